@@ -1,0 +1,47 @@
+"""curv: curvature estimation on surface meshes (numpy/scipy only).
+
+>>> import curv
+>>> res = curv.estimate(mesh, method="mru", range=2)   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from .errors import CurvError, EstimatorError, LoadError, MeshError
+from .mesh import Mesh, MeshReport
+from .result import QUANTITIES, Curvature, Principal
+from .validity import Reason
+
+__version__ = "0.1.0"
+
+# Heavier parts load on first use so that `import curv` stays cheap.
+_LAZY = {
+    "estimate": ("curv.api", "estimate"),
+    "iter_estimate": ("curv.api", "iter_estimate"),
+    "ESTIMATORS": ("curv.estimators", "ESTIMATORS"),
+    "vertex_normals": ("curv.normals", "vertex_normals"),
+    "load": ("curv.io", "load"),
+    "save_ply": ("curv.io", "save_ply"),
+    "surfaces": ("curv.surfaces", None),
+}
+
+__all__ = [
+    "Mesh", "MeshReport", "Curvature", "Principal", "Reason", "QUANTITIES",
+    "CurvError", "MeshError", "LoadError", "EstimatorError", *_LAZY,
+]
+
+
+def __getattr__(name):
+    try:
+        module, attr = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module 'curv' has no attribute {name!r}") from None
+    mod = importlib.import_module(module)
+    value = mod if attr is None else getattr(mod, attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

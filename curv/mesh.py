@@ -1,0 +1,516 @@
+"""The mesh model: vertices, polygon faces and the connectivity every estimator needs.
+
+A :class:`Mesh` is immutable once built; every derived array (edges, adjacency, borders, normals of
+faces, ...) is computed on first use and cached. Faces may be triangles or general polygons; they are
+stored flat (``face_indices`` with ``face_offsets``) so mixed meshes cost nothing extra.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import MeshError
+
+__all__ = ["Mesh", "MeshReport"]
+
+
+@dataclass(frozen=True)
+class MeshReport:
+    """Counts of what a mesh contains, for a one-screen summary.
+
+    Every field is a plain int, or a dict ``{polygon size: face count}`` for ``polygon_kinds``.
+    """
+
+    vertices: int
+    faces: int
+    edges: int
+    polygon_kinds: dict
+    components: int
+    border_edges: int
+    border_loops: int
+    nonmanifold_edges: int
+    nonmanifold_vertices: int
+    degenerate_faces: int
+    isolated_vertices: int
+
+    def lines(self) -> list[str]:
+        """Human-readable lines, one fact each."""
+        kinds = ", ".join(f"{n} {_POLY_NAMES.get(k, f'{k}-gons')}" for k, n in sorted(self.polygon_kinds.items()))
+        out = [
+            f"{self.vertices} vertices, {self.faces} faces ({kinds or 'none'}), {self.edges} edges",
+            f"{self.components} connected component{'s' if self.components != 1 else ''}",
+            f"{self.border_edges} border edges in {self.border_loops} loop{'s' if self.border_loops != 1 else ''}"
+            if self.border_edges else "closed (no border)",
+        ]
+        for count, what in [
+            (self.nonmanifold_edges, "non-manifold edges"),
+            (self.nonmanifold_vertices, "non-manifold vertices"),
+            (self.degenerate_faces, "degenerate faces"),
+            (self.isolated_vertices, "isolated vertices"),
+        ]:
+            if count:
+                out.append(f"{count} {what}")
+        return out
+
+
+_POLY_NAMES = {3: "triangles", 4: "quads", 5: "pentagons", 6: "hexagons"}
+
+
+def _as_vertices(vertices) -> np.ndarray:
+    try:
+        v = np.array(vertices, dtype=np.float64, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"vertices are not numeric: {exc}") from None
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise MeshError(f"vertices must have shape (n, 3), got {v.shape}")
+    if v.shape[0] == 0:
+        raise MeshError("mesh has no vertices")
+    bad = ~np.isfinite(v)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        kind = "NaN" if np.isnan(v[row, col]) else "infinite"
+        more = int(bad.any(axis=1).sum()) - 1
+        extra = f" (and {more} more vertices)" if more else ""
+        raise MeshError(f"vertex {row} has a {kind} coordinate{extra}")
+    return v
+
+
+def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """Flatten ``faces`` into ``(indices, offsets)``; validate sizes and index range."""
+    if isinstance(faces, np.ndarray) and faces.dtype != object:
+        f = faces
+        if f.ndim != 2:
+            raise MeshError(f"faces must be a 2-D array (m, k) or a list of polygons, got shape {f.shape}")
+        if f.size and not np.issubdtype(f.dtype, np.integer):
+            if not np.all(np.mod(f, 1) == 0):
+                raise MeshError("face indices must be integers")
+        f = f.astype(np.int64)
+        # A padded array marks unused trailing slots with -1.
+        pad = f == -1
+        trailing = np.flip(np.cumprod(np.flip(pad, axis=1), axis=1), axis=1).astype(bool)
+        sizes = (~trailing).sum(axis=1)
+        indices = f[~trailing]
+    else:
+        try:
+            polys = [np.asarray(p).reshape(-1) for p in faces]
+        except (TypeError, ValueError) as exc:
+            raise MeshError(f"faces are not index lists: {exc}") from None
+        for i, p in enumerate(polys):
+            if p.size and not np.issubdtype(p.dtype, np.integer):
+                if not (np.issubdtype(p.dtype, np.number) and np.all(np.mod(p, 1) == 0)):
+                    raise MeshError(f"face {i} has non-integer indices")
+        sizes = np.array([p.size for p in polys], dtype=np.int64)
+        indices = np.concatenate(polys).astype(np.int64) if polys else np.zeros(0, np.int64)
+    if sizes.size == 0:
+        raise MeshError("mesh has no faces")
+    small = np.flatnonzero(sizes < 3)
+    if small.size:
+        raise MeshError(f"face {small[0]} has {sizes[small[0]]} vertices; a face needs at least 3")
+    offsets = np.zeros(sizes.size + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    face_of = np.repeat(np.arange(sizes.size), sizes)
+    neg = np.flatnonzero(indices < 0)
+    if neg.size:
+        raise MeshError(f"face {face_of[neg[0]]} has a negative vertex index {indices[neg[0]]}")
+    high = np.flatnonzero(indices >= n_vertices)
+    if high.size:
+        raise MeshError(
+            f"face {face_of[high[0]]} refers to vertex {indices[high[0]]}, "
+            f"but the mesh has only {n_vertices} vertices"
+        )
+    return indices, offsets
+
+
+class Mesh:
+    """A polygon mesh with validated data and cached connectivity.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (n, 3)
+        Vertex positions; must be finite.
+    faces : array_like, shape (m, k), or sequence of sequences of int
+        Polygons as vertex indices, counter-clockwise seen from outside (the normal side).
+        A 2-D array may pad shorter polygons with trailing ``-1``.
+
+    Raises
+    ------
+    MeshError
+        For malformed data, naming what is wrong and where. Degenerate faces, isolated and
+        non-manifold vertices are *not* errors: they are reported by :meth:`report` and
+        flagged in the masks below.
+    """
+
+    def __init__(self, vertices, faces):
+        v = _as_vertices(vertices)
+        indices, offsets = _as_faces(faces, v.shape[0])
+        v.setflags(write=False)
+        indices.setflags(write=False)
+        offsets.setflags(write=False)
+        self._vertices = v
+        self._indices = indices
+        self._offsets = offsets
+
+    # ------------------------------------------------------------------ basic data
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64 vertex positions (read-only)."""
+        return self._vertices
+
+    @property
+    def face_indices(self) -> np.ndarray:
+        """(sum of face sizes,) int64: the vertex indices of all faces, one after the other."""
+        return self._indices
+
+    @property
+    def face_offsets(self) -> np.ndarray:
+        """(m + 1,) int64: face ``i`` is ``face_indices[face_offsets[i]:face_offsets[i + 1]]``."""
+        return self._offsets
+
+    @property
+    def n_vertices(self) -> int:
+        return self._vertices.shape[0]
+
+    @property
+    def n_faces(self) -> int:
+        return self._offsets.size - 1
+
+    @cached_property
+    def face_sizes(self) -> np.ndarray:
+        """(m,) int64 number of vertices of each face."""
+        return np.diff(self._offsets)
+
+    @cached_property
+    def is_triangular(self) -> bool:
+        """True when every face is a triangle."""
+        return bool(np.all(self.face_sizes == 3))
+
+    @cached_property
+    def faces(self) -> np.ndarray:
+        """(m, kmax) int64 faces, padded with -1 where a polygon has fewer than kmax vertices."""
+        kmax = int(self.face_sizes.max())
+        out = np.full((self.n_faces, kmax), -1, dtype=np.int64)
+        col = np.arange(self._indices.size) - np.repeat(self._offsets[:-1], self.face_sizes)
+        out[self.corner_face, col] = self._indices
+        return out
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(m, 3) int64 triangles; raises :class:`MeshError` on a mesh with other polygons."""
+        if not self.is_triangular:
+            kinds = sorted(set(self.face_sizes.tolist()) - {3})
+            raise MeshError(f"needs a triangle mesh, but the mesh has faces with {kinds} vertices")
+        return self.faces
+
+    # ------------------------------------------------------------------ corners and edges
+    @cached_property
+    def corner_face(self) -> np.ndarray:
+        """(h,) int64 face of each corner (one corner per entry of ``face_indices``)."""
+        return np.repeat(np.arange(self.n_faces, dtype=np.int64), self.face_sizes)
+
+    @cached_property
+    def corner_next(self) -> np.ndarray:
+        """(h,) int64 index (into ``face_indices``) of the next corner in the same face."""
+        h = np.arange(self._indices.size, dtype=np.int64)
+        nxt = h + 1
+        last = self._offsets[1:] - 1
+        nxt[last] = self._offsets[:-1]
+        return nxt
+
+    @cached_property
+    def corner_prev(self) -> np.ndarray:
+        """(h,) int64 index of the previous corner in the same face."""
+        prev = np.empty_like(self.corner_next)
+        prev[self.corner_next] = np.arange(self.corner_next.size)
+        return prev
+
+    @cached_property
+    def halfedges(self) -> np.ndarray:
+        """(h, 2) int64 directed edges ``(corner vertex, next corner vertex)`` of every face."""
+        return np.stack([self._indices, self._indices[self.corner_next]], axis=1)
+
+    @cached_property
+    def _edge_data(self):
+        he = self.halfedges
+        ok = he[:, 0] != he[:, 1]  # repeated indices in a face give no edge
+        key = np.sort(he, axis=1)
+        lin = key[:, 0] * self.n_vertices + key[:, 1]
+        lin_ok = lin[ok]
+        uniq, inv = np.unique(lin_ok, return_inverse=True)
+        edges = np.stack([uniq // self.n_vertices, uniq % self.n_vertices], axis=1)
+        he_edge = np.full(he.shape[0], -1, dtype=np.int64)
+        he_edge[ok] = inv
+        return edges, he_edge
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        """(e, 2) int64 unique undirected edges, ``edges[:, 0] < edges[:, 1]``."""
+        return self._edge_data[0]
+
+    @cached_property
+    def halfedge_edge(self) -> np.ndarray:
+        """(h,) int64 undirected edge of each halfedge, -1 for the null edge of a repeated index."""
+        return self._edge_data[1]
+
+    @cached_property
+    def edge_face_count(self) -> np.ndarray:
+        """(e,) int64 number of faces using each edge (1 on a border, >2 where non-manifold)."""
+        he = self.halfedge_edge
+        return np.bincount(he[he >= 0], minlength=self.edges.shape[0])
+
+    @cached_property
+    def edge_faces(self) -> np.ndarray:
+        """(e, 2) int64 the first two faces of each edge; -1 where there is none.
+
+        For a manifold interior edge, ``edge_faces[:, 0]`` is the face in which the edge runs
+        from ``edges[:, 0]`` to ``edges[:, 1]`` when orientation is consistent.
+        """
+        he = self.halfedge_edge
+        ok = np.flatnonzero(he >= 0)
+        forward = self.halfedges[ok, 0] < self.halfedges[ok, 1]
+        # forward halfedges first, so that slot 0 gets the face where the edge runs low -> high
+        order = np.lexsort((~forward, he[ok]))
+        ok = ok[order]
+        e = he[ok]
+        first = np.ones(e.size, bool)
+        first[1:] = e[1:] != e[:-1]
+        rank = np.arange(e.size) - np.maximum.accumulate(np.where(first, np.arange(e.size), 0))
+        out = np.full((self.edges.shape[0], 2), -1, dtype=np.int64)
+        keep = rank < 2
+        out[e[keep], rank[keep]] = self.corner_face[ok[keep]]
+        return out
+
+    @cached_property
+    def edge_vectors(self) -> np.ndarray:
+        """(e, 3) float64 ``vertices[edges[:, 1]] - vertices[edges[:, 0]]``."""
+        return self._vertices[self.edges[:, 1]] - self._vertices[self.edges[:, 0]]
+
+    @cached_property
+    def edge_lengths(self) -> np.ndarray:
+        """(e,) float64 edge lengths."""
+        return np.linalg.norm(self.edge_vectors, axis=1)
+
+    @cached_property
+    def mean_edge_length(self) -> float:
+        return float(self.edge_lengths.mean()) if self.edge_lengths.size else 0.0
+
+    # ------------------------------------------------------------------ vertex connectivity
+    @cached_property
+    def adjacency(self) -> sp.csr_matrix:
+        """(n, n) symmetric CSR matrix of int8 ones: ``A[i, j] = 1`` when ``i`` and ``j`` share an edge.
+
+        Indices are sorted within each row.
+        """
+        e = self.edges
+        n = self.n_vertices
+        rows = np.concatenate([e[:, 0], e[:, 1]])
+        cols = np.concatenate([e[:, 1], e[:, 0]])
+        a = sp.csr_matrix((np.ones(rows.size, np.int8), (rows, cols)), shape=(n, n))
+        a.sort_indices()
+        return a
+
+    @cached_property
+    def valence(self) -> np.ndarray:
+        """(n,) int64 number of edge neighbours of each vertex."""
+        return np.diff(self.adjacency.indptr).astype(np.int64)
+
+    @cached_property
+    def vertex_faces(self) -> sp.csr_matrix:
+        """(n, m) CSR incidence: entry (v, f) counts the corners of face f at vertex v."""
+        n, m = self.n_vertices, self.n_faces
+        return sp.csr_matrix(
+            (np.ones(self._indices.size, np.int32), (self._indices, self.corner_face)), shape=(n, m)
+        )
+
+    @cached_property
+    def vertex_edges(self) -> sp.csr_matrix:
+        """(n, e) CSR incidence: entry (v, e) is 1 when v is an endpoint of edge e."""
+        e = self.edges
+        ne = e.shape[0]
+        rows = e.reshape(-1)
+        cols = np.repeat(np.arange(ne), 2)
+        return sp.csr_matrix((np.ones(rows.size, np.int8), (rows, cols)), shape=(self.n_vertices, ne))
+
+    @cached_property
+    def longest_edge(self) -> np.ndarray:
+        """(n,) float64 longest edge incident to each vertex: the maximum distance to p in its 1-ring.
+
+        This is the unit of the estimation range (paper §4.1). 0 for a vertex with no edge.
+        """
+        out = np.zeros(self.n_vertices)
+        np.maximum.at(out, self.edges[:, 0], self.edge_lengths)
+        np.maximum.at(out, self.edges[:, 1], self.edge_lengths)
+        return out
+
+    # ------------------------------------------------------------------ faces geometry
+    @cached_property
+    def face_vector_areas(self) -> np.ndarray:
+        """(m, 3) float64 Newell vector area of each face: unit normal times area.
+
+        Exact for planar polygons and the natural average normal for non-planar ones.
+        """
+        v = self._vertices
+        a = v[self._indices]
+        b = v[self._indices[self.corner_next]]
+        cross = np.cross(a, b)
+        out = np.zeros((self.n_faces, 3))
+        for k in range(3):
+            out[:, k] = np.bincount(self.corner_face, weights=cross[:, k], minlength=self.n_faces)
+        return 0.5 * out
+
+    @cached_property
+    def face_areas(self) -> np.ndarray:
+        """(m,) float64 face areas (norm of the Newell vector area)."""
+        return np.linalg.norm(self.face_vector_areas, axis=1)
+
+    @cached_property
+    def face_normals(self) -> np.ndarray:
+        """(m, 3) float64 unit face normals; NaN rows for degenerate faces."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = self.face_vector_areas / self.face_areas[:, None]
+        out[self.degenerate_faces] = np.nan
+        return out
+
+    @cached_property
+    def degenerate_faces(self) -> np.ndarray:
+        """(m,) bool: faces with a repeated vertex index or (numerically) zero area.
+
+        Zero area means area below ``1e-12`` times the squared longest edge of the face.
+        """
+        repeated = np.zeros(self.n_faces, bool)
+        null = self.halfedge_edge < 0
+        repeated[self.corner_face[null]] = True
+        # an index repeated non-consecutively (e.g. a quad 0 1 0 2) gives no null edge
+        order = np.lexsort((self._indices, self.corner_face))
+        f_sorted = self.corner_face[order]
+        i_sorted = self._indices[order]
+        dup = (f_sorted[1:] == f_sorted[:-1]) & (i_sorted[1:] == i_sorted[:-1])
+        repeated[f_sorted[1:][dup]] = True
+        he = self.halfedges
+        lengths2 = np.einsum("ij,ij->i", *(2 * [self._vertices[he[:, 1]] - self._vertices[he[:, 0]]]))
+        longest2 = np.zeros(self.n_faces)
+        np.maximum.at(longest2, self.corner_face, lengths2)
+        area = np.linalg.norm(self.face_vector_areas, axis=1)
+        tiny = area <= 1e-12 * longest2
+        return repeated | tiny
+
+    # ------------------------------------------------------------------ topology flags
+    @cached_property
+    def border_edges(self) -> np.ndarray:
+        """(e,) bool: edges used by exactly one face."""
+        return self.edge_face_count == 1
+
+    @cached_property
+    def nonmanifold_edges(self) -> np.ndarray:
+        """(e,) bool: edges used by three or more faces."""
+        return self.edge_face_count > 2
+
+    @cached_property
+    def border_vertices(self) -> np.ndarray:
+        """(n,) bool: vertices on a border edge or a non-manifold edge."""
+        out = np.zeros(self.n_vertices, bool)
+        bad = self.border_edges | self.nonmanifold_edges
+        out[self.edges[bad].reshape(-1)] = True
+        return out
+
+    @cached_property
+    def isolated_vertices(self) -> np.ndarray:
+        """(n,) bool: vertices that no face uses."""
+        used = np.zeros(self.n_vertices, bool)
+        used[self._indices] = True
+        return ~used
+
+    @cached_property
+    def nonmanifold_vertices(self) -> np.ndarray:
+        """(n,) bool: vertices whose faces do not form one fan (e.g. the tip of a bow tie).
+
+        Counted as: the faces around v, linked when they share an edge at v, form more than one
+        group. Vertices on non-manifold edges are included too.
+        """
+        # Corner graph: two corners at the same vertex are linked when their faces share the edge
+        # leaving or entering the vertex. Components of corners per vertex = fans.
+        he_edge = self.halfedge_edge
+        prev = self.corner_prev
+        h = self._indices.size
+        # corner c at vertex v touches edges he_edge[c] (outgoing) and he_edge[prev[c]] (incoming)
+        corner_edges = np.concatenate([he_edge, he_edge[prev]])
+        corners = np.concatenate([np.arange(h), np.arange(h)])
+        ok = corner_edges >= 0
+        # graph nodes: corners 0..h-1, then one node per (edge, vertex at that end); a corner links to
+        # the (edge, its vertex) nodes of the two edges it touches, so corners of one fan connect.
+        ev_key = corner_edges * self.n_vertices + np.concatenate([self._indices, self._indices])
+        ev_key = ev_key[ok]
+        uniq, inv = np.unique(ev_key, return_inverse=True)
+        g = sp.csr_matrix(
+            (np.ones(inv.size, np.int8), (corners[ok], h + inv)), shape=(h + uniq.size, h + uniq.size)
+        )
+        ncomp, labels = sp.csgraph.connected_components(g, directed=False)
+        fans = np.zeros(self.n_vertices, np.int64)
+        pair = np.unique(labels[:h] * self.n_vertices + self._indices)
+        np.add.at(fans, pair % self.n_vertices, 1)
+        out = fans > 1
+        out[self.edges[self.nonmanifold_edges].reshape(-1)] = True
+        return out
+
+    @cached_property
+    def components(self) -> tuple[int, np.ndarray]:
+        """``(count, labels)``: connected components of the vertex graph; labels is (n,) int."""
+        ncomp, labels = sp.csgraph.connected_components(self.adjacency, directed=False)
+        return int(ncomp), labels
+
+    def report(self) -> MeshReport:
+        """Summarise the mesh: sizes, polygon kinds, components, borders and defects."""
+        sizes, counts = np.unique(self.face_sizes, return_counts=True)
+        iso = self.isolated_vertices
+        ncomp, labels = self.components
+        ncomp_faces = len(np.unique(labels[~iso])) if (~iso).any() else 0
+        border = self.border_edges
+        loops = 0
+        if border.any():
+            be = self.edges[border]
+            verts = np.unique(be)
+            remap = np.searchsorted(verts, be)
+            g = sp.csr_matrix((np.ones(len(be)), (remap[:, 0], remap[:, 1])), shape=(verts.size,) * 2)
+            loops = int(sp.csgraph.connected_components(g, directed=False)[0])
+        return MeshReport(
+            vertices=self.n_vertices,
+            faces=self.n_faces,
+            edges=int(self.edges.shape[0]),
+            polygon_kinds={int(s): int(c) for s, c in zip(sizes, counts)},
+            components=ncomp_faces,
+            border_edges=int(border.sum()),
+            border_loops=loops,
+            nonmanifold_edges=int(self.nonmanifold_edges.sum()),
+            nonmanifold_vertices=int(self.nonmanifold_vertices.sum()),
+            degenerate_faces=int(self.degenerate_faces.sum()),
+            isolated_vertices=int(iso.sum()),
+        )
+
+    # ------------------------------------------------------------------ derived meshes
+    @classmethod
+    def _trusted(cls, vertices: np.ndarray, indices: np.ndarray, offsets: np.ndarray) -> "Mesh":
+        m = cls.__new__(cls)
+        for arr in (vertices, indices, offsets):
+            arr.setflags(write=False)
+        m._vertices, m._indices, m._offsets = vertices, indices, offsets
+        return m
+
+    def with_vertices(self, vertices) -> "Mesh":
+        """A mesh with the same faces and new (validated) vertex positions of the same count."""
+        v = _as_vertices(vertices)
+        if v.shape[0] != self.n_vertices:
+            raise MeshError(f"expected {self.n_vertices} vertices, got {v.shape[0]}")
+        return Mesh._trusted(v, self._indices, self._offsets)
+
+    def flipped(self) -> "Mesh":
+        """The same mesh with every face's orientation reversed."""
+        sizes = self.face_sizes
+        local = np.arange(self._indices.size) - np.repeat(self._offsets[:-1], sizes)
+        rev = np.repeat(self._offsets[1:], sizes) - 1 - local
+        return Mesh._trusted(self._vertices, self._indices[rev].copy(), self._offsets)
+
+    def __repr__(self) -> str:
+        kinds = "triangles" if self.is_triangular else "polygons"
+        return f"Mesh({self.n_vertices} vertices, {self.n_faces} {kinds})"

@@ -1,0 +1,111 @@
+"""Result containers: the raw output of an estimator and the public :class:`Curvature`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .validity import Reason
+
+__all__ = ["Principal", "Curvature"]
+
+
+@dataclass
+class Principal:
+    """What an estimator returns before the validity rules are applied.
+
+    Attributes
+    ----------
+    k1, k2 : (n,) float64
+        Principal curvatures, in any order.
+    d1, d2 : (n, 3) float64
+        Directions belonging to ``k1`` and ``k2``.
+    reason : (n,) uint8
+        :class:`Reason` codes; ``Reason.OK`` where the estimate is usable.
+    """
+
+    k1: np.ndarray
+    k2: np.ndarray
+    d1: np.ndarray
+    d2: np.ndarray
+    reason: np.ndarray
+
+
+@dataclass
+class Curvature:
+    """Principal curvatures and directions at every vertex, with a validity mask.
+
+    Attributes
+    ----------
+    k1, k2 : (n,) float64
+        Principal curvatures, ``k1 >= k2``; NaN where ``valid`` is False. Positive where the
+        surface bends away from its normal (outward sphere of radius r: ``+1/r``).
+    d1, d2 : (n, 3) float64
+        Unit principal directions, tangent to ``normals``; NaN where ``valid`` is False.
+    normals : (n, 3) float64
+        The unit vertex normals the estimate used.
+    valid : (n,) bool
+        False where the estimate is not trustworthy (border-affected, degenerate, singular).
+    reason : (n,) uint8
+        Why a vertex is invalid (:class:`curv.Reason`), ``0`` where valid.
+    method : str
+        Registry name of the estimator (``"exact"`` for analytic truth).
+    range : int or None
+        The range k of Rk.
+    info : dict
+        Free-form details: elapsed seconds, smoothing options, ...
+    """
+
+    k1: np.ndarray
+    k2: np.ndarray
+    d1: np.ndarray
+    d2: np.ndarray
+    normals: np.ndarray
+    valid: np.ndarray
+    reason: np.ndarray = None
+    method: str = ""
+    range: int | None = None
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.reason is None:
+            self.reason = np.where(self.valid, Reason.OK, Reason.NOT_COMPUTED).astype(np.uint8)
+
+    @property
+    def n(self) -> int:
+        return self.k1.shape[0]
+
+    @property
+    def mean(self) -> np.ndarray:
+        """(n,) mean curvature H = (k1 + k2) / 2."""
+        return 0.5 * (self.k1 + self.k2)
+
+    @property
+    def gaussian(self) -> np.ndarray:
+        """(n,) Gaussian curvature K = k1 * k2."""
+        return self.k1 * self.k2
+
+    @property
+    def shape_index(self) -> np.ndarray:
+        """(n,) Koenderink shape index in [-1, 1]: 2/pi * arctan((k1 + k2) / (k1 - k2))."""
+        return (2.0 / np.pi) * np.arctan2(self.k1 + self.k2, self.k1 - self.k2)
+
+    @property
+    def curvedness(self) -> np.ndarray:
+        """(n,) Koenderink curvedness sqrt((k1^2 + k2^2) / 2)."""
+        return np.sqrt(0.5 * (self.k1**2 + self.k2**2))
+
+    @property
+    def valid_fraction(self) -> float:
+        return float(self.valid.mean()) if self.valid.size else 0.0
+
+    def quantity(self, name: str) -> np.ndarray:
+        """A per-vertex scalar by name: ``k1``, ``k2``, ``mean``, ``gaussian``, ``shape_index``, ``curvedness``."""
+        if name not in QUANTITIES:
+            raise ValueError(f"unknown quantity {name!r}; choose one of {', '.join(QUANTITIES)}")
+        return getattr(self, name)
+
+
+QUANTITIES = ("mean", "gaussian", "k1", "k2", "shape_index", "curvedness")
+"""Names accepted by :meth:`Curvature.quantity`, in display order."""

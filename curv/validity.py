@@ -1,0 +1,48 @@
+"""Why a vertex has no trustworthy estimate: one reason code per vertex."""
+
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+
+__all__ = ["Reason", "describe_reasons"]
+
+
+class Reason(enum.IntEnum):
+    """Per-vertex reason codes stored in :attr:`curv.Curvature.reason` (uint8).
+
+    ``OK`` is the only code with ``valid == True``. When several apply, the first one found wins
+    in the order the estimator checks them; the code is for diagnosis, the mask is the contract.
+    """
+
+    OK = 0
+    BORDER = 1
+    """On a border, or the support reaches one, for an estimator that needs a closed 1-ring."""
+    TOO_FEW_NEIGHBOURS = 2
+    """Fewer neighbours in range than the fit has unknowns."""
+    SINGULAR = 3
+    """The least-squares system (or the tensor) is numerically singular."""
+    DEGENERATE = 4
+    """Isolated vertex, zero-area faces around it, or no usable normal."""
+    NONMANIFOLD = 5
+    """On a non-manifold edge or vertex, for an estimator that needs a disc-like 1-ring."""
+    NOT_COMPUTED = 6
+    """The estimate was not computed here (e.g. the values were smoothed from invalid neighbours)."""
+
+
+def describe_reasons(reason: np.ndarray) -> dict[str, int]:
+    """Count vertices per reason.
+
+    Parameters
+    ----------
+    reason : (n,) uint8
+        Reason codes.
+
+    Returns
+    -------
+    dict
+        ``{reason name: count}`` for every code that occurs, ``OK`` first.
+    """
+    codes, counts = np.unique(np.asarray(reason, dtype=np.uint8), return_counts=True)
+    return {Reason(int(c)).name: int(k) for c, k in zip(codes, counts)}
