@@ -1,0 +1,173 @@
+"""The one entry point: ``curv.estimate(mesh, method, range)`` and its generator form."""
+
+from __future__ import annotations
+
+import enum
+import time
+from typing import Generator
+
+import numpy as np
+
+from .errors import EstimatorError, MeshError
+from .estimators import get_spec
+from .mesh import Mesh
+from .normals import NormalWeighting, normalize_rows, vertex_normals
+from .result import Curvature
+from .smoothing import smooth_positions, smooth_values
+from .validity import Reason
+
+__all__ = ["estimate", "iter_estimate", "Smoothing", "parse_range"]
+
+
+class Smoothing(str, enum.Enum):
+    """The paper's smoothing variants (§5.3, Fig. 10), applied around an estimate."""
+
+    NONE = "none"
+    MESH = "mesh"
+    """Cotan-smooth the vertex positions, then estimate (R2SM in the paper)."""
+    VALUES = "values"
+    """Estimate, then cotan-smooth k1 and k2 over valid neighbours (R2SV)."""
+
+
+def parse_range(value) -> int:
+    """Accept ``2``, ``"2"`` or ``"R2"``; return the int k (validity is checked by the spec)."""
+    if isinstance(value, str):
+        text = value.strip().upper().removeprefix("R")
+        if text.isdigit():
+            return int(text)
+        raise EstimatorError(f"range must look like 2 or 'R2', got {value!r}")
+    if isinstance(value, (bool, np.bool_)):
+        raise EstimatorError(f"range must be an integer, got {value!r}")
+    return value
+
+
+def _check_normals(normals, n: int) -> np.ndarray:
+    arr = np.asarray(normals, dtype=np.float64)
+    if arr.shape != (n, 3):
+        raise MeshError(f"normals must have shape ({n}, 3), got {arr.shape}")
+    return normalize_rows(arr)
+
+
+def iter_estimate(
+    mesh: Mesh,
+    method: str = "mru",
+    range=2,
+    *,
+    normals: np.ndarray | None = None,
+    normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
+    smooth: Smoothing | str | None = None,
+    smooth_iterations: int = 1,
+    smooth_strength: float = 0.5,
+    block_size: int | None = None,
+) -> Generator[float, None, Curvature]:
+    """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
+
+    Every ``yield`` is a point where a caller may stop (cancel). Parameters as in :func:`estimate`.
+    """
+    spec = get_spec(method)
+    k = spec.check_range(parse_range(range))
+    if not isinstance(mesh, Mesh):
+        raise MeshError(f"expected a curv.Mesh, got {type(mesh).__name__}")
+    if spec.triangles_only and not mesh.is_triangular:
+        kinds = sorted(set(mesh.face_sizes.tolist()) - {3})
+        raise MeshError(
+            f"estimator {spec.name!r} needs a triangle mesh, but the mesh has faces with {kinds} vertices; "
+            f"use one of: nc, qs, an, mru"
+        )
+    smooth = Smoothing(smooth or Smoothing.NONE)
+    t0 = time.perf_counter()
+    work_mesh = mesh
+    if smooth is Smoothing.MESH:
+        work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
+        if normals is not None:
+            raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
+    if normals is None:
+        used_normals = vertex_normals(work_mesh, weighting=normal_weighting)
+    else:
+        used_normals = _check_normals(normals, mesh.n_vertices)
+    yield 0.0
+    raw = yield from spec.function(work_mesh, used_normals, k, block_size=block_size)
+
+    k1, k2, d1, d2, reason = raw.k1, raw.k2, raw.d1, raw.d2, raw.reason.copy()
+    isolated = mesh.isolated_vertices
+    reason[(reason == Reason.OK) & isolated] = Reason.DEGENERATE
+    reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
+    swap = k2 > k1
+    k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)
+    d1, d2 = np.where(swap[:, None], d2, d1), np.where(swap[:, None], d1, d2)
+    # keep (d1, d2, N) right-handed so results are reproducible
+    flip = np.einsum("ij,ij->i", np.cross(d1, d2), used_normals) < 0
+    d2 = np.where(flip[:, None], -d2, d2)
+    if smooth is Smoothing.VALUES:
+        ok = reason == Reason.OK
+        k1, k2 = smooth_values(mesh, np.stack([k1, k2], axis=1), ok,
+                               iterations=smooth_iterations, strength=smooth_strength).T
+        swap = k2 > k1
+        k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)
+        d1, d2 = np.where(swap[:, None], d2, d1), np.where(swap[:, None], -d1, d2)
+    valid = reason == Reason.OK
+    for arr in (k1, k2):
+        arr[~valid] = np.nan
+    d1[~valid] = np.nan
+    d2[~valid] = np.nan
+    yield 1.0
+    return Curvature(
+        k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
+        method=spec.name, range=k,
+        info={"seconds": time.perf_counter() - t0, "smooth": smooth.value,
+              "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0},
+    )
+
+
+def estimate(
+    mesh: Mesh,
+    method: str = "mru",
+    range=2,
+    *,
+    normals: np.ndarray | None = None,
+    normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
+    smooth: Smoothing | str | None = None,
+    smooth_iterations: int = 1,
+    smooth_strength: float = 0.5,
+    block_size: int | None = None,
+) -> Curvature:
+    """Estimate principal curvatures and directions at every vertex.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    method : str
+        Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
+    range : int or str
+        k of the range Rk (``2`` or ``"R2"``); must be one the estimator supports.
+    normals : (n, 3) array_like, optional
+        Vertex normals to use (normalised here); default Max-weighted normals of the mesh.
+    normal_weighting : {"max", "area", "angle"}
+        Weights of the default normals.
+    smooth : {None, "mesh", "values"}
+        Smooth the mesh before (R2SM) or the curvature values after (R2SV) the estimate.
+    smooth_iterations, smooth_strength : int, float
+        Explicit cotan-Laplacian steps and their step size.
+    block_size : int, optional
+        Vertices per block of the range neighbourhoods (memory bound); default automatic.
+
+    Returns
+    -------
+    Curvature
+        ``k1 >= k2``, unit directions, ``valid`` mask; NaN where invalid.
+
+    Raises
+    ------
+    EstimatorError
+        Unknown method or range (the message lists the allowed ones).
+    MeshError
+        A mesh the estimator cannot handle (e.g. quads for a triangle-only estimator).
+    """
+    gen = iter_estimate(mesh, method, range, normals=normals, normal_weighting=normal_weighting,
+                        smooth=smooth, smooth_iterations=smooth_iterations,
+                        smooth_strength=smooth_strength, block_size=block_size)
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value

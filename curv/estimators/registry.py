@@ -1,0 +1,112 @@
+"""The estimator registry: every estimator family registers its spec here.
+
+The CLI, the viewer and the study list estimators from :data:`ESTIMATORS`; adding an estimator is
+one module with one ``@register(...)`` call.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Generator
+
+import numpy as np
+
+from ..errors import EstimatorError
+from ..mesh import Mesh
+from ..result import Principal
+
+__all__ = ["EstimatorSpec", "ESTIMATORS", "register", "get_spec", "EstimatorFunction"]
+
+EstimatorFunction = Callable[..., Generator[float, None, Principal]]
+"""``fn(mesh, normals, k, *, block_size) -> Generator[fraction done, None, Principal]``."""
+
+
+@dataclass(frozen=True)
+class EstimatorSpec:
+    """Description of one estimator family.
+
+    Attributes
+    ----------
+    name : str
+        Registry key, e.g. ``"mru"``.
+    title : str
+        Human-readable name.
+    ranges : tuple of int
+        The ranges k of Rk it supports.
+    function : EstimatorFunction
+        The generator computing it.
+    triangles_only : bool
+        Needs a triangle mesh.
+    uses_normals : bool
+        Uses the neighbours' vertex normals, so its support at Rk is collected within
+        ``(k - 1)`` times the longest 1-ring edge.
+    closed_ring : bool
+        Assumes a closed 1-ring: border-affected vertices are invalid.
+    reference : str
+        Where the method comes from.
+    summary : str
+        One line on what it does.
+    """
+
+    name: str
+    title: str
+    ranges: tuple[int, ...]
+    function: EstimatorFunction = field(repr=False, compare=False)
+    triangles_only: bool
+    uses_normals: bool
+    closed_ring: bool
+    reference: str
+    summary: str = ""
+
+    def support_factor(self, k: int) -> int:
+        """Radius of the collected support in longest-1-ring-edge units for range Rk."""
+        return k - 1 if self.uses_normals else k
+
+    def check_range(self, k) -> int:
+        """Validate a range and return it as int; :class:`EstimatorError` names the allowed ones."""
+        try:
+            ki = int(k)
+        except (TypeError, ValueError):
+            ki = None
+        if ki is None or ki != k or ki not in self.ranges:
+            allowed = ", ".join(f"R{r}" for r in self.ranges)
+            raise EstimatorError(f"estimator {self.name!r} has no range {k!r}; allowed: {allowed}")
+        return ki
+
+    def variants(self) -> list[tuple[str, int]]:
+        """``[(name, k), ...]`` for every supported range."""
+        return [(self.name, k) for k in self.ranges]
+
+
+ESTIMATORS: dict[str, EstimatorSpec] = {}
+"""Registry: name -> :class:`EstimatorSpec`, in registration (paper) order."""
+
+
+def register(spec: EstimatorSpec) -> EstimatorSpec:
+    """Add ``spec`` to :data:`ESTIMATORS` (the name must be new)."""
+    if spec.name in ESTIMATORS:
+        raise ValueError(f"estimator {spec.name!r} is registered twice")
+    ESTIMATORS[spec.name] = spec
+    return spec
+
+
+def get_spec(name: str) -> EstimatorSpec:
+    """Look up an estimator; :class:`EstimatorError` lists the known names."""
+    try:
+        return ESTIMATORS[name]
+    except (KeyError, TypeError):
+        raise EstimatorError(f"unknown estimator {name!r}; choose one of {', '.join(ESTIMATORS)}") from None
+
+
+def all_variants() -> list[tuple[str, int]]:
+    """Every (name, range) pair of the registry, in registry order."""
+    return [v for spec in ESTIMATORS.values() for v in spec.variants()]
+
+
+def empty_principal(n: int) -> Principal:
+    """A :class:`Principal` of NaNs with every reason ``OK`` (to be filled by an estimator)."""
+    return Principal(
+        k1=np.full(n, np.nan), k2=np.full(n, np.nan),
+        d1=np.full((n, 3), np.nan), d2=np.full((n, 3), np.nan),
+        reason=np.zeros(n, np.uint8),
+    )
