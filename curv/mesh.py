@@ -152,6 +152,8 @@ class Mesh:
         self._vertices = v
         self._indices = indices
         self._offsets = offsets
+        self.info: dict = {}
+        """Free-form provenance (source file, repairs done on load); not part of the geometry."""
 
     # ------------------------------------------------------------------ basic data
     @property
@@ -495,6 +497,7 @@ class Mesh:
         for arr in (vertices, indices, offsets):
             arr.setflags(write=False)
         m._vertices, m._indices, m._offsets = vertices, indices, offsets
+        m.info = {}
         return m
 
     def with_vertices(self, vertices) -> "Mesh":

@@ -1,0 +1,162 @@
+"""Command line: ``curv list``, ``curv estimate``, ``curv study``.
+
+Errors in the input end the program with a one-line message on stderr and a non-zero status,
+never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .errors import CurvError
+
+__all__ = ["main"]
+
+EXIT_INPUT = 2
+EXIT_INTERRUPTED = 130
+
+
+class Progress:
+    """A one-line progress bar with ETA on stderr (silent when stderr is not a terminal)."""
+
+    def __init__(self, label: str, *, stream=None, enabled: bool | None = None):
+        self.stream = stream or sys.stderr
+        self.enabled = self.stream.isatty() if enabled is None else enabled
+        self.label = label
+        self.start = time.perf_counter()
+        self._last = -1.0
+
+    def update(self, fraction: float) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if fraction < 1.0 and now - self._last < 0.1:
+            return
+        self._last = now
+        elapsed = now - self.start
+        eta = elapsed * (1 - fraction) / fraction if fraction > 0 else float("nan")
+        bar = "#" * int(30 * fraction)
+        eta_text = f"ETA {eta:5.1f}s" if np.isfinite(eta) else "ETA   ?"
+        self.stream.write(f"\r{self.label} [{bar:<30}] {100 * fraction:5.1f}% {elapsed:6.1f}s {eta_text}")
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _cmd_list(args) -> int:
+    from .estimators import ESTIMATORS
+
+    print(f"{'name':<6} {'ranges':<12} {'polygons':<9} {'borders':<8} title / reference")
+    for spec in ESTIMATORS.values():
+        ranges = ",".join(f"R{k}" for k in spec.ranges)
+        print(f"{spec.name:<6} {ranges:<12} {'no' if spec.triangles_only else 'yes':<9} "
+              f"{'invalid' if spec.closed_ring else 'fitted':<8} {spec.title}")
+        print(f"{'':<37} {spec.reference}")
+    return 0
+
+
+def _stats_line(name: str, values: np.ndarray) -> str:
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return f"  {name:<10} (no valid values)"
+    lo, med, hi = np.percentile(finite, [0, 50, 100])
+    return f"  {name:<10} min {lo: .6g}   median {med: .6g}   max {hi: .6g}"
+
+
+def _cmd_estimate(args) -> int:
+    from .api import iter_estimate
+    from .io import load, save_ply
+    from .validity import describe_reasons
+
+    t0 = time.perf_counter()
+    mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
+                orient=args.orient, remove_unreferenced=args.remove_unreferenced)
+    t_load = time.perf_counter() - t0
+    progress = Progress(f"{args.method} R{args.range}", enabled=None if not args.quiet else False)
+    gen = iter_estimate(mesh, args.method, args.range, smooth=args.smooth)
+    t1 = time.perf_counter()
+    try:
+        while True:
+            progress.update(next(gen))
+    except StopIteration as stop:
+        res = stop.value
+    finally:
+        progress.close()
+    t_est = time.perf_counter() - t1
+    if args.output:
+        save_ply(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
+                 clim=tuple(args.clim) if args.clim else None)
+    rep = mesh.report()
+    print(f"{args.input}: {rep.lines()[0]}")
+    for line in mesh.info.get("repairs", []):
+        print(f"  repair: {line}")
+    reasons = describe_reasons(res.reason)
+    invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
+    print(f"{res.method} R{res.range}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
+          f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
+    for name in ("k1", "k2", "mean", "gaussian"):
+        print(_stats_line(name, getattr(res, name)))
+    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s" + (f"; wrote {args.output}" if args.output else ""))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="curv", description="Curvature estimation on surface meshes.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p_list = sub.add_parser("list", help="list the estimators and their ranges")
+    p_list.set_defaults(func=_cmd_list)
+
+    p_est = sub.add_parser("estimate", help="estimate curvature on a mesh file")
+    p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
+    p_est.add_argument("--method", "-m", default="mru", help="estimator name (see `curv list`); default mru")
+    p_est.add_argument("--range", "-r", default="2", help="range k of Rk, e.g. 2 or R2; default 2")
+    p_est.add_argument("--output", "-o", help="write a coloured binary PLY with the curvature properties")
+    p_est.add_argument("--quantity", default="mean",
+                       choices=["mean", "gaussian", "k1", "k2", "shape_index", "curvedness"],
+                       help="what the PLY colours show; default mean")
+    p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
+    p_est.add_argument("--clim", nargs=2, type=float, metavar=("LO", "HI"), help="colour limits")
+    p_est.add_argument("--smooth", choices=["mesh", "values"], help="smooth the mesh before or the values after")
+    p_est.add_argument("--merge-vertices", action="store_true", help="merge vertices at identical positions")
+    p_est.add_argument("--remove-degenerate", action="store_true", help="drop zero-area / repeated-index faces")
+    p_est.add_argument("--orient", action="store_true", help="make face orientation consistent")
+    p_est.add_argument("--remove-unreferenced", action="store_true", help="drop vertices no face uses")
+    p_est.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p_est.set_defaults(func=_cmd_estimate)
+
+    try:
+        from .study.cli import add_study_parser
+    except ImportError:  # the study needs the optional matplotlib/dask extras
+        pass
+    else:
+        add_study_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except CurvError as exc:
+        print(f"curv: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except (OSError, MemoryError) as exc:
+        print(f"curv: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print("curv: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,249 @@
+"""Reading meshes (keeping polygons where the format has them) and writing coloured PLY files.
+
+Readers: PLY through plyfile (polygons kept), OBJ and OFF through meshio (polygons kept), anything
+else trimesh reads (STL, glTF/GLB, 3MF, ...) through trimesh (triangles). Every failure becomes a
+:class:`LoadError` or :class:`MeshError` whose one-line message starts with the file name.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .colors import SIGNED, auto_limits, map_colors
+from .errors import LoadError, MeshError
+from .mesh import Mesh
+from .repair import repair
+from .result import Curvature
+
+__all__ = ["load", "save_ply", "read_arrays"]
+
+_MESHIO_SUFFIXES = {".obj", ".off"}
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) < 200 else text[:197] + "..."
+
+
+def _check_path(path: Path) -> None:
+    if not path.exists():
+        raise LoadError(f"{path}: no such file")
+    if path.is_dir():
+        raise LoadError(f"{path}: is a directory, not a mesh file")
+    if not os.access(path, os.R_OK):
+        raise LoadError(f"{path}: permission denied")
+    if path.stat().st_size == 0:
+        raise LoadError(f"{path}: file is empty")
+
+
+def _read_ply(path: Path):
+    from plyfile import PlyData
+
+    with open(path, "rb") as fh:
+        data = PlyData.read(fh)
+    names = [e.name for e in data.elements]
+    if "vertex" not in names:
+        raise LoadError(f"{path}: PLY file has no vertex element")
+    vert = data["vertex"].data
+    missing = [c for c in "xyz" if c not in vert.dtype.names]
+    if missing:
+        raise LoadError(f"{path}: PLY vertices lack coordinate(s) {', '.join(missing)}")
+    vertices = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+    if "face" not in names or len(data["face"].data) == 0:
+        raise LoadError(f"{path}: has {len(vertices)} vertices but no faces (a point cloud?); curv needs a mesh")
+    face = data["face"].data
+    key = next((k for k in ("vertex_indices", "vertex_index") if k in face.dtype.names), None)
+    if key is None:
+        raise LoadError(f"{path}: PLY faces have no vertex_indices list")
+    return vertices, list(face[key])
+
+
+def _read_meshio(path: Path):
+    import meshio
+
+    m = meshio.read(path)
+    polys = []
+    for block in m.cells:
+        data = block.data
+        if block.type in ("vertex", "line"):
+            continue
+        if isinstance(data, np.ndarray) and data.ndim == 2:
+            polys.extend(data)
+        else:
+            polys.extend(np.asarray(p) for p in data)
+    if not polys:
+        raise LoadError(f"{path}: has {len(m.points)} points but no faces; curv needs a mesh")
+    pts = np.asarray(m.points, dtype=np.float64)
+    if pts.ndim == 2 and pts.shape[1] == 2:
+        pts = np.column_stack([pts, np.zeros(len(pts))])
+    return pts, polys
+
+
+def _read_trimesh(path: Path):
+    import trimesh
+
+    loaded = trimesh.load(path, force="mesh", process=False)
+    faces = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))))
+    if faces.size == 0:
+        raise LoadError(f"{path}: contains no faces")
+    return np.asarray(loaded.vertices, dtype=np.float64), faces
+
+
+def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:
+    """Read raw ``(vertices (n, 3), faces)`` from a file without building a :class:`Mesh`.
+
+    Raises
+    ------
+    LoadError
+        Missing, unreadable, empty, malformed or face-less file.
+    """
+    path = Path(path)
+    _check_path(path)
+    suffix = path.suffix.lower()
+    reader = _read_ply if suffix == ".ply" else _read_meshio if suffix in _MESHIO_SUFFIXES else _read_trimesh
+    try:
+        return reader(path)
+    except LoadError:
+        raise
+    except MemoryError:
+        raise LoadError(f"{path}: not enough memory to read the file") from None
+    except Exception as exc:  # every reader has its own exception zoo; one clear line for the user
+        kind = suffix.lstrip(".").upper() or "mesh"
+        raise LoadError(f"{path}: not a readable {kind} file ({_one_line(exc)})") from None
+
+
+def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False, orient: bool = False,
+         remove_unreferenced: bool = False) -> Mesh:
+    """Load a mesh file.
+
+    Parameters
+    ----------
+    path : str or Path
+        PLY, OBJ, OFF (polygons kept) or anything trimesh reads (STL, glTF/GLB, ...).
+    merge_vertices : bool
+        Merge vertices at identical positions.
+    remove_degenerate : bool
+        Drop faces with repeated vertices or zero area.
+    orient : bool
+        Make face orientation consistent within each component (closed components outward).
+    remove_unreferenced : bool
+        Drop vertices no face uses (renumbers the vertices).
+
+    Returns
+    -------
+    Mesh
+        ``mesh.info`` holds ``{"path": ..., "repairs": [human-readable lines]}``.
+
+    Raises
+    ------
+    LoadError
+        The file cannot be read as a mesh.
+    MeshError
+        The file was read but its data are malformed (message names the file and the problem).
+    """
+    path = Path(path)
+    vertices, faces = read_arrays(path)
+    try:
+        mesh = Mesh(vertices, faces)
+        mesh, repairs = repair(mesh, merge_vertices=merge_vertices, remove_degenerate=remove_degenerate,
+                               orient=orient, remove_unreferenced=remove_unreferenced)
+    except MeshError as exc:
+        raise MeshError(f"{path}: {exc}") from None
+    mesh.info.update(path=str(path), repairs=repairs)
+    return mesh
+
+
+_FLOAT_PROPS = ("k1", "k2", "mean", "gaussian")
+_DIR_PROPS = tuple(f"d{i}{c}" for i in (1, 2) for c in "xyz")
+
+
+def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", cmap: str | None = None,
+             clim: tuple[float, float] | None = None, colors: np.ndarray | None = None,
+             extra: dict[str, np.ndarray] | None = None) -> Path:
+    """Write a binary PLY with vertex colours and curvature properties, atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file; written to a temporary file in the same folder, then renamed, so a failure
+        never leaves a partial file.
+    mesh : Mesh
+    curvature : Curvature
+        Values at the mesh vertices.
+    quantity : str
+        What the colours show (``mean``, ``gaussian``, ``k1``, ``k2``, ``shape_index``, ``curvedness``).
+    cmap : str, optional
+        matplotlib colour map; default diverging for signed quantities, sequential otherwise.
+    clim : (lo, hi), optional
+        Colour limits; default symmetric 2-98 % percentiles for signed quantities.
+    colors : (n, 4) uint8, optional
+        Colours to write as they are (the viewer passes what it shows); overrides quantity/cmap/clim.
+    extra : dict of str -> (n,) float, optional
+        More float vertex properties (e.g. ``error_rel``).
+
+    Returns
+    -------
+    Path
+        The written file. Properties: x, y, z, red, green, blue, alpha (uchar), k1, k2, mean,
+        gaussian, d1x..d1z, d2x..d2z (float), valid (uchar), plus ``extra``; faces as
+        ``vertex_indices`` lists.
+    """
+    from plyfile import PlyData, PlyElement
+
+    path = Path(path)
+    n = mesh.n_vertices
+    if curvature.k1.shape[0] != n:
+        raise MeshError(f"curvature has {curvature.k1.shape[0]} values but the mesh has {n} vertices")
+    if colors is None:
+        values = curvature.quantity(quantity)
+        signed = SIGNED.get(quantity, True)
+        cmap = cmap or ("coolwarm" if signed else "viridis")
+        lim = clim if clim is not None else auto_limits(values[curvature.valid], signed=signed)
+        colors = map_colors(values, cmap=cmap, clim=lim, valid=curvature.valid)
+    colors = np.asarray(colors)
+    if colors.shape != (n, 4):
+        raise ValueError(f"colors must have shape ({n}, 4), got {colors.shape}")
+    extra = dict(extra or {})
+    fields = [(c, "f8") for c in "xyz"] + [(c, "u1") for c in ("red", "green", "blue", "alpha")]
+    fields += [(c, "f4") for c in _FLOAT_PROPS + _DIR_PROPS] + [("valid", "u1")]
+    fields += [(name, "f4") for name in extra]
+    vert = np.empty(n, dtype=fields)
+    for i, c in enumerate("xyz"):
+        vert[c] = mesh.vertices[:, i]
+    for i, c in enumerate(("red", "green", "blue", "alpha")):
+        vert[c] = colors[:, i]
+    for name in _FLOAT_PROPS:
+        vert[name] = getattr(curvature, name)
+    for i, c in enumerate("xyz"):
+        vert[f"d1{c}"] = curvature.d1[:, i]
+        vert[f"d2{c}"] = curvature.d2[:, i]
+    vert["valid"] = curvature.valid.astype(np.uint8)
+    for name, values in extra.items():
+        vert[name] = np.asarray(values, dtype=np.float64)
+    sizes = mesh.face_sizes
+    if np.all(sizes == sizes[0]):
+        face = np.empty(mesh.n_faces, dtype=[("vertex_indices", "i4", (int(sizes[0]),))])
+        face["vertex_indices"] = mesh.faces
+    else:
+        face = np.empty(mesh.n_faces, dtype=[("vertex_indices", object)])
+        face["vertex_indices"] = np.split(mesh.face_indices.astype(np.int32), mesh.face_offsets[1:-1])
+    ply = PlyData([PlyElement.describe(vert, "vertex"),
+                   PlyElement.describe(face, "face", len_types={"vertex_indices": "u1"},
+                                       val_types={"vertex_indices": "i4"})],
+                  text=False, comments=[f"curvlab: {curvature.method} R{curvature.range}, colours show {quantity}"])
+    folder = path.parent if str(path.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            ply.write(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
