@@ -71,10 +71,10 @@ def _as_vertices(vertices) -> np.ndarray:
     bad = ~np.isfinite(v)
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        kind = "NaN" if np.isnan(v[row, col]) else "infinite"
+        kind = "a NaN" if np.isnan(v[row, col]) else "an infinite"
         more = int(bad.any(axis=1).sum()) - 1
         extra = f" (and {more} more vertices)" if more else ""
-        raise MeshError(f"vertex {row} has a {kind} coordinate{extra}")
+        raise MeshError(f"vertex {row} has {kind} coordinate{extra}")
     return v
 
 
