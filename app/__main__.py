@@ -1,0 +1,5 @@
+"""``python -m app`` runs the viewer."""
+
+from app.main import main
+
+raise SystemExit(main())

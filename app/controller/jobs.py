@@ -1,0 +1,200 @@
+"""The job controller: one source job and one estimate job per (method, range), all off the GUI thread.
+
+A new source supersedes everything running; a pane switching estimator stops the estimate nobody
+shows any more. Stale results are recognised by a generation number and dropped.
+"""
+
+from __future__ import annotations
+
+import curv
+from PySide6.QtCore import QObject, QThreadPool, Signal
+from superqt.utils import create_worker
+
+from app.model import Document
+
+from .sources import load_source
+
+__all__ = ["Controller"]
+
+
+class Controller(QObject):
+    """Start, supersede and cancel the document's background work.
+
+    Signals
+    -------
+    busy_changed(bool)
+        Something is (no longer) running.
+    progress(str, float)
+        What runs and the fraction done (``-1``: unknown).
+    message(str)
+        Informational status text.
+    failed(str)
+        A one-line error message (the document keeps its previous state).
+    """
+
+    busy_changed = Signal(bool)
+    progress = Signal(str, float)
+    message = Signal(str)
+    failed = Signal(str)
+
+    def __init__(self, document: Document, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self.doc = document
+        self._generation = 0
+        self._source_job = None
+        self._estimates: dict[tuple[str, int], object] = {}
+        self._fractions: dict[tuple[str, int], float] = {}
+        self._closed = False
+        self._busy = False
+
+    # -- state ----------------------------------------------------------------------------------
+    @property
+    def busy(self) -> bool:
+        """True while a source or estimate job runs."""
+        return self._source_job is not None or bool(self._estimates)
+
+    def running_keys(self) -> list[tuple[str, int]]:
+        return list(self._estimates)
+
+    def _update_busy(self) -> None:
+        if self.busy != self._busy:
+            self._busy = self.busy
+            self.busy_changed.emit(self._busy)
+        if self._source_job is not None:
+            self.progress.emit(f"Loading {self._source_job[1].label}", -1.0)
+        elif self._estimates:
+            names = ", ".join(f"{m} R{r}" for m, r in self._estimates)
+            frac = sum(self._fractions.values()) / len(self._fractions)
+            self.progress.emit(f"Estimating {names}", frac)
+
+    # -- sources --------------------------------------------------------------------------------
+    def open_source(self, source) -> None:
+        """Load a file or mesh a surface; supersedes every running job."""
+        if self._closed:
+            return
+        self._stop_all()
+        self._generation += 1
+        gen = self._generation
+        worker = create_worker(load_source, source, _start_thread=False)
+        worker.returned.connect(lambda out, gen=gen: self._source_done(gen, out))
+        worker.errored.connect(lambda exc, gen=gen, src=source: self._source_failed(gen, src, exc))
+        self._source_job = (worker, source)
+        worker.start()
+        self._update_busy()
+
+    def _source_done(self, gen: int, out) -> None:
+        if gen != self._generation or self._closed:
+            return
+        self._source_job = None
+        source, mesh, truth = out
+        self.doc.set_mesh(source, mesh, truth)
+        self.message.emit(f"{source.label}: {'; '.join(mesh.report().lines()[:2])}")
+        self.request_missing()
+        self._update_busy()
+
+    def _source_failed(self, gen: int, source, exc: Exception) -> None:
+        if gen != self._generation or self._closed:
+            return
+        self._source_job = None
+        self._update_busy()
+        self.failed.emit(f"Could not open {source.label}: {_one_line(exc)}")
+
+    # -- estimates ------------------------------------------------------------------------------
+    def request_missing(self) -> None:
+        """Start an estimate for every key a pane shows that is neither known nor running."""
+        if self._closed or self.doc.mesh is None or self._source_job is not None:
+            return
+        wanted = {p.key for p in self.doc.panes}
+        for key in [k for k in self._estimates if k not in wanted]:
+            self._stop(key)
+        for key in self.doc.missing_keys():
+            if key not in self._estimates:
+                self._start_estimate(key)
+        self._update_busy()
+
+    def recompute(self, key) -> None:
+        """Forget the result or failure of ``key`` and compute it again."""
+        self.doc.results.pop(key, None)
+        self.doc.failures.pop(key, None)
+        self._stop(key)
+        self.request_missing()
+
+    def _start_estimate(self, key) -> None:
+        method, k = key
+        gen = self._generation
+        worker = create_worker(curv.iter_estimate, self.doc.mesh, method, k, _start_thread=False)
+        worker.yielded.connect(lambda f, key=key, w=worker: self._estimate_progress(w, key, f))
+        worker.returned.connect(lambda res, key=key, gen=gen, w=worker: self._estimate_done(w, gen, key, res))
+        worker.errored.connect(lambda exc, key=key, gen=gen, w=worker: self._estimate_failed(w, gen, key, exc))
+        self._estimates[key] = worker
+        self._fractions[key] = 0.0
+        worker.start()
+
+    def _current(self, worker, gen, key) -> bool:
+        return not self._closed and gen == self._generation and self._estimates.get(key) is worker
+
+    def _estimate_progress(self, worker, key, fraction) -> None:
+        if self._estimates.get(key) is worker:
+            self._fractions[key] = float(fraction)
+            self._update_busy()
+
+    def _estimate_done(self, worker, gen, key, result) -> None:
+        if not self._current(worker, gen, key):
+            return
+        self._forget(key)
+        self.doc.set_result(key, result)
+        n_bad = int((~result.valid).sum())
+        secs = result.info.get("seconds")
+        took = f" in {secs:.2f} s" if secs is not None else ""
+        self.message.emit(f"{key[0]} R{key[1]}{took}; {n_bad} invalid vertices")
+        self._update_busy()
+
+    def _estimate_failed(self, worker, gen, key, exc) -> None:
+        if not self._current(worker, gen, key):
+            return
+        self._forget(key)
+        msg = f"{key[0]} R{key[1]} failed: {_one_line(exc)}"
+        self.doc.set_failure(key, msg)
+        self._update_busy()
+        self.failed.emit(msg)
+
+    # -- stopping -------------------------------------------------------------------------------
+    def cancel(self) -> None:
+        """Stop everything running; panes fall back to their last result."""
+        was_source = self._source_job is not None
+        keys = list(self._estimates)
+        self._stop_all()
+        self._generation += 1 if was_source else 0
+        for key in keys:
+            self.doc.set_failure(key, f"{key[0]} R{key[1]} cancelled")
+        self._update_busy()
+        if was_source or keys:
+            self.message.emit("Cancelled")
+
+    def _forget(self, key) -> None:
+        self._estimates.pop(key, None)
+        self._fractions.pop(key, None)
+
+    def _stop(self, key) -> None:
+        worker = self._estimates.get(key)
+        if worker is not None:
+            worker.quit()
+            self._forget(key)
+
+    def _stop_all(self) -> None:
+        if self._source_job is not None:
+            self._source_job[0].quit()
+            self._source_job = None
+        for key in list(self._estimates):
+            self._stop(key)
+
+    def shutdown(self, *, timeout_ms: int = 5000) -> bool:
+        """Stop every job and wait for the threads; returns False if some did not finish in time."""
+        self._closed = True
+        self._stop_all()
+        return QThreadPool.globalInstance().waitForDone(timeout_ms)
+
+
+def _one_line(exc: Exception) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__

@@ -1,0 +1,171 @@
+"""``curvlab``: start the viewer, optionally on a mesh or surface, or render a scripted snapshot.
+
+Examples
+--------
+curvlab part.ply
+curvlab --surface torus --method mru --range 3 --quantity gaussian
+curvlab --surface ellipsoid_patch --method mru --range 2 --compare qs:2 --difference --screenshot out.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+__all__ = ["main", "build_parser", "configure"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command-line interface of ``curvlab``."""
+    p = argparse.ArgumentParser(prog="curvlab", description="Estimate and inspect the curvature of surface meshes.")
+    p.add_argument("mesh", nargs="?", help="mesh file to open (PLY, OBJ, STL, OFF, glTF, ...)")
+    src = p.add_argument_group("synthetic surface (default when no mesh is given)")
+    src.add_argument("--surface", help="analytic surface name, e.g. sphere, torus, ellipsoid_patch")
+    src.add_argument("--param", action="append", default=[], metavar="NAME=VALUE", help="surface parameter")
+    src.add_argument("--random", action="store_true", help="draw the surface parameters at random from --seed")
+    src.add_argument("--vertices", type=int, help="vertex count (217, 817, 3169, 12481 for the hexagon)")
+    src.add_argument("--irregularity", type=float, default=0.0, help="RMS angle deviation in degrees (0-25)")
+    src.add_argument("--noise", type=float, default=0.0, help="Gaussian noise in mean edge lengths")
+    src.add_argument("--seed", type=int, default=0)
+    est = p.add_argument_group("estimate and display")
+    est.add_argument("--method", default="mru", help="estimator of pane A")
+    est.add_argument("--range", default="2", help="range k of Rk for pane A (2 or R2)")
+    est.add_argument("--compare", action="append", default=[], metavar="M:R", help="add a pane (up to 3)")
+    est.add_argument("--difference", action="store_true", help="show the A - B difference pane")
+    est.add_argument("--quantity", default="mean",
+                     help="mean, gaussian, k1, k2, shape_index, curvedness")
+    est.add_argument("--show", default="estimate", help="estimate, exact, error or e_rel (analytic sources)")
+    est.add_argument("--directions", action="store_true", help="draw principal direction glyphs")
+    est.add_argument("--cmap", help="colour map for the shown field")
+    est.add_argument("--limits", help="colour limits LO,HI (default: symmetric 2-98 %% percentiles)")
+    snap = p.add_argument_group("scripted snapshot")
+    snap.add_argument("--screenshot", metavar="PNG", help="render, save the window image and exit")
+    snap.add_argument("--size", default="1400x860", help="window size WxH for the snapshot")
+    snap.add_argument("--timeout", type=float, default=300.0, help="seconds before the snapshot gives up")
+    return p
+
+
+def _parse_range(text: str) -> int:
+    t = str(text).strip().upper().removeprefix("R")
+    if not t.isdigit():
+        raise ValueError(f"range must look like 2 or R2, got {text!r}")
+    return int(t)
+
+
+def configure(window, args) -> object:
+    """Apply parsed ``args`` to a :class:`~app.views.main_window.MainWindow`; return the source to open.
+
+    Raises
+    ------
+    ValueError
+        An unknown estimator, range, quantity, surface or colour map (message names the allowed ones).
+    """
+    import curv
+
+    from app.model import FileSource, Layer, LimitMode, Pane, Quantity, SurfaceSource, colormap_names
+    from app.views.main_window import DEFAULT_SOURCE
+
+    panes = [(args.method, args.range)] + [tuple(c.split(":", 1)) if ":" in c else (c, "2") for c in args.compare]
+    if len(panes) > 4:
+        raise ValueError("at most 4 panes (--compare up to 3 times)")
+    checked = []
+    for method, k in panes:
+        spec = curv.ESTIMATORS.get(method)
+        if spec is None:
+            raise ValueError(f"unknown estimator {method!r}; choose one of {', '.join(curv.ESTIMATORS)}")
+        k = _parse_range(k)
+        if k not in spec.ranges:
+            raise ValueError(f"estimator {method!r} has no range R{k}; allowed: "
+                             + ", ".join(f"R{r}" for r in spec.ranges))
+        checked.append(Pane(method, k))
+    doc = window.doc
+    doc.set_pane_count(len(checked))
+    for i, pane in enumerate(checked):
+        doc.set_pane(i, method=pane.method, range=pane.range)
+    doc.set_difference(args.difference)
+    try:
+        quantity, layer = Quantity(args.quantity), Layer(args.show)
+    except ValueError:
+        raise ValueError(f"unknown quantity {args.quantity!r} or --show {args.show!r}; quantities: "
+                         f"{', '.join(q.value for q in Quantity)}; show: {', '.join(x.value for x in Layer)}") from None
+    changes = dict(quantity=quantity, show_directions=args.directions)
+    if args.cmap:
+        if args.cmap not in colormap_names():
+            raise ValueError(f"unknown colour map {args.cmap!r}; choose one of {', '.join(colormap_names())}")
+        key = "diverging_cmap" if args.cmap in colormap_names("diverging") else "sequential_cmap"
+        changes[key] = args.cmap
+    if args.limits:
+        lo, hi = (float(x) for x in args.limits.split(","))
+        changes.update(limit_mode=LimitMode.MANUAL, manual=(lo, hi))
+    doc.display.update(**changes)
+    window.pending_layer = layer  # applied once the source (and its truth) is there
+    if args.mesh:
+        if args.surface:
+            raise ValueError("give either a mesh file or --surface, not both")
+        return FileSource(str(Path(args.mesh).expanduser()))
+    if args.surface or args.param or args.random or args.vertices:
+        name = args.surface or DEFAULT_SOURCE.name
+        surfaces = curv.surfaces.SURFACES
+        if name not in surfaces:
+            raise ValueError(f"unknown surface {name!r}; choose one of {', '.join(surfaces)}")
+        params = {}
+        for item in args.param:
+            key, _, value = item.partition("=")
+            params[key.strip()] = float(value)
+        n = args.vertices or getattr(surfaces[name], "default_vertices", DEFAULT_SOURCE.n_vertices)
+        return SurfaceSource(name=name, params=params, n_vertices=n, irregularity=args.irregularity,
+                             noise=args.noise, seed=args.seed, random_params=args.random)
+    return DEFAULT_SOURCE
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the viewer; with ``--screenshot`` render once, save the window image and exit.
+
+    Returns
+    -------
+    int
+        0 on success; 1 when loading or estimating failed in snapshot mode; 2 for bad arguments.
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        from PySide6.QtCore import QSettings
+        from PySide6.QtWidgets import QApplication
+    except ImportError as exc:  # pragma: no cover
+        print(f"curvlab: the viewer needs the gui extra (pip install 'curvlab[gui]'): {exc}", file=sys.stderr)
+        return 2
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    app.setApplicationName("curvlab")
+    app.setOrganizationName("curvlab")
+    from app.views.main_window import MainWindow
+
+    settings = None
+    if args.screenshot:  # snapshots do not read or change the user's settings
+        tmp = tempfile.mkdtemp(prefix="curvlab-")
+        settings = QSettings(str(Path(tmp) / "snapshot.ini"), QSettings.Format.IniFormat)
+    window = MainWindow(settings=settings)
+    try:
+        source = configure(window, args)
+    except ValueError as exc:
+        window.close()
+        parser.exit(2, f"curvlab: error: {exc}\n")
+    if args.screenshot:
+        from app.snapshot import Snapshot
+
+        w, _, h = args.size.partition("x")
+        window.resize(int(w), int(h))
+        snapshot = Snapshot(window, args.screenshot, timeout_s=args.timeout)
+        window.show()
+        window.open_source_then(source)
+        snapshot.start()
+        app.exec()
+        return snapshot.status
+    window.show()
+    window.open_source_then(source)
+    return app.exec()
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,106 @@
+"""Display settings shared by every pane: what to colour by and how."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, fields, replace
+
+from .colour import LimitMode
+from .events import Event
+from .quantities import Quantity
+
+__all__ = ["Layer", "DisplayState", "Display"]
+
+
+class Layer(enum.Enum):
+    """Which field of the chosen quantity is shown."""
+
+    ESTIMATE = "estimate"
+    EXACT = "exact"
+    ERROR = "error"
+    E_REL = "e_rel"
+
+    @property
+    def title(self) -> str:
+        return {"estimate": "Estimate", "exact": "Exact value", "error": "Signed error (est - exact)",
+                "e_rel": "Relative error e_rel"}[self.value]
+
+    @property
+    def needs_truth(self) -> bool:
+        return self is not Layer.ESTIMATE
+
+    def __str__(self) -> str:
+        return self.title
+
+
+@dataclass(frozen=True)
+class DisplayState:
+    """An immutable snapshot of the display settings.
+
+    Attributes
+    ----------
+    quantity : Quantity
+    layer : Layer
+    diverging_cmap, sequential_cmap : str
+        Colour maps for signed and unsigned fields.
+    limit_mode : LimitMode
+    percentiles : (lo, hi)
+        Percentiles of the ``PERCENTILE`` mode, default 2-98 %.
+    manual : (lo, hi)
+        Limits of the ``MANUAL`` mode.
+    shared_scale : bool
+        One colour scale over every estimate pane (compare mode).
+    show_directions : bool
+        Draw d1/d2 glyph lines.
+    """
+
+    quantity: Quantity = Quantity.MEAN
+    layer: Layer = Layer.ESTIMATE
+    diverging_cmap: str = "coolwarm"
+    sequential_cmap: str = "viridis"
+    limit_mode: LimitMode = LimitMode.PERCENTILE
+    percentiles: tuple = (2.0, 98.0)
+    manual: tuple = (-1.0, 1.0)
+    shared_scale: bool = True
+    show_directions: bool = False
+
+    @property
+    def signed(self) -> bool:
+        """Whether the shown field is signed (diverging map, limits centred on 0)."""
+        if self.layer is Layer.ERROR:
+            return True
+        if self.layer is Layer.E_REL:
+            return False
+        return self.quantity.signed
+
+    @property
+    def cmap_name(self) -> str:
+        return self.diverging_cmap if self.signed else self.sequential_cmap
+
+
+class Display:
+    """Mutable holder of a :class:`DisplayState` with a ``changed`` event.
+
+    ``changed`` is emitted with the set of field names that changed.
+    """
+
+    def __init__(self, state: DisplayState | None = None) -> None:
+        self.state = state or DisplayState()
+        self.changed = Event()
+
+    def update(self, **changes) -> None:
+        """Set fields by name; emits ``changed`` only if something differs."""
+        known = {f.name for f in fields(DisplayState)}
+        unknown = set(changes) - known
+        if unknown:
+            raise TypeError(f"unknown display settings: {', '.join(sorted(unknown))}")
+        new = replace(self.state, **changes)
+        diff = {k for k in changes if getattr(new, k) != getattr(self.state, k)}
+        if diff:
+            self.state = new
+            self.changed.emit(diff)
+
+    def __getattr__(self, name):
+        if name == "state":
+            raise AttributeError(name)
+        return getattr(self.state, name)

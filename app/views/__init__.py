@@ -1,0 +1,1 @@
+"""Qt widgets and VTK viewports; they draw the model and forward user edits to it."""

@@ -1,0 +1,77 @@
+"""Building VTK geometry from a :class:`curv.Mesh` (shared by every pane) and direction glyphs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+from vtkmodules.vtkCommonDataModel import vtkCellArray
+
+__all__ = ["mesh_polydata", "direction_glyphs", "glyph_subsample"]
+
+
+def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
+    """A PolyData of ``mesh`` (triangles or polygons) with point normals for smooth shading.
+
+    Parameters
+    ----------
+    mesh : curv.Mesh
+    normals : (n, 3) float, optional
+        Vertex normals; stored as the active normals so VTK shades smoothly without copying.
+    """
+    poly = pv.PolyData()
+    poly.points = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
+    cells = vtkCellArray()
+    offsets = numpy_to_vtkIdTypeArray(np.ascontiguousarray(mesh.face_offsets, dtype=np.int64), deep=True)
+    conn = numpy_to_vtkIdTypeArray(np.ascontiguousarray(mesh.face_indices, dtype=np.int64), deep=True)
+    cells.SetData(offsets, conn)
+    poly.SetPolys(cells)
+    if normals is not None:
+        arr = numpy_to_vtk(np.ascontiguousarray(normals, dtype=np.float32), deep=True)
+        arr.SetName("Normals")
+        poly.GetPointData().SetNormals(arr)
+    return poly
+
+
+def glyph_subsample(n: int, *, count: int = 2000, seed: int = 0) -> np.ndarray:
+    """A fixed, spread-out subset of at most ``count`` vertex indices (same on every pane)."""
+    if n <= count:
+        return np.arange(n)
+    return np.sort(np.random.default_rng(seed).choice(n, size=count, replace=False))
+
+
+def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.ndarray,
+                     min_anisotropy: float = 0.02) -> tuple[pv.PolyData, pv.PolyData]:
+    """Line glyphs along d1 and d2 at ``index``, centred on the vertices.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+    result : curv.Curvature
+    length : float
+        Full length of a glyph line (a multiple of the mean edge length).
+    index : (m,) int
+        Subsample of vertices to draw.
+    min_anisotropy : float
+        Glyphs are hidden where ``|k1 - k2| / (|k1| + |k2|)`` is below this (umbilics: no direction).
+
+    Returns
+    -------
+    (d1_lines, d2_lines) : pyvista.PolyData
+    """
+    k1, k2 = result.k1[index], result.k2[index]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        aniso = np.abs(k1 - k2) / (np.abs(k1) + np.abs(k2))
+    keep = index[np.isfinite(aniso) & (aniso >= min_anisotropy)]
+    out = []
+    lift = 0.02 * length * result.normals[keep]
+    for d in (result.d1, result.d2):
+        half = 0.5 * length * d[keep]
+        centre = points[keep] + lift
+        pts = np.empty((2 * keep.size, 3))
+        pts[0::2] = centre - half
+        pts[1::2] = centre + half
+        lines = np.column_stack([np.full(keep.size, 2), np.arange(0, 2 * keep.size, 2),
+                                 np.arange(1, 2 * keep.size, 2)]).ravel()
+        out.append(pv.PolyData(pts, lines=lines) if keep.size else pv.PolyData())
+    return out[0], out[1]

@@ -1,0 +1,122 @@
+"""The grid of viewports (compare mode) with linked cameras."""
+
+from __future__ import annotations
+
+import math
+
+import pyvista as pv
+from PySide6.QtCore import Signal
+from PySide6.QtWidgets import QGridLayout, QWidget
+from vtkmodules.vtkRenderingCore import vtkCamera
+
+from .viewport import Viewport
+
+__all__ = ["PaneGrid"]
+
+
+class PaneGrid(QWidget):
+    """Holds 1-5 :class:`Viewport` s (4 panes + difference) laid out in a grid.
+
+    With ``linked`` cameras every viewport renders through the first one's camera, and an
+    interaction in any viewport re-renders the others.
+
+    Signals
+    -------
+    activated(int), vertex_picked(int)
+        Forwarded from the viewports.
+    """
+
+    activated = Signal(int)
+    vertex_picked = Signal(int)
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        self.layout_ = QGridLayout(self)
+        self.layout_.setContentsMargins(0, 0, 0, 0)
+        self.layout_.setSpacing(3)
+        self.viewports: list[Viewport] = []
+        self.linked = True
+        self._base: pv.PolyData | None = None
+        self._edge = 1.0
+        self._syncing = False
+        self._synced_mtime = 0
+        self.set_count(1)
+
+    # -- panes ----------------------------------------------------------------------------------
+    def set_count(self, n: int) -> None:
+        """Show ``n`` viewports, creating or closing them as needed."""
+        while len(self.viewports) > n:
+            vp = self.viewports.pop()
+            self.layout_.removeWidget(vp)
+            vp.close_plotter()
+            vp.deleteLater()
+        while len(self.viewports) < n:
+            vp = Viewport(len(self.viewports), self)
+            vp.activated.connect(self.activated)
+            vp.vertex_picked.connect(self.vertex_picked)
+            vp.plotter.ren_win.AddObserver("EndEvent", self._after_render)
+            if self._base is not None:
+                vp.set_geometry(self._base, edge_length=self._edge)
+            self.viewports.append(vp)
+        cols = n if n <= 3 else math.ceil(n / 2)
+        for i, vp in enumerate(self.viewports):
+            self.layout_.addWidget(vp, i // cols, i % cols)
+        self.set_linked(self.linked)
+
+    def set_geometry(self, base: pv.PolyData, *, edge_length: float) -> None:
+        """Show a new mesh in every viewport and frame it."""
+        self._base, self._edge = base, edge_length
+        for vp in self.viewports:
+            vp.set_geometry(base, edge_length=edge_length)
+        self.reset_camera()
+
+    def reset_camera(self) -> None:
+        first = self.viewports[0].plotter
+        first.view_vector((0.55, -1.0, 0.85), viewup=(0.0, 0.0, 1.0), render=False)
+        first.reset_camera(render=False)
+        first.camera.zoom(1.15)
+        if not self.linked:
+            for vp in self.viewports[1:]:
+                vp.plotter.camera.DeepCopy(first.camera)
+        self.render_all()
+
+    # -- cameras --------------------------------------------------------------------------------
+    def set_linked(self, linked: bool) -> None:
+        """Share the first viewport's camera with all (True) or give each its own copy (False)."""
+        self.linked = bool(linked)
+        master = self.viewports[0].plotter.renderer.GetActiveCamera()
+        for vp in self.viewports[1:]:
+            ren = vp.plotter.renderer
+            if linked:
+                ren.SetActiveCamera(master)
+            elif ren.GetActiveCamera() is master:
+                own = vtkCamera()
+                own.DeepCopy(master)
+                ren.SetActiveCamera(own)
+            ren.ResetCameraClippingRange()
+        self.render_all()
+
+    def _after_render(self, window, event) -> None:
+        """After any viewport renders with a moved shared camera, render the others to match."""
+        if self._syncing or not self.linked or len(self.viewports) < 2:
+            return
+        camera = self.viewports[0].plotter.renderer.GetActiveCamera()
+        if camera.GetMTime() <= self._synced_mtime:
+            return
+        self.render_all(skip=window)
+
+    def render_all(self, *, skip=None) -> None:
+        """Render every viewport (except the one whose window is ``skip``)."""
+        self._syncing = True
+        try:
+            for vp in self.viewports:
+                if vp.plotter.ren_win is not skip:
+                    vp.plotter.renderer.ResetCameraClippingRange()
+                    vp.render()
+        finally:
+            self._syncing = False
+            self._synced_mtime = self.viewports[0].plotter.renderer.GetActiveCamera().GetMTime()
+
+    def close_all(self) -> None:
+        for vp in self.viewports:
+            vp.close_plotter()
