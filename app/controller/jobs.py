@@ -75,9 +75,10 @@ class Controller(QObject):
         self._stop_all()
         self._generation += 1
         gen = self._generation
-        worker = create_worker(load_source, source, _start_thread=False)
-        worker.returned.connect(lambda out, gen=gen: self._source_done(gen, out))
-        worker.errored.connect(lambda exc, gen=gen, src=source: self._source_failed(gen, src, exc))
+        # errored must be connected at creation, or superqt re-raises the error in the GUI thread
+        worker = create_worker(load_source, source, _start_thread=False, _connect={
+            "returned": lambda out, gen=gen: self._source_done(gen, out),
+            "errored": lambda exc, gen=gen, src=source: self._source_failed(gen, src, exc)})
         self._source_job = (worker, source)
         worker.start()
         self._update_busy()
@@ -122,10 +123,14 @@ class Controller(QObject):
     def _start_estimate(self, key) -> None:
         method, k = key
         gen = self._generation
-        worker = create_worker(curv.iter_estimate, self.doc.mesh, method, k, _start_thread=False)
-        worker.yielded.connect(lambda f, key=key, w=worker: self._estimate_progress(w, key, f))
-        worker.returned.connect(lambda res, key=key, gen=gen, w=worker: self._estimate_done(w, gen, key, res))
-        worker.errored.connect(lambda exc, key=key, gen=gen, w=worker: self._estimate_failed(w, gen, key, exc))
+        block = int(min(max(self.doc.mesh.n_vertices // 40, 2000), 50000))  # ~40 progress/cancel points
+        box = []  # the worker, for the callbacks (they must exist before it does)
+        worker = create_worker(curv.iter_estimate, self.doc.mesh, method, k, block_size=block,
+                               _start_thread=False, _connect={
+            "yielded": lambda f: self._estimate_progress(box[0], key, f),
+            "returned": lambda res: self._estimate_done(box[0], gen, key, res),
+            "errored": lambda exc: self._estimate_failed(box[0], gen, key, exc)})
+        box.append(worker)
         self._estimates[key] = worker
         self._fractions[key] = 0.0
         worker.start()

@@ -27,7 +27,9 @@ def load_source(source):
         With a one-line message (unreadable file, bad parameters, ...).
     """
     if isinstance(source, FileSource):
-        return source, curv.load(source.path), None
+        # STL stores every triangle with its own corners: merge them, or nothing is connected
+        merge = source.path.lower().endswith(".stl")
+        return source, curv.load(source.path, merge_vertices=merge), None
     if isinstance(source, SurfaceSource):
         sampled = curv.surfaces.make_surface(
             source.name, n_vertices=source.n_vertices, irregularity=source.irregularity,

@@ -7,7 +7,6 @@ import math
 import pyvista as pv
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QGridLayout, QWidget
-from vtkmodules.vtkRenderingCore import vtkCamera
 
 from .viewport import Viewport
 
@@ -77,22 +76,20 @@ class PaneGrid(QWidget):
         first.camera.zoom(1.15)
         if not self.linked:
             for vp in self.viewports[1:]:
-                vp.plotter.camera.DeepCopy(first.camera)
+                vp.plotter.renderer.camera = first.camera.copy()
         self.render_all()
 
     # -- cameras --------------------------------------------------------------------------------
     def set_linked(self, linked: bool) -> None:
         """Share the first viewport's camera with all (True) or give each its own copy (False)."""
         self.linked = bool(linked)
-        master = self.viewports[0].plotter.renderer.GetActiveCamera()
+        master = self.viewports[0].plotter.renderer.camera
         for vp in self.viewports[1:]:
             ren = vp.plotter.renderer
-            if linked:
-                ren.SetActiveCamera(master)
-            elif ren.GetActiveCamera() is master:
-                own = vtkCamera()
-                own.DeepCopy(master)
-                ren.SetActiveCamera(own)
+            if linked and ren.camera is not master:
+                ren.camera = master
+            elif not linked and ren.camera is master:
+                ren.camera = master.copy()
             ren.ResetCameraClippingRange()
         self.render_all()
 

@@ -1,0 +1,68 @@
+"""Fixtures for the viewer tests: the real main window under Xvfb (pytest-xvfb), isolated settings."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("PySide6.QtWidgets", reason="the viewer tests need PySide6 (gui extra)")
+pytest.importorskip("pyvistaqt", reason="the viewer tests need pyvistaqt (gui extra)")
+pytest.importorskip("superqt", reason="the viewer tests need superqt (gui extra)")
+
+from PySide6.QtCore import QSettings  # noqa: E402
+
+from app.model import SurfaceSource  # noqa: E402
+
+TIMEOUT_MS = 30_000
+
+
+@pytest.fixture
+def window(qtbot, tmp_path):
+    """A shown :class:`MainWindow` with settings in ``tmp_path``; closed (workers stopped) afterwards."""
+    from app.views.main_window import MainWindow
+
+    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
+    win = MainWindow(settings=settings)
+    win.quiet = True  # failures go to the status bar only: no dialog waiting for a click
+    win.resize(1200, 760)
+    win.show()
+    qtbot.waitExposed(win)
+    yield win
+    win.close()
+
+
+def wait_ready(qtbot, win, *, timeout: int = TIMEOUT_MS) -> None:
+    """Wait until a mesh is shown and every pane has a result or a failure."""
+    doc, ctl = win.doc, win.controller
+
+    def done():
+        assert doc.mesh is not None and not ctl.busy
+        assert all(p.key in doc.results or p.key in doc.failures for p in doc.panes)
+
+    qtbot.waitUntil(done, timeout=timeout)
+
+
+def open_surface(qtbot, win, name: str = "saddle", *, n_vertices: int = 217, **kw) -> None:
+    """Mesh an analytic surface through the controller and wait for every pane."""
+    win.open_surface(SurfaceSource(name=name, n_vertices=n_vertices, **kw))
+    qtbot.waitUntil(lambda: win.doc.source is not None and win.doc.source.name == name, timeout=TIMEOUT_MS)
+    wait_ready(qtbot, win)
+
+
+class Helpers:
+    """Test helpers bound to one window, handed out by the ``ui`` fixture."""
+
+    timeout = TIMEOUT_MS
+
+    def __init__(self, qtbot, win) -> None:
+        self.qtbot, self.win = qtbot, win
+
+    def wait_ready(self, *, timeout: int = TIMEOUT_MS) -> None:
+        wait_ready(self.qtbot, self.win, timeout=timeout)
+
+    def open_surface(self, name: str = "saddle", **kw) -> None:
+        open_surface(self.qtbot, self.win, name, **kw)
+
+
+@pytest.fixture
+def ui(qtbot, window):
+    return Helpers(qtbot, window)

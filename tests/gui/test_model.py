@@ -1,0 +1,72 @@
+"""The viewer's document model on its own (plain Python: no display needed)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("app.model")
+
+import curv  # noqa: E402
+from app.model import Document, LimitMode, Pane, colormap, compute_limits, map_colours  # noqa: E402
+from app.model.colour import INVALID_RGBA  # noqa: E402
+from app.model.errors import relative_error  # noqa: E402
+
+
+def test_map_colours_ends_centre_and_nan():
+    cmap = colormap("coolwarm")
+    rgba = map_colours(np.array([-5.0, -1.0, 0.0, 1.0, 5.0, np.nan]), (-1.0, 1.0), cmap)
+    assert rgba.dtype == np.uint8 and rgba.shape == (6, 4)
+    np.testing.assert_array_equal(rgba[0, :3], cmap.table[0])   # clipped below
+    np.testing.assert_array_equal(rgba[1, :3], cmap.table[0])
+    np.testing.assert_array_equal(rgba[2, :3], cmap.table[128])  # 0 maps to the middle entry
+    np.testing.assert_array_equal(rgba[4, :3], cmap.table[-1])
+    np.testing.assert_array_equal(rgba[5], INVALID_RGBA)
+    assert rgba[0, 2] > rgba[0, 0] and rgba[4, 0] > rgba[4, 2]  # blue low, red high
+
+
+def test_limits_symmetric_percentile_minmax_manual():
+    v = np.r_[np.linspace(-1.0, 3.0, 101), np.nan]
+    assert compute_limits(v, mode=LimitMode.MINMAX, signed=True) == (-3.0, 3.0)
+    assert compute_limits(v, mode=LimitMode.MINMAX, signed=False) == (-1.0, 3.0)
+    lo, hi = compute_limits(v, mode=LimitMode.PERCENTILE, signed=True, percentiles=(2, 98))
+    assert hi == pytest.approx(np.percentile(v[:-1], 98)) and lo == -hi
+    assert compute_limits(v, mode=LimitMode.MANUAL, signed=True, manual=(0.5, -0.2)) == (-0.2, 0.5)
+    lo, hi = compute_limits(np.full(4, 2.0), mode=LimitMode.MINMAX, signed=False)
+    assert lo < 2.0 < hi
+
+
+def test_relative_error_exact_values():
+    est = curv.Curvature(k1=np.array([1.1, 2.0]), k2=np.array([0.9, np.nan]), d1=np.zeros((2, 3)),
+                         d2=np.zeros((2, 3)), normals=np.zeros((2, 3)), valid=np.array([True, False]))
+    truth = curv.Curvature(k1=np.array([1.0, 1.0]), k2=np.array([1.0, 1.0]), d1=np.zeros((2, 3)),
+                           d2=np.zeros((2, 3)), normals=np.zeros((2, 3)), valid=np.array([True, True]))
+    e = relative_error(est, truth)
+    assert e[0] == pytest.approx(0.1) and np.isnan(e[1])
+
+
+def _result(n, value):
+    return curv.Curvature(k1=np.full(n, value), k2=np.full(n, value), d1=np.zeros((n, 3)), d2=np.zeros((n, 3)),
+                          normals=np.zeros((n, 3)), valid=np.ones(n, bool))
+
+
+def test_failure_reverts_pane_to_last_good_and_events_fire():
+    mesh = curv.Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    doc = Document(default_panes=(Pane("mru", 2), Pane("nc", 2)))
+    seen = []
+    doc.pane_changed.connect(lambda i: seen.append(("pane", i)))
+    doc.set_mesh("src", mesh)
+    doc.set_result(("mru", 2), _result(3, 1.0))
+    doc.set_pane(0, method="ru")
+    assert doc.missing_keys() == [("ru", 2)]
+    doc.set_failure(("ru", 2), "ru needs triangles")
+    assert doc.panes[0] == Pane("mru", 2) and ("ru", 2) in doc.failures
+    assert seen == [("pane", 0), ("pane", 0)]
+    doc.set_pane_count(2)
+    assert doc.panes[1] == Pane("nc", 2) and doc.missing_keys() == [("nc", 2)]
+    doc.set_result(("nc", 2), _result(3, 3.0))
+    doc.set_difference(True)
+    fields = doc.fields()
+    assert len(fields) == 3
+    assert fields[0][1] == fields[1][1] == (-3.0, 3.0)          # shared scale over A and B (H = 1, 3)
+    np.testing.assert_allclose(fields[2][0], -2.0)               # A - B
