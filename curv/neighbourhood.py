@@ -77,9 +77,10 @@ class Neighbourhood:
 
 def _ball_filter(c: sp.csr_matrix, centres: np.ndarray, pos: np.ndarray, radius2: np.ndarray) -> sp.csr_matrix:
     """Keep the entries (i, j) of ``c`` with ``|pos[j] - pos[centres[i]]|^2 <= radius2[i]``."""
-    rows = np.repeat(np.arange(c.shape[0]), np.diff(c.indptr))
-    d = pos[c.indices] - pos[centres[rows]]
-    keep = np.einsum("ij,ij->i", d, d) <= radius2[rows]
+    counts = np.diff(c.indptr)
+    rows = np.repeat(np.arange(c.shape[0]), counts)
+    d = pos[c.indices] - np.repeat(pos[centres], counts, axis=0)
+    keep = np.einsum("ij,ij->i", d, d) <= np.repeat(radius2, counts)
     counts = np.bincount(rows[keep], minlength=c.shape[0])
     indptr = np.zeros(c.shape[0] + 1, dtype=np.int64)
     np.cumsum(counts, out=indptr[1:])
@@ -91,21 +92,25 @@ def _block_supports(mesh: Mesh, ids: np.ndarray, factor: float, adjacency: sp.cs
     c = ids.size
     radius = factor * mesh.longest_edge[ids] * (1.0 + TIE_TOLERANCE)
     radius2 = radius**2
-    reached = sp.csr_matrix((np.ones(c, bool), (np.arange(c), ids)), shape=(c, n))
-    frontier = reached
     pos = mesh.vertices
-    while frontier.nnz:
-        candidates = (frontier @ adjacency).astype(bool)
-        candidates = candidates > reached  # drop what is reached already
-        frontier = _ball_filter(candidates.tocsr(), ids, pos, radius2)
-        reached = (reached + frontier).astype(bool)
-    reached.sort_indices()
-    rows = np.repeat(np.arange(c), np.diff(reached.indptr))
-    not_self = reached.indices != ids[rows]
-    counts = np.bincount(rows[not_self], minlength=c)
+    layer = sp.csr_matrix((np.ones(c, bool), (np.arange(c), ids)), shape=(c, n))
+    previous = sp.csr_matrix((c, n), dtype=bool)
+    layers = []
+    while layer.nnz:
+        # BFS layering: a neighbour of layer t lies in layer t-1, t or t+1, so only those two
+        # layers need subtracting (not everything reached so far)
+        candidates = (layer @ adjacency).astype(bool)
+        candidates = candidates > layer
+        candidates = candidates > previous
+        previous, layer = layer, _ball_filter(candidates.tocsr(), ids, pos, radius2)
+        layers.append(layer)
+    rows = np.concatenate([np.repeat(np.arange(c), np.diff(l.indptr)) for l in layers])
+    cols = np.concatenate([l.indices for l in layers]).astype(np.int64)
+    order = np.argsort(rows, kind="stable")
+    counts = np.bincount(rows, minlength=c)
     indptr = np.zeros(c + 1, dtype=np.int64)
     np.cumsum(counts, out=indptr[1:])
-    return Neighbourhood(ids, indptr, reached.indices[not_self].astype(np.int64), radius)
+    return Neighbourhood(ids, indptr, cols[order], radius)
 
 
 def block_size_for(mesh: Mesh, factor: float, *, pairs: int = DEFAULT_BLOCK_PAIRS) -> int:

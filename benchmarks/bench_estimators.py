@@ -1,0 +1,144 @@
+"""Speed and memory of every estimator variant, with libigl and VTK as peers.
+
+Run by hand (not part of the test suite)::
+
+    .venv/bin/python benchmarks/bench_estimators.py --sizes 100000 1000000
+    .venv/bin/python benchmarks/bench_estimators.py --sizes 1000000 --only mru:2 nc:4
+
+Each measurement runs in a fresh subprocess so that peak memory (ru_maxrss) is its own; the mesh and
+its connectivity are built before the baseline is taken, so "peak above mesh" is what the estimate
+itself adds. The mesh is a torus with jittered parameters (irregular, closed, valence ~6).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+
+def jittered_torus(n_target: int, *, R: float = 2.0, r: float = 0.8, seed: int = 0):
+    """Closed irregular triangle torus with about ``n_target`` vertices: (vertices (n,3), faces (m,3))."""
+    n_minor = int(round(np.sqrt(n_target * r / R)))
+    n_major = int(round(n_target / n_minor))
+    rng = np.random.default_rng(seed)
+    i, j = np.meshgrid(np.arange(n_major), np.arange(n_minor), indexing="ij")
+    theta = 2 * np.pi * (i.ravel() + 0.25 * rng.uniform(-1, 1, i.size)) / n_major
+    phi = 2 * np.pi * (j.ravel() + 0.25 * rng.uniform(-1, 1, j.size)) / n_minor
+    ring = R + r * np.cos(phi)
+    v = np.stack([ring * np.cos(theta), ring * np.sin(theta), r * np.sin(phi)], axis=1)
+    a = (i * n_minor + j).ravel()
+    b = (((i + 1) % n_major) * n_minor + j).ravel()
+    c = (((i + 1) % n_major) * n_minor + (j + 1) % n_minor).ravel()
+    d = (i * n_minor + (j + 1) % n_minor).ravel()
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    return v, faces
+
+
+def _maxrss_bytes() -> int:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def _child(kind: str, name: str, k: int, n: int) -> dict:
+    """Runs in the subprocess: build the mesh, take the baseline, time one estimate."""
+    v, f = jittered_torus(n)
+    if kind == "curv":
+        import curv
+
+        mesh = curv.Mesh(v, f)
+        t0 = time.perf_counter()
+        for attr in ("edges", "adjacency", "longest_edge", "edge_faces", "vertex_faces", "degenerate_faces",
+                     "border_vertices", "nonmanifold_vertices", "face_normals"):
+            getattr(mesh, attr)
+        prep = time.perf_counter() - t0
+        base = _maxrss_bytes()
+        t0 = time.perf_counter()
+        res = curv.estimate(mesh, name, k)
+        seconds = time.perf_counter() - t0
+        extra = {"valid": float(res.valid.mean()), "prep_seconds": prep}
+    elif kind == "igl":
+        import igl
+
+        base = _maxrss_bytes()
+        t0 = time.perf_counter()
+        igl.principal_curvature(v, f.astype(np.int64), radius=k)
+        seconds = time.perf_counter() - t0
+        extra = {}
+    elif kind == "vtk":
+        import pyvista as pv
+        import vtk
+
+        poly = pv.PolyData.from_regular_faces(v, f)
+        base = _maxrss_bytes()
+        t0 = time.perf_counter()
+        for mode in ("SetCurvatureTypeToMean", "SetCurvatureTypeToGaussian"):
+            flt = vtk.vtkCurvatures()
+            flt.SetInputData(poly)
+            getattr(flt, mode)()
+            flt.Update()
+        seconds = time.perf_counter() - t0
+        extra = {}
+    else:
+        raise ValueError(kind)
+    return {"seconds": seconds, "peak_above_mesh_mb": (_maxrss_bytes() - base) / 2**20, **extra}
+
+
+def run_one(kind: str, name: str, k: int, n: int) -> dict:
+    cmd = [sys.executable, __file__, "--child", kind, name, str(k), str(n)]
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        return {"error": (out.stderr.strip().splitlines() or ["failed"])[-1]}
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sizes", type=int, nargs="+", default=[100_000, 1_000_000])
+    parser.add_argument("--only", nargs="*", help="variants as name:k (default all)")
+    parser.add_argument("--no-peers", action="store_true", help="skip libigl and VTK")
+    parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child:
+        kind, name, k, n = args.child
+        print(json.dumps(_child(kind, name, int(k), int(n))))
+        return 0
+
+    import curv
+    from curv.estimators import all_variants
+
+    variants = [tuple(v.split(":")) for v in args.only] if args.only else all_variants()
+    variants = [(m, int(k)) for m, k in variants]
+    print(f"# cores: {os.cpu_count()}, numpy {np.__version__}, curv {curv.__version__}")
+    for n in args.sizes:
+        v, _ = jittered_torus(n)
+        print(f"\n## jittered torus, {len(v)} vertices")
+        print(f"{'variant':<12} {'seconds':>8} {'peak MB':>8} {'valid':>6}   vs igl R2  vs VTK")
+        peers = {}
+        if not args.no_peers:
+            peers["igl"] = run_one("igl", "principal_curvature", 2, n)
+            peers["vtk"] = run_one("vtk", "curvatures", 0, n)
+        for m, k in variants:
+            r = run_one("curv", m, k, n)
+            if "error" in r:
+                print(f"{m + ' R' + str(k):<12} error: {r['error']}")
+                continue
+            ratios = "  ".join(
+                f"{peers[p]['seconds'] / r['seconds']:8.2f}x" if "seconds" in peers.get(p, {}) else "       -"
+                for p in ("igl", "vtk"))
+            print(f"{m + ' R' + str(k):<12} {r['seconds']:8.2f} {r['peak_above_mesh_mb']:8.0f} "
+                  f"{r['valid']:6.3f}   {ratios}", flush=True)
+        for p, r in peers.items():
+            text = f"{r['seconds']:8.2f} {r['peak_above_mesh_mb']:8.0f}" if "seconds" in r else f"error: {r['error']}"
+            label = "libigl R2" if p == "igl" else "VTK H+K"
+            print(f"{label:<12} {text}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
