@@ -91,6 +91,12 @@ def iter_estimate(
     k1, k2, d1, d2, reason = raw.k1, raw.k2, raw.d1, raw.d2, raw.reason.copy()
     isolated = mesh.isolated_vertices
     reason[(reason == Reason.OK) & isolated] = Reason.DEGENERATE
+    # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
+    reason[(reason == Reason.OK) & mesh.nonmanifold_vertices] = Reason.NONMANIFOLD
+    # faces of opposite orientation meet here: the vertex normal is meaningless
+    flipped = np.zeros(mesh.n_vertices, bool)
+    flipped[mesh.edges[mesh.inconsistent_edges].reshape(-1)] = True
+    reason[(reason == Reason.OK) & flipped] = Reason.DEGENERATE
     reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
     swap = k2 > k1
     k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)

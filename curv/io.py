@@ -21,7 +21,7 @@ from .result import Curvature
 
 __all__ = ["load", "save_ply", "read_arrays"]
 
-_MESHIO_SUFFIXES = {".obj", ".off"}
+_MESHIO_SUFFIXES = {".obj"}
 
 
 def _one_line(exc: BaseException) -> str:
@@ -40,26 +40,110 @@ def _check_path(path: Path) -> None:
         raise LoadError(f"{path}: file is empty")
 
 
+def _ply_header(fh) -> tuple[str, dict[str, int], dict[str, list[str]]]:
+    """Parse just enough of a PLY header: format, element counts, list property names per element."""
+    fmt, counts, lists, current = "", {}, {}, None
+    for _ in range(10_000):
+        line = fh.readline()
+        if not line:
+            break
+        words = line.decode("ascii", errors="replace").split()
+        if not words:
+            continue
+        if words[0] == "format" and len(words) > 1:
+            fmt = words[1]
+        elif words[0] == "element" and len(words) == 3 and words[2].isdigit():
+            current = words[1]
+            counts[current] = int(words[2])
+            lists[current] = []
+        elif words[0] == "property" and len(words) == 5 and words[1] == "list" and current:
+            lists[current].append(words[4])
+        elif words[0] == "end_header":
+            return fmt, counts, lists
+    return fmt, counts, lists
+
+
+def _ply_trailing_data(fh, fmt: str, header_end: int, counts: dict[str, int], position: int) -> bool:
+    """True when the file holds more data than the header's element counts declare."""
+    if fmt == "ascii":
+        fh.seek(header_end)
+        lines = [ln for ln in fh.read().split(b"\n") if ln.strip()]
+        return len(lines) > sum(counts.values())
+    fh.seek(position)
+    return bool(fh.read(64).strip())
+
+
+def _read_off(path: Path):
+    """OFF / COFF / NOFF: vertices (extra per-vertex values ignored), polygons of any size."""
+    text = path.read_bytes().decode("ascii", errors="strict")
+    lines = [ln.split("#", 1)[0].split() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln]
+    if not lines or not lines[0][0].upper().endswith("OFF"):
+        raise ValueError("no OFF keyword on the first line")
+    head = lines[0][1:] or lines[1]
+    body = lines[1:] if lines[0][1:] else lines[2:]
+    if len(head) < 2:
+        raise ValueError("missing vertex and face counts")
+    nv, nf = int(head[0]), int(head[1])
+    if len(body) < nv + nf:
+        raise ValueError(f"header declares {nv} vertices and {nf} faces but the file ends after {len(body)} lines")
+    if len(body) > nv + nf:
+        raise ValueError(f"header declares {nv} vertices and {nf} faces but the file has {len(body)} data lines")
+    vertices = np.array([ln[:3] for ln in body[:nv]], dtype=np.float64).reshape(-1, 3)
+    faces = [np.array(ln[1:1 + int(ln[0])], dtype=np.int64) for ln in body[nv:]]
+    bad = [i for i, (ln, f) in enumerate(zip(body[nv:], faces)) if f.size != int(ln[0])]
+    if bad:
+        raise ValueError(f"face {bad[0]} lists fewer indices than its count")
+    if not faces:
+        raise LoadError(f"{path}: has {nv} vertices but no faces; curv needs a mesh")
+    return vertices, faces
+
+
 def _read_ply(path: Path):
-    from plyfile import PlyData
+    from plyfile import PlyData, PlyElementParseError
 
     with open(path, "rb") as fh:
-        data = PlyData.read(fh)
-    names = [e.name for e in data.elements]
-    if "vertex" not in names:
-        raise LoadError(f"{path}: PLY file has no vertex element")
-    vert = data["vertex"].data
-    missing = [c for c in "xyz" if c not in vert.dtype.names]
-    if missing:
-        raise LoadError(f"{path}: PLY vertices lack coordinate(s) {', '.join(missing)}")
-    vertices = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
-    if "face" not in names or len(data["face"].data) == 0:
-        raise LoadError(f"{path}: has {len(vertices)} vertices but no faces (a point cloud?); curv needs a mesh")
-    face = data["face"].data
-    key = next((k for k in ("vertex_indices", "vertex_index") if k in face.dtype.names), None)
-    if key is None:
-        raise LoadError(f"{path}: PLY faces have no vertex_indices list")
-    return vertices, list(face[key])
+        fmt, counts, lists = _ply_header(fh)
+        header_end = fh.tell()
+        fh.seek(0)
+        key = next((k for k in ("vertex_indices", "vertex_index") if k in lists.get("face", [])), None)
+        data = None
+        if fmt.startswith("binary") and key is not None and lists["face"] == [key]:
+            # fast path: triangles memory-mapped as an (m, 3) array, no per-face Python objects
+            try:
+                data = PlyData.read(fh, known_list_len={"face": {key: 3}})
+            except PlyElementParseError as exc:
+                if "unexpected list length" not in str(exc):
+                    raise
+                fh.seek(0)
+        if data is None:
+            data = PlyData.read(fh)
+        position = fh.tell() if not fh.closed else 0
+    with open(path, "rb") as fh:
+        if _ply_trailing_data(fh, fmt, header_end, counts, position):
+            raise LoadError(f"{path}: holds more data than its header declares "
+                            f"({', '.join(f'{n} {e}' for e, n in counts.items())}); the element counts are wrong")
+        names = [e.name for e in data.elements]
+        if "vertex" not in names:
+            raise LoadError(f"{path}: PLY file has no vertex element")
+        vert = data["vertex"].data
+        missing = [c for c in "xyz" if c not in vert.dtype.names]
+        if missing:
+            raise LoadError(f"{path}: PLY vertices lack coordinate(s) {', '.join(missing)}")
+        vertices = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+        if "face" not in names or len(data["face"].data) == 0:
+            raise LoadError(f"{path}: has {len(vertices)} vertices but no faces (a point cloud?); curv needs a mesh")
+        face = data["face"].data
+        key = next((k for k in ("vertex_indices", "vertex_index") if k in face.dtype.names), None)
+        if key is None:
+            raise LoadError(f"{path}: PLY faces have no vertex_indices list")
+        column = face[key]
+        if column.dtype != object:
+            return vertices, np.array(column, dtype=np.int64)
+        sizes = np.fromiter((len(p) for p in column), dtype=np.int64, count=len(column))
+        if np.all(sizes == sizes[0]) and sizes[0] > 0:
+            return vertices, np.stack(column).astype(np.int64)
+        return vertices, list(column)
 
 
 def _read_meshio(path: Path):
@@ -104,7 +188,8 @@ def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:
     path = Path(path)
     _check_path(path)
     suffix = path.suffix.lower()
-    reader = _read_ply if suffix == ".ply" else _read_meshio if suffix in _MESHIO_SUFFIXES else _read_trimesh
+    reader = {".ply": _read_ply, ".off": _read_off}.get(suffix) or (
+        _read_meshio if suffix in _MESHIO_SUFFIXES else _read_trimesh)
     try:
         return reader(path)
     except LoadError:

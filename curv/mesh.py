@@ -35,6 +35,8 @@ class MeshReport:
     nonmanifold_vertices: int
     degenerate_faces: int
     isolated_vertices: int
+    inconsistent_edges: int = 0
+    duplicate_vertices: int = 0
 
     def lines(self) -> list[str]:
         """Human-readable lines, one fact each."""
@@ -50,6 +52,8 @@ class MeshReport:
             (self.nonmanifold_vertices, "non-manifold vertices"),
             (self.degenerate_faces, "degenerate faces"),
             (self.isolated_vertices, "isolated vertices"),
+            (self.inconsistent_edges, "edges between faces of opposite orientation"),
+            (self.duplicate_vertices, "vertices at the same position as another"),
         ]:
             if count:
                 out.append(f"{count} {what}")
@@ -410,6 +414,36 @@ class Mesh:
         return self.edge_face_count > 2
 
     @cached_property
+    def inconsistent_edges(self) -> np.ndarray:
+        """(e,) bool: manifold edges whose two faces traverse them in the same direction.
+
+        Such an edge joins faces of opposite orientation (a flipped face); the vertex normals there
+        are unreliable. :func:`curv.repair.orient_faces` fixes them.
+        """
+        he = self.halfedge_edge
+        ok = he >= 0
+        forward = self.halfedges[ok, 0] < self.halfedges[ok, 1]
+        n_forward = np.bincount(he[ok], weights=forward, minlength=self.edges.shape[0])
+        return (self.edge_face_count == 2) & (n_forward != 1)
+
+    @cached_property
+    def duplicate_vertices(self) -> np.ndarray:
+        """(n,) bool: vertices at exactly the position of a vertex with a lower index."""
+        v = self._vertices
+        order = np.lexsort(v.T[::-1])
+        same = np.all(v[order[1:]] == v[order[:-1]], axis=1)
+        out = np.zeros(self.n_vertices, bool)
+        out[order[1:][same]] = True
+        # within a run of equal rows the lowest index must stay unmarked
+        first = np.ones(self.n_vertices, bool)
+        first[1:] = ~same
+        run = np.cumsum(first) - 1
+        lowest = np.full(run[-1] + 1, self.n_vertices)
+        np.minimum.at(lowest, run, order)
+        out[lowest[run]] = False
+        return out
+
+    @cached_property
     def border_vertices(self) -> np.ndarray:
         """(n,) bool: vertices on a border edge or a non-manifold edge."""
         out = np.zeros(self.n_vertices, bool)
@@ -488,6 +522,8 @@ class Mesh:
             nonmanifold_vertices=int(self.nonmanifold_vertices.sum()),
             degenerate_faces=int(self.degenerate_faces.sum()),
             isolated_vertices=int(iso.sum()),
+            inconsistent_edges=int(self.inconsistent_edges.sum()),
+            duplicate_vertices=int(self.duplicate_vertices.sum()),
         )
 
     # ------------------------------------------------------------------ derived meshes
