@@ -484,7 +484,7 @@ class Mesh:
         )
         ncomp, labels = sp.csgraph.connected_components(g, directed=False)
         fans = np.zeros(self.n_vertices, np.int64)
-        pair = np.unique(labels[:h] * self.n_vertices + self._indices)
+        pair = np.unique(labels[:h].astype(np.int64) * self.n_vertices + self._indices)  # int32 labels overflow
         np.add.at(fans, pair % self.n_vertices, 1)
         out = fans > 1
         out[self.edges[self.nonmanifold_edges].reshape(-1)] = True
