@@ -1,0 +1,110 @@
+import numpy as np
+import pytest
+
+import curv
+from curv.validity import Reason
+from tests.meshes import icosphere, tube
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return icosphere(3, 2.0)
+
+
+def test_unknown_method_lists_the_known_ones(sphere):
+    with pytest.raises(curv.EstimatorError, match="unknown estimator 'foo'; choose one of .*mru") as err:
+        curv.estimate(sphere, "foo", 2)
+    assert isinstance(err.value, ValueError)
+
+
+@pytest.mark.parametrize("method, bad, allowed", [("meyer", 2, "R1"), ("ru", 3, "R2"), ("mru", 1, "R2, R3, R4"),
+                                                  ("an", 5, "R2, R3, R4"), ("nc", 2.5, "R1, R2, R3, R4")])
+def test_unsupported_range_names_the_allowed_ones(sphere, method, bad, allowed):
+    with pytest.raises(ValueError, match=f"no range {bad!r}; allowed: {allowed}$"):
+        curv.estimate(sphere, method, bad)
+
+
+def test_range_spellings(sphere):
+    a = curv.estimate(sphere, "qs", 3)
+    b = curv.estimate(sphere, "qs", "R3")
+    np.testing.assert_array_equal(a.k1, b.k1)
+    assert a.range == b.range == 3 and a.method == "qs"
+
+
+def test_result_contract(sphere):
+    res = curv.estimate(sphere, "mru", 2)
+    n = sphere.n_vertices
+    assert res.k1.shape == res.k2.shape == res.valid.shape == res.reason.shape == (n,)
+    assert res.d1.shape == res.d2.shape == res.normals.shape == (n, 3)
+    np.testing.assert_allclose(res.mean, 0.5 * (res.k1 + res.k2))
+    np.testing.assert_allclose(res.gaussian, res.k1 * res.k2)
+    np.testing.assert_allclose(res.shape_index, 1.0)  # umbilic cap: shape index +1
+    assert res.valid.dtype == bool and res.reason.dtype == np.uint8
+    # right-handed frames (d1, d2, N)
+    assert np.all(np.einsum("ij,ij->i", np.cross(res.d1, res.d2), res.normals) > 0.99)
+
+
+def test_given_normals_are_used(sphere):
+    exact = sphere.vertices / np.linalg.norm(sphere.vertices, axis=1, keepdims=True)
+    res = curv.estimate(sphere, "an", 2, normals=3 * exact)  # normalised on the way in
+    np.testing.assert_allclose(res.normals, exact, atol=1e-15)
+    with pytest.raises(curv.MeshError, match=r"normals must have shape \(642, 3\)"):
+        curv.estimate(sphere, "an", 2, normals=exact[:10])
+
+
+def test_iter_estimate_reports_progress_and_returns_the_result(sphere):
+    gen = curv.iter_estimate(sphere, "nc", 4, block_size=100)
+    fractions = []
+    try:
+        while True:
+            fractions.append(next(gen))
+    except StopIteration as stop:
+        res = stop.value
+    assert fractions[0] == 0.0 and fractions[-1] == 1.0
+    assert np.all(np.diff(fractions) >= 0) and len(fractions) >= 8
+    np.testing.assert_allclose(res.k1, curv.estimate(sphere, "nc", 4).k1)
+
+
+def test_stopping_the_generator_midway_is_clean(sphere):
+    gen = curv.iter_estimate(sphere, "qs", 2, block_size=50)
+    next(gen), next(gen)
+    gen.close()  # cancel: no exception, nothing left running
+
+
+def test_invalid_values_are_nan_never_made_up():
+    m = tube(40, 20)
+    res = curv.estimate(m, "meyer", 1)
+    bad = ~res.valid
+    assert bad.any() and (res.reason[bad] == Reason.BORDER).all()
+    for arr in (res.k1, res.k2, res.mean, res.gaussian):
+        assert np.isnan(arr[bad]).all() and np.isfinite(arr[~bad]).all()
+    assert np.isnan(res.d1[bad]).all()
+
+
+def test_mesh_smoothing_reduces_noise_error():
+    rng = np.random.default_rng(1)
+    clean = icosphere(4)
+    noisy = clean.with_vertices(clean.vertices + 0.1 * clean.mean_edge_length * rng.standard_normal(clean.vertices.shape))
+    plain = curv.estimate(noisy, "nc", 2)
+    sm = curv.estimate(noisy, "nc", 2, smooth="mesh", smooth_iterations=2)
+    assert sm.info["smooth"] == "mesh"
+    err = lambda r: np.sqrt(np.nanmean((r.k1 - 1) ** 2 + (r.k2 - 1) ** 2))
+    assert err(sm) < 0.8 * err(plain)
+
+
+def test_value_smoothing_averages_neighbours_only_over_valid_vertices():
+    rng = np.random.default_rng(2)
+    clean = icosphere(4)
+    noisy = clean.with_vertices(clean.vertices + 0.1 * clean.mean_edge_length * rng.standard_normal(clean.vertices.shape))
+    plain = curv.estimate(noisy, "mru", 2)
+    sv = curv.estimate(noisy, "mru", 2, smooth="values")
+    assert np.nanstd(sv.mean) < 0.8 * np.nanstd(plain.mean)
+    assert np.all(sv.k1[sv.valid] >= sv.k2[sv.valid])
+    m = tube(40, 20)
+    res = curv.estimate(m, "ru", 2, smooth="values")
+    assert np.isnan(res.k1[~res.valid]).all() and np.isfinite(res.k1[res.valid]).all()
+
+
+def test_not_a_mesh_is_rejected():
+    with pytest.raises(curv.MeshError, match="expected a curv.Mesh"):
+        curv.estimate(np.zeros((3, 3)), "nc", 1)
