@@ -155,6 +155,7 @@ def main(argv: list[str] | None = None) -> int:
         from app.snapshot import Snapshot
 
         w, _, h = args.size.partition("x")
+        window.requested_size = (int(w), int(h))
         window.resize(int(w), int(h))
         snapshot = Snapshot(window, args.screenshot, timeout_s=args.timeout)
         window.show()

@@ -51,6 +51,10 @@ class Snapshot(QObject):
         QApplication.processEvents()
         self.window.grid.render_all()
         image = self.window.grab()
+        wanted = getattr(self.window, "requested_size", None)
+        if wanted is not None and (image.width(), image.height()) != tuple(wanted):
+            print(f"curvlab: the window could not be {wanted[0]}x{wanted[1]}; "
+                  f"saved at its minimum {image.width()}x{image.height()}", file=sys.stderr)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         if not image.save(str(self.path), "PNG"):
             self._finish(f"could not write {self.path}")

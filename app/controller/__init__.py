@@ -1,6 +1,6 @@
 """Runs the slow work (loading, meshing, estimation) in worker threads and feeds the model."""
 
 from .jobs import Controller
-from .sources import load_source
+from .sources import Loaded, load_source, prepare_source
 
-__all__ = ["Controller", "load_source"]
+__all__ = ["Controller", "Loaded", "load_source", "prepare_source"]

@@ -12,13 +12,20 @@ from superqt.utils import create_worker
 
 from app.model import Document
 
-from .sources import load_source
+from .sources import prepare_source
 
 __all__ = ["Controller"]
 
 
 class Controller(QObject):
     """Start, supersede and cancel the document's background work.
+
+    Parameters
+    ----------
+    document : Document
+    prepare : callable, optional
+        ``prepare(mesh)`` run in the source worker after loading (e.g. to build render geometry off
+        the GUI thread); its value is :attr:`prepared` when ``mesh_changed`` fires.
 
     Signals
     -------
@@ -37,9 +44,12 @@ class Controller(QObject):
     message = Signal(str)
     failed = Signal(str)
 
-    def __init__(self, document: Document, parent: QObject | None = None) -> None:
+    def __init__(self, document: Document, parent: QObject | None = None, *, prepare=None) -> None:
         super().__init__(parent)
         self.doc = document
+        self.prepare = prepare
+        self.prepared = None
+        """What ``prepare(mesh)`` built in the worker for the current mesh (set before ``mesh_changed``)."""
         self._generation = 0
         self._source_job = None
         self._estimates: dict[tuple[str, int], object] = {}
@@ -76,7 +86,7 @@ class Controller(QObject):
         self._generation += 1
         gen = self._generation
         # errored must be connected at creation, or superqt re-raises the error in the GUI thread
-        worker = create_worker(load_source, source, _start_thread=False, _connect={
+        worker = create_worker(prepare_source, source, self.prepare, _start_thread=False, _connect={
             "returned": lambda out, gen=gen: self._source_done(gen, out),
             "errored": lambda exc, gen=gen, src=source: self._source_failed(gen, src, exc)})
         self._source_job = (worker, source)
@@ -87,9 +97,9 @@ class Controller(QObject):
         if gen != self._generation or self._closed:
             return
         self._source_job = None
-        source, mesh, truth = out
-        self.doc.set_mesh(source, mesh, truth)
-        self.message.emit(f"{source.label}: {'; '.join(mesh.report().lines()[:2])}")
+        self.prepared = out.prepared
+        self.doc.set_mesh(out.source, out.mesh, out.truth)
+        self.message.emit(f"{out.source.label}: {'; '.join(out.report[:2])}")
         self.request_missing()
         self._update_busy()
 

@@ -2,11 +2,42 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import curv
 
 from app.model.sources import FileSource, SurfaceSource
 
-__all__ = ["load_source"]
+__all__ = ["load_source", "prepare_source", "Loaded"]
+
+
+@dataclass
+class Loaded:
+    """What a source job hands to the GUI thread.
+
+    Attributes
+    ----------
+    source : FileSource or SurfaceSource
+    mesh : curv.Mesh
+    truth : curv.Curvature or None
+    report : list of str
+        ``mesh.report().lines()``, computed off the GUI thread.
+    prepared : object
+        Whatever the controller's ``prepare`` hook built from the mesh (e.g. render geometry).
+    """
+
+    source: object
+    mesh: object
+    truth: object
+    report: list = field(default_factory=list)
+    prepared: object = None
+
+
+def prepare_source(source, prepare=None) -> Loaded:
+    """:func:`load_source`, the mesh report, and ``prepare(mesh)`` if given; runs in a worker thread."""
+    source, mesh, truth = load_source(source)
+    report = mesh.report().lines()
+    return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh))
 
 
 def load_source(source):

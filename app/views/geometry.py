@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import curv
 import numpy as np
 import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray
 
-__all__ = ["mesh_polydata", "direction_glyphs", "glyph_subsample"]
+__all__ = ["mesh_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample"]
 
 
 def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
@@ -31,6 +32,11 @@ def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
         arr.SetName("Normals")
         poly.GetPointData().SetNormals(arr)
     return poly
+
+
+def prepare_geometry(mesh) -> tuple[pv.PolyData, float]:
+    """Render geometry of ``mesh`` and its mean edge length; safe to run in a worker thread."""
+    return mesh_polydata(mesh, curv.vertex_normals(mesh)), float(mesh.mean_edge_length)
 
 
 def glyph_subsample(n: int, *, count: int = 2000, seed: int = 0) -> np.ndarray:

@@ -18,7 +18,7 @@ from app.model import Document, FileSource, Layer, Pane, SurfaceSource, colormap
 from app.model.colour import map_colours
 
 from .compare_panel import ComparePanel
-from .geometry import direction_glyphs, glyph_subsample, mesh_polydata
+from .geometry import direction_glyphs, glyph_subsample, prepare_geometry
 from .inspect_panel import InspectPanel
 from .pane_grid import PaneGrid
 from .readout import Readout
@@ -55,7 +55,7 @@ class MainWindow(QMainWindow):
         defaults = tuple(Pane(n, 2 if 2 in curv.ESTIMATORS[n].ranges else curv.ESTIMATORS[n].ranges[0])
                          for n in names)
         self.doc = Document(default_panes=defaults)
-        self.controller = Controller(self.doc, self)
+        self.controller = Controller(self.doc, self, prepare=prepare_geometry)
         self.grid = PaneGrid(self)
         self.setCentralWidget(self.grid)
         self._glyph_index = None
@@ -193,8 +193,9 @@ class MainWindow(QMainWindow):
         doc = self.doc
         if isinstance(doc.source, FileSource):
             self._add_recent(str(Path(doc.source.path).resolve()))
-        normals = curv.vertex_normals(doc.mesh)
-        self.grid.set_geometry(mesh_polydata(doc.mesh, normals), edge_length=doc.mesh.mean_edge_length)
+        prepared = self.controller.prepared  # built in the worker; rebuilt here only if missing
+        base, edge = prepared if prepared is not None else prepare_geometry(doc.mesh)
+        self.grid.set_geometry(base, edge_length=edge)
         self._glyph_index = glyph_subsample(doc.mesh.n_vertices, count=min(1500, max(doc.mesh.n_vertices // 6, 1)))
         self.setWindowTitle(f"curvlab — {doc.source.label}")
         if isinstance(doc.source, SurfaceSource):
@@ -214,7 +215,10 @@ class MainWindow(QMainWindow):
 
     def _on_pane(self, i: int) -> None:
         self.controller.request_missing()
-        self.redraw()
+        if self.doc.panes[i].key in self.doc.results:
+            self.redraw()
+        else:  # keep the old colours on screen until the new result arrives
+            self.update_titles()
 
     def _on_display(self, names: set) -> None:
         for key in names & {"diverging_cmap", "sequential_cmap"}:
@@ -244,19 +248,23 @@ class MainWindow(QMainWindow):
                 values, clim, cmap = field
                 map_colours(values, clim, cmap, out=vp.colours)
                 vp.set_colours(vp.colours, clim=clim, cmap=cmap, title=title)
-            vp.title.setText(self._pane_title(i))
-            vp.set_message(self._pane_message(i))
             res = doc.result(i) if i < len(doc.panes) else None
             if state.show_directions and res is not None:
                 vp.set_glyphs(direction_glyphs(doc.mesh.vertices, res, length=1.6 * doc.mesh.mean_edge_length,
                                                index=self._glyph_index))
             else:
                 vp.set_glyphs(None)
+        self.update_titles()
         self.grid.render_all()
         res = doc.result(doc.active)
         self.inspect.show_values(fields[doc.active] if fields else None, table=doc.cmap(doc.active).table,
                                  n_invalid=None if res is None else int((~res.valid).sum()),
                                  n_vertices=doc.mesh.n_vertices)
+
+    def update_titles(self) -> None:
+        """Pane headers: estimator and status; no re-render needed."""
+        for i, vp in enumerate(self.grid.viewports[:self.doc.view_count]):
+            vp.set_title(self._pane_title(i), status=self._pane_message(i))
 
     def _pane_title(self, i: int) -> str:
         doc = self.doc
@@ -304,8 +312,7 @@ class MainWindow(QMainWindow):
     def _set_busy(self, busy: bool) -> None:
         self.progress.setVisible(busy)
         self.cancel_button.setVisible(busy)
-        if not busy:
-            self.redraw()
+        self.update_titles()
 
     def _on_progress(self, label: str, fraction: float) -> None:
         if fraction < 0:

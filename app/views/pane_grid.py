@@ -63,13 +63,14 @@ class PaneGrid(QWidget):
         self.set_linked(self.linked)
 
     def set_geometry(self, base: pv.PolyData, *, edge_length: float) -> None:
-        """Show a new mesh in every viewport and frame it."""
+        """Show a new mesh in every viewport and frame it (rendered by the next :meth:`render_all`)."""
         self._base, self._edge = base, edge_length
         for vp in self.viewports:
             vp.set_geometry(base, edge_length=edge_length)
-        self.reset_camera()
+        self.reset_camera(render=False)
 
-    def reset_camera(self) -> None:
+    def reset_camera(self, *, render: bool = True) -> None:
+        """Frame the mesh from above at an angle."""
         first = self.viewports[0].plotter
         first.view_vector((0.55, -1.0, 0.85), viewup=(0.0, 0.0, 1.0), render=False)
         first.reset_camera(render=False)
@@ -77,7 +78,8 @@ class PaneGrid(QWidget):
         if not self.linked:
             for vp in self.viewports[1:]:
                 vp.plotter.renderer.camera = first.camera.copy()
-        self.render_all()
+        if render:
+            self.render_all()
 
     # -- cameras --------------------------------------------------------------------------------
     def set_linked(self, linked: bool) -> None:

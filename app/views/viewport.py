@@ -58,7 +58,6 @@ class Viewport(QFrame):
         self._bar = _scalar_bar(self._lut)
         self.plotter.renderer.AddViewProp(self._bar)
         self._bar.SetVisibility(False)
-        self._message = self.plotter.add_text("", position="upper_left", font_size=10, color="black")
         self._press = None
         self._picker = vtkCellPicker()
         self._picker.SetTolerance(0.002)
@@ -105,9 +104,10 @@ class Viewport(QFrame):
         self._bar.SetVisibility(True)
         self._bar.Modified()
 
-    def set_message(self, text: str) -> None:
-        """Overlay text in the upper-left corner (status of the pane)."""
-        self._message.SetText(2, text)  # upper-left corner slot of the corner annotation
+    def set_title(self, text: str, *, status: str = "") -> None:
+        """The pane's header: what it shows, and its status (computing, failed) in red."""
+        extra = f" &nbsp;<span style='color:#b00020'>{status}</span>" if status else ""
+        self.title.setText(f"{text}{extra}")
 
     # -- overlays -------------------------------------------------------------------------------
     def clear_glyphs(self) -> None:
