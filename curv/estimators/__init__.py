@@ -1,6 +1,6 @@
 """Curvature estimators; importing this package registers all of them in :data:`ESTIMATORS`."""
 
-from . import goldfeather, mru  # noqa: F401  (registration side effects, paper order below)
+from . import meyer, csm, goldfeather, rusinkiewicz, mru  # noqa: F401  (registration side effects, paper order)
 from .registry import ESTIMATORS, EstimatorSpec, all_variants, get_spec, register
 
 __all__ = ["ESTIMATORS", "EstimatorSpec", "get_spec", "register", "all_variants"]
