@@ -7,7 +7,9 @@ never a traceback.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import traceback
 import time
 from pathlib import Path
 
@@ -18,6 +20,7 @@ from .errors import CurvError
 __all__ = ["main"]
 
 EXIT_INPUT = 2
+EXIT_INTERNAL = 3
 EXIT_INTERRUPTED = 130
 
 
@@ -71,17 +74,52 @@ def _stats_line(name: str, values: np.ndarray) -> str:
     return f"  {name:<10} min {lo: .6g}   median {med: .6g}   max {hi: .6g}"
 
 
+def _check_output(path: str) -> None:
+    """Fail before the long work when the output file cannot be written."""
+    out = Path(path)
+    folder = out.parent if str(out.parent) else Path(".")
+    if out.is_dir():
+        raise CurvOutputError(f"{out}: is a directory; give a file name for the output")
+    if not folder.is_dir():
+        raise CurvOutputError(f"{out}: cannot write: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise CurvOutputError(f"{out}: cannot write: no permission to write in {folder}")
+
+
+def _check_memory(args, n_vertices: int, n_faces: int, method: str, k: int) -> None:
+    from .memory import check_memory
+
+    if not args.memory_check:
+        return
+    est = check_memory(n_vertices, n_faces, method, k)
+    if not est.fits:
+        raise CurvMemoryError(
+            f"{args.input}: {method} R{k} on {n_vertices:,} vertices and {n_faces:,} faces "
+            f"{est.describe()}; refusing to start (use a smaller range, another estimator, "
+            f"a bigger machine, or --no-memory-check)")
+
+
 def _cmd_estimate(args) -> int:
-    from .api import iter_estimate
-    from .io import load, save_ply
+    from .api import iter_estimate, parse_range
+    from .estimators import get_spec
+    from .io import load, peek_counts, save_ply
     from .validity import describe_reasons
 
+    spec = get_spec(args.method)
+    k = spec.check_range(parse_range(args.range))
+    if args.output:
+        _check_output(args.output)
+    counts = peek_counts(args.input)
+    if counts is not None:  # refuse before reading a file that will not fit
+        _check_memory(args, *counts, spec.name, k)
     t0 = time.perf_counter()
     mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
                 orient=args.orient, remove_unreferenced=args.remove_unreferenced)
     t_load = time.perf_counter() - t0
-    progress = Progress(f"{args.method} R{args.range}", enabled=None if not args.quiet else False)
-    gen = iter_estimate(mesh, args.method, args.range, smooth=args.smooth)
+    if counts is None:
+        _check_memory(args, mesh.n_vertices, mesh.n_faces, spec.name, k)
+    progress = Progress(f"{spec.name} R{k}", enabled=None if not args.quiet else False)
+    gen = iter_estimate(mesh, spec.name, k, smooth=args.smooth)
     t1 = time.perf_counter()
     try:
         while True:
@@ -92,12 +130,19 @@ def _cmd_estimate(args) -> int:
         progress.close()
     t_est = time.perf_counter() - t1
     if args.output:
-        save_ply(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
-                 clim=tuple(args.clim) if args.clim else None)
+        try:
+            save_ply(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
+                     clim=tuple(args.clim) if args.clim else None)
+        except OSError as exc:
+            raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
     rep = mesh.report()
     print(f"{args.input}: {rep.lines()[0]}")
+    for line in rep.lines()[1:]:
+        print(f"  {line}")
     for line in mesh.info.get("repairs", []):
         print(f"  repair: {line}")
+    for line in _hints(args, rep):
+        print(f"  hint: {line}")
     reasons = describe_reasons(res.reason)
     invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
     print(f"{res.method} R{res.range}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
@@ -106,6 +151,26 @@ def _cmd_estimate(args) -> int:
         print(_stats_line(name, getattr(res, name)))
     print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s" + (f"; wrote {args.output}" if args.output else ""))
     return 0
+
+
+def _hints(args, rep) -> list[str]:
+    """Repairs that would likely help, for the defects the report shows."""
+    out = []
+    if rep.duplicate_vertices and not args.merge_vertices:
+        out.append(f"{rep.duplicate_vertices} vertices repeat another's position: try --merge-vertices")
+    if rep.degenerate_faces and not args.remove_degenerate:
+        out.append("degenerate faces found: try --remove-degenerate")
+    if rep.inconsistent_edges and not args.orient:
+        out.append("faces of opposite orientation meet (their vertices are invalid): try --orient")
+    return out
+
+
+class CurvOutputError(CurvError, OSError):
+    """The output file cannot be written."""
+
+
+class CurvMemoryError(CurvError, MemoryError):
+    """The estimate would not fit in the available memory."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -131,6 +196,8 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("--orient", action="store_true", help="make face orientation consistent")
     p_est.add_argument("--remove-unreferenced", action="store_true", help="drop vertices no face uses")
     p_est.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p_est.add_argument("--no-memory-check", dest="memory_check", action="store_false",
+                       help="estimate even when the predicted peak memory exceeds the available memory")
     p_est.set_defaults(func=_cmd_estimate)
 
     try:
@@ -150,12 +217,22 @@ def main(argv: list[str] | None = None) -> int:
     except CurvError as exc:
         print(f"curv: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
-    except (OSError, MemoryError) as exc:
-        print(f"curv: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+    except MemoryError:
+        print("curv: error: out of memory (try a smaller range or a smaller mesh)", file=sys.stderr)
+        return EXIT_INPUT
+    except OSError as exc:
+        print(f"curv: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:
         print("curv: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Exception as exc:  # a bug in curv: still one line for the user, the details on request
+        if os.environ.get("CURV_DEBUG"):
+            traceback.print_exc()
+        text = " ".join(str(exc).split())[:300]
+        print(f"curv: internal error: {type(exc).__name__}: {text} (a bug; set CURV_DEBUG=1 for details)",
+              file=sys.stderr)
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

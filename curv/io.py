@@ -19,7 +19,7 @@ from .mesh import Mesh
 from .repair import repair
 from .result import Curvature
 
-__all__ = ["load", "save_ply", "read_arrays"]
+__all__ = ["load", "save_ply", "read_arrays", "peek_counts"]
 
 _MESHIO_SUFFIXES = {".obj"}
 
@@ -175,6 +175,29 @@ def _read_trimesh(path: Path):
     if faces.size == 0:
         raise LoadError(f"{path}: contains no faces")
     return np.asarray(loaded.vertices, dtype=np.float64), faces
+
+
+def peek_counts(path) -> tuple[int, int] | None:
+    """``(n_vertices, n_faces)`` from a PLY or OFF header without reading the data; None otherwise.
+
+    Never raises: a file it cannot peek into gives None (:func:`load` then reports the problem).
+    """
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            if path.suffix.lower() == ".ply":
+                if fh.readline().strip() != b"ply":
+                    return None
+                _, counts, _ = _ply_header(fh)
+                if "vertex" in counts:
+                    return counts["vertex"], counts.get("face", 0)
+            elif path.suffix.lower() == ".off":
+                words = fh.read(4096).split()
+                if words and words[0].upper().endswith(b"OFF") and len(words) >= 3:
+                    return int(words[1]), int(words[2])
+    except (OSError, ValueError):
+        return None
+    return None
 
 
 def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:

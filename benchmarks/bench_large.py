@@ -1,0 +1,103 @@
+"""Large-mesh benchmark: write a torus with N vertices as binary PLY, then time `curv estimate` on it.
+
+Usage::
+
+    python benchmarks/bench_large.py write --vertices 10000000 --out /tmp/torus10M.ply
+    nice /usr/bin/time -v curv estimate /tmp/torus10M.ply -m mru -r 2 -q
+    python benchmarks/bench_large.py calibrate     # peak RSS of `curv estimate` at a few sizes
+
+The torus is closed (no border), a regular (major x minor) grid split into triangles, so every
+estimator has work at every vertex. Written with numpy in one go: no per-vertex Python.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def torus(n_vertices: int, R: float = 3.0, r: float = 1.0):
+    """(vertices (n, 3) float64, faces (2n, 3) int32) of a closed torus with about ``n_vertices`` vertices."""
+    n_minor = max(8, int(round(np.sqrt(n_vertices * r / R))))
+    n_major = max(8, int(round(n_vertices / n_minor)))
+    i, j = np.meshgrid(np.arange(n_major), np.arange(n_minor), indexing="ij")
+    theta = (2 * np.pi / n_major) * i.ravel()
+    phi = (2 * np.pi / n_minor) * j.ravel()
+    ring = R + r * np.cos(phi)
+    v = np.stack([ring * np.cos(theta), ring * np.sin(theta), r * np.sin(phi)], axis=1)
+    del theta, phi, ring
+    a = (i * n_minor + j).ravel().astype(np.int32)
+    b = (((i + 1) % n_major) * n_minor + j).ravel().astype(np.int32)
+    c = (((i + 1) % n_major) * n_minor + (j + 1) % n_minor).ravel().astype(np.int32)
+    d = (i * n_minor + (j + 1) % n_minor).ravel().astype(np.int32)
+    faces = np.concatenate([np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)])
+    return v, faces
+
+
+def write_ply(path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """Binary little-endian PLY (float64 x, y, z; uchar-counted int32 triangles)."""
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n"
+              "property double x\nproperty double y\nproperty double z\n"
+              f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    face = np.empty(len(faces), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    face["n"] = 3
+    face["i"] = faces
+    with open(path, "wb") as fh:
+        fh.write(header.encode("ascii"))
+        fh.write(np.ascontiguousarray(vertices, dtype="<f8").tobytes())
+        fh.write(face.tobytes())
+
+
+def measure(path, method: str, k: int, curv_exe: str) -> dict:
+    """Run ``curv estimate`` under ``/usr/bin/time -v``; return peak RSS (bytes), wall seconds, exit status."""
+    cmd = ["/usr/bin/time", "-v", curv_exe, "estimate", str(path), "-m", method, "-r", str(k), "-q",
+           "--no-memory-check"]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", proc.stderr)
+    return {"method": method, "range": k, "peak_bytes": int(rss.group(1)) * 1024 if rss else None,
+            "seconds": round(wall, 2), "status": proc.returncode, "stdout": proc.stdout.strip().splitlines()}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    w = sub.add_parser("write", help="write a torus PLY")
+    w.add_argument("--vertices", type=int, default=10_000_000)
+    w.add_argument("--out", required=True)
+    c = sub.add_parser("calibrate", help="peak memory of curv estimate at a few sizes, as JSON lines")
+    c.add_argument("--sizes", type=int, nargs="+", default=[100_000, 400_000])
+    c.add_argument("--variants", nargs="+", default=["mru:2", "mru:4", "nc:1", "qs:4", "an:4", "meyer:1"])
+    c.add_argument("--curv", default=str(Path(sys.executable).with_name("curv")))
+    args = parser.parse_args(argv)
+    if args.command == "write":
+        t0 = time.perf_counter()
+        v, f = torus(args.vertices)
+        write_ply(args.out, v, f)
+        print(f"wrote {args.out}: {len(v)} vertices, {len(f)} faces in {time.perf_counter() - t0:.1f} s")
+        return 0
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in args.sizes:
+            path = Path(tmp) / f"torus{n}.ply"
+            v, f = torus(n)
+            write_ply(path, v, f)
+            for variant in args.variants:
+                method, k = variant.split(":")
+                row = measure(path, method, int(k), args.curv)
+                row.update(vertices=len(v), faces=len(f))
+                row.pop("stdout")
+                print(json.dumps(row), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
