@@ -1,6 +1,6 @@
 """Predict the peak memory of ``curv estimate`` before running it, and what the machine has free.
 
-The model is linear in the mesh size, ``BASE_BYTES + PER_UNIT[method][k] * units`` with
+The model is ``BASE_BYTES + PER_UNIT_BYTES * units + BLOCK_BYTES[method, k]`` with
 ``units = n_vertices + n_faces / 2`` (twice the vertex count on a closed triangle mesh). The
 coefficients were measured with ``benchmarks/bench_large.py calibrate`` (peak RSS of the whole
 ``curv estimate`` process: reading the file, connectivity, normals, the estimator's blocks and the
@@ -13,22 +13,29 @@ from pathlib import Path
 
 __all__ = ["estimate_peak_bytes", "available_bytes", "format_bytes", "MemoryEstimate", "check_memory"]
 
-BASE_BYTES = 160 * 2**20
+BASE_BYTES = 170 * 2**20
 """Interpreter, numpy, scipy and plyfile loaded, before any mesh data."""
 
-PER_UNIT: dict[str, dict[int, float]] = {
-    "meyer": {1: 900.0},
-    "csm": {1: 1100.0, 2: 1100.0, 3: 1100.0, 4: 1100.0},
-    "nc": {1: 900.0, 2: 900.0, 3: 900.0, 4: 900.0},
-    "qs": {1: 900.0, 2: 900.0, 3: 900.0, 4: 900.0},
-    "an": {2: 1000.0, 3: 1000.0, 4: 1000.0},
-    "ru": {2: 1000.0},
-    "mru": {2: 1000.0, 3: 1000.0, 4: 1000.0},
-}
-"""Bytes per size unit for each (method, range), measured; see the module docstring."""
+PER_UNIT_BYTES = 1950.0
+"""Mesh, connectivity, normals, report and result arrays per size unit (largest slope measured:
+``nc`` R1 between 100k and 400k vertices, 1.87 kB; ``mru`` R2: 1.30 kB)."""
 
-_FALLBACK_PER_UNIT = 1200.0
-"""For an estimator or range not measured yet: the largest measured figure, rounded up."""
+BLOCK_BYTES: dict[tuple[str, int], int] = {
+    ("mru", 3): 1150 * 2**20,
+    ("mru", 4): 1150 * 2**20,
+    ("qs", 3): 1000 * 2**20,
+    ("qs", 4): 1000 * 2**20,
+    ("nc", 3): 1000 * 2**20,
+    ("nc", 4): 1000 * 2**20,
+    ("an", 2): 2850 * 2**20,
+    ("an", 3): 2850 * 2**20,
+    ("an", 4): 2850 * 2**20,
+    ("csm", 3): 1200 * 2**20,
+    ("csm", 4): 1200 * 2**20,
+}
+"""Temporaries of the neighbourhood blocks at wide ranges, which do not grow with the mesh (the
+blocks are bounded): measured peak at 100k vertices minus the linear part. Wide ranges not measured
+take the value of their R4 (an upper bound); R1/R2 of the one-ring estimators have none to speak of."""
 
 
 def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range: int) -> int:
@@ -48,9 +55,11 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range: int) 
     int
         Bytes.
     """
-    per_unit = PER_UNIT.get(method, {}).get(int(range), _FALLBACK_PER_UNIT)
     units = float(n_vertices) + 0.5 * float(n_faces)
-    return int(BASE_BYTES + per_unit * units)
+    linear = BASE_BYTES + PER_UNIT_BYTES * units
+    # small meshes have small blocks: the block term cannot exceed what the mesh can fill
+    block = min(BLOCK_BYTES.get((method, int(range)), 0), 20_000.0 * units)
+    return int(linear + block)
 
 
 def _cgroup_free() -> int | None:
