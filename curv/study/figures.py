@@ -43,18 +43,9 @@ def _bands(ax, methods: list[str], positions: dict[str, list[float]]) -> None:
             ax.axvspan(min(xs) - 0.5, max(xs) + 0.5, color="0.93", zorder=0)
 
 
-def figure_density_bars(an: Analysis, noise: float, path, *, title: str) -> bool:
-    """Grouped bars: error per plain variant (x) and density (bars), at one noise level.
-
-    Returns False (and writes nothing) when the table has no rows at that noise level.
-    """
+def _density_panel(ax, an: Analysis, variants, dens, noise: float, measure: str, *, legend: bool) -> None:
     plt = _pyplot()
-    variants = list(an.plain)
-    dens = an.levels("density")
-    if not variants or not an.has(noise=noise):
-        return False
-    vals = np.array([[an.err(v, density=d, noise=noise) for d in dens] for v in variants])
-    fig, ax = plt.subplots(figsize=(max(8.0, 0.55 * len(variants) + 2), 4.2), dpi=110)
+    vals = np.array([[an.err(v, measure=measure, density=d, noise=noise) for d in dens] for v in variants])
     width = 0.8 / len(dens)
     colors = plt.get_cmap("viridis")(np.linspace(0.85, 0.15, len(dens)))
     x = np.arange(len(variants))
@@ -67,9 +58,29 @@ def figure_density_bars(an: Analysis, noise: float, path, *, title: str) -> bool
     ax.set_xticks(x, [f"{short_name(v.method)}\n{v.range_label}" for v in variants], fontsize=8)
     ax.set_xlim(-0.6, len(variants) - 0.4)
     _scale(ax, vals)
-    ax.set_ylabel(MEASURES[an.measure].replace(" over ", "\nover "), fontsize=8)
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=7, ncol=len(dens) + 1, loc="upper center", bbox_to_anchor=(0.5, -0.16), frameon=False)
+    ax.set_ylabel(MEASURES[measure].replace(" over ", "\nover "), fontsize=8)
+    if legend:
+        ax.legend(fontsize=7, ncol=len(dens) + 1, loc="upper center", bbox_to_anchor=(0.5, -0.16), frameon=False)
+
+
+def figure_density_bars(an: Analysis, noise: float, path, *, title: str, companion: str | None = None) -> bool:
+    """Grouped bars: error per plain variant (x) and density (bars), at one noise level.
+
+    With ``companion`` (a measure name), a second panel below shows that measure (e.g. the median
+    of e_rel, which stays readable when the trimmed RMS saturates on noisy meshes).
+    Returns False (and writes nothing) when the table has no rows at that noise level.
+    """
+    plt = _pyplot()
+    variants = list(an.plain)
+    dens = an.levels("density")
+    if not variants or not an.has(noise=noise):
+        return False
+    measures = [an.measure] + ([companion] if companion and companion != an.measure else [])
+    fig, axes = plt.subplots(len(measures), 1, figsize=(max(8.0, 0.55 * len(variants) + 2), 1.0 + 3.4 * len(measures)),
+                             dpi=110, squeeze=False)
+    for i, (ax, m) in enumerate(zip(axes[:, 0], measures)):
+        _density_panel(ax, an, variants, dens, noise, m, legend=i == len(measures) - 1)
+    axes[0, 0].set_title(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
@@ -102,9 +113,10 @@ def figure_smoothing(an: Analysis, path) -> bool:
         _scale(ax, np.concatenate(allv))
         ax.set_title(f"{d} vertices, " + ("no noise" if noise == 0 else f"noise {noise:.0%}"), fontsize=10)
         ax.set_ylabel(MEASURES[an.measure].replace(" over ", "\nover "), fontsize=8)
-    axes[0][0].legend(fontsize=8, ncol=4, loc="upper center", bbox_to_anchor=(0.5 * len(levels), -0.1), frameon=False)
+    handles, labels = axes[0][0].get_legend_handles_labels()
     fig.suptitle("Larger range (R3) versus smoothing the mesh (R2SM) or the values (R2SV)", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.legend(handles, labels, fontsize=8, ncol=4, loc="lower center", frameon=False)
     fig.savefig(path)
     plt.close(fig)
     return True
@@ -121,6 +133,7 @@ def write_figures(an: Analysis, out_dir) -> list[Path]:
     if an.noise_levels and an.noise_max > 0 and figure_density_bars(
         an, an.noise_max, out / "fig9.png",
         title=f"Fig. 9: error per estimator and density, noise {an.noise_max:.0%} (σ = {an.noise_max * 10:g}% of mean edge)",
+        companion="median_erel" if an.measure == "rms_erel" else None,
     ):
         written.append(out / "fig9.png")
     if figure_smoothing(an, out / "fig10.png"):
