@@ -102,11 +102,15 @@ class Histogram(QWidget):
             x = self.x_of(v)
             p.drawLine(QPointF(x, r.top()), QPointF(x, r.bottom()))
         p.setPen(QPen(QColor("#202020")))
-        text_r = QRectF(r.left(), r.bottom() + 2, r.width(), _LABEL_H)
-        p.drawText(text_r, Qt.AlignmentFlag.AlignLeft, f"{self.clim[0]:.4g}")
-        p.drawText(text_r, Qt.AlignmentFlag.AlignRight, f"{self.clim[1]:.4g}")
+        width = 70.0  # each limit's label sits under its line, kept inside the widget
+        for v, align in zip(self.clim, (Qt.AlignmentFlag.AlignRight, Qt.AlignmentFlag.AlignLeft)):
+            x = self.x_of(v)
+            left = x - width if align is Qt.AlignmentFlag.AlignRight else x
+            left = min(max(left, 0.0), self.width() - width)
+            p.drawText(QRectF(left, r.bottom() + 2, width, _LABEL_H), align, f"{v:.4g}")
         if self.n_nan:
-            p.drawText(text_r, Qt.AlignmentFlag.AlignHCenter, f"{self.n_nan} invalid")
+            p.drawText(QRectF(r.left(), r.top() + 2, r.width() - 4, _LABEL_H), Qt.AlignmentFlag.AlignRight,
+                       f"{self.n_nan} invalid (not shown)")
 
     # -- dragging -------------------------------------------------------------------------------
     def _near(self, x: float) -> int | None:

@@ -199,6 +199,7 @@ def _scalar_bar(lut: vtkLookupTable) -> vtkScalarBarActor:
     bar.SetMaximumWidthInPixels(420)
     bar.SetNumberOfLabels(3)
     bar.SetBarRatio(0.3)
+    bar.SetTextPositionToPrecedeScalarBar()  # labels under the bar, title above: no overlap
     bar.SetLabelFormat("%-#6.3g")
     bar.UnconstrainedFontSizeOn()
     for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):

@@ -271,3 +271,20 @@ def test_close_during_computation_exits_cleanly(qtbot, window, ui):
     assert window.controller.busy
     window.close()
     assert not window.controller.busy
+
+
+def test_settings_persist_colour_maps_recent_and_layout(qtbot, window, ui, tmp_path):
+    from app.views.main_window import MainWindow
+
+    ui.open_surface("saddle")
+    window.inspect.cmap_div.setCurrentText("RdBu_r")
+    assert window.doc.fields()[0][2].name == "RdBu_r"
+    window.docks["readout"].hide()
+    window.close()
+    again = MainWindow(settings=window.settings)
+    qtbot.addWidget(again)
+    again.show()
+    assert again.doc.display.diverging_cmap == "RdBu_r"
+    assert again.inspect.cmap_div.currentText() == "RdBu_r"
+    assert not again.docks["readout"].isVisible()
+    again.close()
