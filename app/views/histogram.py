@@ -102,12 +102,15 @@ class Histogram(QWidget):
             x = self.x_of(v)
             p.drawLine(QPointF(x, r.top()), QPointF(x, r.bottom()))
         p.setPen(QPen(QColor("#202020")))
-        width = 70.0  # each limit's label sits under its line, kept inside the widget
-        for v, align in zip(self.clim, (Qt.AlignmentFlag.AlignRight, Qt.AlignmentFlag.AlignLeft)):
-            x = self.x_of(v)
-            left = x - width if align is Qt.AlignmentFlag.AlignRight else x
-            left = min(max(left, 0.0), self.width() - width)
-            p.drawText(QRectF(left, r.bottom() + 2, width, _LABEL_H), align, f"{v:.4g}")
+        width = 70.0  # each limit's label sits beside its line (outside the span if it fits)
+        left_align, right_align = Qt.AlignmentFlag.AlignLeft, Qt.AlignmentFlag.AlignRight
+        x_lo, x_hi = self.x_of(self.clim[0]), self.x_of(self.clim[1])
+        lo_rect = (QRectF(x_lo - width - 3, r.bottom() + 2, width, _LABEL_H), right_align) if x_lo - width - 3 >= 0 \
+            else (QRectF(x_lo + 3, r.bottom() + 2, width, _LABEL_H), left_align)
+        hi_rect = (QRectF(x_hi + 3, r.bottom() + 2, width, _LABEL_H), left_align) if x_hi + width + 3 <= self.width() \
+            else (QRectF(x_hi - width - 3, r.bottom() + 2, width, _LABEL_H), right_align)
+        for (rect, align), v in zip((lo_rect, hi_rect), self.clim):
+            p.drawText(rect, align, f"{v:.4g}")
         if self.n_nan:
             p.drawText(QRectF(r.left(), r.top() + 2, r.width() - 4, _LABEL_H), Qt.AlignmentFlag.AlignRight,
                        f"{self.n_nan} invalid (not shown)")

@@ -13,6 +13,7 @@ from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QFormLayout, QHBoxLayout, QLabel, QLineEdit, QPushButton, QVBoxLayout, QWidget,
 )
 from superqt import QEnumComboBox, QLabeledDoubleRangeSlider
+from superqt.utils import qdebounced
 
 from app.model import Document, Layer, LimitMode, Quantity, colormap_names
 
@@ -100,8 +101,8 @@ class InspectPanel(QWidget):
         self.cmap_div.currentTextChanged.connect(lambda n: doc.display.update(diverging_cmap=n))
         self.cmap_seq.currentTextChanged.connect(lambda n: doc.display.update(sequential_cmap=n))
         self.limit_mode.currentEnumChanged.connect(lambda m: doc.display.update(limit_mode=m))
-        self.percentiles.valueChanged.connect(
-            lambda v: doc.display.update(percentiles=(float(v[0]), float(v[1])), limit_mode=LimitMode.PERCENTILE))
+        self._percentiles_edited = qdebounced(self._percentiles_edited, timeout=120)  # big meshes: not every tick
+        self.percentiles.valueChanged.connect(self._percentiles_edited)
         self.lo_edit.editingFinished.connect(self._manual_edited)
         self.hi_edit.editingFinished.connect(self._manual_edited)
         self.shared.toggled.connect(lambda on: doc.display.update(shared_scale=on))
@@ -131,6 +132,9 @@ class InspectPanel(QWidget):
             self.sync()  # refuse: no truth for a file mesh
             return
         self.doc.display.update(layer=layer)
+
+    def _percentiles_edited(self, value) -> None:
+        self.doc.display.update(percentiles=(float(value[0]), float(value[1])), limit_mode=LimitMode.PERCENTILE)
 
     def _manual_edited(self) -> None:
         try:
