@@ -85,6 +85,13 @@ def iter_estimate(
         used_normals = vertex_normals(work_mesh, weighting=normal_weighting)
     else:
         used_normals = _check_normals(normals, mesh.n_vertices)
+    # Where the faces around a vertex are not one consistently oriented fan, its normal averages
+    # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
+    meaningless = mesh.nonmanifold_vertices.copy()
+    meaningless[mesh.edges[mesh.inconsistent_edges].reshape(-1)] = True
+    if meaningless.any():
+        used_normals = used_normals.copy()
+        used_normals[meaningless] = np.nan
     yield 0.0
     raw = yield from spec.function(work_mesh, used_normals, k, block_size=block_size)
 
@@ -94,9 +101,10 @@ def iter_estimate(
     # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
     reason[(reason == Reason.OK) & mesh.nonmanifold_vertices] = Reason.NONMANIFOLD
     # faces of opposite orientation meet here: the vertex normal is meaningless
-    flipped = np.zeros(mesh.n_vertices, bool)
-    flipped[mesh.edges[mesh.inconsistent_edges].reshape(-1)] = True
-    reason[(reason == Reason.OK) & flipped] = Reason.DEGENERATE
+    reason[(reason == Reason.OK) & meaningless] = Reason.DEGENERATE
+    # on a border the normal and every fit see one side only: the values there are not estimates
+    # of the surface's curvature, whatever the estimator
+    reason[(reason == Reason.OK) & mesh.border_vertices] = Reason.BORDER
     reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
     swap = k2 > k1
     k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)

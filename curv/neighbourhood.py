@@ -21,8 +21,9 @@ __all__ = ["Neighbourhood", "iter_neighbourhoods", "segment_sum", "neighbourhood
 TIE_TOLERANCE = 1e-9
 """Relative tolerance on the radius, so that vertices exactly at k edge lengths (regular meshes) are in."""
 
-DEFAULT_BLOCK_PAIRS = 4_000_000
-"""Target number of (vertex, neighbour) pairs per block: about 100-300 MB of temporaries in the estimators."""
+DEFAULT_BLOCK_PAIRS = 1_000_000
+"""Target number of (vertex, neighbour) pairs per block: bounds the temporaries of the estimators
+(about 40 float64 arrays of this length for the 7-unknown fit, 300 MB)."""
 
 
 @dataclass
@@ -141,14 +142,35 @@ def _block_supports(mesh: Mesh, ids: np.ndarray, factor: float, adjacency: sp.cs
     return Neighbourhood(ids, indptr, cols[order], radius)
 
 
-def block_size_for(mesh: Mesh, factor: float, *, pairs: int = DEFAULT_BLOCK_PAIRS) -> int:
+def expansion_adjacency(mesh: Mesh) -> sp.csr_matrix:
+    """(n, n) bool adjacency the search expands along: rows of non-manifold vertices are empty.
+
+    A bow-tie vertex or the end of a fin joins surface sheets that are not one disc; a support may
+    contain such a vertex but must not continue through it onto the other sheet.
+    """
+    adjacency = mesh.adjacency.astype(bool)
+    bad = mesh.nonmanifold_vertices
+    if bad.any():
+        rows = np.repeat(np.arange(mesh.n_vertices), np.diff(adjacency.indptr))
+        adjacency.data[bad[rows]] = False
+        adjacency.eliminate_zeros()
+    return adjacency
+
+
+def block_size_for(mesh: Mesh, factor: float, *, pairs: int = DEFAULT_BLOCK_PAIRS, sample: int = 512) -> int:
     """Number of vertices per block so that a block holds about ``pairs`` neighbour pairs.
 
-    A regular triangle mesh has about ``3.6 * factor^2 + 3`` vertices within ``factor`` edge
-    lengths; the estimate is deliberately generous (irregular meshes reach further).
+    The support size is measured on an evenly spaced sample of vertices (supports grow with the
+    square of the range and with the spread of edge lengths, so a formula would misjudge it).
     """
-    per_vertex = 4.0 * max(factor, 1.0) ** 2 + 8.0
-    return int(max(256, min(mesh.n_vertices, pairs // per_vertex)))
+    n = mesh.n_vertices
+    if n <= sample:
+        return n
+    ids = np.linspace(0, n - 1, sample).astype(np.int64)
+    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
+    nb = _block_supports(mesh, ids, factor, expansion_adjacency(mesh), xyz)
+    per_vertex = 1.25 * max(float(nb.counts.mean()), 1.0)  # margin for denser regions
+    return int(max(64, min(n, pairs // per_vertex)))
 
 
 def iter_neighbourhoods(
@@ -176,7 +198,7 @@ def iter_neighbourhoods(
         raise ValueError(f"range factor must be positive, got {factor}")
     ids_all = np.arange(mesh.n_vertices) if vertices is None else np.asarray(vertices, dtype=np.int64)
     block = block_size or block_size_for(mesh, factor)
-    adjacency = mesh.adjacency.astype(bool)
+    adjacency = expansion_adjacency(mesh)
     xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
     for start in range(0, ids_all.size, block):
         yield _block_supports(mesh, ids_all[start:start + block], factor, adjacency, xyz)

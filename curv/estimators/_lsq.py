@@ -15,7 +15,7 @@ import numpy as np
 
 from ..frames import principal_from_tensor, solve_sym3, tangent_frames
 from ..mesh import Mesh
-from ..neighbourhood import Neighbourhood, iter_neighbourhoods
+from ..neighbourhood import Neighbourhood, iter_neighbourhoods, segment_sum
 from ..result import Principal
 from ..validity import Reason
 from .registry import empty_principal
@@ -30,6 +30,9 @@ MIN_TANGENT_LENGTH = 1e-9
 class LocalPairs:
     """The pairs of one neighbourhood block expressed in the centre's tangent frame.
 
+    All per-pair arrays are 1-D (structure of arrays): gathers and arithmetic on contiguous 1-D
+    arrays are several times faster than on rows of (k, 3) arrays.
+
     Attributes
     ----------
     nb : Neighbourhood
@@ -38,6 +41,8 @@ class LocalPairs:
         Offset ``q - p`` in the frame (U, V, N) of the centre p.
     usable : (nnz,) bool
         Pairs with a meaningful tangent offset.
+    frame : (9, nnz) float64
+        U, V, N of each pair's centre, components in rows ``Ux Uy Uz Vx Vy Vz Nx Ny Nz``.
     """
 
     nb: Neighbourhood
@@ -45,53 +50,68 @@ class LocalPairs:
     v: np.ndarray
     w: np.ndarray
     usable: np.ndarray
-    frame_u: np.ndarray
-    frame_v: np.ndarray
-    frame_n: np.ndarray
-    centres: np.ndarray
+    frame: np.ndarray
+
+    def project(self, field: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Components of ``field[q]`` ((n, 3), e.g. normals) in each pair's centre frame: (a, b, c), each (nnz,)."""
+        q = self.nb.indices
+        comps = [np.take(np.ascontiguousarray(field[:, k]), q) for k in range(3)]
+        f = self.frame
+        return tuple(comps[0] * f[3 * j] + comps[1] * f[3 * j + 1] + comps[2] * f[3 * j + 2] for j in range(3))
 
 
-def local_pairs(mesh: Mesh, nb: Neighbourhood, U, V, N) -> LocalPairs:
-    """Express every support offset of the block in the centre's tangent frame."""
-    centres = nb.centres
-    d = mesh.vertices[nb.indices] - mesh.vertices[centres]
-    fu, fv, fn = U[centres], V[centres], N[centres]
-    u = np.einsum("ij,ij->i", d, fu)
-    v = np.einsum("ij,ij->i", d, fv)
-    w = np.einsum("ij,ij->i", d, fn)
-    tiny = MIN_TANGENT_LENGTH * nb.radius[nb.rows]
+def local_pairs(mesh: Mesh, nb: Neighbourhood, frames: np.ndarray) -> LocalPairs:
+    """Express every support offset of the block in the centre's tangent frame.
+
+    ``frames`` is (9, n): U, V, N components of every vertex (see :class:`LocalPairs`).
+    """
+    counts = nb.counts
+    ids = nb.vertices
+    frame = np.repeat(frames[:, ids], counts, axis=1)
+    x = mesh.vertices
+    d = [np.take(np.ascontiguousarray(x[:, k]), nb.indices) - np.repeat(x[ids, k], counts) for k in range(3)]
+    u, v, w = (d[0] * frame[3 * j] + d[1] * frame[3 * j + 1] + d[2] * frame[3 * j + 2] for j in range(3))
+    tiny = MIN_TANGENT_LENGTH * np.repeat(nb.radius, counts)
     usable = (u * u + v * v > tiny * tiny) & np.isfinite(u)
-    return LocalPairs(nb, u, v, w, usable, fu, fv, fn, centres)
+    return LocalPairs(nb, u, v, w, usable, frame)
 
 
-def normal_equations(rows: np.ndarray, size: int, design: list[np.ndarray], rhs: np.ndarray):
-    """Sum the normal equations of equations grouped by row.
+def normal_equations(nb: Neighbourhood, equations: list[tuple[list, np.ndarray]]):
+    """Sum the normal equations of every vertex of a block.
 
     Parameters
     ----------
-    rows : (k,) int64
-        Local row (vertex of the block) of each equation.
-    size : int
-        Number of rows in the block.
-    design : list of p arrays of shape (k,)
-        Coefficients of each unknown in every equation (zero weight equations may be included).
-    rhs : (k,) float64
+    nb : Neighbourhood
+        The block; pairs are grouped by row, so sums are contiguous segment sums.
+    equations : list of (coefficients, rhs)
+        One entry per kind of equation that each pair contributes (e.g. a height and two slopes).
+        ``coefficients`` is a list of p arrays (nnz,) or ``None`` for an unknown absent from that
+        equation; ``rhs`` is (nnz,).
 
     Returns
     -------
-    ata : (size, p, p) float64
-    atb : (size, p) float64
+    ata : (c, p, p) float64
+    atb : (c, p) float64
     """
-    p = len(design)
-    ata = np.empty((size, p, p))
-    atb = np.empty((size, p))
+    p = len(equations[0][0])
+    columns = []
     for i in range(p):
-        atb[:, i] = np.bincount(rows, weights=design[i] * rhs, minlength=size)
         for j in range(i, p):
-            s = np.bincount(rows, weights=design[i] * design[j], minlength=size)
-            ata[:, i, j] = s
-            ata[:, j, i] = s
-    return ata, atb
+            terms = [c[i] * c[j] for c, _ in equations if c[i] is not None and c[j] is not None]
+            columns.append(sum(terms[1:], terms[0]) if terms else None)
+    for i in range(p):
+        terms = [c[i] * r for c, r in equations if c[i] is not None]
+        columns.append(sum(terms[1:], terms[0]))
+    nnz = nb.indices.size
+    stacked = np.stack([col if col is not None else np.zeros(nnz) for col in columns], axis=1)
+    sums = segment_sum(stacked, nb.indptr)
+    ata = np.empty((nb.size, p, p))
+    k = 0
+    for i in range(p):
+        for j in range(i, p):
+            ata[:, i, j] = ata[:, j, i] = sums[:, k]
+            k += 1
+    return ata, sums[:, k:]
 
 
 def solve_normal_equations(ata: np.ndarray, atb: np.ndarray, *, rcond: float = 1e-10):
@@ -161,9 +181,10 @@ def run_fit(
     n = mesh.n_vertices
     out = empty_principal(n)
     U, V = tangent_frames(normals)
+    frames = np.ascontiguousarray(np.concatenate([U, V, normals], axis=1).T)
     done = 0
     for nb in iter_neighbourhoods(mesh, factor, block_size=block_size):
-        pairs = local_pairs(mesh, nb, U, V, normals)
+        pairs = local_pairs(mesh, nb, frames)
         e, f, g, used, singular = fit(pairs, normals)
         ids = nb.vertices
         k1, k2, d1, d2 = principal_from_tensor(e, f, g, U[ids], V[ids])

@@ -27,8 +27,8 @@ def _fit_nc(pairs: LocalPairs, normals: np.ndarray):
         kn = np.where(ok, -2.0 * w / (l2 + w * w), 0.0)
         inv = np.where(ok, 1.0 / l2, 0.0)
     # unit tangent t = (u, v) / |(u, v)|: t^T W t = e tu^2 + 2 f tu tv + g tv^2
-    design = [u * u * inv, 2.0 * u * v * inv, v * v * inv]
-    ata, atb = normal_equations(pairs.nb.rows, pairs.nb.size, design, kn)
+    coeffs = [u * u * inv, 2.0 * u * v * inv, v * v * inv]
+    ata, atb = normal_equations(pairs.nb, [(coeffs, kn)])
     x, singular = solve_normal_equations(ata, atb)
     used = pairs.nb.row_sum(ok.astype(float))
     return x[:, 0], x[:, 1], x[:, 2], used, singular
@@ -37,8 +37,8 @@ def _fit_nc(pairs: LocalPairs, normals: np.ndarray):
 def _fit_qs(pairs: LocalPairs, normals: np.ndarray):
     u, v, w, ok = pairs.u, pairs.v, pairs.w, pairs.usable
     m = ok.astype(float)
-    design = [0.5 * u * u * m, u * v * m, 0.5 * v * v * m]
-    ata, atb = normal_equations(pairs.nb.rows, pairs.nb.size, design, w * m)
+    coeffs = [0.5 * u * u * m, u * v * m, 0.5 * v * v * m]
+    ata, atb = normal_equations(pairs.nb, [(coeffs, w * m)])
     x, singular = solve_normal_equations(ata, atb)
     used = pairs.nb.row_sum(m)
     # W = -Hessian of the height along N
@@ -46,11 +46,11 @@ def _fit_qs(pairs: LocalPairs, normals: np.ndarray):
 
 
 def _fit_an(pairs: LocalPairs, normals: np.ndarray):
-    u, v, w, ok = pairs.u, pairs.v, pairs.w, pairs.usable
-    nq = normals[pairs.nb.indices]
-    a = np.einsum("ij,ij->i", nq, pairs.frame_u)
-    b = np.einsum("ij,ij->i", nq, pairs.frame_v)
-    c = np.einsum("ij,ij->i", nq, pairs.frame_n)
+    # Heights are lengths, slopes are not: solve in coordinates divided by the support radius so the
+    # balance of the two kinds of equation (and so the result) does not depend on the mesh's scale.
+    scale = np.repeat(pairs.nb.radius, pairs.nb.counts)
+    u, v, w, ok = pairs.u / scale, pairs.v / scale, pairs.w / scale, pairs.usable
+    a, b, c = pairs.project(normals)
     m = ok.astype(float)
     slope_ok = ok & (c > MIN_NORMAL_Z) & np.isfinite(c)
     s = slope_ok.astype(float)
@@ -58,18 +58,17 @@ def _fit_an(pairs: LocalPairs, normals: np.ndarray):
         fu = np.where(slope_ok, -a / c, 0.0)
         fv = np.where(slope_ok, -b / c, 0.0)
     uu, uv, vv = u * u, u * v, v * v
-    zero = np.zeros_like(u)
+    us, vs = u * s, v * s
     # unknowns A, B, C, D, E, F, G of w = A/2 u^2 + B uv + C/2 v^2 + D u^3 + E u^2 v + F u v^2 + G v^3
     height = [0.5 * uu * m, uv * m, 0.5 * vv * m, uu * u * m, uu * v * m, u * vv * m, vv * v * m]
-    slope_u = [u * s, v * s, zero, 3 * uu * s, 2 * uv * s, vv * s, zero]
-    slope_v = [zero, u * s, v * s, zero, uu * s, 2 * uv * s, 3 * vv * s]
-    rows = pairs.nb.rows
-    design = [np.concatenate(cols) for cols in zip(height, slope_u, slope_v)]
-    rhs = np.concatenate([w * m, fu, fv])
-    ata, atb = normal_equations(np.concatenate([rows, rows, rows]), pairs.nb.size, design, rhs)
+    slope_u = [us, vs, None, 3 * uu * s, 2 * uv * s, vv * s, None]
+    slope_v = [None, us, vs, None, uu * s, 2 * uv * s, 3 * vv * s]
+    ata, atb = normal_equations(pairs.nb, [(height, w * m), (slope_u, fu), (slope_v, fv)])
     x, singular = solve_normal_equations(ata, atb)
     used = pairs.nb.row_sum(m)
-    return -x[:, 0], -x[:, 1], -x[:, 2], used, singular
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inv = 1.0 / pairs.nb.radius  # second derivatives in unscaled coordinates
+    return -x[:, 0] * inv, -x[:, 1] * inv, -x[:, 2] * inv, used, singular
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):

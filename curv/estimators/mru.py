@@ -16,18 +16,14 @@ from .registry import EstimatorSpec, register
 
 def _fit_mru(pairs: LocalPairs, normals: np.ndarray):
     u, v = pairs.u, pairs.v
-    dn = normals[pairs.nb.indices] - normals[pairs.centres]
-    a = np.einsum("ij,ij->i", dn, pairs.frame_u)
-    b = np.einsum("ij,ij->i", dn, pairs.frame_v)
+    # tangent part of N_q - N_p: N_p is orthogonal to its own frame's U and V, so only N_q remains
+    a, b, _ = pairs.project(normals)
     ok = pairs.usable & np.isfinite(a) & np.isfinite(b)
     m = ok.astype(float)
     u, v = u * m, v * m
     a, b = np.where(ok, a, 0.0), np.where(ok, b, 0.0)
-    zero = np.zeros_like(u)
-    rows = pairs.nb.rows
     # [u v 0] (e f g)^T = a ;  [0 u v] (e f g)^T = b
-    design = [np.concatenate([u, zero]), np.concatenate([v, u]), np.concatenate([zero, v])]
-    ata, atb = normal_equations(np.concatenate([rows, rows]), pairs.nb.size, design, np.concatenate([a, b]))
+    ata, atb = normal_equations(pairs.nb, [([u, v, None], a), ([None, u, v], b)])
     x, singular = solve_normal_equations(ata, atb)
     used = pairs.nb.row_sum(m)
     return x[:, 0], x[:, 1], x[:, 2], used, singular
@@ -35,7 +31,7 @@ def _fit_mru(pairs: LocalPairs, normals: np.ndarray):
 
 def iter_mru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
     """Normal-difference least squares over neighbours within (k-1) longest 1-ring edges."""
-    return (yield from run_fit(mesh, normals, k - 1, _fit_mru, min_pairs=2, block_size=block_size))
+    return (yield from run_fit(mesh, normals, k - 1, _fit_mru, min_pairs=3, block_size=block_size))
 
 
 register(EstimatorSpec(
