@@ -10,7 +10,7 @@ DEB_PKGS := xvfb xauth libgl1 libegl1 libglx-mesa0 libgl1-mesa-dri libxkbcommon-
 	libxcb-xinerama0 libxcb-xinput0 libxcb-xfixes0 libxrender1 libxi6 libdbus-1-3 libfontconfig1 \
 	libxt6 libsm6 libice6
 
-.PHONY: run test test-all venv sysdeps bench study-quick clean
+.PHONY: run test test-all venv sysdeps bench bench-viewer study-quick clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -46,6 +46,9 @@ test-all: sysdeps venv
 
 bench: venv
 	$(PY) benchmarks/bench_estimators.py $(ARGS)
+
+bench-viewer: sysdeps venv
+	$(PY) benchmarks/bench_viewer.py $(ARGS)
 
 study-quick: venv
 	$(VENV)/bin/curv study --preset quick --out study-out

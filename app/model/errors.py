@@ -1,18 +1,15 @@
-"""Error of an estimate against the analytic truth.
-
-Interim home: this belongs in ``curv`` (the study's metrics); the viewer will import it from there
-once the library exposes it.
-"""
+"""Error of an estimate against the analytic truth, as the viewer shows it (numbers from curv.metrics)."""
 
 from __future__ import annotations
 
 import numpy as np
+from curv.metrics import curvature_error
 
 __all__ = ["relative_error"]
 
 
 def relative_error(estimate, truth) -> np.ndarray:
-    """Per-vertex e_rel = (|k1 - k̂1| + |k2 - k̂2|) / (|k1| + |k2|) (paper §5.1).
+    """Per-vertex e_rel (paper eq. 5.2) with NaN where it has no finite value.
 
     Parameters
     ----------
@@ -22,11 +19,9 @@ def relative_error(estimate, truth) -> np.ndarray:
     Returns
     -------
     (n,) float64
-        NaN where the estimate is invalid or the exact curvature is zero (flat point).
+        NaN where the estimate is invalid or the exact curvature is zero (flat point): such
+        vertices are drawn grey rather than saturated.
     """
-    num = np.abs(truth.k1 - estimate.k1) + np.abs(truth.k2 - estimate.k2)
-    den = np.abs(truth.k1) + np.abs(truth.k2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        e = num / den
+    e = curvature_error(estimate, truth)
     e[~np.isfinite(e)] = np.nan
     return e
