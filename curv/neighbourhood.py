@@ -8,15 +8,21 @@ does not leave the ball. It is computed for a block of vertices at once with spa
 
 from __future__ import annotations
 
+import itertools
+import os
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Iterator
+from typing import Callable, Iterator, TypeVar
 
 import numpy as np
 import scipy.sparse as sp
 
 from .mesh import Mesh
 
-__all__ = ["Neighbourhood", "iter_neighbourhoods", "segment_sum", "neighbourhood_matrix", "DEFAULT_BLOCK_PAIRS", "block_size_for"]
+T = TypeVar("T")
+
+__all__ = ["Neighbourhood", "iter_neighbourhoods", "map_neighbourhoods", "default_workers", "segment_sum", "neighbourhood_matrix", "DEFAULT_BLOCK_PAIRS", "block_size_for"]
 
 TIE_TOLERANCE = 1e-9
 """Relative tolerance on the radius, so that vertices exactly at k edge lengths (regular meshes) are in."""
@@ -202,6 +208,78 @@ def iter_neighbourhoods(
     xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
     for start in range(0, ids_all.size, block):
         yield _block_supports(mesh, ids_all[start:start + block], factor, adjacency, xyz)
+
+
+def default_workers() -> int:
+    """Threads for block-parallel work: ``CURV_THREADS`` if set, else the usable cores (at most 8)."""
+    env = os.environ.get("CURV_THREADS", "").strip()
+    if env.isdigit() and int(env) > 0:
+        return int(env)
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, 8))
+
+
+def map_neighbourhoods(
+    mesh: Mesh, factor: float, work: Callable[[Neighbourhood], T], *, block_size: int | None = None,
+    workers: int | None = None,
+) -> Iterator[tuple[Neighbourhood, T]]:
+    """Compute the supports block by block and apply ``work`` to each, on a pool of threads.
+
+    numpy's array kernels and scipy's sparse products release the GIL, so blocks run in parallel.
+    Results come back in block order; at most ``workers + 1`` blocks are in flight, which bounds
+    memory. Closing the generator (cancel) drops the queued blocks and waits for the running ones.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    factor : float
+        As in :func:`iter_neighbourhoods`.
+    work : callable
+        ``work(neighbourhood) -> result`` for one block; must not touch shared state.
+    block_size : int, optional
+    workers : int, optional
+        Threads; default :func:`default_workers`.
+
+    Yields
+    ------
+    (Neighbourhood, result)
+    """
+    if factor <= 0:
+        raise ValueError(f"range factor must be positive, got {factor}")
+    block = block_size or block_size_for(mesh, factor)
+    adjacency = expansion_adjacency(mesh)
+    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
+    starts = range(0, mesh.n_vertices, block)
+
+    def task(start: int):
+        ids = np.arange(start, min(start + block, mesh.n_vertices), dtype=np.int64)
+        nb = _block_supports(mesh, ids, factor, adjacency, xyz)
+        return nb, work(nb)
+
+    workers = workers or default_workers()
+    if workers == 1 or len(starts) == 1:
+        for start in starts:
+            yield task(start)
+        return
+    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="curv")
+    pending: deque = deque()
+    todo = iter(starts)
+    try:
+        for start in itertools.islice(todo, workers + 1):
+            pending.append(pool.submit(task, start))
+        while pending:
+            result = pending.popleft().result()
+            nxt = next(todo, None)
+            if nxt is not None:
+                pending.append(pool.submit(task, nxt))
+            yield result
+    finally:
+        for fut in pending:
+            fut.cancel()
+        pool.shutdown(wait=True)
 
 
 def neighbourhood_matrix(mesh: Mesh, factor: float) -> sp.csr_matrix:

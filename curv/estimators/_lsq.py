@@ -15,7 +15,7 @@ import numpy as np
 
 from ..frames import principal_from_tensor, solve_sym3, tangent_frames
 from ..mesh import Mesh
-from ..neighbourhood import Neighbourhood, iter_neighbourhoods, segment_sum
+from ..neighbourhood import Neighbourhood, map_neighbourhoods, segment_sum
 from ..result import Principal
 from ..validity import Reason
 from .registry import empty_principal
@@ -182,8 +182,8 @@ def run_fit(
     out = empty_principal(n)
     U, V = tangent_frames(normals)
     frames = np.ascontiguousarray(np.concatenate([U, V, normals], axis=1).T)
-    done = 0
-    for nb in iter_neighbourhoods(mesh, factor, block_size=block_size):
+
+    def solve_block(nb: Neighbourhood):
         pairs = local_pairs(mesh, nb, frames)
         e, f, g, used, singular = fit(pairs, normals)
         ids = nb.vertices
@@ -192,6 +192,11 @@ def run_fit(
         reason[singular | ~np.isfinite(k1)] = Reason.SINGULAR
         reason[used < min_pairs] = Reason.TOO_FEW_NEIGHBOURS
         reason[~np.isfinite(normals[ids]).all(axis=1)] = Reason.DEGENERATE
+        return k1, k2, d1, d2, reason
+
+    done = 0
+    for nb, (k1, k2, d1, d2, reason) in map_neighbourhoods(mesh, factor, solve_block, block_size=block_size):
+        ids = nb.vertices
         out.k1[ids], out.k2[ids], out.d1[ids], out.d2[ids] = k1, k2, d1, d2
         out.reason[ids] = reason
         done += ids.size

@@ -27,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from ..neighbourhood import Neighbourhood, iter_neighbourhoods
+from ..neighbourhood import Neighbourhood, map_neighbourhoods
 from ..validity import Reason
 from .registry import EstimatorSpec, empty_principal, register
 
@@ -321,8 +321,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None 
     mesh.triangles  # noqa: B018  (raises MeshError on polygons)
     data = _MeshData(mesh)
     normal_ok = np.isfinite(normals).all(axis=1)
-    done = 0
-    for nb in iter_neighbourhoods(mesh, k, block_size=block_size):
+
+    def block_result(nb: Neighbourhood):
         ids = nb.vertices
         tensor, area, hits = _block_tensor(mesh, nb, data)
         singular = ~(area > 0) | ~np.isfinite(tensor).all(axis=1)
@@ -339,6 +339,11 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None 
         reason[hits[:, 0] > 0] = Reason.BORDER
         reason[(hits[:, 2] > 0) | ~normal_ok[ids]] = Reason.DEGENERATE
         reason[hits[:, 1] > 0] = Reason.NONMANIFOLD
+        return ka, kb, da, db, reason
+
+    done = 0
+    for nb, (ka, kb, da, db, reason) in map_neighbourhoods(mesh, k, block_result, block_size=block_size):
+        ids = nb.vertices
         out.k1[ids], out.k2[ids], out.d1[ids], out.d2[ids] = ka, kb, da, db
         out.reason[ids] = reason
         done += ids.size
