@@ -13,13 +13,15 @@ from functools import lru_cache
 from importlib import resources
 
 import numpy as np
+from curv.colors import INVALID_RGBA as _CURV_INVALID
+from curv.colors import apply_table, auto_limits, widen
 
 __all__ = [
     "Colormap", "LimitMode", "colormap", "colormap_names", "compute_limits", "map_colours",
     "INVALID_RGBA",
 ]
 
-INVALID_RGBA = np.array([150, 150, 150, 255], dtype=np.uint8)
+INVALID_RGBA = np.array(_CURV_INVALID, dtype=np.uint8)
 """Neutral grey drawn where a value is NaN (invalid vertex)."""
 
 
@@ -82,74 +84,21 @@ def colormap(name: str) -> Colormap:
 def compute_limits(values: np.ndarray, *, mode: LimitMode, signed: bool,
                    percentiles: tuple[float, float] = (2.0, 98.0),
                    manual: tuple[float, float] = (-1.0, 1.0)) -> tuple[float, float]:
-    """Colour limits for ``values`` (NaN ignored).
+    """Colour limits for ``values`` (NaN ignored), as :func:`curv.colors.auto_limits` computes them.
 
-    Parameters
-    ----------
-    values : (n,) float
-    mode : LimitMode
-        ``PERCENTILE``: the ``percentiles`` of the finite values, made symmetric about 0 when
-        ``signed`` (±max(|lo|, |hi|)); ``MINMAX``: min and max (symmetric when ``signed``);
-        ``MANUAL``: ``manual`` as given.
-    signed : bool
-        Centre the limits on 0.
-
-    Returns
-    -------
-    (lo, hi) : tuple of float
-        ``lo < hi`` always (a constant field gets a small span around its value).
+    ``MANUAL`` returns ``manual`` sorted (widened if empty); ``MINMAX`` and ``PERCENTILE`` follow
+    the data, symmetric about 0 when ``signed``. Always ``lo < hi``.
     """
     if mode is LimitMode.MANUAL:
         lo, hi = sorted(float(x) for x in manual)
-        return _widen(lo, hi)
-    finite = np.asarray(values, dtype=np.float64)
-    finite = finite[np.isfinite(finite)]
-    if finite.size == 0:
-        return (-1.0, 1.0) if signed else (0.0, 1.0)
-    if mode is LimitMode.MINMAX:
-        lo, hi = float(finite.min()), float(finite.max())
-    else:
-        lo, hi = (float(x) for x in np.percentile(finite, percentiles))
-    if signed:
-        m = max(abs(lo), abs(hi))
-        lo, hi = -m, m
-    return _widen(lo, hi)
-
-
-def _widen(lo: float, hi: float) -> tuple[float, float]:
-    if hi > lo:
-        return lo, hi
-    pad = max(abs(lo) * 1e-3, 1e-12)
-    return lo - pad, hi + pad
+        return widen(lo, hi)
+    return auto_limits(values, signed=signed, percentiles=percentiles, minmax=mode is LimitMode.MINMAX)
 
 
 def map_colours(values: np.ndarray, clim: tuple[float, float], cmap: Colormap, *,
                 out: np.ndarray | None = None) -> np.ndarray:
     """RGBA colours of ``values`` under ``cmap`` between ``clim``; NaN gets :data:`INVALID_RGBA`.
 
-    Parameters
-    ----------
-    values : (n,) float
-    clim : (lo, hi)
-        Values at or below ``lo`` get the first table entry, at or above ``hi`` the last.
-    cmap : Colormap
-    out : (n, 4) uint8, optional
-        Array written in place (e.g. the viewport's colour array).
-
-    Returns
-    -------
-    (n, 4) uint8
+    The same mapping as :func:`curv.colors.apply_table`, with the packaged table of ``cmap``.
     """
-    v = np.asarray(values, dtype=np.float64)
-    lo, hi = clim
-    n_col = cmap.table.shape[0]
-    nan = np.isnan(v)
-    t = (v - lo) * ((n_col - 1) / (hi - lo))
-    t[nan] = 0.0
-    idx = np.clip(np.rint(t), 0, n_col - 1).astype(np.intp)
-    if out is None:
-        out = np.empty((v.shape[0], 4), dtype=np.uint8)
-    out[:, :3] = cmap.table[idx]
-    out[:, 3] = 255
-    out[nan] = INVALID_RGBA
-    return out
+    return apply_table(values, clim, cmap.table, out=out)
