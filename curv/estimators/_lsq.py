@@ -15,7 +15,7 @@ import numpy as np
 
 from ..frames import principal_from_tensor, solve_sym3, tangent_frames
 from ..mesh import Mesh
-from ..neighbourhood import Neighbourhood, map_neighbourhoods, segment_sum
+from ..neighbourhood import DEFAULT_BLOCK_PAIRS, Neighbourhood, block_size_for, map_neighbourhoods, segment_sum
 from ..result import Principal
 from ..validity import Reason
 from .registry import empty_principal
@@ -154,7 +154,8 @@ FitBlock = Callable[[LocalPairs, np.ndarray], tuple[np.ndarray, np.ndarray, np.n
 
 
 def run_fit(
-    mesh: Mesh, normals: np.ndarray, factor: float, fit: FitBlock, *, min_pairs: int, block_size: int | None
+    mesh: Mesh, normals: np.ndarray, factor: float, fit: FitBlock, *, min_pairs: int, block_size: int | None,
+    pairs_per_block: int = DEFAULT_BLOCK_PAIRS,
 ) -> Generator[float, None, Principal]:
     """Drive a per-vertex fit over all neighbourhood blocks.
 
@@ -168,6 +169,9 @@ def run_fit(
     min_pairs : int
         Fewer usable neighbours than this make the vertex ``TOO_FEW_NEIGHBOURS``.
     block_size : int or None
+        Vertices per block; default so that a block holds about ``pairs_per_block`` pairs.
+    pairs_per_block : int
+        Lower it for fits with many unknowns: their per-pair temporaries are wider.
 
     Yields
     ------
@@ -195,6 +199,7 @@ def run_fit(
         return k1, k2, d1, d2, reason
 
     done = 0
+    block_size = block_size or block_size_for(mesh, factor, pairs=pairs_per_block)
     for nb, (k1, k2, d1, d2, reason) in map_neighbourhoods(mesh, factor, solve_block, block_size=block_size):
         ids = nb.vertices
         out.k1[ids], out.k2[ids], out.d1[ids], out.d2[ids] = k1, k2, d1, d2

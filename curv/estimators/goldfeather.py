@@ -83,7 +83,9 @@ def iter_qs(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
 
 def iter_an(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
     """Adjacent-normal cubic fit; support within (k-1) longest edges (7 unknowns, 3 equations per neighbour)."""
-    return (yield from run_fit(mesh, normals, k - 1, _fit_an, min_pairs=3, block_size=block_size))
+    # 35 normal-equation columns per pair (7 unknowns): smaller blocks keep the peak memory flat
+    return (yield from run_fit(mesh, normals, k - 1, _fit_an, min_pairs=3, block_size=block_size,
+                               pairs_per_block=250_000))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
