@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..metrics import absolute_error, relative_error
+
 __all__ = ["absolute_error", "relative_error", "summarize", "METRIC_COLUMNS"]
 
 METRIC_COLUMNS: tuple[str, ...] = (
@@ -27,45 +29,6 @@ METRIC_COLUMNS: tuple[str, ...] = (
     "rms_eabs", "rms_h", "nrms_h", "rms_k", "nrms_k",
 )
 """Keys of :func:`summarize`'s result, in table order."""
-
-
-def absolute_error(k1, k2, k1_hat, k2_hat) -> np.ndarray:
-    """``e_abs = |k1 - k̂1| + |k2 - k̂2|``.
-
-    Parameters
-    ----------
-    k1, k2 : (n,) float
-        Exact principal curvatures, ``k1 >= k2``.
-    k1_hat, k2_hat : (n,) float
-        Estimates, ``k1_hat >= k2_hat``; NaN where the estimate is invalid.
-
-    Returns
-    -------
-    (n,) float64
-        NaN where an estimate is NaN.
-    """
-    return np.abs(np.asarray(k1, float) - k1_hat) + np.abs(np.asarray(k2, float) - k2_hat)
-
-
-def relative_error(k1, k2, k1_hat, k2_hat) -> np.ndarray:
-    """``e_rel = e_abs / (|k1| + |k2|)`` (paper eq. 5.2).
-
-    Parameters as in :func:`absolute_error`.
-
-    Returns
-    -------
-    (n,) float64
-        ``inf`` where the exact curvature is zero and the estimate is not; ``0`` where both are
-        zero; NaN where the estimate is NaN.
-    """
-    num = absolute_error(k1, k2, k1_hat, k2_hat)
-    den = np.abs(np.asarray(k1, float)) + np.abs(np.asarray(k2, float))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = num / den
-    flat = den == 0
-    out[flat & (num == 0)] = 0.0
-    out[flat & (num > 0)] = np.inf
-    return out
 
 
 def _rms(x: np.ndarray) -> float:
