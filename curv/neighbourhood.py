@@ -97,9 +97,13 @@ def segment_sum(values: np.ndarray, indptr: np.ndarray) -> np.ndarray:
         Zero for empty segments. One ``np.add.reduceat`` pass (several times faster than
         ``np.bincount`` with weights).
     """
-    padded = np.concatenate([values, np.zeros((1,) + values.shape[1:], values.dtype)])
-    out = np.add.reduceat(padded, indptr[:-1], axis=0)
-    out[indptr[1:] == indptr[:-1]] = 0
+    starts = indptr[:-1]
+    nonempty = indptr[1:] > starts
+    out = np.zeros((starts.size,) + values.shape[1:], dtype=values.dtype)
+    if values.shape[0]:
+        # reducing at the starts of non-empty segments only: each runs to the next such start,
+        # which is exactly its own end since empty segments hold nothing in between
+        out[nonempty] = np.add.reduceat(values, starts[nonempty], axis=0)
     return out
 
 
@@ -134,18 +138,21 @@ def _block_supports(mesh: Mesh, ids: np.ndarray, factor: float, adjacency: sp.cs
     while layer.nnz:
         # BFS layering: a neighbour of layer t lies in layer t-1, t or t+1, so only those two
         # layers need subtracting (not everything reached so far)
-        candidates = layer @ adjacency
-        candidates = candidates > layer
-        candidates = candidates > previous
+        candidates = (layer @ adjacency) > (layer + previous)
         previous, layer = layer, _ball_filter(candidates.tocsr(), centre_xyz, xyz, radius2)
         layers.append(layer)
-    rows = np.concatenate([np.repeat(np.arange(c), np.diff(l.indptr)) for l in layers])
-    cols = np.concatenate([l.indices for l in layers]).astype(np.int64)
-    order = np.argsort(rows, kind="stable")
-    counts = np.bincount(rows, minlength=c)
+    # merge the layers row by row without sorting: every entry goes to its row's slot, after the
+    # entries of the same row in earlier layers
+    per_layer = np.stack([np.diff(l.indptr) for l in layers])
+    counts = per_layer.sum(axis=0)
     indptr = np.zeros(c + 1, dtype=np.int64)
     np.cumsum(counts, out=indptr[1:])
-    return Neighbourhood(ids, indptr, cols[order], radius)
+    before = indptr[:-1] + np.cumsum(per_layer, axis=0) - per_layer
+    cols = np.empty(indptr[-1], dtype=np.int64)
+    for layer, start in zip(layers, before):
+        k = np.diff(layer.indptr)
+        cols[np.repeat(start - layer.indptr[:-1], k) + np.arange(layer.nnz)] = layer.indices
+    return Neighbourhood(ids, indptr, cols, radius)
 
 
 def expansion_adjacency(mesh: Mesh) -> sp.csr_matrix:

@@ -94,24 +94,22 @@ def normal_equations(nb: Neighbourhood, equations: list[tuple[list, np.ndarray]]
     atb : (c, p) float64
     """
     p = len(equations[0][0])
-    columns = []
-    for i in range(p):
-        for j in range(i, p):
-            terms = [c[i] * c[j] for c, _ in equations if c[i] is not None and c[j] is not None]
-            columns.append(sum(terms[1:], terms[0]) if terms else None)
-    for i in range(p):
-        terms = [c[i] * r for c, r in equations if c[i] is not None]
-        columns.append(sum(terms[1:], terms[0]))
-    nnz = nb.indices.size
-    stacked = np.stack([col if col is not None else np.zeros(nnz) for col in columns], axis=1)
-    sums = segment_sum(stacked, nb.indptr)
     ata = np.empty((nb.size, p, p))
-    k = 0
+    atb = np.empty((nb.size, p))
+
+    def summed(terms: list) -> np.ndarray:
+        # each column is reduced on its own: stacking them first costs a transposing copy
+        if not terms:
+            return np.zeros(nb.size)
+        return segment_sum(sum(terms[1:], terms[0]), nb.indptr)
+
     for i in range(p):
         for j in range(i, p):
-            ata[:, i, j] = ata[:, j, i] = sums[:, k]
-            k += 1
-    return ata, sums[:, k:]
+            col = summed([c[i] * c[j] for c, _ in equations if c[i] is not None and c[j] is not None])
+            ata[:, i, j] = col
+            ata[:, j, i] = col
+        atb[:, i] = summed([c[i] * r for c, r in equations if c[i] is not None])
+    return ata, atb
 
 
 def solve_normal_equations(ata: np.ndarray, atb: np.ndarray, *, rcond: float = 1e-10):
