@@ -291,7 +291,7 @@ class Mesh:
     @cached_property
     def edge_vectors(self) -> np.ndarray:
         """(e, 3) float64 ``vertices[edges[:, 1]] - vertices[edges[:, 0]]``."""
-        return self._vertices[self.edges[:, 1]] - self._vertices[self.edges[:, 0]]
+        return np.take(self._vertices, self.edges[:, 1], axis=0) - np.take(self._vertices, self.edges[:, 0], axis=0)
 
     @cached_property
     def edge_lengths(self) -> np.ndarray:
@@ -358,8 +358,8 @@ class Mesh:
         Exact for planar polygons and the natural average normal for non-planar ones.
         """
         v = self._vertices
-        a = v[self._indices]
-        b = v[self._indices[self.corner_next]]
+        a = np.take(v, self._indices, axis=0)
+        b = np.take(a, self.corner_next, axis=0)
         cross = np.cross(a, b)
         out = np.zeros((self.n_faces, 3))
         for k in range(3):
@@ -395,7 +395,8 @@ class Mesh:
         dup = (f_sorted[1:] == f_sorted[:-1]) & (i_sorted[1:] == i_sorted[:-1])
         repeated[f_sorted[1:][dup]] = True
         he = self.halfedges
-        lengths2 = np.einsum("ij,ij->i", *(2 * [self._vertices[he[:, 1]] - self._vertices[he[:, 0]]]))
+        d = np.take(self._vertices, he[:, 1], axis=0) - np.take(self._vertices, he[:, 0], axis=0)
+        lengths2 = np.einsum("ij,ij->i", d, d)
         longest2 = np.zeros(self.n_faces)
         np.maximum.at(longest2, self.corner_face, lengths2)
         area = np.linalg.norm(self.face_vector_areas, axis=1)

@@ -135,6 +135,13 @@ def _block_supports(mesh: Mesh, ids: np.ndarray, factor: float, adjacency: sp.cs
     layer = sp.csr_matrix((np.ones(c, bool), (np.arange(c), ids)), shape=(c, n))
     previous = sp.csr_matrix((c, n), dtype=bool)
     layers = []
+    if factor >= 1.0:
+        # every 1-ring neighbour lies within the longest 1-ring edge: the first layer is the
+        # adjacency row itself, no product or distance test needed
+        first = adjacency[ids]
+        first.sort_indices()
+        previous, layer = layer, first
+        layers.append(layer)
     while layer.nnz:
         # BFS layering: a neighbour of layer t lies in layer t-1, t or t+1, so only those two
         # layers need subtracting (not everything reached so far)

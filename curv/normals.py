@@ -40,13 +40,13 @@ def _corner_vectors(mesh: Mesh) -> tuple[list[np.ndarray], list[np.ndarray]]:
     are several times faster than gathering rows of the (n, 3) vertex array.
     """
     idx = mesh.face_indices
-    nxt, prv = idx[mesh.corner_next], idx[mesh.corner_prev]
+    nxt, prv = mesh.corner_next, mesh.corner_prev
     a, b = [], []
     for k in range(3):
-        coord = np.ascontiguousarray(mesh.vertices[:, k])
-        here = np.take(coord, idx)
-        a.append(np.take(coord, nxt) - here)
-        b.append(np.take(coord, prv) - here)
+        here = np.take(np.ascontiguousarray(mesh.vertices[:, k]), idx)
+        # the neighbours' coordinates come from the corner array itself: local indices, cache-friendly
+        a.append(np.take(here, nxt) - here)
+        b.append(np.take(here, prv) - here)
     return a, b
 
 

@@ -189,7 +189,7 @@ def run_fit(
         pairs = local_pairs(mesh, nb, frames)
         e, f, g, used, singular = fit(pairs, normals)
         ids = nb.vertices
-        k1, k2, d1, d2 = principal_from_tensor(e, f, g, U[ids], V[ids])
+        k1, k2, d1, d2 = principal_from_tensor(e, f, g, np.take(U, ids, axis=0), np.take(V, ids, axis=0))
         reason = np.full(ids.size, Reason.OK, np.uint8)
         reason[singular | ~np.isfinite(k1)] = Reason.SINGULAR
         reason[used < min_pairs] = Reason.TOO_FEW_NEIGHBOURS

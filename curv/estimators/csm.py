@@ -125,8 +125,8 @@ def face_frames(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     """
     tri = mesh.triangles
     v = mesh.vertices
-    e0 = v[tri[:, 1]] - v[tri[:, 0]]
-    e2 = v[tri[:, 2]] - v[tri[:, 0]]
+    e0 = np.take(v, tri[:, 1], axis=0) - np.take(v, tri[:, 0], axis=0)
+    e2 = np.take(v, tri[:, 2], axis=0) - np.take(v, tri[:, 0], axis=0)
     x1 = np.linalg.norm(e0, axis=1)
     bad = mesh.degenerate_faces | ~(x1 > 0)
     n_f = np.where(bad[:, None], 0.0, np.nan_to_num(mesh.face_normals))
@@ -229,7 +229,7 @@ def _clipped_edges(mesh: Mesh, nb: Neighbourhood, rows: np.ndarray, edges: np.nd
     out = np.empty(rows.size)
     for s in range(0, rows.size, PAIR_CHUNK):
         r, e = rows[s:s + PAIR_CHUNK], edges[s:s + PAIR_CHUNK]
-        start = v[mesh.edges[e, 0]] - v[nb.vertices[r]]
+        start = np.take(v, mesh.edges[e, 0], axis=0) - np.take(v, nb.vertices[r], axis=0)
         t1, t2 = segment_ball(start, mesh.edge_vectors[e], nb.radius[r])
         out[s:s + PAIR_CHUNK] = t2 - t1
     return out
@@ -242,7 +242,7 @@ def _clipped_faces(mesh: Mesh, nb: Neighbourhood, rows: np.ndarray, faces: np.nd
     out = np.empty(rows.size)
     for s in range(0, rows.size, PAIR_CHUNK):
         r, f = rows[s:s + PAIR_CHUNK], faces[s:s + PAIR_CHUNK]
-        offset = v[nb.vertices[r]] - v[first[f]]
+        offset = np.take(v, nb.vertices[r], axis=0) - np.take(v, first[f], axis=0)
         out[s:s + PAIR_CHUNK] = triangle_ball_area(offset, nb.radius[r], data.frame[f], data.corners[f])
     out[~np.isfinite(out)] = 0.0
     return out

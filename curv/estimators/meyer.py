@@ -73,7 +73,7 @@ def corner_geometry(mesh: Mesh):
         The corner's share of the mixed Voronoi area ``A_mixed`` (0 on degenerate faces).
     """
     tri = mesh.triangles
-    corner = mesh.vertices[tri]
+    corner = np.take(mesh.vertices, tri, axis=0)
     edge = [corner[:, (i + 1) % 3] - corner[:, i] for i in range(3)]
     len2 = np.stack([np.einsum("ij,ij->i", e, e) for e in edge], axis=1)
     # the angle at corner i is between edge i and the reversed edge i+2
@@ -156,7 +156,7 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
         scatter = scatter_matrix(tri[:, i], n)
         # cot(a_j) (p - q_j) summed: edge i (to q = corner i+1) faces corner i+2, edge i+2 faces i+1
         hvec += scatter @ (cot[:, nxt, None] * edge[prv] - cot[:, prv, None] * edge[i])
-        f = frames[tri[:, i]].reshape(-1, 3, 3)
+        f = np.take(frames, tri[:, i], axis=0).reshape(-1, 3, 3)
         u, v, w = np.einsum("ij,ikj->ki", edge[i], f)
         l2 = u * u + v * v
         with np.errstate(invalid="ignore", divide="ignore"):

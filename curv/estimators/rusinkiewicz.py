@@ -52,7 +52,7 @@ def face_tensors(mesh: Mesh, normals: np.ndarray):
     tri = mesh.triangles
     v = mesh.vertices
     nf = mesh.face_normals
-    e0 = v[tri[:, 1]] - v[tri[:, 0]]
+    e0 = np.take(v, tri[:, 1], axis=0) - np.take(v, tri[:, 0], axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
         u_f = e0 / np.linalg.norm(e0, axis=1, keepdims=True)
     v_f = np.cross(nf, u_f)
@@ -61,8 +61,8 @@ def face_tensors(mesh: Mesh, normals: np.ndarray):
     b0 = np.zeros(size); b1 = np.zeros(size); b2 = np.zeros(size)  # noqa: E702
     for i in range(3):
         j, k = (i + 1) % 3, (i + 2) % 3
-        edge = v[tri[:, k]] - v[tri[:, j]]
-        dn = normals[tri[:, k]] - normals[tri[:, j]]
+        edge = np.take(v, tri[:, k], axis=0) - np.take(v, tri[:, j], axis=0)
+        dn = np.take(normals, tri[:, k], axis=0) - np.take(normals, tri[:, j], axis=0)
         eu, ev = _dot(edge, u_f), _dot(edge, v_f)
         nu, nv = _dot(dn, u_f), _dot(dn, v_f)
         # rows [eu ev 0] -> nu and [0 eu ev] -> nv
@@ -109,11 +109,11 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
     U, V = tangent_frames(normals)
     acc = np.zeros((n, 4))  # weighted e, f, g and total weight
     flip = np.zeros(n, bool)
-    bad_face = face_singular | mesh.degenerate_faces | ~np.isfinite(normals[tri]).all(axis=(1, 2))
+    bad_face = face_singular | mesh.degenerate_faces | ~np.isfinite(np.take(normals, tri, axis=0)).all(axis=(1, 2))
     fe, ff, fg = (np.where(bad_face, 0.0, efg[:, c]) for c in range(3))
     for i in range(3):
         p = tri[:, i]
-        n_p = normals[p]
+        n_p = np.take(normals, p, axis=0)
         c = _dot(nf, n_p)
         opposite = ~(c > MIN_ROTATION_COS)
         np.logical_or.at(flip, p[opposite & ~bad_face], True)
@@ -124,7 +124,7 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
         with np.errstate(invalid="ignore", divide="ignore"):
             inv = np.where(opposite, 0.0, 1.0 / (1.0 + c))
         rows = []
-        for basis in (U[p], V[p]):
+        for basis in (np.take(U, p, axis=0), np.take(V, p, axis=0)):
             rt = c[:, None] * basis + np.cross(axis, basis) + axis * (_dot(axis, basis) * inv)[:, None]
             rows.append((_dot(rt, u_f), _dot(rt, v_f)))
         (uu, uv), (vu, vv) = rows
