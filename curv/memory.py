@@ -1,10 +1,10 @@
 """Predict the peak memory of ``curv estimate`` before running it, and what the machine has free.
 
-The model is ``BASE_BYTES + PER_UNIT_BYTES * units + BLOCK_BYTES[method, k]`` with
-``units = n_vertices + n_faces / 2`` (twice the vertex count on a closed triangle mesh). The
-coefficients were measured with ``benchmarks/bench_large.py calibrate`` (peak RSS of the whole
-``curv estimate`` process: reading the file, connectivity, normals, the estimator's blocks and the
-result) and rounded up.
+The model is ``BASE_BYTES + (PER_UNIT_BYTES + FACE_PASS_BYTES[method]) * units + BLOCK_BYTES[method, k]``
+with ``units = n_vertices + n_faces / 2`` (twice the vertex count on a closed triangle mesh). The
+coefficients come from peak RSS of the whole ``curv estimate`` process (reading the file,
+connectivity, normals, the estimator's blocks, the result and the output file), measured with
+``/usr/bin/time -v`` at 10M vertices and ``benchmarks/bench_estimators.py`` at 1M, rounded up.
 """
 
 from __future__ import annotations
@@ -16,26 +16,22 @@ __all__ = ["estimate_peak_bytes", "available_bytes", "format_bytes", "MemoryEsti
 BASE_BYTES = 170 * 2**20
 """Interpreter, numpy, scipy and plyfile loaded, before any mesh data."""
 
-PER_UNIT_BYTES = 1950.0
-"""Mesh, connectivity, normals, report and result arrays per size unit (largest slope measured:
-``nc`` R1 between 100k and 400k vertices, 1.87 kB; ``mru`` R2: 1.30 kB)."""
+PER_UNIT_BYTES = 1100.0
+"""Mesh, connectivity, validity masks, normals, report and result arrays per size unit.
 
-BLOCK_BYTES: dict[tuple[str, int], int] = {
-    ("mru", 3): 1150 * 2**20,
-    ("mru", 4): 1150 * 2**20,
-    ("qs", 3): 1000 * 2**20,
-    ("qs", 4): 1000 * 2**20,
-    ("nc", 3): 1000 * 2**20,
-    ("nc", 4): 1000 * 2**20,
-    ("an", 2): 2850 * 2**20,
-    ("an", 3): 2850 * 2**20,
-    ("an", 4): 2850 * 2**20,
-    ("csm", 3): 1200 * 2**20,
-    ("csm", 4): 1200 * 2**20,
-}
-"""Temporaries of the neighbourhood blocks at wide ranges, which do not grow with the mesh (the
-blocks are bounded): measured peak at 100k vertices minus the linear part. Wide ranges not measured
-take the value of their R4 (an upper bound); R1/R2 of the one-ring estimators have none to speak of."""
+Measured: ``curv estimate`` mru R2 on a 10M-vertex torus (20M faces, 20M units) peaked at 18.7 GB
+resident (928 B per unit above the base); rounded up by about 20 %."""
+
+FACE_PASS_BYTES: dict[str, float] = {"meyer": 400.0, "ru": 400.0, "csm": 400.0}
+"""Extra bytes per unit of the estimators with whole-mesh per-face temporaries (not blocked): at
+1M vertices they peaked about 0.45 GB above the block-bounded fits (benchmarks/bench_estimators.py)."""
+
+BLOCK_BYTES: dict[tuple[str, int], int] = {k: 1200 * 2**20 for k in (
+    ("mru", 3), ("mru", 4), ("qs", 3), ("qs", 4), ("nc", 3), ("nc", 4), ("an", 2), ("an", 3), ("an", 4),
+    ("csm", 3), ("csm", 4))}
+"""Temporaries of the neighbourhood blocks at wide ranges. Blocks hold about 1M neighbour pairs
+(250k for ``an``) and at most three are in flight, so this does not grow with the mesh; measured
+at most 0.66 GB above the mesh at 1M vertices, taken as 1.2 GB to stay on the safe side."""
 
 
 def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range: int) -> int:
@@ -56,7 +52,7 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range: int) 
         Bytes.
     """
     units = float(n_vertices) + 0.5 * float(n_faces)
-    linear = BASE_BYTES + PER_UNIT_BYTES * units
+    linear = BASE_BYTES + (PER_UNIT_BYTES + FACE_PASS_BYTES.get(method, 0.0)) * units
     # small meshes have small blocks: the block term cannot exceed what the mesh can fill
     block = min(BLOCK_BYTES.get((method, int(range)), 0), 20_000.0 * units)
     return int(linear + block)
