@@ -15,10 +15,10 @@ import numpy as np
 
 from ..frames import principal_from_tensor, solve_sym3, tangent_frames
 from ..mesh import Mesh
-from ..neighbourhood import DEFAULT_BLOCK_PAIRS, Neighbourhood, block_size_for, map_neighbourhoods, segment_sum
+from ..neighbourhood import DEFAULT_BLOCK_PAIRS, Neighbourhood, block_size_for, segment_sum
 from ..result import Principal
 from ..validity import Reason
-from .registry import empty_principal
+from .registry import iter_blockwise
 
 __all__ = ["LocalPairs", "run_fit", "normal_equations", "solve_normal_equations"]
 
@@ -180,8 +180,6 @@ def run_fit(
     -------
     Principal
     """
-    n = mesh.n_vertices
-    out = empty_principal(n)
     U, V = tangent_frames(normals)
     frames = np.ascontiguousarray(np.concatenate([U, V, normals], axis=1).T)
 
@@ -196,12 +194,5 @@ def run_fit(
         reason[~np.isfinite(normals[ids]).all(axis=1)] = Reason.DEGENERATE
         return k1, k2, d1, d2, reason
 
-    done = 0
     block_size = block_size or block_size_for(mesh, factor, pairs=pairs_per_block)
-    for nb, (k1, k2, d1, d2, reason) in map_neighbourhoods(mesh, factor, solve_block, block_size=block_size):
-        ids = nb.vertices
-        out.k1[ids], out.k2[ids], out.d1[ids], out.d2[ids] = k1, k2, d1, d2
-        out.reason[ids] = reason
-        done += ids.size
-        yield done / n
-    return out
+    return (yield from iter_blockwise(mesh, factor, solve_block, block_size=block_size))

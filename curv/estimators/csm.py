@@ -27,9 +27,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from ..neighbourhood import Neighbourhood, map_neighbourhoods
+from ..neighbourhood import Neighbourhood
 from ..validity import Reason
-from .registry import EstimatorSpec, empty_principal, register
+from .registry import EstimatorSpec, iter_blockwise, register
 
 __all__ = ["iter_csm", "edge_tensors", "segment_ball", "triangle_ball_area"]
 
@@ -316,8 +316,6 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None 
     -------
     Principal
     """
-    n = mesh.n_vertices
-    out = empty_principal(n)
     mesh.triangles  # noqa: B018  (raises MeshError on polygons)
     data = _MeshData(mesh)
     normal_ok = np.isfinite(normals).all(axis=1)
@@ -341,14 +339,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None 
         reason[hits[:, 1] > 0] = Reason.NONMANIFOLD
         return ka, kb, da, db, reason
 
-    done = 0
-    for nb, (ka, kb, da, db, reason) in map_neighbourhoods(mesh, k, block_result, block_size=block_size):
-        ids = nb.vertices
-        out.k1[ids], out.k2[ids], out.d1[ids], out.d2[ids] = ka, kb, da, db
-        out.reason[ids] = reason
-        done += ids.size
-        yield done / n
-    return out
+    return (yield from iter_blockwise(mesh, k, block_result, block_size=block_size))
 
 
 register(EstimatorSpec(

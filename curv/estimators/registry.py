@@ -103,6 +103,44 @@ def all_variants() -> list[tuple[str, int]]:
     return [v for spec in ESTIMATORS.values() for v in spec.variants()]
 
 
+def iter_blockwise(mesh: Mesh, factor: float, block_fn, *, block_size: int | None = None
+                   ) -> Generator[float, None, Principal]:
+    """Run a per-block estimator over all range supports (threaded) and assemble the result.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    factor : float
+        Support radius in longest-1-ring-edge units.
+    block_fn : callable
+        ``block_fn(neighbourhood) -> (k1, k2, d1, d2, reason)`` for the block's centre vertices:
+        (c,), (c,), (c, 3), (c, 3), (c,) uint8.
+    block_size : int, optional
+        Vertices per block.
+
+    Yields
+    ------
+    float
+        Fraction of vertices done (the points where a caller may cancel).
+
+    Returns
+    -------
+    Principal
+    """
+    from ..neighbourhood import map_neighbourhoods
+
+    n = mesh.n_vertices
+    out = empty_principal(n)
+    done = 0
+    for nb, (k1, k2, d1, d2, reason) in map_neighbourhoods(mesh, factor, block_fn, block_size=block_size):
+        ids = nb.vertices
+        out.k1[ids], out.k2[ids], out.d1[ids], out.d2[ids] = k1, k2, d1, d2
+        out.reason[ids] = reason
+        done += ids.size
+        yield done / n
+    return out
+
+
 def empty_principal(n: int) -> Principal:
     """A :class:`Principal` of NaNs with every reason ``OK`` (to be filled by an estimator)."""
     return Principal(
