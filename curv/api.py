@@ -106,12 +106,13 @@ def iter_estimate(
     # of the surface's curvature, whatever the estimator
     reason[(reason == Reason.OK) & mesh.border_vertices] = Reason.BORDER
     reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
-    swap = k2 > k1
-    k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)
-    d1, d2 = np.where(swap[:, None], d2, d1), np.where(swap[:, None], d1, d2)
+    # (the arrays are this call's own: the estimator made them for it)
+    # the estimators order k1 >= k2 already; this only repairs the rare rows they did not
+    swap = np.flatnonzero(k2 > k1)
+    k1[swap], k2[swap] = k2[swap], k1[swap]
+    d1[swap], d2[swap] = d2[swap], d1[swap]
     # keep (d1, d2, N) right-handed so results are reproducible
-    flip = np.einsum("ij,ij->i", np.cross(d1, d2), used_normals) < 0
-    d2 = np.where(flip[:, None], -d2, d2)
+    d2[_triple_product(d1, d2, used_normals) < 0] *= -1.0
     if smooth is Smoothing.VALUES:
         ok = reason == Reason.OK
         k1, k2 = smooth_values(mesh, np.stack([k1, k2], axis=1), ok,
@@ -131,6 +132,14 @@ def iter_estimate(
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0},
     )
+
+
+def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Row-wise ``(a x b) . c`` of three (n, 3) arrays: (n,); NaN where a row has a NaN."""
+    a0, a1, a2 = a.T
+    b0, b1, b2 = b.T
+    c0, c1, c2 = c.T
+    return (a1 * b2 - a2 * b1) * c0 + (a2 * b0 - a0 * b2) * c1 + (a0 * b1 - a1 * b0) * c2
 
 
 def estimate(

@@ -233,6 +233,19 @@ class Mesh:
         return prev
 
     @cached_property
+    def vertex_corners(self) -> tuple[np.ndarray, np.ndarray]:
+        """The corners grouped by vertex: ``(indptr (n+1,) int64, corners (h,) int64)``.
+
+        The corners at vertex v are ``corners[indptr[v]:indptr[v+1]]``, in face order. Built with a
+        counting sort (linear time).
+        """
+        h = self._indices.size
+        corners = np.arange(h, dtype=np.int64)
+        grouped = sp.coo_matrix((np.ones(h, np.int8), (self._indices, corners)),
+                                shape=(self.n_vertices, h)).tocsr()
+        return grouped.indptr.astype(np.int64, copy=False), grouped.indices.astype(np.int64, copy=False)
+
+    @cached_property
     def halfedges(self) -> np.ndarray:
         """(h, 2) int64 directed edges ``(corner vertex, next corner vertex)`` of every face."""
         return np.stack([self._indices, self._indices[self.corner_next]], axis=1)

@@ -11,6 +11,7 @@ import enum
 
 import numpy as np
 
+from .corners import CornerChunk, map_vertex_chunks
 from .mesh import Mesh
 
 __all__ = ["NormalWeighting", "vertex_normals", "normalize_rows"]
@@ -33,23 +34,6 @@ def normalize_rows(v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _corner_vectors(mesh: Mesh) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """Vectors from each corner to the next and to the previous corner of its face.
-
-    Returns two lists of three (h,) arrays (x, y, z components): 1-D gathers of single coordinates
-    are several times faster than gathering rows of the (n, 3) vertex array.
-    """
-    idx = mesh.face_indices
-    nxt, prv = mesh.corner_next, mesh.corner_prev
-    a, b = [], []
-    for k in range(3):
-        here = np.take(np.ascontiguousarray(mesh.vertices[:, k]), idx)
-        # the neighbours' coordinates come from the corner array itself: local indices, cache-friendly
-        a.append(np.take(here, nxt) - here)
-        b.append(np.take(here, prv) - here)
-    return a, b
-
-
 def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX) -> np.ndarray:
     """Unit vertex normals.
 
@@ -67,21 +51,35 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
         degenerate.
     """
     weighting = NormalWeighting(weighting)
-    (ax, ay, az), (bx, by, bz) = _corner_vectors(mesh)
-    cross = [ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx]
-    if weighting is NormalWeighting.MAX:
-        with np.errstate(invalid="ignore", divide="ignore"):
-            inv = 1.0 / ((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
-        inv[~np.isfinite(inv)] = 0.0  # a zero-length edge: the corner has no direction to give
-        w = [c * inv for c in cross]
-    elif weighting is NormalWeighting.AREA:
-        w = list(mesh.face_vector_areas[mesh.corner_face].T)
-    else:
-        sin = np.sqrt(cross[0] ** 2 + cross[1] ** 2 + cross[2] ** 2)
-        angle = np.arctan2(sin, ax * bx + ay * by + az * bz)
-        fn = np.nan_to_num(mesh.face_normals)[mesh.corner_face]
-        w = [fn[:, k] * angle for k in range(3)]
-    idx = mesh.face_indices
-    n = mesh.n_vertices
-    acc = np.stack([np.bincount(idx, weights=w[k], minlength=n) for k in range(3)], axis=1)
+    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
+    if weighting is NormalWeighting.AREA:
+        face_weight = mesh.face_vector_areas
+    elif weighting is NormalWeighting.ANGLE:
+        face_weight = np.nan_to_num(mesh.face_normals)
+    acc = np.zeros((mesh.n_vertices, 3))
+    corner_face = mesh.corner_face
+
+    def work(chunk: CornerChunk) -> None:
+        # edges from the corner's vertex to the next and to the previous corner of its face
+        here = [np.repeat(coord[chunk.start:chunk.stop], chunk.counts) for coord in xyz]
+        ax, ay, az = (np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
+        bx, by, bz = (np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
+        cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
+        if weighting is NormalWeighting.MAX:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                inv = 1.0 / ((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+            inv[~np.isfinite(inv)] = 0.0  # a zero-length edge: the corner has no direction to give
+            w = [c * inv for c in cross]
+        else:
+            fw = np.take(face_weight, np.take(corner_face, chunk.corners), axis=0)
+            if weighting is NormalWeighting.AREA:
+                w = list(fw.T)
+            else:
+                sin = np.sqrt(cross[0] ** 2 + cross[1] ** 2 + cross[2] ** 2)
+                angle = np.arctan2(sin, ax * bx + ay * by + az * bz)
+                w = [fw[:, k] * angle for k in range(3)]
+        for k in range(3):
+            acc[chunk.start:chunk.stop, k] = chunk.sum(w[k])
+
+    map_vertex_chunks(mesh, work)
     return normalize_rows(acc)

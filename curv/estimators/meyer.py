@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..corners import CornerChunk, map_vertex_chunks
 from ..frames import tangent_frames
 from ..mesh import Mesh
 from ..validity import Reason
@@ -121,6 +122,10 @@ def ring_flags(mesh: Mesh, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray,
 def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
     """Meyer et al. operators on the 1-ring (``k`` must be 1; ``block_size`` is unused).
 
+    The corners around each vertex are processed in cache-sized chunks of vertices on a thread
+    pool (:mod:`curv.corners`): every corner contributes its face's cotangent terms, angle and
+    mixed-area share to its own vertex, so a chunk needs no data from any other chunk.
+
     Parameters
     ----------
     mesh : Mesh
@@ -141,23 +146,43 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     """
     n = mesh.n_vertices
     out = empty_principal(n)
-    tri = mesh.triangles
-    edge, cot, angle, area = corner_geometry(mesh)
-    U, V = tangent_frames(normals)
-    frames = np.concatenate([U, V, normals], axis=1)
-    yield 0.2
+    if not mesh.is_triangular:
+        mesh.triangles  # raises the MeshError that names the polygon sizes
+    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+    degenerate_faces = mesh.degenerate_faces
+    corner_face = mesh.corner_face
+    singular = np.zeros(n, bool)
+    yield 0.1
 
-    # One pass over the corners. In a closed oriented 1-ring every edge p-q leaves p in exactly
-    # one face, so edge i of corner i enumerates the 1-ring pairs once each.
-    hvec = np.zeros((n, 3))
-    acc = np.zeros((_COLUMNS, n))
-    for i in range(3):
-        nxt, prv = (i + 1) % 3, (i + 2) % 3
-        scatter = scatter_matrix(tri[:, i], n)
-        # cot(a_j) (p - q_j) summed: edge i (to q = corner i+1) faces corner i+2, edge i+2 faces i+1
-        hvec += scatter @ (cot[:, nxt, None] * edge[prv] - cot[:, prv, None] * edge[i])
-        f = np.take(frames, tri[:, i], axis=0).reshape(-1, 3, 3)
-        u, v, w = np.einsum("ij,ikj->ki", edge[i], f)
+    def work(chunk: CornerChunk) -> None:
+        rows = slice(chunk.start, chunk.stop)
+        counts = chunk.counts
+        # the corner's vertex a and the next (b) and previous (c) vertices of its triangle
+        here = [np.repeat(coord[rows], counts) for coord in xyz]
+        ab = [np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here)]
+        ac = [np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here)]
+        bc = [y - x for x, y in zip(ab, ac)]
+        twice = np.sqrt(_dot(_cross(ab, ac), _cross(ab, ac)))  # twice the triangle area
+        bad = np.take(degenerate_faces, np.take(corner_face, chunk.corners))
+        twice_safe = np.where(bad, 1.0, twice)
+        dot_a, dot_b, dot_c = _dot(ab, ac), -_dot(ab, bc), _dot(ac, bc)
+        cot_b, cot_c = dot_b / twice_safe, dot_c / twice_safe
+        angle = np.arctan2(twice_safe, dot_a)
+        # mixed Voronoi area: edge ab faces corner c, edge ac faces corner b
+        area = 0.125 * (cot_c * _dot(ab, ab) + cot_b * _dot(ac, ac))
+        obtuse_here = dot_a < 0
+        obtuse_other = (dot_b < 0) | (dot_c < 0)
+        area = np.where(obtuse_here, 0.25 * twice, np.where(obtuse_other, 0.125 * twice, area))
+        # mean-curvature normal: sum of (cot b + cot c) style terms, (a - b) cot c + (a - c) cot b
+        hterm = [-(cot_c * e1 + cot_b * e2) for e1, e2 in zip(ab, ac)]
+        for arr in (angle, area, *hterm):
+            arr[bad] = 0.0
+
+        # direction fit on the edge a -> b (in a closed ring every leaving edge appears once)
+        nrm = normals[rows]
+        U, V = tangent_frames(nrm)
+        u, v, w = (sum(e * np.repeat(np.ascontiguousarray(F[:, c]), counts) for c, e in enumerate(ab))
+                   for F in (U, V, nrm))
         l2 = u * u + v * v
         with np.errstate(invalid="ignore", divide="ignore"):
             ok = l2 > (MIN_TANGENT_LENGTH**2) * (l2 + w * w)
@@ -165,42 +190,52 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
             kn = np.where(ok, -2.0 * w / (l2 + w * w), 0.0)
         c2 = (u * u - v * v) * inv
         s2 = 2.0 * u * v * inv
-        for row, values in enumerate((area[:, i], angle[:, i], c2 * c2, c2 * s2, s2 * s2,
-                                      kn * c2, kn * s2, c2, s2)):
-            acc[row] += scatter @ values
-        yield 0.2 + 0.2 * (i + 1)
+        a_mixed, angle_sum, a00, a01, a11, r0, r1, t0, t1, hx, hy, hz = (
+            chunk.sum(x) for x in (area, angle, c2 * c2, c2 * s2, s2 * s2, kn * c2, kn * s2, c2, s2, *hterm))
 
-    a_mixed = acc[0]
-    singular = ~(a_mixed > 0)
-    safe_area = np.where(singular, 1.0, a_mixed)
-    hvec /= (2.0 * safe_area)[:, None]
-    sign = np.sign(np.einsum("ij,ij->i", hvec, np.nan_to_num(normals)))
-    h = 0.5 * sign * np.linalg.norm(hvec, axis=1)
-    kg = (2.0 * np.pi - acc[1]) / safe_area
-    root = np.sqrt(np.maximum(h * h - kg, 0.0))
+        empty = ~(a_mixed > 0)
+        safe_area = np.where(empty, 1.0, a_mixed)
+        hx, hy, hz = (x / (2.0 * safe_area) for x in (hx, hy, hz))
+        with np.errstate(invalid="ignore"):
+            sign = np.sign(hx * nrm[:, 0] + hy * nrm[:, 1] + hz * nrm[:, 2])
+        h = 0.5 * sign * np.sqrt(hx * hx + hy * hy + hz * hz)
+        kg = (2.0 * np.pi - angle_sum) / safe_area
+        root = np.sqrt(np.maximum(h * h - kg, 0.0))
+        # trace-constrained fit x cos2phi + y sin2phi = kn - H: a 2x2 system in closed form; only
+        # the angle of (x, y) is needed, and det > 0 where the system is regular
+        b0 = r0 - h * t0
+        b1 = r1 - h * t1
+        det = a00 * a11 - a01 * a01
+        fit_singular = ~(det > FIT_RCOND * np.maximum(a00, a11) ** 2)
+        theta = 0.5 * np.arctan2(a00 * b1 - a01 * b0, a11 * b0 - a01 * b1)
+        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+        out.k1[rows] = h + root
+        out.k2[rows] = h - root
+        out.d1[rows] = c * U + s * V
+        out.d2[rows] = -s * U + c * V
+        singular[rows] = empty | fit_singular
 
-    # trace-constrained fit x cos2phi + y sin2phi = kn - H: a 2x2 system in closed form; only the
-    # angle of (x, y) is needed, and det > 0 where the system is regular
-    a00, a01, a11 = acc[2], acc[3], acc[4]
-    b0 = acc[5] - h * acc[7]
-    b1 = acc[6] - h * acc[8]
-    det = a00 * a11 - a01 * a01
-    fit_singular = ~(det > FIT_RCOND * np.maximum(a00, a11) ** 2)
-    theta = 0.5 * np.arctan2(a00 * b1 - a01 * b0, a11 * b0 - a01 * b1)
-    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
-    out.k1[:] = h + root
-    out.k2[:] = h - root
-    out.d1[:] = c * U + s * V
-    out.d2[:] = -s * U + c * V
+    map_vertex_chunks(mesh, work)
+    yield 0.9
 
     border, degenerate, nonmanifold = ring_flags(mesh, normals)
     reason = out.reason
-    reason[singular | fit_singular] = Reason.SINGULAR
+    reason[singular] = Reason.SINGULAR
     reason[border] = Reason.BORDER
     reason[degenerate] = Reason.DEGENERATE
     reason[nonmanifold] = Reason.NONMANIFOLD
     yield 1.0
     return out
+
+
+def _dot(a, b):
+    """Row-wise dot product of two vectors given as three (k,) component arrays."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _cross(a, b):
+    """Cross product of two vectors given as three (k,) component arrays."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 _COLUMNS = 9
