@@ -21,77 +21,16 @@ angle ``atan2(y, x) / 2``; the curvature values stay those of the formula above.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..corners import CornerChunk, map_vertex_chunks
 from ..frames import tangent_frames
 from ..mesh import Mesh
 from ..validity import Reason
 from ._lsq import MIN_TANGENT_LENGTH
+from ._triangle_corners import TriangleCorners
 from .registry import EstimatorSpec, empty_principal, register
 
-__all__ = ["iter_meyer", "corner_geometry", "ring_flags", "scatter_matrix"]
-
-
-def scatter_matrix(index: np.ndarray, n: int) -> sp.csc_matrix:
-    """(n, k) matrix summing k per-item values into n bins: ``(S @ x)[b] = sum of x[j] with index[j] == b``.
-
-    One entry per column, so it needs no sorting; ``S @ x`` (1-D or C-contiguous 2-D ``x``) is a
-    single C pass, faster than ``np.bincount`` with weights.
-
-    Parameters
-    ----------
-    index : (k,) int
-        Bin of every item.
-    n : int
-        Number of bins.
-
-    Returns
-    -------
-    (n, k) scipy.sparse.csc_matrix
-    """
-    k = index.size
-    return sp.csc_matrix((np.ones(k), index, np.arange(k + 1)), shape=(n, k))
-
-
-def corner_geometry(mesh: Mesh):
-    """Per-corner edges, cotangents, angles and mixed Voronoi areas of a triangle mesh.
-
-    Parameters
-    ----------
-    mesh : Mesh
-        Triangle mesh.
-
-    Returns
-    -------
-    edge : list of three (m, 3) float64
-        ``edge[i]`` runs from corner i to corner i+1 of every face.
-    cot : (m, 3) float64
-        Cotangent of the angle at each corner (0 on degenerate faces).
-    angle : (m, 3) float64
-        Corner angles in radians (0 on degenerate faces).
-    area : (m, 3) float64
-        The corner's share of the mixed Voronoi area ``A_mixed`` (0 on degenerate faces).
-    """
-    tri = mesh.triangles
-    corner = np.take(mesh.vertices, tri, axis=0)
-    edge = [corner[:, (i + 1) % 3] - corner[:, i] for i in range(3)]
-    len2 = np.stack([np.einsum("ij,ij->i", e, e) for e in edge], axis=1)
-    # the angle at corner i is between edge i and the reversed edge i+2
-    dots = -np.stack([np.einsum("ij,ij->i", edge[i], edge[(i + 2) % 3]) for i in range(3)], axis=1)
-    face_area = mesh.face_areas
-    bad = mesh.degenerate_faces
-    twice = np.where(bad, 1.0, 2.0 * face_area)[:, None]
-    cot = dots / twice
-    angle = np.arctan2(twice, dots)
-    obtuse = dots < 0
-    # edge i faces corner i+2, edge i+2 faces corner i+1
-    area = 0.125 * (cot[:, [2, 0, 1]] * len2 + cot[:, [1, 2, 0]] * len2[:, [2, 0, 1]])
-    any_obtuse = obtuse.any(axis=1)
-    area[any_obtuse] = np.where(obtuse[any_obtuse], 0.5, 0.25) * face_area[any_obtuse, None]
-    for arr in (cot, angle, area):
-        arr[bad] = 0.0
-    return edge, cot, angle, area
+__all__ = ["iter_meyer", "ring_flags"]
 
 
 def ring_flags(mesh: Mesh, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -157,26 +96,11 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     def work(chunk: CornerChunk) -> None:
         rows = slice(chunk.start, chunk.stop)
         counts = chunk.counts
-        # the corner's vertex a and the next (b) and previous (c) vertices of its triangle
-        here = [np.repeat(coord[rows], counts) for coord in xyz]
-        ab = [np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here)]
-        ac = [np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here)]
-        bc = [y - x for x, y in zip(ab, ac)]
-        twice = np.sqrt(_dot(_cross(ab, ac), _cross(ab, ac)))  # twice the triangle area
-        bad = np.take(degenerate_faces, np.take(corner_face, chunk.corners))
-        twice_safe = np.where(bad, 1.0, twice)
-        dot_a, dot_b, dot_c = _dot(ab, ac), -_dot(ab, bc), _dot(ac, bc)
-        cot_b, cot_c = dot_b / twice_safe, dot_c / twice_safe
-        angle = np.arctan2(twice_safe, dot_a)
-        # mixed Voronoi area: edge ab faces corner c, edge ac faces corner b
-        area = 0.125 * (cot_c * _dot(ab, ab) + cot_b * _dot(ac, ac))
-        obtuse_here = dot_a < 0
-        obtuse_other = (dot_b < 0) | (dot_c < 0)
-        area = np.where(obtuse_here, 0.25 * twice, np.where(obtuse_other, 0.125 * twice, area))
-        # mean-curvature normal: sum of (cot b + cot c) style terms, (a - b) cot c + (a - c) cot b
-        hterm = [-(cot_c * e1 + cot_b * e2) for e1, e2 in zip(ab, ac)]
-        for arr in (angle, area, *hterm):
-            arr[bad] = 0.0
+        tc = TriangleCorners.of(chunk, xyz, degenerate_faces, corner_face)
+        ab = tc.ab
+        # mean-curvature normal: (a - b) cot c + (a - c) cot b, summed over the corners
+        hterm = [-(tc.cot_c * e1 + tc.cot_b * e2) for e1, e2 in zip(ab, tc.ac)]
+        area, angle = tc.mixed_area, tc.angle()
 
         # direction fit on the edge a -> b (in a closed ring every leaving edge appears once)
         nrm = normals[rows]
@@ -226,16 +150,6 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     reason[nonmanifold] = Reason.NONMANIFOLD
     yield 1.0
     return out
-
-
-def _dot(a, b):
-    """Row-wise dot product of two vectors given as three (k,) component arrays."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross(a, b):
-    """Cross product of two vectors given as three (k,) component arrays."""
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 _COLUMNS = 9
