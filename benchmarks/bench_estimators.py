@@ -105,7 +105,8 @@ def _child(kind: str, name: str, k: int, n: int, mesh_kind: str) -> dict:
         mesh = curv.Mesh(v, f)
         t0 = time.perf_counter()
         for attr in ("edges", "adjacency", "longest_edge", "edge_faces", "vertex_faces", "degenerate_faces",
-                     "border_vertices", "nonmanifold_vertices", "face_normals"):
+                     "border_vertices", "nonmanifold_vertices", "face_normals",
+                     "vertex_corners", "corner_next", "corner_prev", "inconsistent_edges", "isolated_vertices"):
             getattr(mesh, attr)
         prep = time.perf_counter() - t0
         gc.collect()

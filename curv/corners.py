@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from .mesh import Mesh
-from .neighbourhood import default_workers
+from .neighbourhood import default_workers, segment_ids
 
 __all__ = ["CornerChunk", "corner_chunks", "map_vertex_chunks", "CHUNK_VERTICES"]
 
@@ -41,15 +41,19 @@ class CornerChunk:
         Local row pointers: the corners of vertex ``start + i`` are ``corners[indptr[i]:indptr[i+1]]``.
     corners : (k,) int64
         Corner ids (indices into ``mesh.face_indices``).
+    local : (k,) int64
+        The corner's vertex relative to the chunk (``vertex - start``): ``np.take(x[start:stop], local)``
+        expands per-vertex values to the corners (``np.repeat`` would hold the GIL).
     vertex, nxt, prv : (k,) int64
-        The corner's vertex (``start + i``), the vertex of the next corner of its face and that of
-        the previous corner: edges ``vertex -> nxt`` and ``vertex -> prv`` leave the vertex.
+        The corner's vertex (``start + local``), the vertex of the next corner of its face and that
+        of the previous corner: edges ``vertex -> nxt`` and ``vertex -> prv`` leave the vertex.
     """
 
     start: int
     stop: int
     indptr: np.ndarray
     corners: np.ndarray
+    local: np.ndarray
     vertex: np.ndarray
     nxt: np.ndarray
     prv: np.ndarray
@@ -59,9 +63,9 @@ class CornerChunk:
         """(stop - start,) int64 number of corners at each vertex."""
         return np.diff(self.indptr)
 
-    def local_rows(self) -> np.ndarray:
-        """(k,) int64 chunk-local row (0 .. stop-start-1) of every corner."""
-        return self.vertex - self.start
+    def expand(self, values: np.ndarray) -> np.ndarray:
+        """Per-vertex ``values`` of the whole mesh, (n,) or (n, c), taken at every corner's vertex: (k, ...)."""
+        return np.take(values[self.start:self.stop], self.local, axis=0)
 
     def sum(self, values: np.ndarray) -> np.ndarray:
         """Sum per-corner ``values`` (k,) or (k, c) over the corners of each vertex: (stop - start, ...).
@@ -93,9 +97,9 @@ def _chunk(mesh: Mesh, start: int, stop: int) -> CornerChunk:
     ids = corners[lo:hi]
     local = indptr[start:stop + 1] - lo
     idx = mesh.face_indices
+    rows = segment_ids(local)
     return CornerChunk(
-        start=start, stop=stop, indptr=local, corners=ids,
-        vertex=np.repeat(np.arange(start, stop, dtype=np.int64), np.diff(local)),
+        start=start, stop=stop, indptr=local, corners=ids, local=rows, vertex=rows + start,
         nxt=np.take(idx, np.take(mesh.corner_next, ids)),
         prv=np.take(idx, np.take(mesh.corner_prev, ids)),
     )

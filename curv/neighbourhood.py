@@ -13,6 +13,7 @@ import os
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Callable, Iterator, TypeVar
 
 import numpy as np
@@ -22,7 +23,7 @@ from .mesh import Mesh
 
 T = TypeVar("T")
 
-__all__ = ["Neighbourhood", "iter_neighbourhoods", "map_neighbourhoods", "default_workers", "segment_sum", "neighbourhood_matrix", "DEFAULT_BLOCK_PAIRS", "block_size_for"]
+__all__ = ["Neighbourhood", "iter_neighbourhoods", "map_neighbourhoods", "default_workers", "segment_sum", "segment_ids", "neighbourhood_matrix", "DEFAULT_BLOCK_PAIRS", "block_size_for"]
 
 TIE_TOLERANCE = 1e-9
 """Relative tolerance on the radius, so that vertices exactly at k edge lengths (regular meshes) are in."""
@@ -63,15 +64,19 @@ class Neighbourhood:
         """(c,) int64 number of support vertices of each centre."""
         return np.diff(self.indptr)
 
-    @property
+    @cached_property
     def rows(self) -> np.ndarray:
         """(nnz,) int64 local row (0..c-1) of every pair."""
-        return np.repeat(np.arange(self.size, dtype=np.int64), self.counts)
+        return segment_ids(self.indptr)
+
+    def expand(self, values: np.ndarray) -> np.ndarray:
+        """Per-centre ``values`` (c, ...) repeated for every pair of the centre: (nnz, ...)."""
+        return np.take(values, self.rows, axis=0)
 
     @property
     def centres(self) -> np.ndarray:
         """(nnz,) int64 centre vertex of every pair (``vertices[rows]``)."""
-        return np.repeat(self.vertices, self.counts)
+        return self.expand(self.vertices)
 
     def row_sum(self, values: np.ndarray) -> np.ndarray:
         """Sum per-pair ``values`` (nnz, ...) over each row; returns (c, ...)."""
@@ -80,6 +85,33 @@ class Neighbourhood:
     def any(self, flags: np.ndarray) -> np.ndarray:
         """(c,) bool: whether any support vertex has ``flags[vertex]`` set; ``flags`` is (n,) bool."""
         return self.row_sum(flags[self.indices].astype(np.float64)) > 0
+
+
+def segment_ids(indptr: np.ndarray) -> np.ndarray:
+    """Segment (row) of every entry of CSR-like segments: ``out[j] = i`` for ``indptr[i] <= j < indptr[i+1]``.
+
+    Parameters
+    ----------
+    indptr : (c + 1,) int
+        Non-decreasing segment bounds starting at 0.
+
+    Returns
+    -------
+    (indptr[-1],) int64
+
+    Notes
+    -----
+    Same as ``np.repeat(np.arange(c), np.diff(indptr))``, but built from a cumulative sum:
+    ``np.repeat`` holds the GIL, which serialises the threads that work on blocks in parallel. For
+    the same reason the hot loops expand per-row values with ``np.take(values, segment_ids(...))``
+    rather than ``np.repeat``.
+    """
+    nnz = int(indptr[-1])
+    starts = np.zeros(nnz + 1, np.int64)
+    inner = indptr[1:-1]
+    # each segment boundary bumps the row counter; empty segments bump it more than once
+    np.add.at(starts, inner, 1)
+    return np.cumsum(starts[:nnz])
 
 
 def segment_sum(values: np.ndarray, indptr: np.ndarray) -> np.ndarray:
@@ -113,15 +145,17 @@ def _ball_filter(c: sp.csr_matrix, centre_xyz: tuple, xyz: tuple, radius2: np.nd
     Coordinates come as separate contiguous 1-D arrays: 1-D gathers are several times faster than
     gathering rows of an (n, 3) array.
     """
-    counts = np.diff(c.indptr)
+    rows = segment_ids(c.indptr)
     d2 = np.zeros(c.indices.size)
     for coord, centre in zip(xyz, centre_xyz):
         d = np.take(coord, c.indices)
-        d -= np.repeat(centre, counts)
+        d -= np.take(centre, rows)
         d2 += d * d
-    keep = d2 <= np.repeat(radius2, counts)
-    indptr = np.zeros(c.shape[0] + 1, dtype=np.int64)
-    np.cumsum(segment_sum(keep.astype(np.int64), c.indptr), out=indptr[1:])
+    keep = d2 <= np.take(radius2, rows)
+    # kept entries before each row start: the new row pointers
+    kept_before = np.zeros(keep.size + 1, dtype=np.int64)
+    np.cumsum(keep, out=kept_before[1:])
+    indptr = kept_before[c.indptr]
     return sp.csr_matrix((np.ones(indptr[-1], bool), c.indices[keep], indptr), shape=c.shape)
 
 
@@ -157,8 +191,8 @@ def _block_supports(mesh: Mesh, ids: np.ndarray, factor: float, adjacency: sp.cs
     before = indptr[:-1] + np.cumsum(per_layer, axis=0) - per_layer
     cols = np.empty(indptr[-1], dtype=np.int64)
     for layer, start in zip(layers, before):
-        k = np.diff(layer.indptr)
-        cols[np.repeat(start - layer.indptr[:-1], k) + np.arange(layer.nnz)] = layer.indices
+        shift = np.take(start - layer.indptr[:-1], segment_ids(layer.indptr))
+        cols[shift + np.arange(layer.nnz)] = layer.indices
     return Neighbourhood(ids, indptr, cols, radius)
 
 

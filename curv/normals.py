@@ -61,7 +61,7 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
 
     def work(chunk: CornerChunk) -> None:
         # edges from the corner's vertex to the next and to the previous corner of its face
-        here = [np.repeat(coord[chunk.start:chunk.stop], chunk.counts) for coord in xyz]
+        here = [chunk.expand(coord) for coord in xyz]
         ax, ay, az = (np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
         bx, by, bz = (np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
         cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)

@@ -52,26 +52,30 @@ class LocalPairs:
     usable: np.ndarray
     frame: np.ndarray
 
-    def project(self, field: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Components of ``field[q]`` ((n, 3), e.g. normals) in each pair's centre frame: (a, b, c), each (nnz,)."""
+    def project(self, field) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Components of ``field[q]`` (e.g. normals) in each pair's centre frame: (a, b, c), each (nnz,).
+
+        ``field`` is an (n, 3) array or, cheaper when called per block, its three contiguous (n,)
+        columns.
+        """
         q = self.nb.indices
-        comps = [np.take(np.ascontiguousarray(field[:, k]), q) for k in range(3)]
+        comps = [np.take(np.ascontiguousarray(field[k] if isinstance(field, tuple) else field[:, k]), q)
+                 for k in range(3)]
         f = self.frame
         return tuple(comps[0] * f[3 * j] + comps[1] * f[3 * j + 1] + comps[2] * f[3 * j + 2] for j in range(3))
 
 
-def local_pairs(mesh: Mesh, nb: Neighbourhood, frames: np.ndarray) -> LocalPairs:
+def local_pairs(xyz: tuple, nb: Neighbourhood, frames: np.ndarray) -> LocalPairs:
     """Express every support offset of the block in the centre's tangent frame.
 
-    ``frames`` is (9, n): U, V, N components of every vertex (see :class:`LocalPairs`).
+    ``xyz`` are the three contiguous (n,) coordinate columns of the vertices; ``frames`` is (9, n):
+    U, V, N components of every vertex (see :class:`LocalPairs`).
     """
-    counts = nb.counts
     ids = nb.vertices
-    frame = np.repeat(frames[:, ids], counts, axis=1)
-    x = mesh.vertices
-    d = [np.take(np.ascontiguousarray(x[:, k]), nb.indices) - np.repeat(x[ids, k], counts) for k in range(3)]
+    frame = np.take(frames[:, ids], nb.rows, axis=1)
+    d = [np.take(x, nb.indices) - nb.expand(np.take(x, ids)) for x in xyz]
     u, v, w = (d[0] * frame[3 * j] + d[1] * frame[3 * j + 1] + d[2] * frame[3 * j + 2] for j in range(3))
-    tiny = MIN_TANGENT_LENGTH * np.repeat(nb.radius, counts)
+    tiny = MIN_TANGENT_LENGTH * nb.expand(nb.radius)
     usable = (u * u + v * v > tiny * tiny) & np.isfinite(u)
     return LocalPairs(nb, u, v, w, usable, frame)
 
@@ -148,7 +152,8 @@ def solve_normal_equations(ata: np.ndarray, atb: np.ndarray, *, rcond: float = 1
 
 
 FitBlock = Callable[[LocalPairs, np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
-"""``fit(pairs, normals) -> (e, f, g, equation_count, singular)`` for one block."""
+"""``fit(pairs, normals) -> (e, f, g, equation_count, singular)`` for one block; ``normals`` as the
+three contiguous (n,) columns that :meth:`LocalPairs.project` takes."""
 
 
 def run_fit(
@@ -182,10 +187,13 @@ def run_fit(
     """
     U, V = tangent_frames(normals)
     frames = np.ascontiguousarray(np.concatenate([U, V, normals], axis=1).T)
+    # contiguous columns once per run: every block gathers from them
+    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
+    normal_columns = tuple(frames[6:9])
 
     def solve_block(nb: Neighbourhood):
-        pairs = local_pairs(mesh, nb, frames)
-        e, f, g, used, singular = fit(pairs, normals)
+        pairs = local_pairs(xyz, nb, frames)
+        e, f, g, used, singular = fit(pairs, normal_columns)
         ids = nb.vertices
         k1, k2, d1, d2 = principal_from_tensor(e, f, g, np.take(U, ids, axis=0), np.take(V, ids, axis=0))
         reason = np.full(ids.size, Reason.OK, np.uint8)

@@ -63,7 +63,7 @@ class TriangleCorners:
     def of(cls, chunk: CornerChunk, xyz: Vec, degenerate_faces: np.ndarray,
            corner_face: np.ndarray) -> "TriangleCorners":
         """Compute them for ``chunk`` from the vertex coordinates ``xyz`` (three (n,) arrays)."""
-        here = [np.repeat(coord[chunk.start:chunk.stop], chunk.counts) for coord in xyz]
+        here = [chunk.expand(coord) for coord in xyz]
         ab = tuple(np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
         ac = tuple(np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
         bc = tuple(y - x for x, y in zip(ab, ac))

@@ -20,7 +20,7 @@ MIN_NORMAL_Z = 0.1
 """A neighbour normal tilted more than ~84 degrees from the centre normal gives no slope equation."""
 
 
-def _fit_nc(pairs: LocalPairs, normals: np.ndarray):
+def _fit_nc(pairs: LocalPairs, normals: tuple):
     u, v, w, ok = pairs.u, pairs.v, pairs.w, pairs.usable
     l2 = u * u + v * v
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -34,7 +34,7 @@ def _fit_nc(pairs: LocalPairs, normals: np.ndarray):
     return x[:, 0], x[:, 1], x[:, 2], used, singular
 
 
-def _fit_qs(pairs: LocalPairs, normals: np.ndarray):
+def _fit_qs(pairs: LocalPairs, normals: tuple):
     u, v, w, ok = pairs.u, pairs.v, pairs.w, pairs.usable
     m = ok.astype(float)
     coeffs = [0.5 * u * u * m, u * v * m, 0.5 * v * v * m]
@@ -45,10 +45,10 @@ def _fit_qs(pairs: LocalPairs, normals: np.ndarray):
     return -x[:, 0], -x[:, 1], -x[:, 2], used, singular
 
 
-def _fit_an(pairs: LocalPairs, normals: np.ndarray):
+def _fit_an(pairs: LocalPairs, normals: tuple):
     # Heights are lengths, slopes are not: solve in coordinates divided by the support radius so the
     # balance of the two kinds of equation (and so the result) does not depend on the mesh's scale.
-    scale = np.repeat(pairs.nb.radius, pairs.nb.counts)
+    scale = pairs.nb.expand(pairs.nb.radius)
     u, v, w, ok = pairs.u / scale, pairs.v / scale, pairs.w / scale, pairs.usable
     a, b, c = pairs.project(normals)
     m = ok.astype(float)

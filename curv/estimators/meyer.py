@@ -95,7 +95,6 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
 
     def work(chunk: CornerChunk) -> None:
         rows = slice(chunk.start, chunk.stop)
-        counts = chunk.counts
         tc = TriangleCorners.of(chunk, xyz, degenerate_faces, corner_face)
         ab = tc.ab
         # mean-curvature normal: (a - b) cot c + (a - c) cot b, summed over the corners
@@ -105,7 +104,7 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
         # direction fit on the edge a -> b (in a closed ring every leaving edge appears once)
         nrm = normals[rows]
         U, V = tangent_frames(nrm)
-        u, v, w = (sum(e * np.repeat(np.ascontiguousarray(F[:, c]), counts) for c, e in enumerate(ab))
+        u, v, w = (sum(e * np.take(F[:, c], chunk.local) for c, e in enumerate(ab))
                    for F in (U, V, nrm))
         l2 = u * u + v * v
         with np.errstate(invalid="ignore", divide="ignore"):

@@ -14,7 +14,7 @@ from ._lsq import LocalPairs, normal_equations, run_fit, solve_normal_equations
 from .registry import EstimatorSpec, register
 
 
-def _fit_mru(pairs: LocalPairs, normals: np.ndarray):
+def _fit_mru(pairs: LocalPairs, normals: tuple):
     u, v = pairs.u, pairs.v
     # tangent part of N_q - N_p: N_p is orthogonal to its own frame's U and V, so only N_q remains
     a, b, _ = pairs.project(normals)

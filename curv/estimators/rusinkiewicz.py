@@ -68,10 +68,9 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
 
     def work(chunk: CornerChunk) -> None:
         rows = slice(chunk.start, chunk.stop)
-        counts = chunk.counts
         tc = TriangleCorners.of(chunk, xyz, degenerate_faces, corner_face)
         ab, ac = tc.ab, tc.ac
-        n_a = tuple(np.repeat(c[rows], counts) for c in nxyz)
+        n_a = tuple(chunk.expand(c) for c in nxyz)
         n_b = tuple(np.take(c, chunk.nxt) for c in nxyz)
         n_c = tuple(np.take(c, chunk.prv) for c in nxyz)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -111,7 +110,7 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
         U, V = tangent_frames(nrm)
         coords = []
         for frame in (U, V):
-            basis = tuple(np.repeat(np.ascontiguousarray(frame[:, c]), counts) for c in range(3))
+            basis = tuple(np.take(frame[:, c], chunk.local) for c in range(3))
             turn = cross(axis, basis)
             along = dot(axis, basis) * inv
             rt = tuple(cos * b + t + a * along for b, t, a in zip(basis, turn, axis))
