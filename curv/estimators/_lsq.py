@@ -1,9 +1,10 @@
 """Shared machinery of the per-vertex least-squares estimators (nc, qs, an, mru).
 
 Each of them writes, for every (vertex p, neighbour q) pair of the support, a few linear equations
-in the unknowns of a local fit. The normal equations ``A^T A x = A^T b`` of every vertex are summed
-with ``np.bincount`` over the pairs and solved all at once: closed form for 3 unknowns, a batched
-``np.linalg.solve`` (after Jacobi scaling) for more.
+in the unknowns of a local fit. The supports of a block of vertices are laid out padded, one row
+per vertex (:class:`LocalPairs`, grouped by support size so padding stays below 1/8); the normal
+equations ``A^T A x = A^T b`` of every vertex are row sums, solved all at once: closed form for 3
+unknowns, a batched ``np.linalg.solve`` (after Jacobi scaling) for more.
 """
 
 from __future__ import annotations
@@ -15,12 +16,12 @@ import numpy as np
 
 from ..frames import principal_from_tensor, solve_sym3, tangent_frames
 from ..mesh import Mesh
-from ..neighbourhood import DEFAULT_BLOCK_PAIRS, Neighbourhood, block_size_for, segment_sum
+from ..neighbourhood import DEFAULT_BLOCK_PAIRS, Neighbourhood, block_size_for
 from ..result import Principal
 from ..validity import Reason
 from .registry import iter_blockwise
 
-__all__ = ["LocalPairs", "run_fit", "normal_equations", "solve_normal_equations"]
+__all__ = ["LocalPairs", "run_fit", "normal_equations", "solve_normal_equations", "padded_groups", "local_pairs"]
 
 MIN_TANGENT_LENGTH = 1e-9
 """Pairs whose tangent-plane offset is below this fraction of the support radius carry no direction."""
@@ -28,69 +29,129 @@ MIN_TANGENT_LENGTH = 1e-9
 
 @dataclass
 class LocalPairs:
-    """The pairs of one neighbourhood block expressed in the centre's tangent frame.
+    """The supports of a group of centres in a padded layout, in each centre's tangent frame.
 
-    All per-pair arrays are 1-D (structure of arrays): gathers and arithmetic on contiguous 1-D
-    arrays are several times faster than on rows of (k, 3) arrays.
+    Row i holds the support of centre i in ``K`` slots; rows with fewer neighbours are padded
+    with the centre itself. A padded slot has a zero offset, so it is never ``usable`` and adds
+    nothing to any fit. The padded layout lets every per-centre quantity (frame, radius) broadcast
+    over its row instead of being copied to every pair, and the per-centre sums are plain row sums.
 
     Attributes
     ----------
-    nb : Neighbourhood
-        The block.
-    u, v, w : (nnz,) float64
+    neighbours : (c, K) int64
+        Support vertices (padding: the centre).
+    radius : (c,) float64
+        Support radius of each centre.
+    frame : (c, 9) float64
+        U, V, N of each centre, components ``Ux Uy Uz Vx Vy Vz Nx Ny Nz``.
+    u, v, w : (c, K) float64
         Offset ``q - p`` in the frame (U, V, N) of the centre p.
-    usable : (nnz,) bool
-        Pairs with a meaningful tangent offset.
-    frame : (9, nnz) float64
-        U, V, N of each pair's centre, components in rows ``Ux Uy Uz Vx Vy Vz Nx Ny Nz``.
+    usable : (c, K) bool
+        Pairs with a meaningful tangent offset (never a padded slot).
     """
 
-    nb: Neighbourhood
+    neighbours: np.ndarray
+    radius: np.ndarray
+    frame: np.ndarray
     u: np.ndarray
     v: np.ndarray
     w: np.ndarray
     usable: np.ndarray
-    frame: np.ndarray
 
-    def project(self, field) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Components of ``field[q]`` (e.g. normals) in each pair's centre frame: (a, b, c), each (nnz,).
+    @staticmethod
+    def row_sum(values: np.ndarray) -> np.ndarray:
+        """Sum (c, K) per-pair values (bool counts as 0/1) over each centre's row: (c,) float64."""
+        return values.sum(axis=1, dtype=np.float64)
 
-        ``field`` is an (n, 3) array or, cheaper when called per block, its three contiguous (n,)
-        columns.
+    def project(self, columns: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Components of a per-vertex vector field at the neighbours, in each centre's frame.
+
+        ``columns`` are the field's three contiguous (n,) component arrays (e.g. of the normals).
+        Returns (a, b, c), each (c, K).
         """
-        q = self.nb.indices
-        comps = [np.take(np.ascontiguousarray(field[k] if isinstance(field, tuple) else field[:, k]), q)
-                 for k in range(3)]
+        comps = [np.take(col, self.neighbours) for col in columns]
         f = self.frame
-        return tuple(comps[0] * f[3 * j] + comps[1] * f[3 * j + 1] + comps[2] * f[3 * j + 2] for j in range(3))
+        return tuple(comps[0] * f[:, 3 * j, None] + comps[1] * f[:, 3 * j + 1, None] + comps[2] * f[:, 3 * j + 2, None]
+                     for j in range(3))
 
 
-def local_pairs(xyz: tuple, nb: Neighbourhood, frames: np.ndarray) -> LocalPairs:
-    """Express every support offset of the block in the centre's tangent frame.
+def padded_groups(counts: np.ndarray, *, min_group: int = 256) -> list[tuple[np.ndarray, int]]:
+    """Split centres into groups of similar support size for the padded layout.
 
-    ``xyz`` are the three contiguous (n,) coordinate columns of the vertices; ``frames`` is (9, n):
-    U, V, N components of every vertex (see :class:`LocalPairs`).
-    """
-    ids = nb.vertices
-    frame = np.take(frames[:, ids], nb.rows, axis=1)
-    d = [np.take(x, nb.indices) - nb.expand(np.take(x, ids)) for x in xyz]
-    u, v, w = (d[0] * frame[3 * j] + d[1] * frame[3 * j + 1] + d[2] * frame[3 * j + 2] for j in range(3))
-    tiny = MIN_TANGENT_LENGTH * nb.expand(nb.radius)
-    usable = (u * u + v * v > tiny * tiny) & np.isfinite(u)
-    return LocalPairs(nb, u, v, w, usable, frame)
-
-
-def normal_equations(nb: Neighbourhood, equations: list[tuple[list, np.ndarray]]):
-    """Sum the normal equations of every vertex of a block.
+    Each centre's size is rounded up to a cap with at most 1/8 of it padding (steps of 1 up to 8,
+    then 8 caps per doubling); groups smaller than ``min_group`` join the next larger cap, which
+    bounds the number of groups (and the per-group overhead) on irregular meshes.
 
     Parameters
     ----------
+    counts : (c,) int
+        Support size of every centre.
+
+    Returns
+    -------
+    list of (rows, K)
+        ``rows`` (r,) int64 indices into ``counts``; ``K`` the row length of the group.
+    """
+    size = np.maximum(counts, 1)
+    step = 2 ** np.maximum(0, np.floor(np.log2(size)).astype(np.int64) - 3)
+    cap = -(-size // step) * step
+    order = np.argsort(cap, kind="stable")
+    caps, starts = np.unique(cap[order], return_index=True)
+    bounds = list(starts) + [order.size]
+    groups = []
+    pending_start = 0
+    for i, k in enumerate(caps):
+        stop = bounds[i + 1]
+        if stop - pending_start >= min_group or i == caps.size - 1:
+            groups.append((order[pending_start:stop], int(k)))
+            pending_start = stop
+    return groups
+
+
+def local_pairs(xyz: tuple, nb: Neighbourhood, rows: np.ndarray, width: int,
+                frames: np.ndarray) -> LocalPairs:
+    """Express the supports of some centres of a block in their tangent frames, padded to ``width``.
+
+    Parameters
+    ----------
+    xyz : three (n,) float64
+        Contiguous vertex coordinate columns.
     nb : Neighbourhood
-        The block; pairs are grouped by row, so sums are contiguous segment sums.
+        The block.
+    rows : (c,) int64
+        Centres of the block (local row numbers) to take; every support has at most ``width`` entries.
+    width : int
+        Slots per row.
+    frames : (n, 9) float64
+        U, V, N of every vertex.
+    """
+    ids = np.take(nb.vertices, rows)
+    start = np.take(nb.indptr, rows)
+    slot = np.arange(width)
+    real = slot[None, :] < np.take(nb.counts, rows)[:, None]
+    gathered = np.take(nb.indices, start[:, None] + slot[None, :], mode="clip")
+    neighbours = np.where(real, gathered, ids[:, None])
+    frame = np.take(frames, ids, axis=0)
+    d = [np.take(x, neighbours) - np.take(x, ids)[:, None] for x in xyz]
+    u, v, w = (d[0] * frame[:, 3 * j, None] + d[1] * frame[:, 3 * j + 1, None] + d[2] * frame[:, 3 * j + 2, None]
+               for j in range(3))
+    radius = np.take(nb.radius, rows)
+    tiny = MIN_TANGENT_LENGTH * radius[:, None]
+    usable = (u * u + v * v > tiny * tiny) & np.isfinite(u)
+    return LocalPairs(neighbours, radius, frame, u, v, w, usable)
+
+
+def normal_equations(pairs: LocalPairs, equations: list[tuple[list, np.ndarray]]):
+    """Sum the normal equations of every centre of a group.
+
+    Parameters
+    ----------
+    pairs : LocalPairs
+        The group (c centres, K slots).
     equations : list of (coefficients, rhs)
         One entry per kind of equation that each pair contributes (e.g. a height and two slopes).
-        ``coefficients`` is a list of p arrays (nnz,) or ``None`` for an unknown absent from that
-        equation; ``rhs`` is (nnz,).
+        ``coefficients`` is a list of p arrays (c, K) or ``None`` for an unknown absent from that
+        equation; ``rhs`` is (c, K).
 
     Returns
     -------
@@ -98,21 +159,21 @@ def normal_equations(nb: Neighbourhood, equations: list[tuple[list, np.ndarray]]
     atb : (c, p) float64
     """
     p = len(equations[0][0])
-    ata = np.empty((nb.size, p, p))
-    atb = np.empty((nb.size, p))
+    c = pairs.radius.size
+    ata = np.empty((c, p, p))
+    atb = np.empty((c, p))
 
     def summed(terms: list) -> np.ndarray:
-        # each column is reduced on its own: stacking them first costs a transposing copy
         if not terms:
-            return np.zeros(nb.size)
-        return segment_sum(sum(terms[1:], terms[0]), nb.indptr)
+            return np.zeros(c)
+        return pairs.row_sum(sum(terms[1:], terms[0]))
 
     for i in range(p):
         for j in range(i, p):
-            col = summed([c[i] * c[j] for c, _ in equations if c[i] is not None and c[j] is not None])
+            col = summed([c_[i] * c_[j] for c_, _ in equations if c_[i] is not None and c_[j] is not None])
             ata[:, i, j] = col
             ata[:, j, i] = col
-        atb[:, i] = summed([c[i] * r for c, r in equations if c[i] is not None])
+        atb[:, i] = summed([c_[i] * r for c_, r in equations if c_[i] is not None])
     return ata, atb
 
 
@@ -191,9 +252,15 @@ def run_fit(
     xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
     normal_columns = tuple(frames[6:9])
 
+    frames_by_vertex = np.ascontiguousarray(frames.T)  # (n, 9): one row gathered per centre
+
     def solve_block(nb: Neighbourhood):
-        pairs = local_pairs(xyz, nb, frames)
-        e, f, g, used, singular = fit(pairs, normal_columns)
+        c = nb.size
+        e, f, g, used = (np.empty(c) for _ in range(4))
+        singular = np.empty(c, bool)
+        for rows, width in padded_groups(nb.counts):
+            pairs = local_pairs(xyz, nb, rows, width, frames_by_vertex)
+            e[rows], f[rows], g[rows], used[rows], singular[rows] = fit(pairs, normal_columns)
         ids = nb.vertices
         k1, k2, d1, d2 = principal_from_tensor(e, f, g, np.take(U, ids, axis=0), np.take(V, ids, axis=0))
         reason = np.full(ids.size, Reason.OK, np.uint8)

@@ -28,9 +28,9 @@ def _fit_nc(pairs: LocalPairs, normals: tuple):
         inv = np.where(ok, 1.0 / l2, 0.0)
     # unit tangent t = (u, v) / |(u, v)|: t^T W t = e tu^2 + 2 f tu tv + g tv^2
     coeffs = [u * u * inv, 2.0 * u * v * inv, v * v * inv]
-    ata, atb = normal_equations(pairs.nb, [(coeffs, kn)])
+    ata, atb = normal_equations(pairs, [(coeffs, kn)])
     x, singular = solve_normal_equations(ata, atb)
-    used = pairs.nb.row_sum(ok.astype(float))
+    used = pairs.row_sum(ok)
     return x[:, 0], x[:, 1], x[:, 2], used, singular
 
 
@@ -38,9 +38,9 @@ def _fit_qs(pairs: LocalPairs, normals: tuple):
     u, v, w, ok = pairs.u, pairs.v, pairs.w, pairs.usable
     m = ok.astype(float)
     coeffs = [0.5 * u * u * m, u * v * m, 0.5 * v * v * m]
-    ata, atb = normal_equations(pairs.nb, [(coeffs, w * m)])
+    ata, atb = normal_equations(pairs, [(coeffs, w * m)])
     x, singular = solve_normal_equations(ata, atb)
-    used = pairs.nb.row_sum(m)
+    used = pairs.row_sum(m)
     # W = -Hessian of the height along N
     return -x[:, 0], -x[:, 1], -x[:, 2], used, singular
 
@@ -48,7 +48,7 @@ def _fit_qs(pairs: LocalPairs, normals: tuple):
 def _fit_an(pairs: LocalPairs, normals: tuple):
     # Heights are lengths, slopes are not: solve in coordinates divided by the support radius so the
     # balance of the two kinds of equation (and so the result) does not depend on the mesh's scale.
-    scale = pairs.nb.expand(pairs.nb.radius)
+    scale = pairs.radius[:, None]
     u, v, w, ok = pairs.u / scale, pairs.v / scale, pairs.w / scale, pairs.usable
     a, b, c = pairs.project(normals)
     m = ok.astype(float)
@@ -63,11 +63,11 @@ def _fit_an(pairs: LocalPairs, normals: tuple):
     height = [0.5 * uu * m, uv * m, 0.5 * vv * m, uu * u * m, uu * v * m, u * vv * m, vv * v * m]
     slope_u = [us, vs, None, 3 * uu * s, 2 * uv * s, vv * s, None]
     slope_v = [None, us, vs, None, uu * s, 2 * uv * s, 3 * vv * s]
-    ata, atb = normal_equations(pairs.nb, [(height, w * m), (slope_u, fu), (slope_v, fv)])
+    ata, atb = normal_equations(pairs, [(height, w * m), (slope_u, fu), (slope_v, fv)])
     x, singular = solve_normal_equations(ata, atb)
-    used = pairs.nb.row_sum(m)
+    used = pairs.row_sum(m)
     with np.errstate(invalid="ignore", divide="ignore"):
-        inv = 1.0 / pairs.nb.radius  # second derivatives in unscaled coordinates
+        inv = 1.0 / pairs.radius  # second derivatives in unscaled coordinates
     return -x[:, 0] * inv, -x[:, 1] * inv, -x[:, 2] * inv, used, singular
 
 

@@ -23,9 +23,9 @@ def _fit_mru(pairs: LocalPairs, normals: tuple):
     u, v = u * m, v * m
     a, b = np.where(ok, a, 0.0), np.where(ok, b, 0.0)
     # [u v 0] (e f g)^T = a ;  [0 u v] (e f g)^T = b
-    ata, atb = normal_equations(pairs.nb, [([u, v, None], a), ([None, u, v], b)])
+    ata, atb = normal_equations(pairs, [([u, v, None], a), ([None, u, v], b)])
     x, singular = solve_normal_equations(ata, atb)
-    used = pairs.nb.row_sum(m)
+    used = pairs.row_sum(m)
     return x[:, 0], x[:, 1], x[:, 2], used, singular
 
 
