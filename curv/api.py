@@ -11,7 +11,7 @@ import numpy as np
 from .errors import EstimatorError, MeshError
 from .estimators import get_spec
 from .mesh import Mesh
-from .normals import NormalWeighting, normalize_rows, vertex_normals
+from .normals import NormalWeighting, normalize_rows, unusable_normal_vertices, vertex_normals
 from .result import Curvature
 from .smoothing import smooth_positions, smooth_values
 from .validity import Reason
@@ -81,19 +81,25 @@ def iter_estimate(
         work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
         if normals is not None:
             raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
-    if normals is None:
-        used_normals = vertex_normals(work_mesh, weighting=normal_weighting)
-    else:
-        used_normals = _check_normals(normals, mesh.n_vertices)
     # Where the faces around a vertex are not one consistently oriented fan, its normal averages
     # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
-    meaningless = mesh.nonmanifold_vertices.copy()
-    meaningless[mesh.edges[mesh.inconsistent_edges].reshape(-1)] = True
-    if meaningless.any():
-        used_normals = used_normals.copy()
-        used_normals[meaningless] = np.nan
+    meaningless = unusable_normal_vertices(mesh)
+    # an estimator that visits every corner anyway computes the default normals on the way
+    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
+    if fused:
+        used_normals = None
+    else:
+        if normals is None:
+            used_normals = vertex_normals(work_mesh, weighting=normal_weighting)
+        else:
+            used_normals = _check_normals(normals, mesh.n_vertices)
+        if meaningless.any():
+            used_normals = used_normals.copy()
+            used_normals[meaningless] = np.nan
     yield 0.0
     raw = yield from spec.function(work_mesh, used_normals, k, block_size=block_size)
+    if fused:
+        used_normals = raw.normals
 
     k1, k2, d1, d2, reason = raw.k1, raw.k2, raw.d1, raw.d2, raw.reason.copy()
     isolated = mesh.isolated_vertices

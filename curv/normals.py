@@ -14,7 +14,7 @@ import numpy as np
 from .corners import CornerChunk, map_vertex_chunks
 from .mesh import Mesh
 
-__all__ = ["NormalWeighting", "vertex_normals", "normalize_rows"]
+__all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "max_corner_weights", "unusable_normal_vertices"]
 
 
 class NormalWeighting(str, enum.Enum):
@@ -32,6 +32,40 @@ def normalize_rows(v: np.ndarray) -> np.ndarray:
         out = v / norm[:, None]
     out[~(norm > 1e-300)] = np.nan
     return out
+
+
+def unusable_normal_vertices(mesh: Mesh) -> np.ndarray:
+    """(n,) bool: vertices whose normal means nothing, so no estimate may use it.
+
+    Where the faces around a vertex are not one consistently oriented fan (a non-manifold vertex,
+    or an endpoint of an edge whose two faces disagree on orientation), the averaged normal mixes
+    unrelated sheets.
+    """
+    out = mesh.nonmanifold_vertices.copy()
+    out[mesh.edges[mesh.inconsistent_edges].reshape(-1)] = True
+    return out
+
+
+def max_corner_weights(a: tuple, b: tuple) -> list:
+    """Max (1999) weighted normal of each corner from its two edge vectors.
+
+    Parameters
+    ----------
+    a, b : three (k,) float64 each
+        Components of the edges from the corner's vertex to the next and to the previous vertex of
+        its face.
+
+    Returns
+    -------
+    list of three (k,) float64
+        ``(a x b) / (|a|^2 |b|^2)``; zero where an edge has zero length.
+    """
+    (ax, ay, az), (bx, by, bz) = a, b
+    cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inv = 1.0 / ((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+    inv[~np.isfinite(inv)] = 0.0  # a zero-length edge: the corner has no direction to give
+    return [c * inv for c in cross]
 
 
 def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX) -> np.ndarray:
@@ -64,13 +98,10 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
         here = [chunk.expand(coord) for coord in xyz]
         ax, ay, az = (np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
         bx, by, bz = (np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
-        cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
         if weighting is NormalWeighting.MAX:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                inv = 1.0 / ((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
-            inv[~np.isfinite(inv)] = 0.0  # a zero-length edge: the corner has no direction to give
-            w = [c * inv for c in cross]
+            w = max_corner_weights((ax, ay, az), (bx, by, bz))
         else:
+            cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
             fw = np.take(face_weight, np.take(corner_face, chunk.corners), axis=0)
             if weighting is NormalWeighting.AREA:
                 w = list(fw.T)

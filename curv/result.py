@@ -23,6 +23,9 @@ class Principal:
         Directions belonging to ``k1`` and ``k2``.
     reason : (n,) uint8
         :class:`Reason` codes; ``Reason.OK`` where the estimate is usable.
+    normals : (n, 3) float64 or None
+        The normals the estimator computed itself (only when it was asked to: see
+        ``EstimatorSpec.computes_normals``).
     """
 
     k1: np.ndarray
@@ -30,6 +33,7 @@ class Principal:
     d1: np.ndarray
     d2: np.ndarray
     reason: np.ndarray
+    normals: np.ndarray | None = None
 
 
 @dataclass

@@ -138,9 +138,16 @@ def face_frames(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     return frame, corners
 
 
-def _sector(ax, ay, bx, by, rho2):
-    """Signed area of the circular sector of radius sqrt(rho2) between directions a and b."""
-    return 0.5 * rho2 * np.arctan2(ax * by - ay * bx, ax * bx + ay * by)
+def _sector_angles(ax, ay, bx, by, where: np.ndarray, out: np.ndarray) -> None:
+    """Add the signed angle from direction a to direction b to ``out``, at the entries ``where`` only.
+
+    ``arctan2`` costs some 30 ns an entry; most pieces of the clipped fan have no sector (an edge
+    end inside the disc), so only the others are evaluated.
+    """
+    idx = np.flatnonzero(where)
+    if idx.size:
+        ax, ay, bx, by = (np.take(x, idx) for x in (ax, ay, bx, by))
+        out[idx] += np.arctan2(ax * by - ay * bx, ax * bx + ay * by)
 
 
 def triangle_ball_area(offset: np.ndarray, radius: np.ndarray, frame: np.ndarray,
@@ -166,13 +173,14 @@ def triangle_ball_area(offset: np.ndarray, radius: np.ndarray, frame: np.ndarray
     (k,) float64
         Areas; 0 where the plane misses the ball.
     """
-    cx, cy, dist = np.einsum("ij,ikj->ki", offset, frame.reshape(-1, 3, 3))
+    ox, oy, oz = offset[:, 0], offset[:, 1], offset[:, 2]
+    cx, cy, dist = (ox * frame[:, 3 * j] + oy * frame[:, 3 * j + 1] + oz * frame[:, 3 * j + 2] for j in range(3))
     rho2 = radius * radius - dist * dist
-    zero = np.zeros_like(cx)
     # triangle corners relative to the foot of the centre, counter-clockwise
     px = (-cx, corners[:, 0] - cx, corners[:, 1] - cx)
     py = (-cy, -cy, corners[:, 2] - cy)
-    total = zero
+    straight = np.zeros_like(cx)
+    angle = np.zeros_like(cx)  # all sectors have the radius sqrt(rho2): sum their angles
     for i in range(3):
         ax, ay = px[i], py[i]
         bx, by = px[(i + 1) % 3], py[(i + 1) % 3]
@@ -188,9 +196,12 @@ def triangle_ball_area(offset: np.ndarray, radius: np.ndarray, frame: np.ndarray
         t2 = np.where(hit, np.clip((-b + sq) * inv, 0.0, 1.0), 0.0)
         p1x, p1y = ax + t1 * dx, ay + t1 * dy
         p2x, p2y = ax + t2 * dx, ay + t2 * dy
-        total = (total + _sector(ax, ay, p1x, p1y, rho2) + 0.5 * (p1x * p2y - p1y * p2x)
-                 + _sector(p2x, p2y, bx, by, rho2))
-    return np.where(rho2 > 0, total, 0.0)
+        straight += 0.5 * (p1x * p2y - p1y * p2x)
+        # a sector before the chord where the edge starts outside the disc, one after it where it
+        # ends outside (a missed edge is one sector from a to b: t1 = t2 = 0)
+        _sector_angles(ax, ay, p1x, p1y, t1 > 0, angle)
+        _sector_angles(p2x, p2y, bx, by, t2 < 1, angle)
+    return np.where(rho2 > 0, straight + 0.5 * rho2 * angle, 0.0)
 
 
 def _with_centres(nb: Neighbourhood, n: int) -> sp.csr_matrix:

@@ -25,6 +25,7 @@ import numpy as np
 from ..corners import CornerChunk, map_vertex_chunks
 from ..frames import tangent_frames
 from ..mesh import Mesh
+from ..normals import max_corner_weights, normalize_rows, unusable_normal_vertices
 from ..validity import Reason
 from ._lsq import MIN_TANGENT_LENGTH
 from ._triangle_corners import TriangleCorners
@@ -69,8 +70,10 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     ----------
     mesh : Mesh
         Closed triangle mesh (vertices with an open or non-manifold 1-ring are marked invalid).
-    normals : (n, 3) float64
-        Unit vertex normals: the sign of H and the tangent frame of the direction fit.
+    normals : (n, 3) float64 or None
+        Unit vertex normals: the sign of H and the tangent frame of the direction fit. None: compute
+        the Max-weighted normals from the same corners (returned in ``Principal.normals``, NaN
+        where :func:`curv.normals.unusable_normal_vertices`).
     k : int
         Range; only 1.
 
@@ -91,6 +94,10 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     degenerate_faces = mesh.degenerate_faces
     corner_face = mesh.corner_face
     singular = np.zeros(n, bool)
+    own_normals = normals is None
+    if own_normals:
+        normals = np.empty((n, 3))
+        unusable = unusable_normal_vertices(mesh)
     yield 0.1
 
     def work(chunk: CornerChunk) -> None:
@@ -101,6 +108,11 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
         hterm = [-(tc.cot_c * e1 + tc.cot_b * e2) for e1, e2 in zip(ab, tc.ac)]
         area, angle = tc.mixed_area, tc.angle()
 
+        if own_normals:
+            summed = np.stack([chunk.sum(w) for w in max_corner_weights(ab, tc.ac)], axis=1)
+            nrm = normalize_rows(summed)
+            nrm[unusable[rows]] = np.nan
+            normals[rows] = nrm
         # direction fit on the edge a -> b (in a closed ring every leaving edge appears once)
         nrm = normals[rows]
         U, V = tangent_frames(nrm)
@@ -147,6 +159,8 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     reason[border] = Reason.BORDER
     reason[degenerate] = Reason.DEGENERATE
     reason[nonmanifold] = Reason.NONMANIFOLD
+    if own_normals:
+        out.normals = normals
     yield 1.0
     return out
 
@@ -163,5 +177,6 @@ register(EstimatorSpec(
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Meyer, Desbrun, Schröder, Barr 2003, Discrete differential-geometry operators for "
               "triangulated 2-manifolds",
+    computes_normals=True,
     summary="cotan mean-curvature normal and angle defect over the mixed Voronoi area",
 ))

@@ -18,7 +18,8 @@ from ..result import Principal
 __all__ = ["EstimatorSpec", "ESTIMATORS", "register", "get_spec", "EstimatorFunction"]
 
 EstimatorFunction = Callable[..., Generator[float, None, Principal]]
-"""``fn(mesh, normals, k, *, block_size) -> Generator[fraction done, None, Principal]``."""
+"""``fn(mesh, normals, k, *, block_size) -> Generator[fraction done, None, Principal]``; ``normals``
+is None only for a spec with ``computes_normals``."""
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,10 @@ class EstimatorSpec:
         Where the method comes from.
     summary : str
         One line on what it does.
+    computes_normals : bool
+        Can compute the default (Max-weighted) vertex normals in its own pass over the mesh: called
+        with ``normals=None`` it returns them in :attr:`Principal.normals`, already NaN at
+        :func:`curv.normals.unusable_normal_vertices`, saving a separate pass.
     """
 
     name: str
@@ -57,6 +62,7 @@ class EstimatorSpec:
     closed_ring: bool
     reference: str
     summary: str = ""
+    computes_normals: bool = False
 
     def support_factor(self, k: int) -> int:
         """Radius of the collected support in longest-1-ring-edge units for range Rk."""
