@@ -85,9 +85,10 @@ class CornerChunk:
         return self.sum(flags.astype(np.int32)) > 0
 
 
-def corner_chunks(mesh: Mesh, chunk: int = CHUNK_VERTICES) -> list[tuple[int, int]]:
-    """The vertex ranges ``(start, stop)`` of the chunks of ``mesh``."""
+def corner_chunks(mesh: Mesh, chunk: int | None = None) -> list[tuple[int, int]]:
+    """The vertex ranges ``(start, stop)`` of the chunks of ``mesh`` (default :data:`CHUNK_VERTICES`)."""
     n = mesh.n_vertices
+    chunk = chunk or CHUNK_VERTICES
     return [(s, min(s + chunk, n)) for s in range(0, n, chunk)]
 
 
@@ -105,7 +106,7 @@ def _chunk(mesh: Mesh, start: int, stop: int) -> CornerChunk:
     )
 
 
-def map_vertex_chunks(mesh: Mesh, work: Callable[[CornerChunk], None], *, chunk: int = CHUNK_VERTICES,
+def map_vertex_chunks(mesh: Mesh, work: Callable[[CornerChunk], None], *, chunk: int | None = None,
                       workers: int | None = None) -> None:
     """Call ``work(chunk)`` for every chunk of vertices, on a thread pool.
 
@@ -117,8 +118,8 @@ def map_vertex_chunks(mesh: Mesh, work: Callable[[CornerChunk], None], *, chunk:
     mesh : Mesh
     work : callable
         ``work(CornerChunk) -> None``.
-    chunk : int
-        Vertices per chunk.
+    chunk : int, optional
+        Vertices per chunk; default :data:`CHUNK_VERTICES`.
     workers : int, optional
         Threads; default :func:`curv.neighbourhood.default_workers`.
     """

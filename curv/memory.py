@@ -22,9 +22,11 @@ PER_UNIT_BYTES = 1100.0
 Measured: ``curv estimate`` mru R2 on a 10M-vertex torus (20M faces, 20M units) peaked at 18.7 GB
 resident (928 B per unit above the base); rounded up by about 20 %."""
 
-FACE_PASS_BYTES: dict[str, float] = {"meyer": 400.0, "ru": 400.0, "csm": 400.0}
-"""Extra bytes per unit of the estimators with whole-mesh per-face temporaries (not blocked): at
-1M vertices they peaked about 0.45 GB above the block-bounded fits (benchmarks/bench_estimators.py)."""
+FACE_PASS_BYTES: dict[str, float] = {"csm": 400.0}
+"""Extra bytes per unit of the estimators with whole-mesh per-edge and per-face arrays: csm (edge
+tensors, face frames) peaked at 1.1 GB above the mesh at 1M vertices, about 0.45 GB more than the
+fits (benchmarks/bench_estimators.py). meyer and ru work in chunks of vertices and peak below the
+fits (0.14 and 0.2 GB at 1M)."""
 
 BLOCK_BYTES: dict[tuple[str, int], int] = {k: 1200 * 2**20 for k in (
     ("mru", 3), ("mru", 4), ("qs", 3), ("qs", 4), ("nc", 3), ("nc", 4), ("an", 2), ("an", 3), ("an", 4),
