@@ -80,6 +80,14 @@ class CornerChunk:
             out[nonempty] = np.add.reduceat(values, starts[nonempty], axis=0)
         return out
 
+    def ring_any(self, flags: np.ndarray) -> np.ndarray:
+        """(stop - start,) bool: per-vertex ``flags`` (n,) bool set at the vertex or at any edge neighbour.
+
+        The edge neighbours of a vertex are the next and previous vertices of its corners.
+        """
+        near = np.take(flags, self.nxt) | np.take(flags, self.prv)
+        return flags[self.start:self.stop] | self.any(near)
+
     def any(self, flags: np.ndarray) -> np.ndarray:
         """(stop - start,) bool: whether any corner of each vertex has ``flags`` (k,) bool set."""
         return self.sum(flags.astype(np.int32)) > 0

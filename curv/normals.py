@@ -46,24 +46,24 @@ def unusable_normal_vertices(mesh: Mesh) -> np.ndarray:
     return out
 
 
-def max_corner_weights(a: tuple, b: tuple) -> list:
-    """Max (1999) weighted normal of each corner from its two edge vectors.
+def max_corner_weights(cross: tuple, a_len2: np.ndarray, b_len2: np.ndarray) -> list:
+    """Max (1999) weighted normal of each corner from its two edge vectors a and b.
 
     Parameters
     ----------
-    a, b : three (k,) float64 each
-        Components of the edges from the corner's vertex to the next and to the previous vertex of
-        its face.
+    cross : three (k,) float64
+        Components of ``a x b``, a and b the edges from the corner's vertex to the next and to the
+        previous vertex of its face.
+    a_len2, b_len2 : (k,) float64
+        ``|a|^2`` and ``|b|^2``.
 
     Returns
     -------
     list of three (k,) float64
         ``(a x b) / (|a|^2 |b|^2)``; zero where an edge has zero length.
     """
-    (ax, ay, az), (bx, by, bz) = a, b
-    cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
     with np.errstate(invalid="ignore", divide="ignore"):
-        inv = 1.0 / ((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+        inv = 1.0 / (a_len2 * b_len2)
     inv[~np.isfinite(inv)] = 0.0  # a zero-length edge: the corner has no direction to give
     return [c * inv for c in cross]
 
@@ -98,10 +98,10 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
         here = [chunk.expand(coord) for coord in xyz]
         ax, ay, az = (np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
         bx, by, bz = (np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
+        cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
         if weighting is NormalWeighting.MAX:
-            w = max_corner_weights((ax, ay, az), (bx, by, bz))
+            w = max_corner_weights(cross, ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
         else:
-            cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
             fw = np.take(face_weight, np.take(corner_face, chunk.corners), axis=0)
             if weighting is NormalWeighting.AREA:
                 w = list(fw.T)

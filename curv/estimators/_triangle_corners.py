@@ -12,8 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..corners import CornerChunk
+from ..validity import Reason
 
-__all__ = ["TriangleCorners", "dot", "cross"]
+__all__ = ["TriangleCorners", "dot", "cross", "closed_ring_reasons"]
 
 Vec = tuple[np.ndarray, np.ndarray, np.ndarray]
 
@@ -36,6 +37,10 @@ class TriangleCorners:
     ----------
     ab, ac : three (k,) float64
         Edge vectors from the corner's vertex to the next and to the previous vertex.
+    normal : three (k,) float64
+        ``ab x ac``: the face normal times twice the area.
+    ab_len2, ac_len2 : (k,) float64
+        Squared edge lengths.
     twice_area : (k,) float64
         Twice the triangle's area, ``|ab x ac|``.
     degenerate : (k,) bool
@@ -52,6 +57,9 @@ class TriangleCorners:
 
     ab: Vec
     ac: Vec
+    normal: Vec
+    ab_len2: np.ndarray
+    ac_len2: np.ndarray
     twice_area: np.ndarray
     degenerate: np.ndarray
     cos_a: np.ndarray
@@ -66,22 +74,53 @@ class TriangleCorners:
         here = [chunk.expand(coord) for coord in xyz]
         ab = tuple(np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
         ac = tuple(np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
-        bc = tuple(y - x for x, y in zip(ab, ac))
         normal = cross(ab, ac)
         twice = np.sqrt(dot(normal, normal))
         bad = np.take(degenerate_faces, np.take(corner_face, chunk.corners))
         twice_safe = np.where(bad, 1.0, twice)
-        cos_a, cos_b, cos_c = dot(ab, ac), -dot(ab, bc), dot(ac, bc)
+        ab_len2, ac_len2, cos_a = dot(ab, ab), dot(ac, ac), dot(ab, ac)
+        # (a - b).(c - b) and (a - c).(b - c), from the dot products already at hand
+        cos_b, cos_c = ab_len2 - cos_a, ac_len2 - cos_a
         cot_b, cot_c = cos_b / twice_safe, cos_c / twice_safe
         # edge ab faces corner c, edge ac faces corner b
-        area = 0.125 * (cot_c * dot(ab, ab) + cot_b * dot(ac, ac))
+        area = 0.125 * (cot_c * ab_len2 + cot_b * ac_len2)
         area = np.where(cos_a < 0, 0.25 * twice, np.where((cos_b < 0) | (cos_c < 0), 0.125 * twice, area))
         for arr in (cot_b, cot_c, area):
             arr[bad] = 0.0
-        return cls(ab, ac, twice, bad, cos_a, cot_b, cot_c, area)
+        return cls(ab, ac, normal, ab_len2, ac_len2, twice, bad, cos_a, cot_b, cot_c, area)
 
     def angle(self) -> np.ndarray:
         """(k,) float64 corner angle at ``a`` in radians (0 on degenerate faces)."""
         out = np.arctan2(self.twice_area, self.cos_a)
         out[self.degenerate] = 0.0
         return out
+
+
+def closed_ring_reasons(chunk: CornerChunk, tc: TriangleCorners, singular: np.ndarray, normals: np.ndarray,
+                        border_vertices: np.ndarray, nonmanifold: np.ndarray) -> np.ndarray:
+    """Reason codes of a chunk's vertices for an estimator that needs a closed, clean 1-ring.
+
+    Later rules override earlier ones: SINGULAR where ``singular``; BORDER on or next to a border;
+    DEGENERATE touching a degenerate face or without a finite normal; NONMANIFOLD where
+    ``nonmanifold`` (the chunk's rows).
+
+    Parameters
+    ----------
+    chunk, tc : CornerChunk, TriangleCorners
+    singular : (r,) bool
+    normals : (r, 3) float64
+        The chunk's vertex normals.
+    border_vertices : (n,) bool
+        :attr:`curv.Mesh.border_vertices`.
+    nonmanifold : (r,) bool
+
+    Returns
+    -------
+    (r,) uint8
+    """
+    reason = np.full(chunk.stop - chunk.start, Reason.OK, np.uint8)
+    reason[singular] = Reason.SINGULAR
+    reason[chunk.ring_any(border_vertices)] = Reason.BORDER
+    reason[chunk.any(tc.degenerate) | ~np.isfinite(normals).all(axis=1)] = Reason.DEGENERATE
+    reason[nonmanifold] = Reason.NONMANIFOLD
+    return reason

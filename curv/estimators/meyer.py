@@ -26,37 +26,11 @@ from ..corners import CornerChunk, map_vertex_chunks
 from ..frames import tangent_frames
 from ..mesh import Mesh
 from ..normals import max_corner_weights, normalize_rows, unusable_normal_vertices
-from ..validity import Reason
 from ._lsq import MIN_TANGENT_LENGTH
-from ._triangle_corners import TriangleCorners
+from ._triangle_corners import TriangleCorners, closed_ring_reasons
 from .registry import EstimatorSpec, empty_principal, register
 
-__all__ = ["iter_meyer", "ring_flags"]
-
-
-def ring_flags(mesh: Mesh, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Vertices whose 1-ring is unfit for a closed-ring estimator.
-
-    Parameters
-    ----------
-    mesh : Mesh
-    normals : (n, 3) float64
-
-    Returns
-    -------
-    border : (n,) bool
-        On a border (or non-manifold edge), or adjacent to such a vertex.
-    degenerate : (n,) bool
-        Touching a degenerate face, or without a finite normal.
-    nonmanifold : (n,) bool
-        Non-manifold vertex.
-    """
-    adj = mesh.adjacency
-    on_border = mesh.border_vertices
-    border = on_border | (adj @ on_border.astype(np.int32) > 0)
-    degenerate = (mesh.vertex_faces @ mesh.degenerate_faces.astype(np.int32) > 0)
-    degenerate |= ~np.isfinite(normals).all(axis=1)
-    return border, degenerate, mesh.nonmanifold_vertices.copy()
+__all__ = ["iter_meyer"]
 
 
 def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
@@ -93,7 +67,7 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     xyz = tuple(np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
     degenerate_faces = mesh.degenerate_faces
     corner_face = mesh.corner_face
-    singular = np.zeros(n, bool)
+    border_vertices, nonmanifold = mesh.border_vertices, mesh.nonmanifold_vertices
     own_normals = normals is None
     if own_normals:
         normals = np.empty((n, 3))
@@ -109,7 +83,8 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
         area, angle = tc.mixed_area, tc.angle()
 
         if own_normals:
-            summed = np.stack([chunk.sum(w) for w in max_corner_weights(ab, tc.ac)], axis=1)
+            summed = np.stack([chunk.sum(w) for w in max_corner_weights(tc.normal, tc.ab_len2, tc.ac_len2)],
+                              axis=1)
             nrm = normalize_rows(summed)
             nrm[unusable[rows]] = np.nan
             normals[rows] = nrm
@@ -148,17 +123,11 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
         out.k2[rows] = h - root
         out.d1[rows] = c * U + s * V
         out.d2[rows] = -s * U + c * V
-        singular[rows] = empty | fit_singular
+        out.reason[rows] = closed_ring_reasons(chunk, tc, empty | fit_singular, nrm, border_vertices,
+                                               nonmanifold[rows])
 
     map_vertex_chunks(mesh, work)
     yield 0.9
-
-    border, degenerate, nonmanifold = ring_flags(mesh, normals)
-    reason = out.reason
-    reason[singular] = Reason.SINGULAR
-    reason[border] = Reason.BORDER
-    reason[degenerate] = Reason.DEGENERATE
-    reason[nonmanifold] = Reason.NONMANIFOLD
     if own_normals:
         out.normals = normals
     yield 1.0

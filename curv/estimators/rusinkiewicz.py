@@ -18,9 +18,7 @@ import numpy as np
 from ..corners import CornerChunk, map_vertex_chunks
 from ..frames import principal_from_tensor, solve_sym3, tangent_frames
 from ..mesh import Mesh
-from ..validity import Reason
-from ._triangle_corners import TriangleCorners, cross, dot
-from .meyer import ring_flags
+from ._triangle_corners import TriangleCorners, closed_ring_reasons, cross, dot
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_ru"]
@@ -63,7 +61,7 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
     nxyz = tuple(np.ascontiguousarray(normals[:, c]) for c in range(3))
     degenerate_faces = mesh.degenerate_faces
     corner_face = mesh.corner_face
-    singular = np.zeros(n, bool)
+    border_vertices, nonmanifold = mesh.border_vertices, mesh.nonmanifold_vertices
     yield 0.1
 
     def work(chunk: CornerChunk) -> None:
@@ -131,18 +129,12 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
                        for val in (e_p, f_p, g_p))
         k1, k2, d1, d2 = principal_from_tensor(e, f, g, U, V)
         out.k1[rows], out.k2[rows], out.d1[rows], out.d2[rows] = k1, k2, d1, d2
-        singular[rows] = (empty | chunk.any(opposite & ~bad) | ~np.isfinite(k1) | chunk.any(bad))
+        singular = empty | chunk.any(opposite & ~bad) | ~np.isfinite(k1) | chunk.any(bad)
+        # the neighbours' normals enter the estimate: a non-manifold neighbour spoils it too
+        out.reason[rows] = closed_ring_reasons(chunk, tc, singular, nrm, border_vertices,
+                                               chunk.ring_any(nonmanifold))
 
     map_vertex_chunks(mesh, work)
-    yield 0.9
-
-    border, degenerate, nonmanifold = ring_flags(mesh, normals)
-    nonmanifold |= mesh.adjacency @ mesh.nonmanifold_vertices.astype(np.int32) > 0
-    reason = out.reason
-    reason[singular] = Reason.SINGULAR
-    reason[border] = Reason.BORDER
-    reason[degenerate] = Reason.DEGENERATE
-    reason[nonmanifold] = Reason.NONMANIFOLD
     yield 1.0
     return out
 
