@@ -112,8 +112,8 @@ def iter_estimate(
     # of the surface's curvature, whatever the estimator
     reason[(reason == Reason.OK) & mesh.border_vertices] = Reason.BORDER
     reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
-    # (the arrays are this call's own: the estimator made them for it)
-    # the estimators order k1 >= k2 already; this only repairs the rare rows they did not
+    # the estimators order k1 >= k2 already; repair in place (the arrays are this call's own) the
+    # rare rows they did not
     swap = np.flatnonzero(k2 > k1)
     k1[swap], k2[swap] = k2[swap], k1[swap]
     d1[swap], d2[swap] = d2[swap], d1[swap]
