@@ -479,27 +479,31 @@ class Mesh:
         Counted as: the faces around v, linked when they share an edge at v, form more than one
         group. Vertices on non-manifold edges are included too.
         """
-        # Corner graph: two corners at the same vertex are linked when their faces share the edge
-        # leaving or entering the vertex. Components of corners per vertex = fans.
+        # Corner graph: two corners at the same vertex are linked when their faces share an edge
+        # at that vertex; the components of the graph are the fans. Vertices on edges with more
+        # than two faces are non-manifold anyway (below), so only edges with exactly two
+        # halfedges link: each links its two corners at either end, and every component holds
+        # the corners of one vertex.
+        idx = self._indices
+        nxt = self.corner_next
+        h = idx.size
         he_edge = self.halfedge_edge
-        prev = self.corner_prev
-        h = self._indices.size
-        # corner c at vertex v touches edges he_edge[c] (outgoing) and he_edge[prev[c]] (incoming)
-        corner_edges = np.concatenate([he_edge, he_edge[prev]])
-        corners = np.concatenate([np.arange(h), np.arange(h)])
-        ok = corner_edges >= 0
-        # graph nodes: corners 0..h-1, then one node per (edge, vertex at that end); a corner links to
-        # the (edge, its vertex) nodes of the two edges it touches, so corners of one fan connect.
-        ev_key = corner_edges * self.n_vertices + np.concatenate([self._indices, self._indices])
-        ev_key = ev_key[ok]
-        uniq, inv = np.unique(ev_key, return_inverse=True)
-        g = sp.csr_matrix(
-            (np.ones(inv.size, np.int8), (corners[ok], h + inv)), shape=(h + uniq.size, h + uniq.size)
-        )
-        ncomp, labels = sp.csgraph.connected_components(g, directed=False)
-        fans = np.zeros(self.n_vertices, np.int64)
-        pair = np.unique(labels[:h].astype(np.int64) * self.n_vertices + self._indices)  # int32 labels overflow
-        np.add.at(fans, pair % self.n_vertices, 1)
+        ok = np.flatnonzero(he_edge >= 0)
+        # halfedges grouped by edge (a counting sort)
+        by_edge = sp.coo_matrix((np.ones(ok.size, np.int8), (he_edge[ok], ok)),
+                                shape=(self.edges.shape[0], h)).tocsr()
+        first = by_edge.indptr[:-1][self.edge_face_count == 2]
+        h1 = by_edge.indices[first].astype(np.int64)
+        h2 = by_edge.indices[first + 1].astype(np.int64)
+        a, b = idx[h1], idx[nxt[h1]]  # h1 runs a -> b; h2 joins the same two vertices
+        at_a = np.where(idx[h2] == a, h2, nxt[h2])
+        at_b = np.where(idx[h2] == b, h2, nxt[h2])
+        links = sp.coo_matrix((np.ones(2 * h1.size, np.int8), (np.concatenate([h1, nxt[h1]]),
+                                                               np.concatenate([at_a, at_b]))), shape=(h, h))
+        ncomp, labels = sp.csgraph.connected_components(links, directed=True, connection="weak")
+        fan_vertex = np.empty(ncomp, np.int64)
+        fan_vertex[labels] = idx
+        fans = np.bincount(fan_vertex, minlength=self.n_vertices)
         out = fans > 1
         out[self.edges[self.nonmanifold_edges].reshape(-1)] = True
         return out
