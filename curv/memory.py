@@ -16,11 +16,12 @@ __all__ = ["estimate_peak_bytes", "available_bytes", "format_bytes", "MemoryEsti
 BASE_BYTES = 170 * 2**20
 """Interpreter, numpy, scipy and plyfile loaded, before any mesh data."""
 
-PER_UNIT_BYTES = 1100.0
+PER_UNIT_BYTES = 800.0
 """Mesh, connectivity, validity masks, normals, report and result arrays per size unit.
 
-Measured: ``curv estimate`` mru R2 on a 10M-vertex torus (20M faces, 20M units) peaked at 18.7 GB
-resident (928 B per unit above the base); rounded up by about 20 %."""
+Measured with ``/usr/bin/time -v curv estimate`` on a 10M-vertex torus (20M faces, 20M units):
+mru R2 peaked at 13.0 GB resident (640 B per unit above the base), meyer at 10.0 GB (490 B);
+rounded up by about 25 %."""
 
 FACE_PASS_BYTES: dict[str, float] = {"csm": 400.0}
 """Extra bytes per unit of the estimators with whole-mesh per-edge and per-face arrays: csm (edge
