@@ -78,7 +78,7 @@ class LocalPairs:
 def padded_groups(counts: np.ndarray, *, min_group: int = 256) -> list[tuple[np.ndarray, int]]:
     """Split centres into groups of similar support size for the padded layout.
 
-    Each centre's size is rounded up to a cap with at most 1/8 of it padding (steps of 1 up to 8,
+    Each centre's size is rounded up to a cap with at most 1/8 of it padding (steps of 1 below 16,
     then 8 caps per doubling); groups smaller than ``min_group`` join the next larger cap, which
     bounds the number of groups (and the per-group overhead) on irregular meshes.
 
