@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from .mesh import Mesh
-from .neighbourhood import default_workers, segment_ids
+from .neighbourhood import default_workers, segment_ids, segment_sum
 
 __all__ = ["CornerChunk", "corner_chunks", "map_vertex_chunks", "CHUNK_VERTICES"]
 
@@ -72,13 +72,7 @@ class CornerChunk:
 
         Vertices without a corner get 0.
         """
-        starts = self.indptr[:-1]
-        nonempty = self.indptr[1:] > starts
-        out = np.zeros((starts.size,) + values.shape[1:], dtype=values.dtype)
-        if values.shape[0]:
-            # reduceat over the starts of non-empty rows: each runs exactly to its own end
-            out[nonempty] = np.add.reduceat(values, starts[nonempty], axis=0)
-        return out
+        return segment_sum(values, self.indptr)
 
     def ring_any(self, flags: np.ndarray) -> np.ndarray:
         """(stop - start,) bool: per-vertex ``flags`` (n,) bool set at the vertex or at any edge neighbour.

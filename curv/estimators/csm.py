@@ -27,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from ..neighbourhood import Neighbourhood
+from ..neighbourhood import Neighbourhood, segment_ids
 from ..validity import Reason
 from .registry import EstimatorSpec, iter_blockwise, register
 
@@ -218,7 +218,7 @@ def _with_centres(nb: Neighbourhood, n: int) -> sp.csr_matrix:
 
 
 def _row_ids(m: sp.csr_matrix) -> np.ndarray:
-    return np.repeat(np.arange(m.shape[0]), np.diff(m.indptr))
+    return segment_ids(m.indptr)
 
 
 class _MeshData:
