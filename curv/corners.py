@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from .mesh import Mesh
-from .neighbourhood import default_workers, segment_ids, segment_sum
+from ._legacy_neighbourhood import default_workers, segment_ids, segment_sum
 
 __all__ = ["CornerChunk", "corner_chunks", "map_vertex_chunks", "CHUNK_VERTICES"]
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..frames import principal_from_tensor, solve_sym3, tangent_frames
 from ..mesh import Mesh
-from ..neighbourhood import DEFAULT_BLOCK_PAIRS, Neighbourhood, block_size_for
+from .._legacy_neighbourhood import DEFAULT_BLOCK_PAIRS, Neighbourhood, block_size_for
 from ..result import Principal
 from ..validity import Reason
 from .registry import iter_blockwise

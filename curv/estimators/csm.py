@@ -27,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from ..neighbourhood import Neighbourhood, segment_ids
+from .._legacy_neighbourhood import Neighbourhood, segment_ids
 from ..validity import Reason
 from .registry import EstimatorSpec, iter_blockwise, register
 

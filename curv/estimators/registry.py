@@ -133,7 +133,7 @@ def iter_blockwise(mesh: Mesh, factor: float, block_fn, *, block_size: int | Non
     -------
     Principal
     """
-    from ..neighbourhood import map_neighbourhoods
+    from .._legacy_neighbourhood import map_neighbourhoods
 
     n = mesh.n_vertices
     out = empty_principal(n)

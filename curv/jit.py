@@ -1,0 +1,154 @@
+"""How curv runs its numba kernels: decorators, threads, one launch at a time, chunked progress.
+
+Every hot loop in curv is a numba kernel compiled with :data:`jit` (serial) or :data:`jit_parallel`
+(``prange`` over vertices). This module is the one owner of how they are launched:
+
+- **Threads.** ``CURV_THREADS`` caps the threads of every parallel kernel (default: the usable
+  cores). numba's thread count is per calling thread, so :func:`launch` sets it on each call.
+- **One parallel launch at a time.** numba's ``workqueue`` layer (chosen here: it needs no extra
+  library and is fork-safe, so the study's process pool may fork after a kernel ran) does not allow
+  two threads to launch parallel kernels at once. The viewer's panes estimate on worker threads in
+  parallel, so launches take :data:`LAUNCH_LOCK`; since every kernel call covers a short chunk of
+  vertices (:func:`iter_chunks`), two estimates interleave chunk by chunk.
+- **Progress and cancel.** :func:`iter_chunks` cuts the vertices into chunks whose size adapts so
+  that each kernel call lasts about :data:`TARGET_SECONDS`; it yields between chunks, which is
+  where a caller may stop.
+- **Compilation.** Kernels are cached on disk (``cache=True``); :func:`compile_pending` tells whether
+  a first call will compile, so the CLI and the viewer can say so.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from typing import Callable, Generator, Iterable
+
+import numba
+from numba import njit
+
+__all__ = [
+    "jit", "jit_parallel", "prange", "threads", "launch", "iter_chunks", "thread_slices",
+    "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
+]
+
+# must be chosen before the first parallel launch of the process
+numba.config.THREADING_LAYER = "workqueue"
+
+jit = njit(cache=True, nogil=True)
+"""Serial kernel or helper: ``@jit``."""
+
+jit_parallel = njit(cache=True, nogil=True, parallel=True)
+"""Parallel kernel whose outer loop is a ``prange``: ``@jit_parallel``."""
+
+prange = numba.prange
+
+TARGET_SECONDS = 0.05
+"""Wanted duration of one kernel call: progress and cancel come at least this often (in practice
+a few times this, as the chunk size adapts to the measured speed)."""
+
+MIN_CHUNK = 256
+MAX_CHUNK = 1 << 20
+
+LAUNCH_LOCK = threading.Lock()
+"""Held while a parallel kernel runs (see the module notes)."""
+
+COMPILE_MESSAGE = "compiling curvature kernels (first run only)..."
+
+
+class Progress(float):
+    """A fraction done (0..1) that may carry a status message for a person (e.g. compiling).
+
+    It is a float, so consumers that only want the fraction can ignore the message.
+    """
+
+    message: str = ""
+
+    def __new__(cls, fraction: float, message: str = ""):
+        obj = super().__new__(cls, fraction)
+        obj.message = message
+        return obj
+
+
+def threads() -> int:
+    """Threads for parallel kernels: ``CURV_THREADS`` if set (capped by numba's pool), else all usable cores."""
+    limit = numba.config.NUMBA_NUM_THREADS
+    env = os.environ.get("CURV_THREADS", "").strip()
+    if env.isdigit() and int(env) > 0:
+        return max(1, min(int(env), limit))
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, limit))
+
+
+def launch(kernel: Callable, *args):
+    """Call a parallel kernel with :func:`threads` threads, one launch at a time in the process."""
+    with LAUNCH_LOCK:
+        numba.set_num_threads(threads())
+        return kernel(*args)
+
+
+def thread_slices(count: int, parts: int):
+    """``(starts, stops)`` of ``parts`` contiguous, nearly equal slices of ``range(count)``."""
+    import numpy as np
+
+    bounds = (np.arange(parts + 1, dtype=np.int64) * count) // parts
+    return bounds[:-1].copy(), bounds[1:].copy()
+
+
+def iter_chunks(n: int, run: Callable[[int, int], None], *, chunk: int | None = None,
+                start_fraction: float = 0.0, end_fraction: float = 1.0) -> Generator[float, None, None]:
+    """Call ``run(lo, hi)`` over consecutive chunks of ``range(n)`` and yield the fraction done.
+
+    Parameters
+    ----------
+    n : int
+        Number of items (vertices).
+    run : callable
+        ``run(lo, hi)`` does the work for items ``lo .. hi-1`` (typically one kernel launch).
+    chunk : int, optional
+        Fixed chunk size; default adaptive, so that a call lasts about :data:`TARGET_SECONDS`.
+    start_fraction, end_fraction : float
+        The progress range this work maps to.
+
+    Yields
+    ------
+    float
+        Fraction done, after each chunk: the points where a caller may cancel.
+    """
+    size = chunk or 4 * MIN_CHUNK
+    lo = 0
+    span = end_fraction - start_fraction
+    while lo < n:
+        hi = min(n, lo + size)
+        t0 = time.perf_counter()
+        run(lo, hi)
+        took = time.perf_counter() - t0
+        if chunk is None and took > 0:
+            # aim at the target, growing at most 4x a step so one slow region cannot overshoot far
+            wanted = int(size * TARGET_SECONDS / took)
+            size = max(MIN_CHUNK, min(MAX_CHUNK, 4 * size, wanted))
+        lo = hi
+        yield start_fraction + span * hi / max(n, 1)
+
+
+def compile_pending(kernels: Iterable) -> bool:
+    """Whether calling these kernels will compile some of them (no usable on-disk cache yet).
+
+    A kernel already compiled in this process, or with an index file in numba's cache, is not
+    pending. Reads numba's cache bookkeeping; if that ever changes shape, answers True (the message
+    then shows once too often, never too rarely).
+    """
+    for kernel in kernels:
+        if getattr(kernel, "overloads", None):
+            continue
+        try:
+            cache = kernel._cache
+            index = cache._cache_file._index_path
+        except AttributeError:
+            return True
+        if not os.path.exists(index):
+            return True
+    return False

@@ -1,0 +1,168 @@
+"""The one owner of the range rule (paper §4.1): parsing, validation, labels and support radii.
+
+The support of the estimate at vertex p under range Rk is every vertex connected to p through the
+mesh within Euclidean distance ``k * L(p)``, where ``L(p)`` is the longest edge of p's 1-ring.
+Estimators that also use their neighbours' normals (``an``, ``mru``) collect within ``(k - 1) * L(p)``:
+their R2 is the classic 1-ring-plus-normals form. Any real ``k`` at least the estimator's smallest
+named range is accepted; ``radius=r`` instead gives every vertex the same ball of radius ``r`` in mesh
+units (the ball the estimator collects in, whatever it is). Estimators without a support (``meyer``,
+``ru``: fixed 1-ring formulas) accept only their one named range.
+
+Everything else (the API, the CLI, the viewer, the memory model, the study) asks this module.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import EstimatorError
+
+__all__ = ["Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
+           "TIE_TOLERANCE", "PAPER_RANGES", "FORMS"]
+
+TIE_TOLERANCE = 1e-9
+"""Relative tolerance on every ball radius, so that vertices exactly at k edge lengths (regular
+meshes) are inside."""
+
+PAPER_RANGES = (1, 2, 3, 4)
+"""The paper's named ranges R1..R4."""
+
+FORMS = "a number k >= 1 such as 2 or 2.5, a label such as 'R2', or radius=r in mesh units"
+"""The allowed forms of a range, for error messages."""
+
+
+@dataclass(frozen=True)
+class Range:
+    """A resolved range: either a multiple ``k`` of each vertex's longest 1-ring edge or a fixed ``radius``.
+
+    Attributes
+    ----------
+    k : float or None
+        k of Rk (None when ``radius`` is given).
+    radius : float or None
+        Ball radius in mesh units, the same at every vertex (None for Rk).
+    """
+
+    k: float | None = None
+    radius: float | None = None
+
+    @property
+    def label(self) -> str:
+        """``'R2'``, ``'R2.5'`` or ``'r=0.3'``."""
+        if self.radius is not None:
+            return f"r={self.radius:g}"
+        return range_label(self.k)
+
+    @property
+    def value(self):
+        """k as an int when it is whole (so ``R2`` compares equal to 2), else the float; None for a radius."""
+        if self.k is None:
+            return None
+        return int(self.k) if float(self.k).is_integer() else float(self.k)
+
+
+def range_label(k) -> str:
+    """``'R2'`` for 2 or 2.0, ``'R2.5'`` for 2.5."""
+    k = float(k)
+    return f"R{int(k)}" if k.is_integer() else f"R{k:g}"
+
+
+def parse_range(value) -> float:
+    """Read a range as a real k: ``2``, ``2.5``, ``"2"``, ``"R2"``, ``"r2.5"``.
+
+    Raises
+    ------
+    EstimatorError
+        Anything else (booleans, NaN, non-numbers), naming the allowed forms.
+    """
+    if isinstance(value, (bool, np.bool_)) or value is None:
+        raise EstimatorError(f"range must be {FORMS}; got {value!r}")
+    if isinstance(value, str):
+        text = value.strip().upper().removeprefix("R")
+        try:
+            k = float(text)
+        except ValueError:
+            raise EstimatorError(f"range must be {FORMS}; got {value!r}") from None
+    else:
+        try:
+            k = float(value)
+        except (TypeError, ValueError):
+            raise EstimatorError(f"range must be {FORMS}; got {value!r}") from None
+    if not math.isfinite(k):
+        raise EstimatorError(f"range must be {FORMS}; got {value!r}")
+    return k
+
+
+def support_factor(k: float, *, uses_normals: bool) -> float:
+    """Radius of the collected support in longest-1-ring-edge units for range Rk: ``k - 1`` or ``k``."""
+    return k - 1.0 if uses_normals else float(k)
+
+
+def resolve(spec, range=None, radius=None) -> Range:
+    """Validate a range request for an estimator.
+
+    Parameters
+    ----------
+    spec : EstimatorSpec
+        The estimator (its ``ranges``, ``has_support``).
+    range : int, float or str, optional
+        k of Rk; default the estimator's R2 if it has one, else its first named range.
+    radius : float, optional
+        Absolute ball radius (mutually exclusive with ``range``).
+
+    Returns
+    -------
+    Range
+
+    Raises
+    ------
+    EstimatorError
+        Both or an invalid one given; the message names the allowed forms.
+    """
+    if radius is not None:
+        if range is not None:
+            raise EstimatorError("give either range= or radius=, not both")
+        if not spec.has_support:
+            raise EstimatorError(
+                f"estimator {spec.name!r} uses its fixed 1-ring ({range_label(spec.ranges[0])}) and takes no radius")
+        try:
+            r = float(radius)
+        except (TypeError, ValueError):
+            r = math.nan
+        if isinstance(radius, (bool, np.bool_)) or not (math.isfinite(r) and r > 0):
+            raise EstimatorError(f"radius must be a positive length in mesh units; got {radius!r}")
+        return Range(radius=r)
+    if range is None:
+        range = 2 if 2 in spec.ranges else spec.ranges[0]
+    k = parse_range(range)
+    if not spec.has_support:
+        if k not in spec.ranges:
+            raise EstimatorError(
+                f"estimator {spec.name!r} uses its fixed 1-ring and has only range "
+                f"{range_label(spec.ranges[0])}; got {range!r}")
+        return Range(k=k)
+    smallest = min(spec.ranges)
+    if k < smallest:
+        raise EstimatorError(
+            f"estimator {spec.name!r} needs a range of at least {range_label(smallest)} "
+            f"({FORMS}); got {range!r}")
+    return Range(k=k)
+
+
+def ball_radii(mesh, rng: Range, *, uses_normals: bool) -> np.ndarray:
+    """(n,) float64 radius of the ball each vertex collects its support in, tolerance included.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    rng : Range
+    uses_normals : bool
+        Whether the estimator also uses its neighbours' normals (support ``k - 1``).
+    """
+    if rng.radius is not None:
+        return np.full(mesh.n_vertices, rng.radius * (1.0 + TIE_TOLERANCE))
+    factor = support_factor(rng.k, uses_normals=uses_normals)
+    return (factor * (1.0 + TIE_TOLERANCE)) * mesh.longest_edge
