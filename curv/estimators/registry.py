@@ -18,8 +18,12 @@ from ..result import Principal
 __all__ = ["EstimatorSpec", "ESTIMATORS", "register", "get_spec", "EstimatorFunction"]
 
 EstimatorFunction = Callable[..., Generator[float, None, Principal]]
-"""``fn(mesh, normals, k, *, block_size) -> Generator[fraction done, None, Principal]``; ``normals``
-is None only for a spec with ``computes_normals``."""
+"""``fn(mesh, normals, radii, *, chunk) -> Generator[fraction done, None, Principal]``.
+
+``normals`` (n, 3) is None only for a spec with ``computes_normals``; ``radii`` (n,) float64 is the
+ball radius every vertex collects its support in (:func:`curv.ranges.ball_radii`), None for an
+estimator without a support (``has_support=False``); ``chunk`` fixes the vertices per kernel call
+(default adaptive, :func:`curv.jit.iter_chunks`)."""
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,9 @@ class EstimatorSpec:
         Where the method comes from.
     summary : str
         One line on what it does.
+    has_support : bool
+        Collects a range support (any real range >= its smallest named one, or a radius). False for
+        the fixed 1-ring formulas (``meyer``, ``ru``), which take only their one named range.
     computes_normals : bool
         Can compute the default (Max-weighted) vertex normals in its own pass over the mesh: called
         with ``normals=None`` it returns them in :attr:`Principal.normals`, already NaN at
@@ -63,6 +70,7 @@ class EstimatorSpec:
     reference: str
     summary: str = ""
     computes_normals: bool = False
+    has_support: bool = True
 
     def support_factor(self, k: int) -> int:
         """Radius of the collected support in longest-1-ring-edge units for range Rk."""
