@@ -54,6 +54,9 @@ class EstimatorSpec:
     has_support : bool
         Collects a range support (any real range >= its smallest named one, or a radius). False for
         the fixed 1-ring formulas (``meyer``, ``ru``), which take only their one named range.
+    kernels : tuple
+        The numba dispatchers the estimator calls, so that a caller can announce a first-run
+        compilation (:func:`curv.jit.compile_pending`).
     computes_normals : bool
         Can compute the default (Max-weighted) vertex normals in its own pass over the mesh: called
         with ``normals=None`` it returns them in :attr:`Principal.normals`, already NaN at
@@ -71,6 +74,7 @@ class EstimatorSpec:
     summary: str = ""
     computes_normals: bool = False
     has_support: bool = True
+    kernels: tuple = field(default=(), repr=False, compare=False)
 
     def support_factor(self, k: int) -> int:
         """Radius of the collected support in longest-1-ring-edge units for range Rk."""
