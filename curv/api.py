@@ -10,7 +10,9 @@ import numpy as np
 
 from .errors import EstimatorError, MeshError
 from .estimators import get_spec
+from .jit import COMPILE_MESSAGE, Progress, compile_pending
 from .mesh import Mesh
+from .ranges import ball_radii, parse_range, resolve
 from .normals import NormalWeighting, normalize_rows, unusable_normal_vertices, vertex_normals
 from .result import Curvature
 from .smoothing import smooth_positions, smooth_values
@@ -29,18 +31,6 @@ class Smoothing(str, enum.Enum):
     """Estimate, then cotan-smooth k1 and k2 over valid neighbours (R2SV)."""
 
 
-def parse_range(value) -> int:
-    """Accept ``2``, ``"2"`` or ``"R2"``; return the int k (validity is checked by the spec)."""
-    if isinstance(value, str):
-        text = value.strip().upper().removeprefix("R")
-        if text.isdigit():
-            return int(text)
-        raise EstimatorError(f"range must look like 2 or 'R2', got {value!r}")
-    if isinstance(value, (bool, np.bool_)):
-        raise EstimatorError(f"range must be an integer, got {value!r}")
-    return value
-
-
 def _check_normals(normals, n: int) -> np.ndarray:
     arr = np.asarray(normals, dtype=np.float64)
     if arr.shape != (n, 3):
@@ -51,8 +41,9 @@ def _check_normals(normals, n: int) -> np.ndarray:
 def iter_estimate(
     mesh: Mesh,
     method: str = "mru",
-    range=2,
+    range=None,
     *,
+    radius: float | None = None,
     normals: np.ndarray | None = None,
     normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
     smooth: Smoothing | str | None = None,
@@ -62,10 +53,12 @@ def iter_estimate(
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
 
-    Every ``yield`` is a point where a caller may stop (cancel). Parameters as in :func:`estimate`.
+    Every ``yield`` is a point where a caller may stop (cancel); the yielded values are
+    :class:`curv.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
+    Parameters as in :func:`estimate`.
     """
     spec = get_spec(method)
-    k = spec.check_range(parse_range(range))
+    rng = resolve(spec, range, radius)
     if not isinstance(mesh, Mesh):
         raise MeshError(f"expected a curv.Mesh, got {type(mesh).__name__}")
     if spec.triangles_only and not mesh.is_triangular:
@@ -96,8 +89,14 @@ def iter_estimate(
         if meaningless.any():
             used_normals = used_normals.copy()
             used_normals[meaningless] = np.nan
-    yield 0.0
-    raw = yield from spec.function(work_mesh, used_normals, k, block_size=block_size)
+    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
+    import inspect  # TRANSITION: old-style estimators until every one is a kernel
+
+    if list(inspect.signature(spec.function).parameters)[2] == "k":
+        raw = yield from spec.function(work_mesh, used_normals, int(rng.k), block_size=block_size)
+    else:
+        raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size)
     if fused:
         used_normals = raw.normals
 
@@ -134,8 +133,9 @@ def iter_estimate(
     yield 1.0
     return Curvature(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
-        method=spec.name, range=k,
-        info={"seconds": time.perf_counter() - t0, "smooth": smooth.value,
+        method=spec.name, range=rng.value,
+        info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
+              "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0},
     )
 
@@ -151,8 +151,9 @@ def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
 def estimate(
     mesh: Mesh,
     method: str = "mru",
-    range=2,
+    range=None,
     *,
+    radius: float | None = None,
     normals: np.ndarray | None = None,
     normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
     smooth: Smoothing | str | None = None,
@@ -167,8 +168,12 @@ def estimate(
     mesh : Mesh
     method : str
         Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
-    range : int or str
-        k of the range Rk (``2`` or ``"R2"``); must be one the estimator supports.
+    range : int, float or str, optional
+        k of the range Rk: ``2``, ``2.5`` or ``"R2"`` (:mod:`curv.ranges`); any real k at least the
+        estimator's smallest named range for the estimators with a support, the one named range
+        for ``meyer`` (R1) and ``ru`` (R2). Default R2 where the estimator has it, else its range.
+    radius : float, optional
+        Instead of ``range``: the same ball radius in mesh units at every vertex.
     normals : (n, 3) array_like, optional
         Vertex normals to use (normalised here); default Max-weighted normals of the mesh.
     normal_weighting : {"max", "area", "angle"}
@@ -178,7 +183,8 @@ def estimate(
     smooth_iterations, smooth_strength : int, float
         Explicit cotan-Laplacian steps and their step size.
     block_size : int, optional
-        Vertices per block of the range neighbourhoods (memory bound); default automatic.
+        Vertices per kernel call (the granularity of progress and cancel); default adaptive, about
+        every 0.05 s. Results do not depend on it.
 
     Returns
     -------
@@ -188,11 +194,12 @@ def estimate(
     Raises
     ------
     EstimatorError
-        Unknown method or range (the message lists the allowed ones).
+        Unknown method, or a range/radius the estimator does not take (the message names the
+        allowed forms).
     MeshError
         A mesh the estimator cannot handle (e.g. quads for a triangle-only estimator).
     """
-    gen = iter_estimate(mesh, method, range, normals=normals, normal_weighting=normal_weighting,
+    gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
                         smooth=smooth, smooth_iterations=smooth_iterations,
                         smooth_strength=smooth_strength, block_size=block_size)
     while True:
