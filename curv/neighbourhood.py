@@ -27,8 +27,8 @@ from .ranges import Range, ball_radii
 __all__ = ["ball_support", "new_scratch", "expansion_adjacency", "supports", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
-QUEUE_START = 256
-"""Initial queue length of a thread's scratch; it doubles whenever a support needs more."""
+QUEUE_START = 0
+"""Length of the queue a kernel starts with: :func:`ball_support` replaces it by a full-length one."""
 
 
 @jit
@@ -47,17 +47,27 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
         Vertex coordinates.
     stamp : (n,) int64
         The calling thread's visited marks: ``stamp[q] == p`` once q was seen from p. Never reset:
-        a new centre has a new mark.
+        a new centre has a new mark. Take the thread's row of the stamps once, outside the loop
+        over vertices: slicing ``stamps[t]`` anew for every vertex made a fit kernel 8x slower.
     queue : (q,) int64
-        The calling thread's queue; replaced by a longer one when full.
+        The calling thread's queue. One shorter than the mesh is replaced, before the search, by
+        one with a slot per vertex: a support can never overflow it, and its untouched pages cost
+        no memory.
 
     Returns
     -------
     count : int
         ``queue[0] == p`` and ``queue[1:count]`` is the support (centre excluded), in BFS order.
-    queue : (q',) int64
-        The queue, possibly reallocated: keep it for the next centre.
+    queue : (n,) int64
+        The queue: keep it for the next centre.
+
+    Notes
+    -----
+    Growing the queue inside the search loop instead (rebinding the array there) made numba
+    reload it on every access: ten times slower.
     """
+    if queue.size < stamp.size:
+        queue = np.empty(stamp.size, np.int64)
     px, py, pz = x[p], y[p], z[p]
     queue[0] = p
     stamp[p] = p
@@ -76,10 +86,6 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
             dy = y[q] - py
             dz = z[q] - pz
             if dx * dx + dy * dy + dz * dz <= radius2:
-                if count == queue.size:
-                    longer = np.empty(2 * queue.size, np.int64)
-                    longer[:count] = queue[:count]
-                    queue = longer
                 queue[count] = q
                 count += 1
     return count, queue

@@ -170,9 +170,10 @@ def _nc_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = np.empty(QUEUE_START, np.int64)
+        stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for p in range(start, stop):
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamps[t], queue)
+            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
 
 
@@ -181,9 +182,10 @@ def _qs_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = np.empty(QUEUE_START, np.int64)
+        stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for p in range(start, stop):
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamps[t], queue)
+            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
 
 
@@ -192,11 +194,12 @@ def _an_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = np.empty(QUEUE_START, np.int64)
+        stamp = stamps[t]
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)
         start, stop = slice_bounds(lo, hi, t, parts)
         for p in range(start, stop):
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamps[t], queue)
+            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
                    ata, atb, row, sol)
 

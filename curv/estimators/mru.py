@@ -60,9 +60,10 @@ def _mru_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = np.empty(QUEUE_START, np.int64)
+        stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for p in range(start, stop):
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamps[t], queue)
+            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
 
 
