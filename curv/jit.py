@@ -53,6 +53,16 @@ MAX_CHUNK = 1 << 20
 LAUNCH_LOCK = threading.Lock()
 """Held while a parallel kernel runs (see the module notes)."""
 
+
+
+def _new_lock_in_child() -> None:
+    # a fork taken while another thread held the lock would inherit it held, with no owner left
+    global LAUNCH_LOCK
+    LAUNCH_LOCK = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_new_lock_in_child)
+
 COMPILE_MESSAGE = "compiling curvature kernels (first run only)..."
 
 
