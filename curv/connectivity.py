@@ -8,7 +8,8 @@ without hashing or sorting global keys:
   list by the other endpoint w and numbers the distinct w > u: edges come out in lexicographic order;
 - :func:`vertex_incidence` lists, per vertex, its edges in increasing edge order, which is also
   increasing neighbour order (all edges ``(q, p)`` with ``q < p`` precede the edges ``(p, r)``);
-- :func:`nonmanifold_vertices` counts the fans of faces around each vertex from the same lists;
+- :func:`vertex_flags` finds border, non-manifold and inconsistently oriented vertices from the
+  same lists (counting the fans of faces around each vertex), without the edge table;
 - :func:`triangle_geometry` gives the vector area, area and degeneracy of every triangle.
 
 The :class:`curv.Mesh` properties wrap them; their meaning is documented there.
@@ -23,7 +24,7 @@ import numpy as np
 from .jit import jit, jit_parallel, launch, prange, threads
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
-           "nonmanifold_vertices", "triangle_geometry", "KERNELS"]
+           "vertex_flags", "triangle_geometry", "KERNELS"]
 
 SMALL_GROUP = 32
 """The halfedges around a vertex are sorted by insertion up to this many; more (a vertex with a
@@ -337,51 +338,75 @@ def _sort_pairs(key, value, k):
 
 
 @jit_parallel
-def _fans(indptr, corners, indices, corner_next, corner_prev, width, parts, nonmanifold):
+def _vertex_flags(indptr, corners, indices, corner_next, corner_prev, width, parts, nonmanifold, border,
+                  inconsistent):
     n = indptr.size - 1
     for t in prange(parts):
-        other, corner = np.empty(width, np.int64), np.empty(width, np.int64)
+        other, corner, outgoing = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
         parent = np.empty(width, np.int64)
         lo, hi = _slice(n, t, parts)
         for u in range(lo, hi):
-            # the halfedges at u (leaving or arriving at each corner), by other endpoint
+            # the halfedges at u (leaving or arriving at each of its corners), by other endpoint;
+            # corner[k] = 2 (position of the corner at u) + (1 if the halfedge leaves u)
             k = 0
             for i in range(indptr[u + 1] - indptr[u]):
                 c = corners[indptr[u] + i]
-                for w in (indices[corner_next[c]], indices[corner_prev[c]]):
-                    if w != u:
-                        other[k], corner[k] = w, i
-                        k += 1
+                w = indices[corner_next[c]]
+                if w != u:
+                    other[k], corner[k] = w, 2 * i + 1
+                    k += 1
+                w = indices[corner_prev[c]]
+                if w != u:
+                    other[k], corner[k] = w, 2 * i
+                    k += 1
                 parent[i] = i
             _sort_pairs(other, corner, k)
             fans = indptr[u + 1] - indptr[u]
-            on_nonmanifold_edge = False
+            on_border = on_nonmanifold_edge = on_inconsistent_edge = False
             start = 0
             for i in range(1, k + 1):
                 if i < k and other[i] == other[start]:
                     continue
                 # halfedges start .. i-1 are those of edge (u, other[start]): one per face
-                if i - start == 2:
-                    a, b = _root(parent, corner[start]), _root(parent, corner[start + 1])
+                faces = i - start
+                if faces == 2:
+                    # the two faces are one fan at u; opposite orientation if both run the same way
+                    a, b = _root(parent, corner[start] >> 1), _root(parent, corner[start + 1] >> 1)
                     if a != b:
                         parent[max(a, b)] = min(a, b)
                         fans -= 1
-                elif i - start > 2:
+                    if (corner[start] & 1) == (corner[start + 1] & 1):
+                        on_inconsistent_edge = True
+                elif faces == 1:
+                    on_border = True
+                else:
                     on_nonmanifold_edge = True
                 start = i
             nonmanifold[u] = fans > 1 or on_nonmanifold_edge
+            border[u] = on_border or on_nonmanifold_edge
+            inconsistent[u] = on_inconsistent_edge
 
 
-def nonmanifold_vertices(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
-                         corner_prev: np.ndarray) -> np.ndarray:
-    """(n,) bool: vertices on an edge with more than two faces, or whose faces form several fans.
+def vertex_flags(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+                 corner_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-vertex topology flags from the halfedges around each vertex (no edge table needed).
 
-    Two corners at u are in one fan when their faces share an edge at u that has exactly two
-    faces; everything is local to u's halfedges (:func:`_upper_halfedges`), so vertices run in parallel.
+    The halfedges at u, grouped by their other endpoint w, are exactly those of the edges (u, w),
+    one per face; everything below is local to u, so vertices run in parallel.
+
+    Returns
+    -------
+    nonmanifold : (n,) bool
+        On an edge with more than two faces, or the faces around u form several fans (two corners
+        at u are in one fan when their faces share an edge at u that has exactly two faces).
+    border : (n,) bool
+        On an edge with one face or more than two.
+    inconsistent : (n,) bool
+        On an edge with two faces that run it the same way (faces of opposite orientation).
     """
     n = indptr.size - 1
-    out = np.empty(n, np.bool_)
-    launch(_fans, indptr, corners, indices, corner_next, corner_prev, _ring_width(indptr), threads(), out)
+    out = np.empty(n, np.bool_), np.empty(n, np.bool_), np.empty(n, np.bool_)
+    launch(_vertex_flags, indptr, corners, indices, corner_next, corner_prev, _ring_width(indptr), threads(), *out)
     return out
 
 
@@ -413,5 +438,5 @@ def triangle_geometry(tri, vertices, vector_area, area, degenerate):
 
 
 KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
-           vertex_face_incidence, _fans, triangle_geometry)
+           vertex_face_incidence, _vertex_flags, triangle_geometry)
 """The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""

@@ -449,10 +449,7 @@ class Mesh:
     @cached_property
     def border_vertices(self) -> np.ndarray:
         """(n,) bool: vertices on a border edge or a non-manifold edge."""
-        out = np.zeros(self.n_vertices, bool)
-        bad = self.border_edges | self.nonmanifold_edges
-        out[self.edges[bad].reshape(-1)] = True
-        return out
+        return self._vertex_flags[1]
 
     @cached_property
     def isolated_vertices(self) -> np.ndarray:
@@ -468,9 +465,20 @@ class Mesh:
         group. Vertices on non-manifold edges are included too.
         """
         # two corners at v are linked when their faces share an edge at v with exactly two faces;
-        # the linked groups are the fans (curv.connectivity.nonmanifold_vertices)
+        # the linked groups are the fans (curv.connectivity.vertex_flags)
+        return self._vertex_flags[0]
+
+    @cached_property
+    def inconsistent_vertices(self) -> np.ndarray:
+        """(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of opposite orientation meet there)."""
+        return self._vertex_flags[2]
+
+    @cached_property
+    def _vertex_flags(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(nonmanifold, border, inconsistent)`` vertex flags in one pass over the corners, without
+        the edge table (:func:`curv.connectivity.vertex_flags`)."""
         indptr, corners = self.vertex_corners
-        return _kernels.nonmanifold_vertices(indptr, corners, self._indices, self.corner_next, self.corner_prev)
+        return _kernels.vertex_flags(indptr, corners, self._indices, self.corner_next, self.corner_prev)
 
     @cached_property
     def components(self) -> tuple[int, np.ndarray]:

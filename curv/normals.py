@@ -16,7 +16,7 @@ from .jit import jit, jit_parallel, launch, prange
 from .mesh import Mesh
 
 __all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "unusable_normal_vertices", "max_normal",
-           "KERNELS"]
+           "max_weight", "unit", "KERNELS"]
 
 
 class NormalWeighting(str, enum.Enum):
@@ -43,9 +43,7 @@ def unusable_normal_vertices(mesh: Mesh) -> np.ndarray:
     or an endpoint of an edge whose two faces disagree on orientation), the averaged normal mixes
     unrelated sheets.
     """
-    out = mesh.nonmanifold_vertices.copy()
-    out[mesh.edges[mesh.inconsistent_edges].reshape(-1)] = True
-    return out
+    return mesh.nonmanifold_vertices | mesh.inconsistent_vertices
 
 
 @jit
@@ -65,16 +63,25 @@ def max_normal(p, lo, hi, corners, indices, corner_next, corner_prev, x):
         b, q = indices[corner_next[c]], indices[corner_prev[c]]
         ax, ay, az = x[b, 0] - x[p, 0], x[b, 1] - x[p, 1], x[b, 2] - x[p, 2]
         bx, by, bz = x[q, 0] - x[p, 0], x[q, 1] - x[p, 1], x[q, 2] - x[p, 2]
-        denominator = (ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz)
-        if denominator == 0.0:
-            continue
-        inv = 1.0 / denominator
-        if not math.isfinite(inv):  # an edge of (almost) zero length
-            continue
-        sx += (ay * bz - az * by) * inv
-        sy += (az * bx - ax * bz) * inv
-        sz += (ax * by - ay * bx) * inv
+        wx, wy, wz = max_weight(ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx,
+                                ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
+        sx += wx
+        sy += wy
+        sz += wz
     return sx, sy, sz
+
+
+@jit
+def max_weight(cx, cy, cz, a2, b2):
+    """One corner's term of the Max normal: ``(a x b) / (|a|^2 |b|^2)`` from ``c = a x b``, ``|a|^2``,
+    ``|b|^2``; 0 where an edge has (almost) zero length."""
+    denominator = a2 * b2
+    if denominator == 0.0:
+        return 0.0, 0.0, 0.0
+    inv = 1.0 / denominator
+    if not math.isfinite(inv):
+        return 0.0, 0.0, 0.0
+    return cx * inv, cy * inv, cz * inv
 
 
 @jit

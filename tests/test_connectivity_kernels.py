@@ -131,6 +131,16 @@ def test_nonmanifold_vertices_are_several_fans_or_on_a_nonmanifold_edge(mesh):
     assert np.array_equal(mesh.nonmanifold_vertices, expected)
 
 
+@pytest.mark.parametrize("mesh", MESHES, ids=IDS)
+def test_border_and_inconsistent_vertices_are_the_ends_of_their_edges(mesh):
+    border = np.zeros(mesh.n_vertices, bool)
+    border[mesh.edges[mesh.edge_face_count != 2].ravel()] = True
+    assert np.array_equal(mesh.border_vertices, border)
+    inconsistent = np.zeros(mesh.n_vertices, bool)
+    inconsistent[mesh.edges[mesh.inconsistent_edges].ravel()] = True
+    assert np.array_equal(mesh.inconsistent_vertices, inconsistent)
+
+
 def test_bowtie_tip_is_the_one_nonmanifold_vertex():
     mesh = _bowtie()
     tip = int(np.argmax(icosphere(1).vertices[:, 0]))

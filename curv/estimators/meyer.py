@@ -25,9 +25,9 @@ import math
 import numpy as np
 
 from .. import connectivity
-from ..jit import iter_chunks, jit, jit_parallel, launch, prange
+from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
-from ..normals import KERNELS as NORMAL_KERNELS, max_normal, unit, unusable_normal_vertices
+from ..normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
 from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
 from ._triangle_corners import corner_angle, corner_triangle, ring_flag, ring_reason
 from .registry import EstimatorSpec, empty_principal, register
@@ -42,82 +42,93 @@ TINY2 = MIN_TANGENT_LENGTH**2
 
 
 @jit_parallel
-def _meyer(lo, hi, indptr, corners, indices, corner_next, corner_prev, corner_face, x, degenerate_faces,
-           border, nonmanifold, unusable, own_normals, normals, k1, k2, d1, d2, reason):
-    for p in prange(lo, hi):
-        c_lo, c_hi = indptr[p], indptr[p + 1]
-        if own_normals:
-            # Max normal from the same corners, NaN where the fan has no meaningful normal
-            sx, sy, sz = max_normal(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, x)
-            nx, ny, nz = unit(sx, sy, sz)
-            if unusable[p]:
-                nx, ny, nz = math.nan, math.nan, math.nan
-            normals[p, 0], normals[p, 1], normals[p, 2] = nx, ny, nz
-        else:
-            nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
-        ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
-        a_mixed = angle_sum = 0.0
-        kx = ky = kz = 0.0  # 2 A_mixed K(p): sum of (p - q_j)(cot a_j + cot b_j), as one term per corner
-        a00 = a01 = a11 = r0 = r1 = t0 = t1 = 0.0  # sums of the direction fit
-        touches_degenerate = False
-        for i in range(c_lo, c_hi):
-            c = corners[i]
-            bad = degenerate_faces[corner_face[c]]
-            touches_degenerate |= bad
-            (abx, aby, abz, acx, acy, acz, _, _, _, _, _, twice_area, cos_a, cot_b, cot_c,
-             area) = corner_triangle(x, p, indices[corner_next[c]], indices[corner_prev[c]], bad)
-            # (a - b) cot c + (a - c) cot b
-            kx += -(cot_c * abx + cot_b * acx)
-            ky += -(cot_c * aby + cot_b * acy)
-            kz += -(cot_c * abz + cot_b * acz)
-            a_mixed += area
-            angle_sum += corner_angle(twice_area, cos_a, bad)
-            # direction fit on the edge a -> b (in a closed ring every leaving edge appears once):
-            # tangent angle phi of the edge, normal curvature kn = 2 (p - q).N / |p - q|^2
-            u = abx * ux + aby * uy + abz * uz
-            v = abx * vx + aby * vy + abz * vz
-            w = abx * nx + aby * ny + abz * nz
-            l2 = u * u + v * v
-            if l2 > TINY2 * (l2 + w * w):
-                inv = 1.0 / l2
-                kn = -2.0 * w / (l2 + w * w)
+def _meyer(lo, hi, parts, width, indptr, corners, indices, corner_next, corner_prev, corner_face, x,
+           degenerate_faces, border, nonmanifold, unusable, own_normals, normals, k1, k2, d1, d2, reason):
+    for t in prange(parts):
+        # the leaving edges ab of the current vertex's corners, for the direction fit
+        edge_x, edge_y, edge_z = np.empty(width), np.empty(width), np.empty(width)
+        start, stop = lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
+        for p in range(start, stop):
+            c_lo, c_hi = indptr[p], indptr[p + 1]
+            a_mixed = angle_sum = 0.0
+            kx = ky = kz = 0.0  # 2 A_mixed K(p): sum of (p - q_j)(cot a_j + cot b_j), one term per corner
+            sx = sy = sz = 0.0  # the Max normal, unnormalised
+            touches_degenerate = False
+            for i in range(c_lo, c_hi):
+                c = corners[i]
+                bad = degenerate_faces[corner_face[c]]
+                touches_degenerate |= bad
+                (abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, ac2, twice_area, cos_a, cot_b, cot_c,
+                 area) = corner_triangle(x, p, indices[corner_next[c]], indices[corner_prev[c]], bad)
+                # (a - b) cot c + (a - c) cot b
+                kx += -(cot_c * abx + cot_b * acx)
+                ky += -(cot_c * aby + cot_b * acy)
+                kz += -(cot_c * abz + cot_b * acz)
+                a_mixed += area
+                angle_sum += corner_angle(twice_area, cos_a, bad)
+                wx, wy, wz = max_weight(nx, ny, nz, ab2, ac2)
+                sx += wx
+                sy += wy
+                sz += wz
+                edge_x[i - c_lo], edge_y[i - c_lo], edge_z[i - c_lo] = abx, aby, abz
+            if own_normals:
+                # the Max normal (as vertex_normals), NaN where the fan has no meaningful normal
+                nx, ny, nz = unit(sx, sy, sz)
+                if unusable[p]:
+                    nx, ny, nz = math.nan, math.nan, math.nan
+                normals[p, 0], normals[p, 1], normals[p, 2] = nx, ny, nz
             else:
-                inv = kn = 0.0
-            c2 = (u * u - v * v) * inv  # cos 2 phi
-            s2 = 2.0 * u * v * inv  # sin 2 phi
-            a00 += c2 * c2
-            a01 += c2 * s2
-            a11 += s2 * s2
-            r0 += kn * c2
-            r1 += kn * s2
-            t0 += c2
-            t1 += s2
+                nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
+            ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
+            # direction fit on the edges a -> b (in a closed ring every leaving edge appears once):
+            # tangent angle phi of the edge, normal curvature kn = 2 (p - q).N / |p - q|^2
+            a00 = a01 = a11 = r0 = r1 = t0 = t1 = 0.0
+            for i in range(c_hi - c_lo):
+                abx, aby, abz = edge_x[i], edge_y[i], edge_z[i]
+                u = abx * ux + aby * uy + abz * uz
+                v = abx * vx + aby * vy + abz * vz
+                w = abx * nx + aby * ny + abz * nz
+                l2 = u * u + v * v
+                if l2 > TINY2 * (l2 + w * w):
+                    inv = 1.0 / l2
+                    kn = -2.0 * w / (l2 + w * w)
+                else:
+                    inv = kn = 0.0
+                c2 = (u * u - v * v) * inv  # cos 2 phi
+                s2 = 2.0 * u * v * inv  # sin 2 phi
+                a00 += c2 * c2
+                a01 += c2 * s2
+                a11 += s2 * s2
+                r0 += kn * c2
+                r1 += kn * s2
+                t0 += c2
+                t1 += s2
 
-        empty = not a_mixed > 0
-        safe_area = 1.0 if empty else a_mixed
-        kx, ky, kz = kx / (2.0 * safe_area), ky / (2.0 * safe_area), kz / (2.0 * safe_area)
-        # H = sign(K . N) |K| / 2; K_G = (2 pi - sum theta) / A_mixed
-        h = 0.5 * _sign(kx * nx + ky * ny + kz * nz) * math.sqrt(kx * kx + ky * ky + kz * kz)
-        kg = (2.0 * math.pi - angle_sum) / safe_area
-        disc = h * h - kg
-        root = math.sqrt(disc) if disc > 0.0 else (disc if math.isnan(disc) else 0.0)
-        # trace-constrained fit x cos2phi + y sin2phi = kn - H: a 2x2 system in closed form; only
-        # the angle of (x, y) is needed, and det > 0 where the system is regular
-        b0 = r0 - h * t0
-        b1 = r1 - h * t1
-        det = a00 * a11 - a01 * a01
-        scale = max(a00, a11) if not (math.isnan(a00) or math.isnan(a11)) else math.nan
-        fit_singular = not det > FIT_RCOND * scale * scale
-        theta = 0.5 * math.atan2(a00 * b1 - a01 * b0, a11 * b0 - a01 * b1)
-        cs, sn = math.cos(theta), math.sin(theta)
-        k1[p] = h + root
-        k2[p] = h - root
-        d1[p, 0], d1[p, 1], d1[p, 2] = cs * ux + sn * vx, cs * uy + sn * vy, cs * uz + sn * vz
-        d2[p, 0], d2[p, 1], d2[p, 2] = -sn * ux + cs * vx, -sn * uy + cs * vy, -sn * uz + cs * vz
-        finite = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
-        reason[p] = ring_reason(empty or fit_singular,
-                                ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, border),
-                                touches_degenerate or not finite, nonmanifold[p])
+            empty = not a_mixed > 0
+            safe_area = 1.0 if empty else a_mixed
+            kx, ky, kz = kx / (2.0 * safe_area), ky / (2.0 * safe_area), kz / (2.0 * safe_area)
+            # H = sign(K . N) |K| / 2; K_G = (2 pi - sum theta) / A_mixed
+            h = 0.5 * _sign(kx * nx + ky * ny + kz * nz) * math.sqrt(kx * kx + ky * ky + kz * kz)
+            kg = (2.0 * math.pi - angle_sum) / safe_area
+            disc = h * h - kg
+            root = math.sqrt(disc) if disc > 0.0 else (disc if math.isnan(disc) else 0.0)
+            # trace-constrained fit x cos2phi + y sin2phi = kn - H: a 2x2 system in closed form; only
+            # the angle of (x, y) is needed, and det > 0 where the system is regular
+            b0 = r0 - h * t0
+            b1 = r1 - h * t1
+            det = a00 * a11 - a01 * a01
+            scale = max(a00, a11) if not (math.isnan(a00) or math.isnan(a11)) else math.nan
+            fit_singular = not det > FIT_RCOND * scale * scale
+            theta = 0.5 * math.atan2(a00 * b1 - a01 * b0, a11 * b0 - a01 * b1)
+            cs, sn = math.cos(theta), math.sin(theta)
+            k1[p] = h + root
+            k2[p] = h - root
+            d1[p, 0], d1[p, 1], d1[p, 2] = cs * ux + sn * vx, cs * uy + sn * vy, cs * uz + sn * vz
+            d2[p, 0], d2[p, 1], d2[p, 2] = -sn * ux + cs * vx, -sn * uy + cs * vy, -sn * uz + cs * vz
+            finite = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
+            reason[p] = ring_reason(empty or fit_singular,
+                                    ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, border),
+                                    touches_degenerate or not finite, nonmanifold[p])
 
 
 def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, chunk: int | None = None):
@@ -163,12 +174,13 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
     else:
         normals = np.ascontiguousarray(normals, dtype=np.float64)
         unusable = np.zeros(0, bool)
-    args = (indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
+    width = int(np.diff(indptr).max(initial=0)) + 1
+    args = (width, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
             mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices, unusable,
             own_normals, normals, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
-        launch(_meyer, lo, hi, *args)
+        launch(_meyer, lo, hi, max(1, min(threads(), hi - lo)), *args)
 
     yield from iter_chunks(n, run, chunk=chunk)
     if own_normals:
