@@ -28,7 +28,7 @@ __all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_
 
 SMALL_GROUP = 32
 """The halfedges around a vertex are sorted by insertion up to this many; more (a vertex with a
-huge fan) by merge sorts, so that no vertex costs quadratic time."""
+huge fan) by a heap sort, so that no vertex costs quadratic time."""
 
 
 @jit
@@ -59,6 +59,48 @@ def group_corners(vertex_of, n):
         items[fill[v]] = c
         fill[v] += 1
     return indptr, items
+
+
+@jit
+def _before(key, value, i, j):
+    return key[i] < key[j] or (key[i] == key[j] and value[i] < value[j])
+
+
+@jit
+def _sift_down(key, value, root, end):
+    while 2 * root + 1 < end:
+        child = 2 * root + 1
+        if child + 1 < end and _before(key, value, child, child + 1):
+            child += 1
+        if not _before(key, value, root, child):
+            return
+        key[root], key[child] = key[child], key[root]
+        value[root], value[child] = value[child], value[root]
+        root = child
+
+
+@jit
+def _sort_pairs(key, value, k):
+    """Sort the pairs ``(key[i], value[i])``, ``i < k``, in increasing order (key first).
+
+    By insertion when short; a heap sort beyond :data:`SMALL_GROUP`, so that a vertex with a
+    huge fan does not cost quadratic time.
+    """
+    if k <= SMALL_GROUP:
+        for i in range(1, k):
+            kk, v = key[i], value[i]
+            j = i - 1
+            while j >= 0 and (key[j] > kk or (key[j] == kk and value[j] > v)):
+                key[j + 1], value[j + 1] = key[j], value[j]
+                j -= 1
+            key[j + 1], value[j + 1] = kk, v
+        return
+    for root in range(k // 2 - 1, -1, -1):
+        _sift_down(key, value, root, k)
+    for end in range(k - 1, 0, -1):
+        key[0], key[end] = key[end], key[0]
+        value[0], value[end] = value[end], value[0]
+        _sift_down(key, value, 0, end)
 
 
 @jit
@@ -95,20 +137,7 @@ def _upper_halfedges(u, corners_u, indices, corner_next, corner_prev, key, halfe
         if w > u:  # arriving at u: w -> u
             key[k], halfedge[k] = 2 * w + 1, h
             k += 1
-    if k <= SMALL_GROUP:
-        for i in range(1, k):
-            kk, h = key[i], halfedge[i]
-            j = i - 1
-            while j >= 0 and (key[j] > kk or (key[j] == kk and halfedge[j] > h)):
-                key[j + 1], halfedge[j + 1] = key[j], halfedge[j]
-                j -= 1
-            key[j + 1], halfedge[j + 1] = kk, h
-    else:
-        # a vertex with a huge fan: merge sorts, by id and then (stably) by key
-        by_id = np.argsort(halfedge[:k], kind="mergesort")
-        perm = by_id[np.argsort(key[:k][by_id], kind="mergesort")]
-        key[:k] = key[:k][perm]
-        halfedge[:k] = halfedge[:k][perm]
+    _sort_pairs(key, halfedge, k)
     return k
 
 
@@ -318,23 +347,6 @@ def _root(parent, i):
         parent[i] = parent[parent[i]]
         i = parent[i]
     return i
-
-
-@jit
-def _sort_pairs(key, value, k):
-    """Sort ``key[:k]`` with ``value[:k]`` alongside (by insertion when short, else a merge sort)."""
-    if k <= SMALL_GROUP:
-        for i in range(1, k):
-            kk, v = key[i], value[i]
-            j = i - 1
-            while j >= 0 and key[j] > kk:
-                key[j + 1], value[j + 1] = key[j], value[j]
-                j -= 1
-            key[j + 1], value[j + 1] = kk, v
-    else:
-        perm = np.argsort(key[:k], kind="mergesort")
-        key[:k] = key[:k][perm]
-        value[:k] = value[:k][perm]
 
 
 @jit_parallel
