@@ -73,59 +73,76 @@ def segment_in_ball(sx, sy, sz, dx, dy, dz, radius2):
 
 
 @jit
-def _fan_piece(ax, ay, bx, by, rho2):
-    """The part of the fan from the disc centre over edge a -> b that lies in the disc.
+def _chord(ax, ay, bx, by, rho2):
+    """Parameters ``t1 <= t2`` in [0, 1] of the part of edge a -> b inside the disc of squared radius ``rho2``.
 
-    Returns ``(straight, angle)``: the signed area of the triangle (0, p1, p2) over the chord
-    p1 p2 of the edge inside the disc, and the signed angles of the circular sectors before the
-    chord (where the edge starts outside) and after it (where it ends outside). A missed edge is
-    one sector from a to b.
+    ``(0, 1)`` for an edge inside the disc, ``(0, 0)`` where its line misses the disc.
     """
     dx = bx - ax
     dy = by - ay
+    if ax * ax + ay * ay <= rho2 and bx * bx + by * by <= rho2:
+        return 0.0, 1.0
     a = dx * dx + dy * dy
     b = dx * ax + dy * ay
     c = ax * ax + ay * ay - rho2
     disc = b * b - a * c
-    t1 = 0.0
-    t2 = 0.0
-    if disc > 0.0 and a > 0.0:
-        sq = math.sqrt(disc)
-        t1 = min(max((-b - sq) / a, 0.0), 1.0)
-        t2 = min(max((-b + sq) / a, 0.0), 1.0)
-    p1x = ax + t1 * dx
-    p1y = ay + t1 * dy
-    p2x = ax + t2 * dx
-    p2y = ay + t2 * dy
-    straight = 0.5 * (p1x * p2y - p1y * p2x)
-    angle = 0.0
-    if t1 > 0.0:
-        angle += math.atan2(ax * p1y - ay * p1x, ax * p1x + ay * p1y)
-    if t2 < 1.0:
-        angle += math.atan2(p2x * by - p2y * bx, p2x * bx + p2y * by)
-    return straight, angle
+    if not (disc > 0.0 and a > 0.0):
+        return 0.0, 0.0
+    sq = math.sqrt(disc)
+    return min(max((-b - sq) / a, 0.0), 1.0), min(max((-b + sq) / a, 0.0), 1.0)
 
 
 @jit
-def _edge_piece(ax, ay, bx, by, rho2):
-    """:func:`_fan_piece`, with a shortcut for an edge inside the disc (a plain triangle)."""
-    if ax * ax + ay * ay <= rho2 and bx * bx + by * by <= rho2:
-        return 0.5 * (ax * by - ay * bx), 0.0
-    return _fan_piece(ax, ay, bx, by, rho2)
+def _angle(ax, ay, bx, by):
+    """Signed angle from direction a to direction b."""
+    return math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+
+
+@jit
+def _corner_sectors(ex, ey, t_exit, cx, cy, nx, ny, t_entry):
+    """Signed angle of the circular sectors at corner c of the fan from the disc centre.
+
+    The edge into c leaves the disc at e (``t_exit < 1``: a sector from e to c), the edge out of
+    c enters it at n (``t_entry > 0``: a sector from c to n). Where both are true crossings of the
+    circle (0 < t < 1) the two sectors are one, from e to n: each part is less than pi/2 (from a
+    point of the circle outwards along a line), so their sum is one ``atan2``.
+    """
+    out_of = t_exit < 1.0
+    into = t_entry > 0.0
+    if out_of and into and t_exit > 0.0 and t_entry < 1.0:
+        return _angle(ex, ey, nx, ny)
+    angle = 0.0
+    if out_of:
+        angle += _angle(ex, ey, cx, cy)
+    if into:
+        angle += _angle(cx, cy, nx, ny)
+    return angle
 
 
 @jit
 def disc_triangle_area(p0x, p0y, p1x, p1y, p2x, p2y, rho2):
     """Area of a counter-clockwise 2-D triangle inside the disc of squared radius ``rho2`` at 0.
 
-    Summed over the three edges as pieces of the fan from the disc centre (:func:`_fan_piece`):
-    straight triangles where an edge is inside the disc, sectors of radius ``sqrt(rho2)`` where it
-    is outside.
+    Summed as the fan from the disc centre over the boundary: a straight triangle over the part
+    of each edge inside the disc (its chord), circular sectors of radius ``sqrt(rho2)`` where the
+    boundary is outside (before and after each chord; a missed edge is one sector end to end).
     """
-    s0, a0 = _edge_piece(p0x, p0y, p1x, p1y, rho2)
-    s1, a1 = _edge_piece(p1x, p1y, p2x, p2y, rho2)
-    s2, a2 = _edge_piece(p2x, p2y, p0x, p0y, rho2)
-    return s0 + s1 + s2 + 0.5 * rho2 * (a0 + a1 + a2)
+    # chord of edge i (corner i -> corner i + 1): from a_i = corner + s_i d to b_i = corner + t_i d
+    s0, t0 = _chord(p0x, p0y, p1x, p1y, rho2)
+    s1, t1 = _chord(p1x, p1y, p2x, p2y, rho2)
+    s2, t2 = _chord(p2x, p2y, p0x, p0y, rho2)
+    a0x, a0y = p0x + s0 * (p1x - p0x), p0y + s0 * (p1y - p0y)
+    b0x, b0y = p0x + t0 * (p1x - p0x), p0y + t0 * (p1y - p0y)
+    a1x, a1y = p1x + s1 * (p2x - p1x), p1y + s1 * (p2y - p1y)
+    b1x, b1y = p1x + t1 * (p2x - p1x), p1y + t1 * (p2y - p1y)
+    a2x, a2y = p2x + s2 * (p0x - p2x), p2y + s2 * (p0y - p2y)
+    b2x, b2y = p2x + t2 * (p0x - p2x), p2y + t2 * (p0y - p2y)
+    straight = 0.5 * ((a0x * b0y - a0y * b0x) + (a1x * b1y - a1y * b1x) + (a2x * b2y - a2y * b2x))
+    # sectors around each corner: after the chord of the edge into it, before that of the edge out
+    angle = (_corner_sectors(b2x, b2y, t2, p0x, p0y, a0x, a0y, s0)
+             + _corner_sectors(b0x, b0y, t0, p1x, p1y, a1x, a1y, s1)
+             + _corner_sectors(b1x, b1y, t1, p2x, p2y, a2x, a2y, s2))
+    return straight + 0.5 * rho2 * angle
 
 
 @jit
