@@ -18,7 +18,7 @@ import numpy as np
 from ..jit import jit
 from ..validity import Reason
 
-__all__ = ["corner_triangle", "corner_angle", "ring_reason", "ring_flag"]
+__all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag"]
 
 OK = np.uint8(Reason.OK)
 BORDER = np.uint8(Reason.BORDER)
@@ -85,11 +85,47 @@ def corner_triangle(x, a, b, c, degenerate):
 
 
 @jit
-def corner_angle(twice_area, cos_a, degenerate):
-    """The angle at the corner in radians, ``atan2(|ab x ac|, ab . ac)`` (0 on a degenerate face)."""
+def turn_by_corner(re, im, turns, twice_area, cos_a, degenerate):
+    """Add the corner angle ``atan2(|ab x ac|, ab . ac)`` to an angle sum kept as a complex number.
+
+    The sum of the angles of a vertex's corners is the argument of the product of the complex
+    numbers ``ab . ac + i |ab x ac|`` (each of argument in [0, pi]), plus 2 pi for every time the
+    product passed the positive real axis: one multiplication per corner instead of an ``atan2``.
+    :func:`angle_sum` reads the sum off. A degenerate corner adds nothing (angle 0).
+
+    Parameters
+    ----------
+    re, im : float
+        The product so far (start with 1, 0).
+    turns : int
+        Completed turns so far (start with 0).
+
+    Returns
+    -------
+    re, im, turns
+    """
     if degenerate:
-        return 0.0
-    return math.atan2(twice_area, cos_a)
+        return re, im, turns
+    below = im < 0.0 or (im == 0.0 and re < 0.0)  # argument in [pi, 2 pi)
+    re, im = re * cos_a - im * twice_area, re * twice_area + im * cos_a
+    if below and im >= 0.0:  # an angle below pi took the argument past 2 pi
+        turns += 1
+    # keep the magnitude (a product of edge lengths squared) in range; powers of two scale exactly
+    size = max(abs(re), abs(im))
+    if size > 2.0**500:
+        re, im = re * 2.0**-500, im * 2.0**-500
+    elif 0.0 < size < 2.0**-500:
+        re, im = re * 2.0**500, im * 2.0**500
+    return re, im, turns
+
+
+@jit
+def angle_sum(re, im, turns):
+    """The angle sum accumulated by :func:`turn_by_corner`: ``arg(re + i im)`` in [0, 2 pi) plus the turns."""
+    angle = math.atan2(im, re)
+    if angle < 0.0:
+        angle += 2.0 * math.pi
+    return angle + 2.0 * math.pi * turns
 
 
 @jit

@@ -29,7 +29,7 @@ from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
 from ..normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
 from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
-from ._triangle_corners import corner_angle, corner_triangle, ring_flag, ring_reason
+from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, turn_by_corner
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_meyer"]
@@ -50,7 +50,8 @@ def _meyer(lo, hi, parts, width, indptr, corners, indices, corner_next, corner_p
         start, stop = lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
         for p in range(start, stop):
             c_lo, c_hi = indptr[p], indptr[p + 1]
-            a_mixed = angle_sum = 0.0
+            a_mixed = 0.0
+            turn_re, turn_im, turns = 1.0, 0.0, 0  # sum of the corner angles theta (turn_by_corner)
             kx = ky = kz = 0.0  # 2 A_mixed K(p): sum of (p - q_j)(cot a_j + cot b_j), one term per corner
             sx = sy = sz = 0.0  # the Max normal, unnormalised
             touches_degenerate = False
@@ -65,7 +66,7 @@ def _meyer(lo, hi, parts, width, indptr, corners, indices, corner_next, corner_p
                 ky += -(cot_c * aby + cot_b * acy)
                 kz += -(cot_c * abz + cot_b * acz)
                 a_mixed += area
-                angle_sum += corner_angle(twice_area, cos_a, bad)
+                turn_re, turn_im, turns = turn_by_corner(turn_re, turn_im, turns, twice_area, cos_a, bad)
                 wx, wy, wz = max_weight(nx, ny, nz, ab2, ac2)
                 sx += wx
                 sy += wy
@@ -109,7 +110,7 @@ def _meyer(lo, hi, parts, width, indptr, corners, indices, corner_next, corner_p
             kx, ky, kz = kx / (2.0 * safe_area), ky / (2.0 * safe_area), kz / (2.0 * safe_area)
             # H = sign(K . N) |K| / 2; K_G = (2 pi - sum theta) / A_mixed
             h = 0.5 * _sign(kx * nx + ky * ny + kz * nz) * math.sqrt(kx * kx + ky * ky + kz * kz)
-            kg = (2.0 * math.pi - angle_sum) / safe_area
+            kg = (2.0 * math.pi - angle_sum(turn_re, turn_im, turns)) / safe_area
             disc = h * h - kg
             root = math.sqrt(disc) if disc > 0.0 else (disc if math.isnan(disc) else 0.0)
             # trace-constrained fit x cos2phi + y sin2phi = kn - H: a 2x2 system in closed form; only
