@@ -91,12 +91,7 @@ def iter_estimate(
             used_normals[meaningless] = np.nan
     radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
-    import inspect  # TRANSITION: old-style estimators until every one is a kernel
-
-    if list(inspect.signature(spec.function).parameters)[2] == "k":
-        raw = yield from spec.function(work_mesh, used_normals, int(rng.k), block_size=block_size)
-    else:
-        raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size)
+    raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size)
     if fused:
         used_normals = raw.normals
 

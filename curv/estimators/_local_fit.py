@@ -19,7 +19,7 @@ import numpy as np
 
 from ..jit import iter_chunks, jit, launch, threads
 from ..mesh import Mesh
-from ..neighbourhood import expansion_adjacency, new_scratch
+from ..neighbourhood import expansion_adjacency, new_queues, new_scratch
 from ..result import Principal
 from ..validity import Reason
 
@@ -232,8 +232,9 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     radii : (n,) float64
         Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
     kernel : numba dispatcher
-        ``kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2, d1, d2, reason)``
-        estimates the vertices ``lo .. hi-1``, splitting them into ``stamps.shape[0]`` slices.
+        ``kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2,
+        reason)`` estimates the vertices ``lo .. hi-1``, splitting them into ``stamps.shape[0]``
+        slices, each with its own row of the stamps and queues.
     chunk : int, optional
         Vertices per call (default adaptive).
 
@@ -252,12 +253,13 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
     radius = np.ascontiguousarray(radii, dtype=np.float64)
     stamps = new_scratch(n, threads())
+    queues = new_queues(n, stamps.shape[0])
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
 
     def run(lo: int, hi: int) -> None:
-        launch(kernel, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2, d1, d2, reason)
+        launch(kernel, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason)
 
     yield from iter_chunks(n, run, chunk=chunk)
     return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason)

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
-from ..neighbourhood import QUEUE_START, ball_support
+from ..neighbourhood import ball_support
 from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, run_fit, slice_bounds,
                          solve_scaled, solve_sym3, tangent_frame)
 from .registry import EstimatorSpec, register
@@ -166,10 +166,10 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, ata,
 
 
 @jit_parallel
-def _nc_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2, d1, d2, reason):
+def _nc_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
-        queue = np.empty(QUEUE_START, np.int64)
+        queue = queues[t]
         stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for p in range(start, stop):
@@ -178,10 +178,10 @@ def _nc_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2
 
 
 @jit_parallel
-def _qs_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2, d1, d2, reason):
+def _qs_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
-        queue = np.empty(QUEUE_START, np.int64)
+        queue = queues[t]
         stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for p in range(start, stop):
@@ -190,10 +190,10 @@ def _qs_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2
 
 
 @jit_parallel
-def _an_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2, d1, d2, reason):
+def _an_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
-        queue = np.empty(QUEUE_START, np.int64)
+        queue = queues[t]
         stamp = stamps[t]
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)

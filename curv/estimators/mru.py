@@ -15,7 +15,7 @@ import numpy as np
 
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
-from ..neighbourhood import QUEUE_START, ball_support
+from ..neighbourhood import ball_support
 from ._local_fit import MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, run_fit, slice_bounds, solve_sym3, tangent_frame
 from .registry import EstimatorSpec, register
 
@@ -56,10 +56,10 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
 
 
 @jit_parallel
-def _mru_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, k1, k2, d1, d2, reason):
+def _mru_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
-        queue = np.empty(QUEUE_START, np.int64)
+        queue = queues[t]
         stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for p in range(start, stop):
