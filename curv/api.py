@@ -31,6 +31,15 @@ class Smoothing(str, enum.Enum):
     """Estimate, then cotan-smooth k1 and k2 over valid neighbours (R2SV)."""
 
 
+def _asks_for_fit(normals) -> bool:
+    """``normals="fit"``; any other string is an error naming the choices."""
+    if not isinstance(normals, str):
+        return False
+    if normals != "fit":
+        raise EstimatorError(f"normals must be an (n, 3) array or 'fit', got {normals!r}")
+    return True
+
+
 def _check_normals(normals, n: int) -> np.ndarray:
     arr = np.asarray(normals, dtype=np.float64)
     if arr.shape != (n, 3):
@@ -49,6 +58,7 @@ def iter_estimate(
     smooth: Smoothing | str | None = None,
     smooth_iterations: int = 1,
     smooth_strength: float = 0.5,
+    fit_range=2,
     block_size: int | None = None,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
@@ -72,7 +82,7 @@ def iter_estimate(
     work_mesh = mesh
     if smooth is Smoothing.MESH:
         work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
-        if normals is not None:
+        if normals is not None and not _asks_for_fit(normals):
             raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
     # Where the faces around a vertex are not one consistently oriented fan, its normal averages
     # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
@@ -84,6 +94,10 @@ def iter_estimate(
     else:
         if normals is None:
             used_normals = vertex_normals(work_mesh, weighting=normal_weighting)
+        elif _asks_for_fit(normals):
+            from .fitted_normals import fitted_normals
+
+            used_normals = fitted_normals(work_mesh, range=fit_range)
         else:
             used_normals = _check_normals(normals, mesh.n_vertices)
         if meaningless.any():
@@ -130,9 +144,21 @@ def iter_estimate(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
         method=spec.name, range=rng.value,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
+              "normals": _normals_label(normals, normal_weighting, fit_range),
               "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0},
     )
+
+
+def _normals_label(normals, weighting, fit_range) -> str:
+    """How the normals were made, for the result's info: ``max``, ``fit R2`` or ``given``."""
+    if normals is None:
+        return NormalWeighting(weighting).value
+    if isinstance(normals, str):
+        from .ranges import range_label
+
+        return f"fit {range_label(parse_range(fit_range))}"
+    return "given"
 
 
 def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -154,6 +180,7 @@ def estimate(
     smooth: Smoothing | str | None = None,
     smooth_iterations: int = 1,
     smooth_strength: float = 0.5,
+    fit_range=2,
     block_size: int | None = None,
 ) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
@@ -169,14 +196,18 @@ def estimate(
         for ``meyer`` (R1) and ``ru`` (R2). Default R2 where the estimator has it, else its range.
     radius : float, optional
         Instead of ``range``: the same ball radius in mesh units at every vertex.
-    normals : (n, 3) array_like, optional
-        Vertex normals to use (normalised here); default Max-weighted normals of the mesh.
+    normals : (n, 3) array_like or "fit", optional
+        Vertex normals to use (normalised here); ``"fit"``: each normal from a local jet fit at
+        range ``fit_range`` (:func:`curv.fitted_normals.fitted_normals`); default Max-weighted
+        normals of the mesh (the paper's protocol).
     normal_weighting : {"max", "area", "angle"}
         Weights of the default normals.
     smooth : {None, "mesh", "values"}
         Smooth the mesh before (R2SM) or the curvature values after (R2SV) the estimate.
     smooth_iterations, smooth_strength : int, float
         Explicit cotan-Laplacian steps and their step size.
+    fit_range : int, float or str
+        Range of the normal fit when ``normals="fit"``.
     block_size : int, optional
         Vertices per kernel call (the granularity of progress and cancel); default adaptive, about
         every 0.05 s. Results do not depend on it.
@@ -196,7 +227,7 @@ def estimate(
     """
     gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
                         smooth=smooth, smooth_iterations=smooth_iterations,
-                        smooth_strength=smooth_strength, block_size=block_size)
+                        smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size)
     while True:
         try:
             next(gen)

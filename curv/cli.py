@@ -120,7 +120,8 @@ def _cmd_estimate(args) -> int:
     if counts is None:
         _check_memory(args, mesh.n_vertices, mesh.n_faces, spec.name, rng)
     progress = Progress(f"{spec.name} {rng.label}", enabled=None if not args.quiet else False)
-    gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, smooth=args.smooth)
+    normals = {"normals": "fit"} if args.normals == "fit" else {"normal_weighting": args.normals}
+    gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, smooth=args.smooth, **normals)
     t1 = time.perf_counter()
     try:
         while True:
@@ -197,6 +198,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="what the PLY colours show; default mean")
     p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
     p_est.add_argument("--clim", nargs=2, type=float, metavar=("LO", "HI"), help="colour limits")
+    p_est.add_argument("--normals", choices=["max", "area", "angle", "fit"], default="max",
+                       help="vertex normals: Max, area or angle weighted face normals, or a local jet fit "
+                            "(R2); default max (the paper's protocol)")
     p_est.add_argument("--smooth", choices=["mesh", "values"], help="smooth the mesh before or the values after")
     p_est.add_argument("--merge-vertices", action="store_true", help="merge vertices at identical positions")
     p_est.add_argument("--remove-degenerate", action="store_true", help="drop zero-area / repeated-index faces")

@@ -111,3 +111,15 @@ def test_value_smoothing_averages_neighbours_only_over_valid_vertices():
 def test_not_a_mesh_is_rejected():
     with pytest.raises(curv.MeshError, match="expected a curv.Mesh"):
         curv.estimate(np.zeros((3, 3)), "nc", 1)
+
+
+def test_fitted_normals_option(sphere):
+    fit = curv.estimate(sphere, "mru", 2, normals="fit")
+    assert fit.info["normals"] == "fit R2"
+    assert curv.estimate(sphere, "mru", 2).info["normals"] == "max"
+    # the jet normals of a sphere are radial
+    radial = sphere.vertices / np.linalg.norm(sphere.vertices, axis=1, keepdims=True)
+    np.testing.assert_allclose(np.abs(np.einsum("ij,ij->i", fit.normals, radial)), 1.0, atol=1e-6)
+    np.testing.assert_allclose(fit.k1[fit.valid], 0.5, rtol=0.02)
+    with pytest.raises(curv.EstimatorError, match="'fit'"):
+        curv.estimate(sphere, "mru", 2, normals="jet")
