@@ -53,6 +53,9 @@ class EstimatorSpec:
     has_support : bool
         Collects a range support (any real range >= its smallest named one, or a radius). False for
         the fixed 1-ring formulas (``meyer``, ``ru``), which take only their one named range.
+    in_paper : bool
+        One of the paper's seven estimators (its 20 variants are the study's core; the others run
+        as extra rows beside them).
     kernels : tuple
         The numba dispatchers the estimator calls, so that a caller can announce a first-run
         compilation (:func:`curv.jit.compile_pending`).
@@ -73,6 +76,7 @@ class EstimatorSpec:
     summary: str = ""
     computes_normals: bool = False
     has_support: bool = True
+    in_paper: bool = True
     kernels: tuple = field(default=(), repr=False, compare=False)
 
     def variants(self) -> list[tuple[str, int]]:
