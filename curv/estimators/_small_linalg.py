@@ -15,21 +15,24 @@ from ..jit import jit
 __all__ = ["sym3_eigen", "sym2_eigen", "solve_spd_scaled"]
 
 JACOBI_SWEEPS = 12
-"""Cyclic Jacobi sweeps of :func:`sym3_eigen`; a 3x3 matrix converges in 4-6."""
+"""Most cyclic Jacobi sweeps of :func:`sym3_eigen`; a 3x3 matrix converges in 3-5."""
+
+INVERSE_STEPS = 3
+"""Inverse-iteration steps of the condition estimate of :func:`solve_spd_scaled`."""
 
 
 @jit
-def sym3_eigen(a, vals, vecs):
+def sym3_eigen(a, vecs):
     """Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations.
 
     Parameters
     ----------
     a : (3, 3) float64
         The matrix; overwritten (it ends up nearly diagonal).
-    vals : (3,) float64
-        Output: eigenvalues in ascending order.
-    vecs : (3, 3) float64
-        Output: ``vecs[:, i]`` is the unit eigenvector of ``vals[i]``.
+    vecs : (4, 3) float64
+        Output: ``vecs[3, i]`` are the eigenvalues in ascending order and ``vecs[:3, i]`` the unit
+        eigenvector of ``vecs[3, i]``. (One array, no row views: views made per vertex inside a
+        parallel loop cost an atomic reference count each.)
     """
     for i in range(3):
         for j in range(3):
@@ -37,7 +40,7 @@ def sym3_eigen(a, vals, vecs):
     for _ in range(JACOBI_SWEEPS):
         off = a[0, 1] * a[0, 1] + a[0, 2] * a[0, 2] + a[1, 2] * a[1, 2]
         diag = a[0, 0] * a[0, 0] + a[1, 1] * a[1, 1] + a[2, 2] * a[2, 2]
-        if off <= 1e-30 * diag or off == 0.0:
+        if off <= 1e-28 * diag:
             break
         for p in range(2):
             for q in range(p + 1, 3):
@@ -67,13 +70,12 @@ def sym3_eigen(a, vals, vecs):
                     vecs[k, p] = c * vkp - s * vkq
                     vecs[k, q] = s * vkp + c * vkq
     for i in range(3):
-        vals[i] = a[i, i]
+        vecs[3, i] = a[i, i]
     # insertion sort of three eigenpairs, ascending
     for i in range(1, 3):
         j = i
-        while j > 0 and vals[j - 1] > vals[j]:
-            vals[j - 1], vals[j] = vals[j], vals[j - 1]
-            for k in range(3):
+        while j > 0 and vecs[3, j - 1] > vecs[3, j]:
+            for k in range(4):
                 vecs[k, j - 1], vecs[k, j] = vecs[k, j], vecs[k, j - 1]
             j -= 1
 
@@ -97,28 +99,22 @@ def sym2_eigen(e, f, g):
 
 
 @jit
-def solve_spd_scaled(m, rhs, size, x, work, scale):
-    """Solve the symmetric positive (semi)definite system ``m x = rhs`` with Jacobi scaling.
+def solve_spd_scaled(m, vec, size):
+    """Solve the symmetric positive (semi)definite system ``m x = b`` with Jacobi scaling.
 
-    The system is scaled to unit diagonal, ``D m D y = D rhs`` with ``D = diag(m)^(-1/2)``, factored
+    The system is scaled to unit diagonal, ``D m D y = D b`` with ``D = diag(m)^(-1/2)``, factored
     by Cholesky, and its reciprocal condition number estimated: the smallest eigenvalue by a few
     steps of inverse iteration with the factor, the largest bounded by the largest absolute row sum.
 
     Parameters
     ----------
     m : (K, K) float64
-        The matrix in its upper triangle (``m[i, j]``, ``i <= j``); the lower triangle is
-        overwritten by the Cholesky factor of the scaled matrix.
-    rhs : (K,) float64
-        Right-hand side (not modified).
+        The matrix in its upper triangle (``m[i, j]``, ``i <= j``); the lower triangle and the
+        diagonal are overwritten by the Cholesky factor of the scaled matrix.
+    vec : (5, K) float64
+        Row 0: the right-hand side b (kept); row 1: output, the solution x; rows 2-4: scratch.
     size : int
         The system's order (``size <= K``); only the leading block is used.
-    x : (K,) float64
-        Output: the solution in ``x[:size]``.
-    work : (2, K) float64
-        Scratch.
-    scale : (K,) float64
-        Scratch (the Jacobi scaling).
 
     Returns
     -------
@@ -129,14 +125,14 @@ def solve_spd_scaled(m, rhs, size, x, work, scale):
     for i in range(size):
         if not m[i, i] > 0.0:
             return 0.0
-        scale[i] = 1.0 / math.sqrt(m[i, i])
-    # lower triangle L of the scaled matrix; row sums bound its largest eigenvalue
+        vec[2, i] = 1.0 / math.sqrt(m[i, i])
+    # row sums of the scaled matrix bound its largest eigenvalue
     lam_max = 0.0
     for i in range(size):
         row = 0.0
         for j in range(size):
             mij = m[i, j] if i <= j else m[j, i]
-            row += abs(mij) * scale[i] * scale[j]
+            row += abs(mij) * vec[2, i] * vec[2, j]
         lam_max = max(lam_max, row)
     for j in range(size):
         s = 1.0  # the scaled diagonal
@@ -145,33 +141,31 @@ def solve_spd_scaled(m, rhs, size, x, work, scale):
         if not s > 1e-300:
             return 0.0
         ljj = math.sqrt(s)
-        m[j, j] = ljj  # the diagonal now holds L (the scaled diagonal is 1 by construction)
+        m[j, j] = ljj
         for i in range(j + 1, size):
-            t = m[j, i] * scale[i] * scale[j]
+            t = m[j, i] * vec[2, i] * vec[2, j]
             for k in range(j):
                 t -= m[i, k] * m[j, k]
             m[i, j] = t / ljj
-    y = work[0]
     for i in range(size):
-        y[i] = rhs[i] * scale[i]
-    _cholesky_solve(m, y, size)
+        vec[3, i] = vec[0, i] * vec[2, i]
+    _cholesky_solve(m, vec, 3, size)
     for i in range(size):
-        x[i] = y[i] * scale[i]
+        vec[1, i] = vec[3, i] * vec[2, i]
     # inverse iteration for the smallest eigenvalue, from a start vector with no special symmetry
-    v = work[1]
     norm = 0.0
     for i in range(size):
-        v[i] = 1.0 + 0.37 * i * (-1.0) ** i
-        norm += v[i] * v[i]
+        vec[4, i] = 1.0 + (0.37 * i if i % 2 == 0 else -0.37 * i)
+        norm += vec[4, i] * vec[4, i]
     lam_min = lam_max
-    for _ in range(4):
+    for _ in range(INVERSE_STEPS):
         norm = math.sqrt(norm)
         for i in range(size):
-            v[i] /= norm
-        _cholesky_solve(m, v, size)
+            vec[4, i] /= norm
+        _cholesky_solve(m, vec, 4, size)
         norm = 0.0
         for i in range(size):
-            norm += v[i] * v[i]
+            norm += vec[4, i] * vec[4, i]
         if not norm > 0.0 or not math.isfinite(norm):
             return 0.0
         lam_min = 1.0 / math.sqrt(norm)  # |A^-1 v| with |v| = 1 bounds 1 / lambda_min from below
@@ -179,15 +173,15 @@ def solve_spd_scaled(m, rhs, size, x, work, scale):
 
 
 @jit
-def _cholesky_solve(l, b, size):
-    """Overwrite ``b`` with ``(L L^T)^-1 b``; ``L`` in the lower triangle and diagonal of ``l``."""
+def _cholesky_solve(l, vec, row, size):
+    """Overwrite ``b = vec[row]`` with ``(L L^T)^-1 b``; ``L`` in the lower triangle and diagonal of ``l``."""
     for i in range(size):
-        t = b[i]
+        t = vec[row, i]
         for k in range(i):
-            t -= l[i, k] * b[k]
-        b[i] = t / l[i, i]
+            t -= l[i, k] * vec[row, k]
+        vec[row, i] = t / l[i, i]
     for i in range(size - 1, -1, -1):
-        t = b[i]
+        t = vec[row, i]
         for k in range(i + 1, size):
-            t -= l[k, i] * b[k]
-        b[i] = t / l[i, i]
+            t -= l[k, i] * vec[row, k]
+        vec[row, i] = t / l[i, i]

@@ -38,6 +38,7 @@ from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
 from ..neighbourhood import ball_support, expansion_adjacency, new_scratch
 from ..validity import Reason
+from ._local_fit import slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
 
@@ -81,20 +82,20 @@ def _scratch():
 
 @jit
 def _monomials(u, v, degree, out):
-    """``out[t(t+1)/2 + j] = u^(t-j) v^j`` for total degree t = 0..degree, j = 0..t."""
-    out[0] = 1.0
+    """``out[1, t(t+1)/2 + j] = u^(t-j) v^j`` for total degree t = 0..degree, j = 0..t."""
+    out[1, 0] = 1.0
     idx = 1
     for t in range(1, degree + 1):
-        # the row of degree t from the row of degree t-1: times u, and the last one also times v
+        # the monomials of degree t from those of degree t-1: times u, and the last one also times v
         prev = idx - t
         for j in range(t):
-            out[idx + j] = out[prev + j] * u
-        out[idx + t] = out[prev + t - 1] * v
+            out[1, idx + j] = out[1, prev + j] * u
+        out[1, idx + t] = out[1, prev + t - 1] * v
         idx += t + 1
 
 
 @jit
-def fit_jet(p, count, queue, x, y, z, ref, degree, m, vec, cov, frame, evec):
+def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec):
     """Fit the degree-``degree`` jet of the support of ``p`` (steps 1 and 2 of the module notes).
 
     Parameters
@@ -103,8 +104,8 @@ def fit_jet(p, count, queue, x, y, z, ref, degree, m, vec, cov, frame, evec):
         Centre vertex; ``queue[:count]`` is its support with ``queue[0] == p``.
     x, y, z : (n,) float64
         Vertex coordinates.
-    ref : (3,) float64
-        Orientation reference (the vertex normal); NaN gives ``DEGENERATE``.
+    normals : (n, 3) float64
+        ``normals[p]`` orients the fit (the vertex normal); NaN gives ``DEGENERATE``.
     degree : int
     m, vec, cov, frame, evec
         Per-thread scratch from :func:`_scratch`. On success ``frame`` rows are ``e1, e2, e3``
@@ -121,7 +122,8 @@ def fit_jet(p, count, queue, x, y, z, ref, degree, m, vec, cov, frame, evec):
     nd = (degree + 1) * (degree + 2) // 2
     if count < nd:
         return _TOO_FEW, 0.0
-    if not (math.isfinite(ref[0]) and math.isfinite(ref[1]) and math.isfinite(ref[2])):
+    rx, ry, rz = normals[p, 0], normals[p, 1], normals[p, 2]
+    if not (math.isfinite(rx) and math.isfinite(ry) and math.isfinite(rz)):
         return _DEGENERATE, 0.0
     px, py, pz = x[p], y[p], z[p]
     # centroid c and covariance sum (q - c)(q - c)^T, from offsets to p for accuracy
@@ -154,9 +156,9 @@ def fit_jet(p, count, queue, x, y, z, ref, degree, m, vec, cov, frame, evec):
     cov[1, 0] = cov[0, 1]
     cov[2, 0] = cov[0, 2]
     cov[2, 1] = cov[1, 2]
-    sym3_eigen(cov, evec[3], evec[:3])
+    sym3_eigen(cov, evec)
     # e3: least variance (the height axis), turned towards the reference normal; e1: most variance
-    sign = 1.0 if evec[0, 0] * ref[0] + evec[1, 0] * ref[1] + evec[2, 0] * ref[2] >= 0.0 else -1.0
+    sign = 1.0 if evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz >= 0.0 else -1.0
     for a in range(3):
         frame[2, a] = sign * evec[a, 0]
         frame[0, a] = evec[a, 2]
@@ -169,20 +171,19 @@ def fit_jet(p, count, queue, x, y, z, ref, degree, m, vec, cov, frame, evec):
         vec[0, a] = 0.0
         for b in range(a, nd):
             m[a, b] = 0.0
-    mono = vec[1]
     for i in range(count):
         q = queue[i]
         dx, dy, dz = (x[q] - px) * inv_h, (y[q] - py) * inv_h, (z[q] - pz) * inv_h
         u = dx * frame[0, 0] + dy * frame[0, 1] + dz * frame[0, 2]
         v = dx * frame[1, 0] + dy * frame[1, 1] + dz * frame[1, 2]
         w = dx * frame[2, 0] + dy * frame[2, 1] + dz * frame[2, 2]
-        _monomials(u, v, degree, mono)
+        _monomials(u, v, degree, vec)
         for a in range(nd):
-            ma = mono[a]
+            ma = vec[1, a]
             vec[0, a] += ma * w
             for b in range(a, nd):
-                m[a, b] += ma * mono[b]
-    rcond = solve_spd_scaled(m, vec[0], nd, vec[1], vec[3:5], vec[2])
+                m[a, b] += ma * vec[1, b]
+    rcond = solve_spd_scaled(m, vec, nd)
     if not rcond >= RCOND:
         return _SINGULAR, 0.0
     for a in range(nd):
@@ -199,27 +200,28 @@ def _to_world(frame, a, b, c, out, row):
 
 
 @jit
-def jet_normal(jet, frame, out, row):
-    """Write the unit normal of the fitted jet at the origin to ``out[row]`` (world coordinates)."""
-    ju, jv = jet[1], jet[2]
+def jet_normal(vec, frame, out, row):
+    """Write the unit normal of the fitted jet (coefficients ``vec[1]``) at the origin to ``out[row]``."""
+    ju, jv = vec[1, 1], vec[1, 2]
     inv = 1.0 / math.sqrt(1.0 + ju * ju + jv * jv)
     _to_world(frame, -ju * inv, -jv * inv, inv, out, row)
 
 
 @jit
-def jet_principal(jet, frame, h, ref, out_k, out_d1, out_d2, row):
+def jet_principal(vec, frame, h, normals, out_k, out_d1, out_d2, row):
     """Principal curvatures and directions of the jet at the origin (step 3 of the module notes).
 
-    Writes ``out_k[0, row], out_k[1, row]`` (k1 >= k2, in mesh units) and unit directions
-    ``out_d1[row]``, ``out_d2[row]``, rotated into the tangent plane of ``ref``.
+    The jet's coefficients are ``vec[1]`` (:func:`fit_jet`). Writes ``out_k[0, row], out_k[1, row]``
+    (k1 >= k2, in mesh units) and unit directions ``out_d1[row]``, ``out_d2[row]``, rotated into the
+    tangent plane of ``normals[row]``.
 
     Returns
     -------
     int
-        ``Reason.OK``, or ``DEGENERATE`` when the jet normal is 90 degrees or more from ``ref``.
+        ``Reason.OK``, or ``DEGENERATE`` when the jet normal is 90 degrees or more from ``normals[row]``.
     """
-    ju, jv = jet[1], jet[2]
-    juu, juv, jvv = 2.0 * jet[3], jet[4], 2.0 * jet[5]
+    ju, jv = vec[1, 1], vec[1, 2]
+    juu, juv, jvv = 2.0 * vec[1, 3], vec[1, 4], 2.0 * vec[1, 5]
     wn = math.sqrt(1.0 + ju * ju + jv * jv)
     # jet normal n and the tangents S_u = (1, 0, J_u), S_v = (0, 1, J_v), in the PCA frame
     n0, n1, n2 = -ju / wn, -jv / wn, 1.0 / wn
@@ -242,14 +244,15 @@ def jet_principal(jet, frame, h, ref, out_k, out_d1, out_d2, row):
     # d1 = c T1 + s T2, d2 = n x d1 = -s T1 + c T2, then to world coordinates
     _to_world(frame, c * t10 + sn * t20, c * t11 + sn * t21, c * t12 + sn * t22, out_d1, row)
     _to_world(frame, -sn * t10 + c * t20, -sn * t11 + c * t21, -sn * t12 + c * t22, out_d2, row)
-    # carry the directions to the tangent plane of ref: smallest rotation taking n to ref
+    # carry the directions to the tangent plane of the reference normal r: smallest rotation taking n to r
     nw0 = n0 * frame[0, 0] + n1 * frame[1, 0] + n2 * frame[2, 0]
     nw1 = n0 * frame[0, 1] + n1 * frame[1, 1] + n2 * frame[2, 1]
     nw2 = n0 * frame[0, 2] + n1 * frame[1, 2] + n2 * frame[2, 2]
-    cosine = nw0 * ref[0] + nw1 * ref[1] + nw2 * ref[2]
+    rx, ry, rz = normals[row, 0], normals[row, 1], normals[row, 2]
+    cosine = nw0 * rx + nw1 * ry + nw2 * rz
     if not cosine > 0.0:
         return _DEGENERATE
-    ax0, ax1, ax2 = nw1 * ref[2] - nw2 * ref[1], nw2 * ref[0] - nw0 * ref[2], nw0 * ref[1] - nw1 * ref[0]
+    ax0, ax1, ax2 = nw1 * rz - nw2 * ry, nw2 * rx - nw0 * rz, nw0 * ry - nw1 * rx
     _rotate(out_d1, row, ax0, ax1, ax2, cosine)
     _rotate(out_d2, row, ax0, ax1, ax2, cosine)
     return _OK
@@ -257,7 +260,7 @@ def jet_principal(jet, frame, h, ref, out_k, out_d1, out_d2, row):
 
 @jit
 def _rotate(out, row, ax0, ax1, ax2, cosine):
-    """Rotate ``out[row]`` by Rodrigues with the unnormalised axis ``a = n x ref`` and ``c = n . ref``:
+    """Rotate ``out[row]`` by Rodrigues with the unnormalised axis ``a = n x r`` and ``c = n . r``:
     ``R v = c v + a x v + a (a . v) / (1 + c)``."""
     v0, v1, v2 = out[row, 0], out[row, 1], out[row, 2]
     dot = (ax0 * v0 + ax1 * v1 + ax2 * v2) / (1.0 + cosine)
@@ -273,11 +276,12 @@ def _jet_kernel(lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stam
         stamp = stamps[t]
         queue = queues[t]
         m, vec, cov, frame, evec = _scratch()
-        for p in range(lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts):
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for p in range(start, stop):
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
-            code, h = fit_jet(p, count, queue, x, y, z, normals[p], degree, m, vec, cov, frame, evec)
+            code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
-                code = jet_principal(vec[1], frame, h, normals[p], k, d1, d2, p)
+                code = jet_principal(vec, frame, h, normals, k, d1, d2, p)
             reason[p] = code
 
 
@@ -288,11 +292,12 @@ def _jet_normal_kernel(lo, hi, degree, radius2, indptr, indices, x, y, z, normal
         stamp = stamps[t]
         queue = queues[t]
         m, vec, cov, frame, evec = _scratch()
-        for p in range(lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts):
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for p in range(start, stop):
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
-            code, h = fit_jet(p, count, queue, x, y, z, normals[p], degree, m, vec, cov, frame, evec)
+            code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
-                jet_normal(vec[1], frame, out, p)
+                jet_normal(vec, frame, out, p)
             reason[p] = code
 
 
@@ -390,7 +395,7 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
 
 
 register(EstimatorSpec(
-    name="jet", title="Osculating jet fitting", ranges=(1, 2, 3, 4), function=iter_jet,
+    name="jet", in_paper=False, title="Osculating jet fitting", ranges=(1, 2, 3, 4), function=iter_jet,
     triangles_only=False, uses_normals=False, closed_ring=False,
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
