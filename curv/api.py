@@ -111,7 +111,8 @@ def iter_estimate(
 
     k1, k2, d1, d2, reason = raw.k1, raw.k2, raw.d1, raw.d2, raw.reason.copy()
     isolated = mesh.isolated_vertices
-    reason[(reason == Reason.OK) & isolated] = Reason.DEGENERATE
+    # no face at all is the root cause, whatever the estimator saw (no support, no normal)
+    reason[isolated] = Reason.DEGENERATE
     # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
     reason[(reason == Reason.OK) & mesh.nonmanifold_vertices] = Reason.NONMANIFOLD
     # faces of opposite orientation meet here: the vertex normal is meaningless
