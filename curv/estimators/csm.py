@@ -185,14 +185,15 @@ def triangle_in_ball_area(ox, oy, oz, radius2, ex, ey, ez, fx, fy, fz, nx, ny, n
 
 # ---------------------------------------------------------------------------- eigen
 @jit
-def _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, out):
+def _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, out):
     """Curvatures and directions of a normal-cycle tensor T at a vertex with unit normal n.
 
     Drops the eigenvector closest to n; of the other two (ascending), each eigenvector is the
-    principal direction of the *other* eigenvalue. Writes ``out[:] = ka, kb, da (3), db (3)`` with
+    principal direction of the *other* eigenvalue. ``tensor`` (3, 3) is overwritten, ``vectors``
+    (4, 3) is scratch for :func:`sym3_eigen`. Writes ``out[:] = ka, kb, da (3), db (3)`` with
     ``ka <= kb``, ``db`` the tangent-projected eigenvector of ka and ``da = n x db``.
     """
-    sym3_eigen(tensor, values, vectors)
+    sym3_eigen(tensor, vectors)  # vectors[:3, j]: eigenvector of the eigenvalue vectors[3, j]
     drop = 0
     best = -1.0
     for j in range(3):
@@ -211,8 +212,8 @@ def _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, out):
     bx /= norm
     by /= norm
     bz /= norm
-    out[0] = values[ia]
-    out[1] = values[ib]
+    out[0] = vectors[3, ia]
+    out[1] = vectors[3, ib]
     out[2] = ny * bz - nz * by
     out[3] = nz * bx - nx * bz
     out[4] = nx * by - ny * bx
@@ -295,8 +296,7 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
     parts = vstamps.shape[0]
     for t in prange(parts):
         queue = np.empty(QUEUE_START, np.int64)
-        values = np.empty(3)
-        vectors = np.empty((3, 3))
+        vectors = np.empty((4, 3))
         tensor = np.empty((3, 3))
         res = np.empty(8)
         vstamp, estamp, fstamp = vstamps[t], estamps[t], fstamps[t]
@@ -363,7 +363,7 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
                 tensor[0, 1] = tensor[1, 0] = t01 * inv
                 tensor[0, 2] = tensor[2, 0] = t02 * inv
                 tensor[1, 2] = tensor[2, 1] = t12 * inv
-                _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, res)
+                _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, res)
                 k1[p], k2[p] = res[0], res[1]
                 for c in range(3):
                     d1[p, c] = res[2 + c]
@@ -427,8 +427,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     edges = np.ascontiguousarray(mesh.edges, dtype=np.int64)
     parts = threads()
     vstamps = new_scratch(n, parts)
-    estamps = np.full((parts, edges.shape[0]), -1, np.int64)
-    fstamps = np.full((parts, tri.shape[0]), -1, np.int64)
+    estamps = np.full((parts, edges.shape[0]), -1, np.int32)  # vertex ids fit; half the cache lines
+    fstamps = np.full((parts, tri.shape[0]), -1, np.int32)
     out = empty_principal(n)
 
     def run(lo: int, hi: int) -> None:

@@ -245,7 +245,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
     parts = threads()
     vstamps = new_scratch(n, parts)
-    fstamps = np.full((parts, tri.shape[0]), -1, np.int64)
+    fstamps = np.full((parts, tri.shape[0]), -1, np.int32)
     out = empty_principal(n)
     mean = np.full(n, np.nan)
     gaussian = np.full(n, np.nan)
@@ -315,8 +315,8 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
 
 
 register(EstimatorSpec(
-    name="icc", title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4), function=iter_icc,
-    triangles_only=True, uses_normals=False, closed_ring=True,
+    name="icc", in_paper=False, title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4),
+    function=iter_icc, triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Lachaud, Romon, Thibert & Coeurjolly 2020, Interpolated corrected curvature measures for "
               "polygonal surfaces (SGP)",
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
