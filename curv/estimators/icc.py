@@ -51,7 +51,8 @@ from ..mesh import Mesh
 from ..neighbourhood import QUEUE_START, ball_support, expansion_adjacency, new_scratch
 from ..validity import Reason
 from ._local_fit import store_principal, tangent_frame
-from .csm import BORDER_BIT, DEGENERATE_BIT, NONMANIFOLD_BIT, face_geometry, support_flags, triangle_in_ball_area
+from .csm import (BORDER_BIT, DEGENERATE_BIT, NONMANIFOLD_BIT, face_frames, face_geometry, face_in_ball_area,
+                  support_flags)
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures"]
@@ -140,7 +141,7 @@ def _row_is_finite(a, r):
 
 
 @jit_parallel
-def _icc_chunk(lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, face_normal, face_area,
+def _icc_chunk(lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames, face_area,
                measures, flags, normals, from_measures, vstamps, fstamps, k1, k2, d1, d2, mean, gaussian,
                reason):
     parts = vstamps.shape[0]
@@ -166,17 +167,9 @@ def _icc_chunk(lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, f
                         hit |= DEGENERATE_BIT
                         continue
                     # weight: the fraction of the face's area inside B
-                    c0, c1, c2 = tri[f, 0], tri[f, 1], tri[f, 2]
-                    ox, oy, oz = px - x[c0], py - y[c0], pz - z[c0]
-                    ex, ey, ez = x[c1] - x[c0], y[c1] - y[c0], z[c1] - z[c0]
-                    fx, fy, fz = x[c2] - x[c0], y[c2] - y[c0], z[c2] - z[c0]
-                    w = 1.0
-                    if not (ox * ox + oy * oy + oz * oz <= r2
-                            and (ex - ox) ** 2 + (ey - oy) ** 2 + (ez - oz) ** 2 <= r2
-                            and (fx - ox) ** 2 + (fy - oy) ** 2 + (fz - oz) ** 2 <= r2):
-                        inside = triangle_in_ball_area(ox, oy, oz, r2, ex, ey, ez, fx, fy, fz,
-                                                       face_normal[f, 0], face_normal[f, 1], face_normal[f, 2])
-                        w = min(max(inside / face_area[f], 0.0), 1.0) if math.isfinite(inside) else 0.0
+                    c0 = tri[f, 0]
+                    inside = face_in_ball_area(frames, f, px - x[c0], py - y[c0], pz - z[c0], r2, face_area[f])
+                    w = min(inside / face_area[f], 1.0)
                     if w > 0.0:
                         for c in range(MEASURES):
                             total[0, c] += w * measures[f, c]
@@ -238,6 +231,8 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     normals = np.ascontiguousarray(normals, dtype=np.float64)
     measures = face_measures(mesh, normals)
     face_normal, face_area = face_geometry(mesh)
+    frames = face_frames(mesh, face_normal)
+    del face_normal
     flags = support_flags(mesh)
     yield 0.0
     x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
@@ -253,7 +248,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     gaussian = np.full(n, np.nan)
 
     def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, face_normal,
+        launch(_icc_chunk, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames,
                face_area, measures, flags, normals, from_measures, vstamps, fstamps,
                out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
