@@ -60,6 +60,7 @@ def iter_estimate(
     smooth_strength: float = 0.5,
     fit_range=2,
     block_size: int | None = None,
+    **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
 
@@ -69,6 +70,7 @@ def iter_estimate(
     """
     spec = get_spec(method)
     rng = resolve(spec, range, radius)
+    options = spec.check_options(options)
     if not isinstance(mesh, Mesh):
         raise MeshError(f"expected a curv.Mesh, got {type(mesh).__name__}")
     if spec.triangles_only and not mesh.is_triangular:
@@ -105,7 +107,7 @@ def iter_estimate(
             used_normals[meaningless] = np.nan
     radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
-    raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size)
+    raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size, **options)
     if fused:
         used_normals = raw.normals
 
@@ -145,7 +147,7 @@ def iter_estimate(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
         method=spec.name, range=rng.value,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
-              "normals": _normals_label(normals, normal_weighting, fit_range),
+              "normals": _normals_label(normals, normal_weighting, fit_range), **options,
               "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0},
     )
@@ -183,6 +185,7 @@ def estimate(
     smooth_strength: float = 0.5,
     fit_range=2,
     block_size: int | None = None,
+    **options,
 ) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
 
@@ -212,6 +215,9 @@ def estimate(
     block_size : int, optional
         Vertices per kernel call (the granularity of progress and cancel); default adaptive, about
         every 0.05 s. Results do not depend on it.
+    **options
+        Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for
+        ``jet``.
 
     Returns
     -------
@@ -228,7 +234,8 @@ def estimate(
     """
     gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
                         smooth=smooth, smooth_iterations=smooth_iterations,
-                        smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size)
+                        smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size,
+                        **options)
     while True:
         try:
             next(gen)

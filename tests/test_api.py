@@ -123,3 +123,8 @@ def test_fitted_normals_option(sphere):
     np.testing.assert_allclose(fit.k1[fit.valid], 0.5, rtol=0.02)
     with pytest.raises(curv.EstimatorError, match="'fit'"):
         curv.estimate(sphere, "mru", 2, normals="jet")
+
+
+def test_unknown_estimator_option_names_the_allowed_ones(sphere):
+    with pytest.raises(curv.EstimatorError, match="'qs' has no option 'degree'; its options: none"):
+        curv.estimate(sphere, "qs", 2, degree=3)

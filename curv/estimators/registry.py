@@ -53,6 +53,9 @@ class EstimatorSpec:
     has_support : bool
         Collects a range support (any real range >= its smallest named one, or a radius). False for
         the fixed 1-ring formulas (``meyer``, ``ru``), which take only their one named range.
+    options : dict
+        Estimator-specific keyword options ``{name: allowed values}`` (e.g. the jet's
+        ``{"degree": (2, 3, 4)}``), passed through by :func:`curv.estimate`.
     in_paper : bool
         One of the paper's seven estimators (its 20 variants are the study's core; the others run
         as extra rows beside them).
@@ -77,7 +80,19 @@ class EstimatorSpec:
     computes_normals: bool = False
     has_support: bool = True
     in_paper: bool = True
+    options: dict = field(default_factory=dict, compare=False)
     kernels: tuple = field(default=(), repr=False, compare=False)
+
+    def check_options(self, options: dict) -> dict:
+        """Validate estimator options; :class:`EstimatorError` names the allowed ones."""
+        for name, value in options.items():
+            if name not in self.options:
+                allowed = ", ".join(self.options) or "none"
+                raise EstimatorError(f"estimator {self.name!r} has no option {name!r}; its options: {allowed}")
+            if value not in self.options[name]:
+                raise EstimatorError(f"estimator {self.name!r}: {name} must be one of "
+                                     f"{', '.join(map(str, self.options[name]))}; got {value!r}")
+        return options
 
     def variants(self) -> list[tuple[str, int]]:
         """``[(name, k), ...]`` for every supported range."""
