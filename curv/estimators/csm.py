@@ -26,7 +26,7 @@ How it runs
 One parallel kernel per chunk of vertices (:func:`curv.jit.iter_chunks`); per vertex it searches
 the support and visits every edge and face touching it once (per-thread stamps over edges and
 faces, like the search's own visited stamps over vertices), so no (centre, edge) pairs are stored.
-The per-edge ``beta(e) / |e|`` and the per-face unit normals and areas are computed once per mesh.
+The per-edge ``beta(e) / |e|`` and the per-face frames and areas are computed once per mesh.
 """
 
 from __future__ import annotations
