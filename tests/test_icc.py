@@ -203,3 +203,19 @@ def test_polygons_are_refused():
     m, _, _ = torus_grid(20, 8, quads=True)
     with pytest.raises(curv.MeshError, match="needs a triangle mesh"):
         curv.estimate(m, "icc", 2)
+
+
+def test_principal_curvatures_from_the_anisotropic_measure_as_an_option():
+    m, theta, phi = torus_grid(120, 48)
+    kmin, kmaj = torus_exact(theta, phi)
+    default = curv.estimate(m, "icc", 4)
+    aniso = curv.estimate(m, "icc", 4, from_measures=False)
+    assert aniso.valid.all()
+    # the same directions; M's eigenvalues carry the tilt bias of a large ball (tube curvature low)
+    np.testing.assert_allclose(np.abs(np.einsum("ij,ij->i", aniso.d1, default.d1)), 1.0, atol=1e-9)
+    err_default = np.abs(default.k1 - np.maximum(kmin, kmaj)).max()
+    err_aniso = np.abs(aniso.k1 - np.maximum(kmin, kmaj)).max()
+    assert err_default < 0.5 * err_aniso
+    assert (aniso.k1 < np.maximum(kmin, kmaj)).mean() > 0.9
+    with pytest.raises(curv.EstimatorError, match="from_measures"):
+        curv.estimate(m, "icc", 4, from_measures="yes")

@@ -320,4 +320,5 @@ register(EstimatorSpec(
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
     kernels=(_face_measures, _icc_chunk),
+    options={"from_measures": (True, False)},
 ))
