@@ -18,8 +18,8 @@ the ``e_rel < 1`` values) and the share of evaluated vertices left invalid. A va
 Variants:
 
 - curvlab: every registry estimator at each of its named ranges (through ``curv.estimate``, Max
-  normals), the jet at degrees 3 and 4 (``iter_jet(degree=...)``: not yet a ``curv.estimate``
-  option), and the estimators that use normals again with fitted normals
+  normals), the jet at degrees 3 and 4 (``curv.estimate(..., degree=d)``), and the estimators that
+  use normals again with fitted normals
   (:func:`curv.fitted_normals.fitted_normals` at the stated range and degree, passed as ``normals=``).
 - peers, each checked for sign and scale on an outward sphere first (:func:`calibrate`; the
   factor found there is applied everywhere and printed): libigl ``principal_curvature`` (k-ring 2
@@ -163,25 +163,6 @@ def _sorted(k1, k2):
     return np.maximum(k1, k2), np.minimum(k1, k2)
 
 
-def _jet_degree(mesh, normals, k, degree):
-    from curv.estimators.jet import iter_jet
-    from curv.ranges import Range, ball_radii
-    from curv.validity import Reason
-
-    gen = iter_jet(mesh, normals, ball_radii(mesh, Range(k=float(k)), uses_normals=False), degree=degree)
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            raw = stop.value
-            break
-    bad = (raw.reason != Reason.OK) | mesh.border_vertices
-    k1, k2 = _sorted(raw.k1, raw.k2)
-    k1[bad] = np.nan
-    k2[bad] = np.nan
-    return k1, k2
-
-
 def curvlab_variants() -> list[tuple[str, dict]]:
     """``[(label, how), ...]`` of every curvlab variant this benchmark runs."""
     import curv
@@ -230,11 +211,11 @@ def run_mesh(job):
     for label, how in curvlab_variants():
         t0 = time.perf_counter()
         if "jet_degree" in how:
-            k1, k2 = _jet_degree(mesh, max_normals, how["k"], how["jet_degree"])
+            res = curv.estimate(mesh, "jet", how["k"], normals=max_normals, degree=how["jet_degree"])
         else:
             normals = fits[how["fit"]] if "fit" in how else max_normals
             res = curv.estimate(mesh, how["method"], how["k"], normals=normals)
-            k1, k2 = res.k1, res.k2
+        k1, k2 = res.k1, res.k2
         seconds[label] = time.perf_counter() - t0
         errors[label] = relative_error(t1, t2, k1[ev], k2[ev])
     v, f = np.asarray(mesh.vertices, float), mesh.triangles.astype(np.int64)

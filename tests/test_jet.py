@@ -203,12 +203,16 @@ def test_unknown_degree_is_refused():
         jet(m, 2, True)
 
 
-def test_default_degree_is_what_estimate_uses():
+def test_default_degree_is_what_estimate_uses_and_degree_passes_through():
     m = icosphere(3, 1.5)
-    res = curv.estimate(m, "jet", 3)
-    raw = jet(m, 3, DEFAULT_DEGREE)
-    np.testing.assert_allclose(res.k1, raw.k1, rtol=1e-12)
-    np.testing.assert_allclose(res.k2, raw.k2, rtol=1e-12)
+    for degree, options in ((DEFAULT_DEGREE, {}), (4, {"degree": 4})):
+        res = curv.estimate(m, "jet", 3, **options)
+        raw = jet(m, 3, degree)
+        np.testing.assert_allclose(res.k1, raw.k1, rtol=1e-12)
+        np.testing.assert_allclose(res.k2, raw.k2, rtol=1e-12)
+    assert res.info["degree"] == 4
+    with pytest.raises(curv.EstimatorError, match="degree must be one of 2, 3, 4"):
+        curv.estimate(m, "jet", 3, degree=5)
 
 
 def test_the_fit_does_not_depend_on_the_given_normals_beyond_their_side():
