@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import curv
 from curv.metrics import relative_error
@@ -118,3 +120,21 @@ def test_estimate_with_fitted_normals_improves_mru_on_noise():
         e = relative_error(s.truth.k1[ev], s.truth.k2[ev], res.k1[ev], res.k2[ev])
         errors.append(np.nanmedian(e))
     assert errors[1] < 0.5 * errors[0], errors
+
+
+_SPHERE = icosphere(2)
+
+
+@settings(max_examples=5, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(scale=st.floats(0.01, 100.0), seed=st.integers(0, 2**31 - 1), degree=st.sampled_from([2, 3, 4]))
+def test_property_normals_move_with_the_mesh(scale, seed, degree):
+    rng = np.random.default_rng(seed)
+    v = _SPHERE.vertices * rng.uniform(0.6, 1.8, 3) + rng.normal(scale=0.02, size=_SPHERE.vertices.shape)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    q *= np.sign(np.linalg.det(q))
+    base = fitted_normals(curv.Mesh(v, _SPHERE.triangles), range=3, degree=degree)
+    moved = fitted_normals(curv.Mesh(scale * v @ q.T + rng.normal(size=3), _SPHERE.triangles), range=3, degree=degree)
+    ok = np.isfinite(base).all(axis=1)
+    assert ok.mean() > 0.9
+    np.testing.assert_array_equal(np.isfinite(moved).all(axis=1), ok)
+    np.testing.assert_allclose(moved[ok], base[ok] @ q.T, atol=1e-7)
