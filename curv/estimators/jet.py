@@ -21,8 +21,8 @@ At each vertex p, with support S(p) = p and the vertices of its ball (:mod:`curv
 Which normal: the given vertex normal (Max by default) only orients the fit and is the normal the
 result reports; k1, k2 are the jet's own (its normal ``n``). The directions are carried from the
 jet's tangent plane to the reported normal's by the smallest rotation taking ``n`` to it, so they are
-tangent to the reported normal (the angle between the two is the fit's normal correction: a degree
-or less on the study's meshes). :func:`curv.fitted_normals.fitted_normals` gives the jet normals.
+tangent to the reported normal. The angle between the two is about the Max normal's own error:
+0.01-0.07 degrees (median) on the study's clean meshes, 5-9 degrees at its 100 % noise. :func:`curv.fitted_normals.fitted_normals` gives the jet normals.
 
 Works on any polygon mesh and on borders (a one-sided fit there).
 """
