@@ -129,7 +129,10 @@ def local_pairs(xyz: tuple, nb: Neighbourhood, rows: np.ndarray, width: int,
     start = np.take(nb.indptr, rows)
     slot = np.arange(width)
     real = slot[None, :] < np.take(nb.counts, rows)[:, None]
-    gathered = np.take(nb.indices, start[:, None] + slot[None, :], mode="clip")
+    if nb.indices.size == 0:  # a block made only of isolated vertices: no support to gather
+        gathered = np.broadcast_to(ids[:, None], (ids.size, width))
+    else:
+        gathered = np.take(nb.indices, start[:, None] + slot[None, :], mode="clip")
     neighbours = np.where(real, gathered, ids[:, None])
     frame = np.take(frames, ids, axis=0)
     d = [np.take(x, neighbours) - np.take(x, ids)[:, None] for x in xyz]
