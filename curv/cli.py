@@ -102,12 +102,16 @@ def _check_memory(args, n_vertices: int, n_faces: int, method: str, k: int) -> N
 def _cmd_estimate(args) -> int:
     from .api import iter_estimate, parse_range
     from .estimators import get_spec
-    from .io import load, peek_counts, save_ply
+    from .io import check_output_suffix, load, peek_counts, save_result
     from .validity import describe_reasons
 
     spec = get_spec(args.method)
     k = spec.check_range(parse_range(args.range))
     if args.output:
+        try:
+            check_output_suffix(args.output)
+        except ValueError as exc:
+            raise CurvOutputError(str(exc)) from None
         _check_output(args.output)
     counts = peek_counts(args.input)
     if counts is not None:  # refuse before reading a file that will not fit
@@ -131,8 +135,8 @@ def _cmd_estimate(args) -> int:
     t_est = time.perf_counter() - t1
     if args.output:
         try:
-            save_ply(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
-                     clim=tuple(args.clim) if args.clim else None)
+            save_result(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
+                        clim=tuple(args.clim) if args.clim else None)
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
     rep = mesh.report()
@@ -144,6 +148,10 @@ def _cmd_estimate(args) -> int:
     for line in _hints(args, rep):
         print(f"  hint: {line}")
     reasons = describe_reasons(res.reason)
+    n_isolated = int(mesh.isolated_vertices.sum())
+    if n_isolated and reasons.get("DEGENERATE", 0) >= n_isolated:  # unreferenced vertices: say so
+        reasons["DEGENERATE"] -= n_isolated
+        reasons = {**{k: v for k, v in reasons.items() if v}, "ISOLATED (no face)": n_isolated}
     invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
     print(f"{res.method} R{res.range}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
           f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
@@ -174,6 +182,10 @@ class CurvMemoryError(CurvError, MemoryError):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .io import OUTPUT_FORMATS
+    from .quantities import QUANTITIES
+    from .quantities import describe as describe_quantities
+
     parser = argparse.ArgumentParser(prog="curv", description="Curvature estimation on surface meshes.")
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -184,10 +196,10 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
     p_est.add_argument("--method", "-m", default="mru", help="estimator name (see `curv list`); default mru")
     p_est.add_argument("--range", "-r", default="2", help="range k of Rk, e.g. 2 or R2; default 2")
-    p_est.add_argument("--output", "-o", help="write a coloured binary PLY with the curvature properties")
-    p_est.add_argument("--quantity", default="mean",
-                       choices=["mean", "gaussian", "k1", "k2", "shape_index", "curvedness"],
-                       help="what the PLY colours show; default mean")
+    p_est.add_argument("--output", "-o", help="write the result: " + "; ".join(
+        f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items()))
+    p_est.add_argument("--quantity", default="mean", choices=list(QUANTITIES),
+                       help="what the output colours show; default mean (" + "; ".join(describe_quantities()) + ")")
     p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
     p_est.add_argument("--clim", nargs=2, type=float, metavar=("LO", "HI"), help="colour limits")
     p_est.add_argument("--smooth", choices=["mesh", "values"], help="smooth the mesh before or the values after")
