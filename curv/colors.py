@@ -77,8 +77,8 @@ def auto_limits(values: np.ndarray, *, signed: bool, percentiles: tuple[float, f
 
 
 def widen(lo: float, hi: float) -> tuple[float, float]:
-    """``(lo, hi)`` unchanged when ``hi > lo``, else a small window around the value."""
-    if hi > lo:
+    """``(lo, hi)`` unchanged when ``hi > lo`` by more than rounding, else a small window around the value."""
+    if hi - lo > 1e-9 * max(abs(lo), abs(hi)):
         return lo, hi
     pad = max(abs(lo) * 1e-3, 1e-12)
     return lo - pad, hi + pad

@@ -57,10 +57,37 @@ class PaneGrid(QWidget):
             if self._base is not None:
                 vp.set_geometry(self._base, edge_length=self._edge)
             self.viewports.append(vp)
-        cols = n if n <= 3 else math.ceil(n / 2)
-        for i, vp in enumerate(self.viewports):
-            self.layout_.addWidget(vp, i // cols, i % cols)
+        self._arrange()
         self.set_linked(self.linked)
+        self.reset_camera(render=False)  # refit: the panes changed shape
+
+    def rows(self) -> list[int]:
+        """Viewports per row: 1, 2, 3 side by side when the grid is wide (else 2 + 1), 2 x 2, 3 + 2."""
+        n = len(self.viewports)
+        wide = self.width() >= 1.9 * max(self.height(), 1)
+        return {1: [1], 2: [2], 3: [3] if wide else [2, 1], 4: [2, 2], 5: [3, 2]}.get(n, [math.ceil(n / 2)] * 2)
+
+    def _arrange(self) -> None:
+        """Place the viewports row by row; each row shares the full width (no empty cells)."""
+        for vp in self.viewports:
+            self.layout_.removeWidget(vp)
+        cols = 6  # a multiple of every row length
+        i = 0
+        for r, count in enumerate(self.rows()):
+            span = cols // count
+            for c in range(count):
+                if i < len(self.viewports):
+                    self.layout_.addWidget(self.viewports[i], r, c * span, 1, span)
+                i += 1
+        for c in range(cols):
+            self.layout_.setColumnStretch(c, 1)
+        self._arranged = tuple(self.rows())
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        super().resizeEvent(event)
+        if getattr(self, "_arranged", None) != tuple(self.rows()):
+            self._arrange()
+            self.reset_camera(render=False)
 
     def set_geometry(self, base: pv.PolyData, *, edge_length: float) -> None:
         """Show a new mesh in every viewport and frame it (rendered by the next :meth:`render_all`)."""
