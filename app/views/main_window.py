@@ -72,6 +72,7 @@ class MainWindow(QMainWindow):
         self.grid = PaneGrid(self)
         self.setCentralWidget(self.grid)
         self._geometry = None
+        self._drawn = None  # what the viewports show (see _scene): unchanged scenes are not re-rendered
 
         self.source_panel = SourcePanel()
         self.inspect = InspectPanel(self.doc)
@@ -229,6 +230,7 @@ class MainWindow(QMainWindow):
             self._add_recent(str(Path(change.source.path).resolve()))
         self._geometry = change.geometry if change.geometry is not None else prepare_geometry(change.mesh)
         self.grid.set_geometry(self._geometry.base, edge_length=self._geometry.edge_length)
+        self._drawn = None
         self.setWindowTitle(f"curvlab — {change.source.label}")
         if isinstance(change.source, SurfaceSource):
             self.source_panel.set_source(change.source)
@@ -242,6 +244,7 @@ class MainWindow(QMainWindow):
 
     def _on_panes(self) -> None:
         self.grid.set_count(self.doc.view_count)
+        self._drawn = None
         self.controller.request_missing()
         self.redraw()
         self._on_picked(self.doc.picked)
@@ -265,11 +268,28 @@ class MainWindow(QMainWindow):
         self.grid.render_all()
 
     # -- drawing --------------------------------------------------------------------------------
-    def redraw(self) -> None:
-        """Recolour every viewport in place from the document and render."""
+    def _scene(self) -> tuple:
+        """Everything the viewports' pixels depend on (results by identity)."""
+        doc = self.doc
+        results = tuple(id(doc.results.get(p.key)) for p in doc.panes)
+        return (id(doc.mesh), tuple(doc.panes), results, doc.view_count, doc.active, doc.picked,
+                doc.display.state, len(self.grid.viewports))
+
+    def redraw(self, *, force: bool = False) -> None:
+        """Recolour every viewport in place from the document and render.
+
+        A scene that is already on screen is not recoloured or rendered again (only the titles
+        are updated): cancelling an estimate reverts the pane to the result it still shows, and
+        must not stall the GUI on a render of a large mesh.
+        """
         doc = self.doc
         if doc.mesh is None:
             return
+        scene = self._scene()
+        if not force and scene == self._drawn:
+            self.update_titles()
+            return
+        self._drawn = scene
         fields = doc.fields()
         state = doc.display.state
         for i, (vp, field) in enumerate(zip(self.grid.viewports, fields)):
