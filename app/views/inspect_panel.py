@@ -92,6 +92,7 @@ class InspectPanel(QWidget):
         self.radius.setStepType(QDoubleSpinBox.StepType.AdaptiveDecimalStepType)
         self.radius.setRange(1e-6, 1e9)
         self.radius.setKeyboardTracking(False)
+        self.radius.setSpecialValueText("—")  # shown while no radius is set
         self.radius.setToolTip("Ball radius in mesh units (the same at every vertex)")
         self.recompute = QPushButton("Recompute")
         self.recompute.setToolTip("Compute the active pane again (F5)")

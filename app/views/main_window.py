@@ -328,7 +328,7 @@ class MainWindow(QMainWindow):
     def _pane_title(self, i: int) -> str:
         doc = self.doc
         title = doc.view_title(i)
-        if not doc.is_difference(i):
+        if not doc.is_difference(i) and doc.view_count <= 2:  # more panes: short headers (full in the tooltip)
             spec = ESTIMATORS.get(doc.panes[i].method)
             title += f" — {spec.title}" if spec else ""
         return title

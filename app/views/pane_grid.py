@@ -48,6 +48,8 @@ class PaneGrid(QWidget):
             vp = self.viewports.pop()
             self.layout_.removeWidget(vp)
             vp.close_plotter()
+            vp.hide()  # deleteLater waits for the event loop: never leave its frame on screen meanwhile
+            vp.setParent(None)
             vp.deleteLater()
         while len(self.viewports) < n:
             vp = Viewport(len(self.viewports), self)
@@ -101,7 +103,9 @@ class PaneGrid(QWidget):
         first = self.viewports[0].plotter
         first.view_vector((0.55, -1.0, 0.85), viewup=(0.0, 0.0, 1.0), render=False)
         first.reset_camera(render=False)
-        first.camera.zoom(1.15)
+        # VTK fits the height; a pane narrower than tall (shared camera: the narrowest) must fit its width
+        aspect = min(vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports)
+        first.camera.zoom(1.15 * min(1.0, max(aspect, 0.2)))
         if not self.linked:
             for vp in self.viewports[1:]:
                 vp.plotter.renderer.camera = first.camera.copy()
