@@ -102,7 +102,7 @@ def configure(window, args) -> object:
         changes[key] = args.cmap
     if args.limits:
         lo, hi = (float(x) for x in args.limits.split(","))
-        changes.update(limit_mode=LimitMode.MANUAL, manual=(lo, hi))
+        changes.update(limit_mode=LimitMode.MANUAL, manual=(lo, hi), lock_limits=True)  # asked for: keep them
     doc.display.update(**changes)
     window.pending_layer = layer  # applied once the source (and its truth) is there
     if args.mesh:

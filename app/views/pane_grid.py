@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pyvista as pv
-from PySide6.QtCore import Signal
+from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QGridLayout, QWidget
 
 from .viewport import Viewport
@@ -61,7 +61,7 @@ class PaneGrid(QWidget):
             self.viewports.append(vp)
         self._arrange()
         self.set_linked(self.linked)
-        self.reset_camera(render=False)  # refit: the panes changed shape
+        self._refit_later()  # the panes changed shape: refit once Qt has laid them out
 
     def rows(self) -> list[int]:
         """Viewports per row: 1, 2, 3 side by side when the grid is wide (else 2 + 1), 2 x 2, 3 + 2."""
@@ -89,7 +89,12 @@ class PaneGrid(QWidget):
         super().resizeEvent(event)
         if getattr(self, "_arranged", None) != tuple(self.rows()):
             self._arrange()
-            self.reset_camera(render=False)
+            self._refit_later()
+
+    def _refit_later(self) -> None:
+        """Reset the camera after the pending layout (VTK uses the panes' sizes at the time of the reset)."""
+        if self._base is not None:
+            QTimer.singleShot(0, lambda: self.reset_camera(render=True))
 
     def set_geometry(self, base: pv.PolyData, *, edge_length: float) -> None:
         """Show a new mesh in every viewport and frame it (rendered by the next :meth:`render_all`)."""
@@ -103,9 +108,10 @@ class PaneGrid(QWidget):
         first = self.viewports[0].plotter
         first.view_vector((0.55, -1.0, 0.85), viewup=(0.0, 0.0, 1.0), render=False)
         first.reset_camera(render=False)
-        # VTK fits the height; a pane narrower than tall (shared camera: the narrowest) must fit its width
-        aspect = min(vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports)
-        first.camera.zoom(1.15 * min(1.0, max(aspect, 0.2)))
+        # VTK fits the first pane (its aspect included); a linked camera must also fit a narrower pane
+        aspects = [vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports]
+        narrow = min(aspects) / max(min(aspects[0], 1.0), 1e-3) if self.linked else 1.0
+        first.camera.zoom(1.15 * min(1.0, max(narrow, 0.2)))
         if not self.linked:
             for vp in self.viewports[1:]:
                 vp.plotter.renderer.camera = first.camera.copy()
