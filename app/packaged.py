@@ -9,7 +9,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-__all__ = ["resource"]
+__all__ = ["resource", "sample_names"]
 
 _CHECKOUT = Path(__file__).resolve().parent.parent / "resources"
 
@@ -26,3 +26,15 @@ def resource(name: str):
     if not path.is_file():
         raise FileNotFoundError(f"curvlab resource {name!r} is missing (looked in app.resources and {_CHECKOUT})")
     return path
+
+
+def sample_names() -> list[str]:
+    """File names of the small sample meshes in ``resources/samples`` (sorted)."""
+    try:
+        folder = resources.files("app.resources").joinpath("samples")
+        if folder.is_dir():
+            return sorted(p.name for p in folder.iterdir() if p.is_file())
+    except ModuleNotFoundError:
+        pass
+    folder = _CHECKOUT / "samples"
+    return sorted(p.name for p in folder.iterdir() if p.is_file()) if folder.is_dir() else []

@@ -21,7 +21,7 @@ from app.model import (
     Document, FileSource, Layer, LimitMode, MeshChange, Pane, SurfaceSource, colormap_names, export_payload,
     map_colours,
 )
-from app.packaged import resource
+from app.packaged import resource, sample_names
 
 from .compare_panel import ComparePanel
 from .geometry import direction_glyphs, glyph_subsample, prepare_geometry
@@ -123,6 +123,9 @@ class MainWindow(QMainWindow):
         self.action_open = QAction("&Open…", self, shortcut=QKeySequence.StandardKey.Open,
                                    triggered=self.open_dialog)
         self.recent_menu = file_menu.addMenu("Open &Recent")
+        self.sample_menu = file_menu.addMenu("Open &Sample")
+        for name in sample_names():
+            self.sample_menu.addAction(name, lambda n=name: self.open_path(str(resource(f"samples/{n}"))))
         self.action_export_ply = QAction("Export coloured &PLY…", self, shortcut="Ctrl+E",
                                          triggered=self.export_ply_dialog)
         self.action_export_vtu = QAction("Export &VTK (.vtu) for ParaView…", self, shortcut="Ctrl+Shift+E",

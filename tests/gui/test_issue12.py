@@ -235,3 +235,13 @@ def test_settings_persist_panes_and_limits_and_help_menu(qtbot, window, ui):
     assert again.doc.panes == [Pane("mru", 2), Pane("qs", 3)]
     assert again.doc.display.limit_mode is LimitMode.MINMAX
     again.close()
+
+
+def test_sample_meshes_ship_in_resources(qtbot, window, ui):
+    actions = {a.text(): a for a in window.sample_menu.actions()}
+    assert "torus.ply" in actions
+    actions["torus.ply"].trigger()
+    qtbot.waitUntil(lambda: isinstance(window.doc.source, FileSource) and window.doc.source.label == "torus.ply",
+                    timeout=TIMEOUT_MS)
+    ui.wait_ready()
+    assert window.doc.mesh.n_vertices == 1000 and window.doc.result(0).valid.all()
