@@ -4,7 +4,6 @@ estimate and help."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -17,10 +16,7 @@ from PySide6.QtWidgets import (
 )
 
 from app.controller import Controller
-from app.model import (
-    Document, FileSource, Layer, LimitMode, MeshChange, Pane, SurfaceSource, colormap_names, export_payload,
-    map_colours,
-)
+from app.model import Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, export_payload, map_colours
 from app.packaged import resource, sample_names
 
 from .compare_panel import ComparePanel
@@ -30,6 +26,7 @@ from .inspect_panel import InspectPanel
 from .mesh_panel import MeshPanel
 from .pane_grid import PaneGrid
 from .readout import Readout
+from .session import restore_session, save_session
 from .source_panel import SourcePanel
 
 __all__ = ["MainWindow", "MESH_FILTER", "DEFAULT_SOURCE"]
@@ -260,8 +257,6 @@ class MainWindow(QMainWindow):
             self.update_titles()
 
     def _on_display(self, names: set) -> None:
-        for key in names & {"diverging_cmap", "sequential_cmap"}:
-            self.settings.setValue(f"cmap/{key}", getattr(self.doc.display, key))
         self.redraw()
 
     def _on_picked(self, index) -> None:
@@ -365,7 +360,8 @@ class MainWindow(QMainWindow):
     def _set_busy(self, busy: bool) -> None:
         self.progress.setVisible(busy)
         self.cancel_button.setVisible(busy)
-        self.action_cancel.setEnabled(busy) if hasattr(self, "action_cancel") else None
+        if hasattr(self, "action_cancel"):  # _set_busy runs once before the menus exist
+            self.action_cancel.setEnabled(busy)
         self.update_titles()
 
     def _on_progress(self, label: str, fraction: float) -> None:
@@ -453,55 +449,18 @@ class MainWindow(QMainWindow):
                          Qt.Orientation.Vertical)
 
     def _restore_settings(self) -> None:
-        s = self.settings
-        geometry, state = s.value("geometry"), s.value("state")
+        geometry, state = self.settings.value("geometry"), self.settings.value("state")
         if geometry is None or not self.restoreGeometry(geometry):
             self._fit_screen()
         if state is not None:
             self.restoreState(state)
-        changes = {}
-        for key, kind in (("diverging_cmap", "diverging"), ("sequential_cmap", "sequential")):
-            value = s.value(f"cmap/{key}")
-            if value and str(value) in colormap_names(kind):
-                changes[key] = str(value)
-        try:
-            mode = s.value("limits/mode")
-            if mode:
-                changes["limit_mode"] = LimitMode(str(mode))
-            for key in ("percentiles", "manual"):
-                value = s.value(f"limits/{key}")
-                if value:
-                    lo, hi = (float(x) for x in json.loads(str(value)))
-                    changes[key] = (lo, hi)
-            changes["lock_limits"] = str(s.value("limits/lock", "false")).lower() == "true"
-        except (ValueError, TypeError):
-            pass
-        self.doc.display.update(**changes)
-        self._restore_panes()
-
-    def _restore_panes(self) -> None:
-        try:
-            saved = json.loads(str(self.settings.value("panes", "[]")))
-            panes = [Pane(p["method"], p["range"], p.get("radius")).validated() for p in saved]
-        except (ValueError, TypeError, KeyError):
-            return
-        if not panes:
-            return
-        self.doc.set_pane_count(len(panes))
-        for i, pane in enumerate(panes):
-            self.doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
+        restore_session(self.settings, self.doc)
 
     def _save_settings(self) -> None:
-        s, st = self.settings, self.doc.display.state
-        s.setValue("geometry", self.saveGeometry())
-        s.setValue("state", self.saveState())
-        s.setValue("panes", json.dumps([{"method": p.method, "range": p.range, "radius": p.radius}
-                                        for p in self.doc.panes]))
-        s.setValue("limits/mode", st.limit_mode.value)
-        s.setValue("limits/percentiles", json.dumps(list(st.percentiles)))
-        s.setValue("limits/manual", json.dumps(list(st.manual)))
-        s.setValue("limits/lock", "true" if st.lock_limits else "false")
-        s.sync()
+        self.settings.setValue("geometry", self.saveGeometry())
+        self.settings.setValue("state", self.saveState())
+        save_session(self.settings, self.doc)
+        self.settings.sync()
 
     def closeEvent(self, event) -> None:  # noqa: N802
         """Stop the workers, save the layout and settings, release the render windows."""
