@@ -272,4 +272,7 @@ def _scalar_bar(lut: vtkLookupTable) -> vtkScalarBarActor:
         prop.ItalicOff()
         prop.BoldOff()
         prop.SetFontSize(12)
+    label = bar.GetLabelTextProperty()  # the end labels overhang the bar: each gets its own light box
+    label.SetBackgroundColor(1.0, 1.0, 1.0)
+    label.SetBackgroundOpacity(0.85)
     return bar
