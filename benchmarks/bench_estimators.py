@@ -1,16 +1,22 @@
-"""Speed and memory of every estimator variant, with libigl and VTK as peers.
+"""Speed and memory of every estimator variant, with trueform, libigl and VTK as peers.
 
 Run by hand (not part of the test suite)::
 
     .venv/bin/python benchmarks/bench_estimators.py --sizes 100000 1000000
     .venv/bin/python benchmarks/bench_estimators.py --sizes 1000000 --only mru:2 nc:4
 
-Each measurement runs in a fresh subprocess; the mesh and its connectivity are built first, then
-resident memory is sampled during the call, so "peak MB" is what the estimate itself adds above
-the mesh (including the normals it computes and the result it returns). Times are wall-clock on
-all cores (estimators run their blocks on a thread pool; ``CURV_THREADS`` limits it).
+Each measurement runs in a fresh subprocess. The vertex and face arrays are built first; then, as a
+new user would call it, a fresh ``curv.Mesh`` is made and estimated inside the timed region, so
+the connectivity every first estimate pays is included ("seconds"); the connectivity alone is
+reported as well ("conn s", on another fresh Mesh). Before timing, each child calls the same
+estimator once on a tiny mesh, so numba's kernels are loaded from the on-disk cache (the first-run
+compile and the cold start are reported by ``--compile``). Resident memory is sampled during the
+call, so "peak MB" is what the estimate adds above the vertex and face arrays. Times are
+wall-clock on all cores (``CURV_THREADS`` limits the kernels' threads).
 
 Meshes (``--mesh``):
+- ``sphere`` (default): a geodesic unit sphere (icosahedron, faces split f^2 times, 10 f^2 + 2
+  vertices): near-equilateral, valence 6 (5 at 12 vertices), closed.
 - ``hexagon`` (default): the paper's test mesh (§5.1), the regular hexagon grid subdivided to about
   N vertices and lifted by the trigonometric patch: near-equilateral, valence 6, one border.
 - ``torus``: a closed torus whose grid parameters are jittered: right-angled, uneven triangles whose
@@ -59,7 +65,14 @@ def hexagon_patch(n_target: int):
     return np.asarray(sampled.mesh.vertices), sampled.mesh.triangles
 
 
-MESHES = {"hexagon": hexagon_patch, "torus": jittered_torus}
+def sphere(n_target: int):
+    """Geodesic unit sphere with about ``n_target`` vertices: (vertices (n,3), faces (m,3))."""
+    from curv.surfaces.tessellate import geodesic_sphere, sphere_frequency
+
+    return geodesic_sphere(sphere_frequency(n_target))
+
+
+MESHES = {"sphere": sphere, "hexagon": hexagon_patch, "torus": jittered_torus}
 
 
 class PeakRSS:
@@ -96,55 +109,103 @@ class PeakRSS:
         return (self.peak - self.base) / 2**20
 
 
-def _child(kind: str, name: str, k: int, n: int, mesh_kind: str) -> dict:
-    """Runs in the subprocess: build the mesh, take the baseline, time one estimate."""
+def _tiny(kind_mesh: str):
+    return MESHES["sphere"](200)
+
+
+def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
+    """Runs in the subprocess: build the arrays, warm up on a tiny mesh, take the baseline, time one call."""
     v, f = MESHES[mesh_kind](n)
+    extra = {}
     if kind == "curv":
         import curv
 
-        mesh = curv.Mesh(v, f)
+        tv, tf_ = _tiny(mesh_kind)
         t0 = time.perf_counter()
-        for attr in ("edges", "adjacency", "longest_edge", "edge_faces", "vertex_faces", "degenerate_faces",
-                     "border_vertices", "nonmanifold_vertices", "face_normals",
-                     "vertex_corners", "corner_next", "corner_prev", "inconsistent_edges", "isolated_vertices"):
-            getattr(mesh, attr)
-        prep = time.perf_counter() - t0
+        curv.estimate(curv.Mesh(tv, tf_), name, k)  # kernels from the cache (or compiled)
+        extra["warmup_seconds"] = time.perf_counter() - t0
+        conn_mesh = curv.Mesh(v, f)
+        t0 = time.perf_counter()
+        for attr in ("adjacency", "longest_edge", "border_vertices", "nonmanifold_vertices",
+                     "isolated_vertices", "inconsistent_edges", "degenerate_faces"):
+            getattr(conn_mesh, attr)
+        extra["conn_seconds"] = time.perf_counter() - t0
+        del conn_mesh
         gc.collect()
         with PeakRSS() as mem:
             t0 = time.perf_counter()
-            res = curv.estimate(mesh, name, k)
+            res = curv.estimate(curv.Mesh(v, f), name, k)
             seconds = time.perf_counter() - t0
-        extra = {"valid": float(res.valid.mean()), "prep_seconds": prep}
+        extra["valid"] = float(res.valid.mean())
+    elif kind == "trueform":
+        import trueform as tf
+
+        faces = np.ascontiguousarray(f, dtype=np.int32)
+        tv, tf_ = _tiny(mesh_kind)
+        tf.principal_curvatures((tf_.astype(np.int32), tv), k=int(k), directions=True)
+        gc.collect()
+        with PeakRSS() as mem:
+            t0 = time.perf_counter()
+            tf.principal_curvatures((faces, v), k=int(k), directions=True)
+            seconds = time.perf_counter() - t0
     elif kind == "igl":
         import igl
 
         gc.collect()
         with PeakRSS() as mem:
             t0 = time.perf_counter()
-            igl.principal_curvature(v, f.astype(np.int64), radius=k)
+            igl.principal_curvature(v, f.astype(np.int64), radius=int(k))
             seconds = time.perf_counter() - t0
-        extra = {}
     elif kind == "vtk":
         import pyvista as pv
         import vtk
 
-        poly = pv.PolyData.from_regular_faces(v, f)
         gc.collect()
         with PeakRSS() as mem:
             t0 = time.perf_counter()
+            poly = pv.PolyData.from_regular_faces(v, f)
             for mode in ("SetCurvatureTypeToMean", "SetCurvatureTypeToGaussian"):
                 flt = vtk.vtkCurvatures()
                 flt.SetInputData(poly)
                 getattr(flt, mode)()
                 flt.Update()
             seconds = time.perf_counter() - t0
-        extra = {}
     else:
         raise ValueError(kind)
     return {"seconds": seconds, "peak_above_mesh_mb": mem.above_base_mb, **extra}
 
 
-def run_one(kind: str, name: str, k: int, n: int, mesh_kind: str, repeat: int = 1) -> dict:
+def compile_times(variants) -> None:
+    """First-run compile time and cached cold start per estimator, each in a fresh process.
+
+    The compile run points numba at an empty cache folder (``NUMBA_CACHE_DIR``), so it measures
+    what a first install pays; the cold start then loads that cache in a new process.
+    """
+    import tempfile
+
+    code = ("import time, sys; t=time.perf_counter(); import curv; from curv.surfaces.tessellate import "
+            "geodesic_sphere; v,f=geodesic_sphere(5); m=curv.Mesh(v,f); t1=time.perf_counter(); "
+            "curv.estimate(m, sys.argv[1], float(sys.argv[2])); print(t1-t, time.perf_counter()-t1)")
+    print(f"{'estimator':<10} {'import s':>8} {'compile s':>10} {'cold start s':>13}")
+    seen = set()
+    for name, k in variants:
+        if name in seen:
+            continue
+        seen.add(name)
+        with tempfile.TemporaryDirectory() as cache:
+            env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+            first = subprocess.run([sys.executable, "-c", code, name, str(k)], capture_output=True, text=True, env=env)
+            second = subprocess.run([sys.executable, "-c", code, name, str(k)], capture_output=True, text=True, env=env)
+        try:
+            imp, comp = map(float, first.stdout.split())
+            _, cold = map(float, second.stdout.split())
+        except ValueError:
+            print(f"{name:<10} error: {(first.stderr or second.stderr).strip().splitlines()[-1:]}")
+            continue
+        print(f"{name:<10} {imp:8.2f} {comp:10.2f} {cold:13.2f}", flush=True)
+
+
+def run_one(kind: str, name: str, k: float, n: int, mesh_kind: str, repeat: int = 1) -> dict:
     """Best of ``repeat`` fresh subprocesses: the fastest time, and the largest peak memory seen."""
     cmd = [sys.executable, __file__, "--child", kind, name, str(k), str(n), mesh_kind]
     runs = []
@@ -161,8 +222,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sizes", type=int, nargs="+", default=[100_000, 1_000_000])
     parser.add_argument("--only", nargs="*", help="variants as name:k (default all)")
-    parser.add_argument("--no-peers", action="store_true", help="skip libigl and VTK")
-    parser.add_argument("--mesh", choices=sorted(MESHES), default="hexagon", help="benchmark mesh (see above)")
+    parser.add_argument("--no-peers", action="store_true", help="skip trueform, libigl and VTK")
+    parser.add_argument("--mesh", choices=sorted(MESHES), default="sphere", help="benchmark mesh (see above)")
+    parser.add_argument("--compile", action="store_true",
+                        help="measure first-run compile and cached cold-start times instead")
     parser.add_argument("--repeat", type=int, default=1,
                         help="runs per variant, each a fresh process; the fastest is reported (shared "
                              "machines vary by tens of percent from run to run)")
@@ -170,37 +233,43 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.child:
         kind, name, k, n, mesh_kind = args.child
-        print(json.dumps(_child(kind, name, int(k), int(n), mesh_kind)))
+        print(json.dumps(_child(kind, name, float(k), int(n), mesh_kind)))
         return 0
 
     import curv
     from curv.estimators import all_variants
 
     variants = [tuple(v.split(":")) for v in args.only] if args.only else all_variants()
-    variants = [(m, int(k)) for m, k in variants]
+    variants = [(m, float(k)) for m, k in variants]
+    if args.compile:
+        compile_times(variants)
+        return 0
     print(f"# cores: {os.cpu_count()}, numpy {np.__version__}, curv {curv.__version__}, best of {args.repeat}")
     for n in args.sizes:
         v, _ = MESHES[args.mesh](n)
         print(f"\n## {args.mesh}, {len(v)} vertices")
-        print(f"{'variant':<12} {'seconds':>8} {'peak MB':>8} {'valid':>6}   vs igl R2  vs VTK")
         peers = {}
         if not args.no_peers:
-            peers["igl"] = run_one("igl", "principal_curvature", 2, n, args.mesh, args.repeat)
-            peers["vtk"] = run_one("vtk", "curvatures", 0, n, args.mesh, args.repeat)
+            for k in (2, 4):
+                peers[f"trueform k={k}"] = run_one("trueform", "principal_curvatures", k, n, args.mesh, args.repeat)
+            peers["libigl r=2"] = run_one("igl", "principal_curvature", 2, n, args.mesh, args.repeat)
+            peers["VTK H+K"] = run_one("vtk", "curvatures", 0, n, args.mesh, args.repeat)
+        print(f"{'variant':<14} {'seconds':>8} {'conn s':>7} {'peak MB':>8} {'valid':>6}  vs tf k=2  vs tf k=4"
+              f"  vs VTK")
         for m, k in variants:
             r = run_one("curv", m, k, n, args.mesh, args.repeat)
+            label = f"{m} R{k:g}"
             if "error" in r:
-                print(f"{m + ' R' + str(k):<12} error: {r['error']}")
+                print(f"{label:<14} error: {r['error']}")
                 continue
             ratios = "  ".join(
                 f"{peers[p]['seconds'] / r['seconds']:8.2f}x" if "seconds" in peers.get(p, {}) else "       -"
-                for p in ("igl", "vtk"))
-            print(f"{m + ' R' + str(k):<12} {r['seconds']:8.2f} {r['peak_above_mesh_mb']:8.0f} "
-                  f"{r['valid']:6.3f}   {ratios}", flush=True)
+                for p in ("trueform k=2", "trueform k=4", "VTK H+K"))
+            print(f"{label:<14} {r['seconds']:8.2f} {r['conn_seconds']:7.2f} {r['peak_above_mesh_mb']:8.0f} "
+                  f"{r['valid']:6.3f}  {ratios}", flush=True)
         for p, r in peers.items():
-            text = f"{r['seconds']:8.2f} {r['peak_above_mesh_mb']:8.0f}" if "seconds" in r else f"error: {r['error']}"
-            label = "libigl R2" if p == "igl" else "VTK H+K"
-            print(f"{label:<12} {text}")
+            text = f"{r['seconds']:8.2f} {'':>7} {r['peak_above_mesh_mb']:8.0f}" if "seconds" in r else f"error: {r['error']}"
+            print(f"{p:<14} {text}")
     return 0
 
 

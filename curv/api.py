@@ -10,7 +10,9 @@ import numpy as np
 
 from .errors import EstimatorError, MeshError
 from .estimators import get_spec
+from .jit import COMPILE_MESSAGE, Progress, compile_pending
 from .mesh import Mesh
+from .ranges import ball_radii, parse_range, resolve
 from .normals import NormalWeighting, normalize_rows, unusable_normal_vertices, vertex_normals
 from .result import Curvature
 from .smoothing import smooth_positions, smooth_values
@@ -29,16 +31,13 @@ class Smoothing(str, enum.Enum):
     """Estimate, then cotan-smooth k1 and k2 over valid neighbours (R2SV)."""
 
 
-def parse_range(value) -> int:
-    """Accept ``2``, ``"2"`` or ``"R2"``; return the int k (validity is checked by the spec)."""
-    if isinstance(value, str):
-        text = value.strip().upper().removeprefix("R")
-        if text.isdigit():
-            return int(text)
-        raise EstimatorError(f"range must look like 2 or 'R2', got {value!r}")
-    if isinstance(value, (bool, np.bool_)):
-        raise EstimatorError(f"range must be an integer, got {value!r}")
-    return value
+def _asks_for_fit(normals) -> bool:
+    """``normals="fit"``; any other string is an error naming the choices."""
+    if not isinstance(normals, str):
+        return False
+    if normals != "fit":
+        raise EstimatorError(f"normals must be an (n, 3) array or 'fit', got {normals!r}")
+    return True
 
 
 def _check_normals(normals, n: int) -> np.ndarray:
@@ -51,21 +50,25 @@ def _check_normals(normals, n: int) -> np.ndarray:
 def iter_estimate(
     mesh: Mesh,
     method: str = "mru",
-    range=2,
+    range=None,
     *,
+    radius: float | None = None,
     normals: np.ndarray | None = None,
     normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
     smooth: Smoothing | str | None = None,
     smooth_iterations: int = 1,
     smooth_strength: float = 0.5,
+    fit_range=2,
     block_size: int | None = None,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
 
-    Every ``yield`` is a point where a caller may stop (cancel). Parameters as in :func:`estimate`.
+    Every ``yield`` is a point where a caller may stop (cancel); the yielded values are
+    :class:`curv.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
+    Parameters as in :func:`estimate`.
     """
     spec = get_spec(method)
-    k = spec.check_range(parse_range(range))
+    rng = resolve(spec, range, radius)
     if not isinstance(mesh, Mesh):
         raise MeshError(f"expected a curv.Mesh, got {type(mesh).__name__}")
     if spec.triangles_only and not mesh.is_triangular:
@@ -79,7 +82,7 @@ def iter_estimate(
     work_mesh = mesh
     if smooth is Smoothing.MESH:
         work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
-        if normals is not None:
+        if normals is not None and not _asks_for_fit(normals):
             raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
     # Where the faces around a vertex are not one consistently oriented fan, its normal averages
     # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
@@ -91,19 +94,25 @@ def iter_estimate(
     else:
         if normals is None:
             used_normals = vertex_normals(work_mesh, weighting=normal_weighting)
+        elif _asks_for_fit(normals):
+            from .fitted_normals import fitted_normals
+
+            used_normals = fitted_normals(work_mesh, range=fit_range)
         else:
             used_normals = _check_normals(normals, mesh.n_vertices)
         if meaningless.any():
             used_normals = used_normals.copy()
             used_normals[meaningless] = np.nan
-    yield 0.0
-    raw = yield from spec.function(work_mesh, used_normals, k, block_size=block_size)
+    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
+    raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size)
     if fused:
         used_normals = raw.normals
 
     k1, k2, d1, d2, reason = raw.k1, raw.k2, raw.d1, raw.d2, raw.reason.copy()
     isolated = mesh.isolated_vertices
-    reason[(reason == Reason.OK) & isolated] = Reason.DEGENERATE
+    # no face at all is the root cause, whatever the estimator saw (no support, no normal)
+    reason[isolated] = Reason.DEGENERATE
     # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
     reason[(reason == Reason.OK) & mesh.nonmanifold_vertices] = Reason.NONMANIFOLD
     # faces of opposite orientation meet here: the vertex normal is meaningless
@@ -134,10 +143,23 @@ def iter_estimate(
     yield 1.0
     return Curvature(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
-        method=spec.name, range=k,
-        info={"seconds": time.perf_counter() - t0, "smooth": smooth.value,
+        method=spec.name, range=rng.value,
+        info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
+              "normals": _normals_label(normals, normal_weighting, fit_range),
+              "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0},
     )
+
+
+def _normals_label(normals, weighting, fit_range) -> str:
+    """How the normals were made, for the result's info: ``max``, ``fit R2`` or ``given``."""
+    if normals is None:
+        return NormalWeighting(weighting).value
+    if isinstance(normals, str):
+        from .ranges import range_label
+
+        return f"fit {range_label(parse_range(fit_range))}"
+    return "given"
 
 
 def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -151,13 +173,15 @@ def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
 def estimate(
     mesh: Mesh,
     method: str = "mru",
-    range=2,
+    range=None,
     *,
+    radius: float | None = None,
     normals: np.ndarray | None = None,
     normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
     smooth: Smoothing | str | None = None,
     smooth_iterations: int = 1,
     smooth_strength: float = 0.5,
+    fit_range=2,
     block_size: int | None = None,
 ) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
@@ -167,18 +191,27 @@ def estimate(
     mesh : Mesh
     method : str
         Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
-    range : int or str
-        k of the range Rk (``2`` or ``"R2"``); must be one the estimator supports.
-    normals : (n, 3) array_like, optional
-        Vertex normals to use (normalised here); default Max-weighted normals of the mesh.
+    range : int, float or str, optional
+        k of the range Rk: ``2``, ``2.5`` or ``"R2"`` (:mod:`curv.ranges`); any real k at least the
+        estimator's smallest named range for the estimators with a support, the one named range
+        for ``meyer`` (R1) and ``ru`` (R2). Default R2 where the estimator has it, else its range.
+    radius : float, optional
+        Instead of ``range``: the same ball radius in mesh units at every vertex.
+    normals : (n, 3) array_like or "fit", optional
+        Vertex normals to use (normalised here); ``"fit"``: each normal from a local jet fit at
+        range ``fit_range`` (:func:`curv.fitted_normals.fitted_normals`); default Max-weighted
+        normals of the mesh (the paper's protocol).
     normal_weighting : {"max", "area", "angle"}
         Weights of the default normals.
     smooth : {None, "mesh", "values"}
         Smooth the mesh before (R2SM) or the curvature values after (R2SV) the estimate.
     smooth_iterations, smooth_strength : int, float
         Explicit cotan-Laplacian steps and their step size.
+    fit_range : int, float or str
+        Range of the normal fit when ``normals="fit"``.
     block_size : int, optional
-        Vertices per block of the range neighbourhoods (memory bound); default automatic.
+        Vertices per kernel call (the granularity of progress and cancel); default adaptive, about
+        every 0.05 s. Results do not depend on it.
 
     Returns
     -------
@@ -188,13 +221,14 @@ def estimate(
     Raises
     ------
     EstimatorError
-        Unknown method or range (the message lists the allowed ones).
+        Unknown method, or a range/radius the estimator does not take (the message names the
+        allowed forms).
     MeshError
         A mesh the estimator cannot handle (e.g. quads for a triangle-only estimator).
     """
-    gen = iter_estimate(mesh, method, range, normals=normals, normal_weighting=normal_weighting,
+    gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
                         smooth=smooth, smooth_iterations=smooth_iterations,
-                        smooth_strength=smooth_strength, block_size=block_size)
+                        smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size)
     while True:
         try:
             next(gen)

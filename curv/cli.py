@@ -59,7 +59,7 @@ def _cmd_list(args) -> int:
 
     print(f"{'name':<6} {'ranges':<12} {'polygons':<9} {'borders':<8} title / reference")
     for spec in ESTIMATORS.values():
-        ranges = ",".join(f"R{k}" for k in spec.ranges)
+        ranges = ",".join(f"R{k}" for k in spec.ranges) + ("+" if spec.has_support else "")
         print(f"{spec.name:<6} {ranges:<12} {'no' if spec.triangles_only else 'yes':<9} "
               f"{'invalid' if spec.closed_ring else 'fitted':<8} {spec.title}")
         print(f"{'':<37} {spec.reference}")
@@ -86,27 +86,28 @@ def _check_output(path: str) -> None:
         raise CurvOutputError(f"{out}: cannot write: no permission to write in {folder}")
 
 
-def _check_memory(args, n_vertices: int, n_faces: int, method: str, k: int) -> None:
+def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng) -> None:
     from .memory import check_memory
 
     if not args.memory_check:
         return
-    est = check_memory(n_vertices, n_faces, method, k)
+    est = check_memory(n_vertices, n_faces, method, rng)
     if not est.fits:
         raise CurvMemoryError(
-            f"{args.input}: {method} R{k} on {n_vertices:,} vertices and {n_faces:,} faces "
+            f"{args.input}: {method} {rng.label} on {n_vertices:,} vertices and {n_faces:,} faces "
             f"{est.describe()}; refusing to start (use a smaller range, another estimator, "
             f"a bigger machine, or --no-memory-check)")
 
 
 def _cmd_estimate(args) -> int:
-    from .api import iter_estimate, parse_range
+    from .api import iter_estimate
     from .estimators import get_spec
     from .io import check_output_suffix, load, peek_counts, save_result
+    from .ranges import resolve
     from .validity import describe_reasons
 
     spec = get_spec(args.method)
-    k = spec.check_range(parse_range(args.range))
+    rng = resolve(spec, args.range, args.radius)
     if args.output:
         try:
             check_output_suffix(args.output)
@@ -115,19 +116,23 @@ def _cmd_estimate(args) -> int:
         _check_output(args.output)
     counts = peek_counts(args.input)
     if counts is not None:  # refuse before reading a file that will not fit
-        _check_memory(args, *counts, spec.name, k)
+        _check_memory(args, *counts, spec.name, rng)
     t0 = time.perf_counter()
     mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
                 orient=args.orient, remove_unreferenced=args.remove_unreferenced)
     t_load = time.perf_counter() - t0
     if counts is None:
-        _check_memory(args, mesh.n_vertices, mesh.n_faces, spec.name, k)
-    progress = Progress(f"{spec.name} R{k}", enabled=None if not args.quiet else False)
-    gen = iter_estimate(mesh, spec.name, k, smooth=args.smooth)
+        _check_memory(args, mesh.n_vertices, mesh.n_faces, spec.name, rng)
+    progress = Progress(f"{spec.name} {rng.label}", enabled=None if not args.quiet else False)
+    normals = {"normals": "fit"} if args.normals == "fit" else {"normal_weighting": args.normals}
+    gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, smooth=args.smooth, **normals)
     t1 = time.perf_counter()
     try:
         while True:
-            progress.update(next(gen))
+            step = next(gen)
+            if getattr(step, "message", "") and not args.quiet:
+                print(f"curv: {step.message}", file=sys.stderr, flush=True)
+            progress.update(step)
     except StopIteration as stop:
         res = stop.value
     finally:
@@ -153,7 +158,7 @@ def _cmd_estimate(args) -> int:
         reasons["DEGENERATE"] -= n_isolated
         reasons = {**{k: v for k, v in reasons.items() if v}, "ISOLATED (no face)": n_isolated}
     invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
-    print(f"{res.method} R{res.range}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
+    print(f"{res.method} {res.info['range_label']}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
           f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
     for name in ("k1", "k2", "mean", "gaussian"):
         print(_stats_line(name, getattr(res, name)))
@@ -195,13 +200,19 @@ def build_parser() -> argparse.ArgumentParser:
     p_est = sub.add_parser("estimate", help="estimate curvature on a mesh file")
     p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
     p_est.add_argument("--method", "-m", default="mru", help="estimator name (see `curv list`); default mru")
-    p_est.add_argument("--range", "-r", default="2", help="range k of Rk, e.g. 2 or R2; default 2")
+    p_est.add_argument("--range", "-r", help="range k of Rk: 2, R2 or any real k such as 2.5 (at least the "
+                       "estimator's smallest); default R2, or the estimator's one range (meyer R1)")
+    p_est.add_argument("--radius", type=float, help="instead of --range: the same ball radius in mesh units at "
+                       "every vertex")
     p_est.add_argument("--output", "-o", help="write the result: " + "; ".join(
         f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items()))
     p_est.add_argument("--quantity", default="mean", choices=list(QUANTITIES),
                        help="what the output colours show; default mean (" + "; ".join(describe_quantities()) + ")")
     p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
     p_est.add_argument("--clim", nargs=2, type=float, metavar=("LO", "HI"), help="colour limits")
+    p_est.add_argument("--normals", choices=["max", "area", "angle", "fit"], default="max",
+                       help="vertex normals: Max, area or angle weighted face normals, or a local jet fit "
+                            "(R2); default max (the paper's protocol)")
     p_est.add_argument("--smooth", choices=["mesh", "values"], help="smooth the mesh before or the values after")
     p_est.add_argument("--merge-vertices", action="store_true", help="merge vertices at identical positions")
     p_est.add_argument("--remove-degenerate", action="store_true", help="drop zero-area / repeated-index faces")

@@ -385,6 +385,8 @@ def _result_label(curvature: Curvature) -> str:
     from .ranges import range_label
 
     rng = curvature.range
+    if curvature.info.get("range_label"):
+        return f"{curvature.method} {curvature.info['range_label']}"
     label = range_label(rng) if isinstance(rng, (int, float, np.integer, np.floating)) else str(rng or "")
     return f"{curvature.method} {label}".strip()
 

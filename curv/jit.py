@@ -20,8 +20,10 @@ Every hot loop in curv is a numba kernel compiled with :data:`jit` (serial) or :
 from __future__ import annotations
 
 import os
+import tempfile
 import threading
 import time
+from pathlib import Path
 from typing import Callable, Generator, Iterable
 
 import numba
@@ -34,6 +36,38 @@ __all__ = [
 
 # must be chosen before the first parallel launch of the process
 numba.config.THREADING_LAYER = "workqueue"
+
+
+def _writable(folder: Path) -> bool:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return False
+    return os.access(folder, os.W_OK | os.X_OK)
+
+
+def _choose_cache_dir() -> None:
+    """Give numba a cache folder it can write, so that no install layout breaks ``import curv``.
+
+    numba caches next to the sources (``__pycache__``) or in the user's cache folder, and raises
+    at decoration time when it can write neither (a read-only install run by a user without a
+    home, as in a service or a test run as ``nobody``). Then use a per-user folder in the system's
+    temporary directory. ``NUMBA_CACHE_DIR`` set by the user always wins.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    package = Path(__file__).resolve().parent
+    in_tree = package / "__pycache__"
+    if _writable(in_tree) and _writable(package / "estimators" / "__pycache__"):
+        return
+    home_cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "curvlab-numba"
+    for folder in (home_cache, Path(tempfile.gettempdir()) / f"curvlab-numba-{os.getuid()}"):
+        if _writable(folder):
+            numba.config.CACHE_DIR = str(folder)
+            return
+
+
+_choose_cache_dir()
 
 jit = njit(cache=True, nogil=True)
 """Serial kernel or helper: ``@jit``."""
@@ -52,6 +86,16 @@ MAX_CHUNK = 1 << 20
 
 LAUNCH_LOCK = threading.Lock()
 """Held while a parallel kernel runs (see the module notes)."""
+
+
+
+def _new_lock_in_child() -> None:
+    # a fork taken while another thread held the lock would inherit it held, with no owner left
+    global LAUNCH_LOCK
+    LAUNCH_LOCK = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_new_lock_in_child)
 
 COMPILE_MESSAGE = "compiling curvature kernels (first run only)..."
 

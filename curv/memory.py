@@ -29,15 +29,11 @@ tensors, face frames) peaked at 1.1 GB above the mesh at 1M vertices, about 0.45
 fits (benchmarks/bench_estimators.py). meyer and ru work in chunks of vertices and peak below the
 fits (0.14 and 0.2 GB at 1M)."""
 
-BLOCK_BYTES: dict[tuple[str, int], int] = {k: 1200 * 2**20 for k in (
-    ("mru", 3), ("mru", 4), ("qs", 3), ("qs", 4), ("nc", 3), ("nc", 4), ("an", 2), ("an", 3), ("an", 4),
-    ("csm", 3), ("csm", 4))}
-"""Temporaries of the neighbourhood blocks at wide ranges. Blocks hold about 1M neighbour pairs
-(250k for ``an``) and at most three are in flight, so this does not grow with the mesh; measured
-at most 0.66 GB above the mesh at 1M vertices, taken as 1.2 GB to stay on the safe side."""
+STAMP_BYTES_PER_THREAD = 8.0
+"""Bytes per vertex and kernel thread of the support search's visited stamps (int64)."""
 
 
-def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range: int) -> int:
+def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range=None) -> int:
     """Predicted peak resident memory of estimating ``method`` at ``range`` on a mesh of this size.
 
     Parameters
@@ -46,8 +42,9 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range: int) 
         Mesh size (faces of any polygon kind).
     method : str
         Registry name.
-    range : int
-        k of Rk.
+    range : Range, float or None
+        The range (kept for the interface: the kernels hold no per-range temporaries beyond
+        each thread's small queue, so the peak does not depend on it).
 
     Returns
     -------
@@ -55,10 +52,10 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range: int) 
         Bytes.
     """
     units = float(n_vertices) + 0.5 * float(n_faces)
+    from .jit import threads
+
     linear = BASE_BYTES + (PER_UNIT_BYTES + FACE_PASS_BYTES.get(method, 0.0)) * units
-    # small meshes have small blocks: the block term cannot exceed what the mesh can fill
-    block = min(BLOCK_BYTES.get((method, int(range)), 0), 20_000.0 * units)
-    return int(linear + block)
+    return int(linear + STAMP_BYTES_PER_THREAD * threads() * float(n_vertices))
 
 
 def _cgroup_free() -> int | None:
@@ -131,7 +128,7 @@ class MemoryEstimate:
         return f"needs about {format_bytes(self.needed)}, {have} available"
 
 
-def check_memory(n_vertices: int, n_faces: int, method: str, range: int, *,
+def check_memory(n_vertices: int, n_faces: int, method: str, range=None, *,
                  available: int | None = None) -> MemoryEstimate:
     """Compare :func:`estimate_peak_bytes` with :func:`available_bytes` (or ``available`` if given)."""
     have = available_bytes() if available is None else available

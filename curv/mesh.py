@@ -12,7 +12,9 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from . import connectivity as _kernels
 from .errors import MeshError
+from .jit import launch
 
 __all__ = ["Mesh", "MeshReport"]
 
@@ -239,11 +241,7 @@ class Mesh:
         The corners at vertex v are ``corners[indptr[v]:indptr[v+1]]``, in face order. Built with a
         counting sort (linear time).
         """
-        h = self._indices.size
-        corners = np.arange(h, dtype=np.int64)
-        grouped = sp.coo_matrix((np.ones(h, np.int8), (self._indices, corners)),
-                                shape=(self.n_vertices, h)).tocsr()
-        return grouped.indptr.astype(np.int64, copy=False), grouped.indices.astype(np.int64, copy=False)
+        return _kernels.group_corners(self._indices, self.n_vertices)
 
     @cached_property
     def halfedges(self) -> np.ndarray:
@@ -252,16 +250,11 @@ class Mesh:
 
     @cached_property
     def _edge_data(self):
-        he = self.halfedges
-        ok = he[:, 0] != he[:, 1]  # repeated indices in a face give no edge
-        key = np.sort(he, axis=1)
-        lin = key[:, 0] * self.n_vertices + key[:, 1]
-        lin_ok = lin[ok]
-        uniq, inv = np.unique(lin_ok, return_inverse=True)
-        edges = np.stack([uniq // self.n_vertices, uniq % self.n_vertices], axis=1)
-        he_edge = np.full(he.shape[0], -1, dtype=np.int64)
-        he_edge[ok] = inv
-        return edges, he_edge
+        """The edge table (:func:`curv.connectivity.edge_table`): edges, halfedge_edge, face count,
+        edge faces, edge halfedges, forward count."""
+        indptr, corners = self.vertex_corners
+        return _kernels.edge_table(indptr, corners, self._indices, self.corner_next, self.corner_prev,
+                                   self.corner_face)
 
     @cached_property
     def edges(self) -> np.ndarray:
@@ -276,8 +269,7 @@ class Mesh:
     @cached_property
     def edge_face_count(self) -> np.ndarray:
         """(e,) int64 number of faces using each edge (1 on a border, >2 where non-manifold)."""
-        he = self.halfedge_edge
-        return np.bincount(he[he >= 0], minlength=self.edges.shape[0])
+        return self._edge_data[2]
 
     @cached_property
     def edge_faces(self) -> np.ndarray:
@@ -286,20 +278,7 @@ class Mesh:
         For a manifold interior edge, ``edge_faces[:, 0]`` is the face in which the edge runs
         from ``edges[:, 0]`` to ``edges[:, 1]`` when orientation is consistent.
         """
-        he = self.halfedge_edge
-        ok = np.flatnonzero(he >= 0)
-        forward = self.halfedges[ok, 0] < self.halfedges[ok, 1]
-        # forward halfedges first, so that slot 0 gets the face where the edge runs low -> high
-        order = np.lexsort((~forward, he[ok]))
-        ok = ok[order]
-        e = he[ok]
-        first = np.ones(e.size, bool)
-        first[1:] = e[1:] != e[:-1]
-        rank = np.arange(e.size) - np.maximum.accumulate(np.where(first, np.arange(e.size), 0))
-        out = np.full((self.edges.shape[0], 2), -1, dtype=np.int64)
-        keep = rank < 2
-        out[e[keep], rank[keep]] = self.corner_face[ok[keep]]
-        return out
+        return self._edge_data[3]
 
     @cached_property
     def edge_vectors(self) -> np.ndarray:
@@ -317,40 +296,38 @@ class Mesh:
 
     # ------------------------------------------------------------------ vertex connectivity
     @cached_property
+    def _incidence(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(indptr (n+1,), neighbours (2e,), edge_ids (2e,))`` int64: the edges of each vertex in
+        increasing order, and their other endpoints (also increasing)."""
+        return _kernels.vertex_incidence(self.edges, self.n_vertices)
+
+    @cached_property
     def adjacency(self) -> sp.csr_matrix:
         """(n, n) symmetric CSR matrix of int8 ones: ``A[i, j] = 1`` when ``i`` and ``j`` share an edge.
 
         Indices are sorted within each row.
         """
-        e = self.edges
+        indptr, neighbours, _ = self._incidence
         n = self.n_vertices
-        rows = np.concatenate([e[:, 0], e[:, 1]])
-        cols = np.concatenate([e[:, 1], e[:, 0]])
-        a = sp.csr_matrix((np.ones(rows.size, np.int8), (rows, cols)), shape=(n, n))
-        a.sort_indices()
-        return a
+        return _csr(np.ones(neighbours.size, np.int8), neighbours, indptr, (n, n))
 
     @cached_property
     def valence(self) -> np.ndarray:
         """(n,) int64 number of edge neighbours of each vertex."""
-        return np.diff(self.adjacency.indptr).astype(np.int64)
+        return np.diff(self._incidence[0])
 
     @cached_property
     def vertex_faces(self) -> sp.csr_matrix:
         """(n, m) CSR incidence: entry (v, f) counts the corners of face f at vertex v."""
-        n, m = self.n_vertices, self.n_faces
-        return sp.csr_matrix(
-            (np.ones(self._indices.size, np.int32), (self._indices, self.corner_face)), shape=(n, m)
-        )
+        indptr, corners = self.vertex_corners
+        face_ptr, faces, counts = _kernels.vertex_face_incidence(indptr, corners, self.corner_face)
+        return _csr(counts, faces, face_ptr, (self.n_vertices, self.n_faces))
 
     @cached_property
     def vertex_edges(self) -> sp.csr_matrix:
         """(n, e) CSR incidence: entry (v, e) is 1 when v is an endpoint of edge e."""
-        e = self.edges
-        ne = e.shape[0]
-        rows = e.reshape(-1)
-        cols = np.repeat(np.arange(ne), 2)
-        return sp.csr_matrix((np.ones(rows.size, np.int8), (rows, cols)), shape=(self.n_vertices, ne))
+        indptr, _, edge_ids = self._incidence
+        return _csr(np.ones(edge_ids.size, np.int8), edge_ids, indptr, (self.n_vertices, self.edges.shape[0]))
 
     @cached_property
     def longest_edge(self) -> np.ndarray:
@@ -358,17 +335,20 @@ class Mesh:
 
         This is the unit of the estimation range (paper §4.1). 0 for a vertex with no edge.
         """
-        out = np.zeros(self.n_vertices)
-        np.maximum.at(out, self.edges[:, 0], self.edge_lengths)
-        np.maximum.at(out, self.edges[:, 1], self.edge_lengths)
+        indptr, neighbours, _ = self._incidence
+        out = np.empty(self.n_vertices)
+        launch(_kernels.longest_incident_edges, indptr, neighbours, self._vertices, out)
         return out
 
     # ------------------------------------------------------------------ faces geometry
-    def _triangle_corner_columns(self) -> list[list[np.ndarray]]:
-        """``p[i][k]``: coordinate k of corner i of every triangle, (m,) each (triangle meshes only)."""
-        tri = self._indices.reshape(-1, 3)
-        cols = [np.ascontiguousarray(self._vertices[:, k]) for k in range(3)]
-        return [[np.take(c, tri[:, i]) for c in cols] for i in range(3)]
+    @cached_property
+    def _triangle_geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Triangle meshes: ``(vector areas (m, 3), areas (m,), degenerate (m,))`` in one pass."""
+        m = self.n_faces
+        vector_area, area, degenerate = np.empty((m, 3)), np.empty(m), np.empty(m, bool)
+        launch(_kernels.triangle_geometry, self._indices.reshape(-1, 3), self._vertices, vector_area, area,
+               degenerate)
+        return vector_area, area, degenerate
 
     @cached_property
     def face_vector_areas(self) -> np.ndarray:
@@ -378,14 +358,7 @@ class Mesh:
         triangle it is half the cross product of two edges (the same vector, with less rounding).
         """
         if self.is_triangular:
-            p0, p1, p2 = self._triangle_corner_columns()
-            a = [y - x for x, y in zip(p0, p1)]
-            b = [y - x for x, y in zip(p0, p2)]
-            out = np.empty((self.n_faces, 3))
-            out[:, 0] = a[1] * b[2] - a[2] * b[1]
-            out[:, 1] = a[2] * b[0] - a[0] * b[2]
-            out[:, 2] = a[0] * b[1] - a[1] * b[0]
-            return 0.5 * out
+            return self._triangle_geometry[0]
         v = self._vertices
         a = np.take(v, self._indices, axis=0)
         b = np.take(a, self.corner_next, axis=0)
@@ -399,6 +372,8 @@ class Mesh:
     @cached_property
     def face_areas(self) -> np.ndarray:
         """(m,) float64 face areas (norm of the Newell vector area)."""
+        if self.is_triangular:
+            return self._triangle_geometry[1]
         return np.linalg.norm(self.face_vector_areas, axis=1)
 
     @cached_property
@@ -416,25 +391,20 @@ class Mesh:
         Zero area means area below ``1e-12`` times the squared longest edge of the face.
         """
         if self.is_triangular:
-            tri = self._indices.reshape(-1, 3)
-            repeated = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2])
-            p = self._triangle_corner_columns()
-            sides2 = [sum((q[k] - r[k]) ** 2 for k in range(3)) for q, r in ((p[1], p[0]), (p[2], p[1]), (p[0], p[2]))]
-            longest2 = np.maximum(np.maximum(sides2[0], sides2[1]), sides2[2])
-        else:
-            repeated = np.zeros(self.n_faces, bool)
-            null = self.halfedge_edge < 0
-            repeated[self.corner_face[null]] = True
-            # an index repeated non-consecutively (e.g. a quad 0 1 0 2) gives no null edge
-            order = np.lexsort((self._indices, self.corner_face))
-            f_sorted = self.corner_face[order]
-            i_sorted = self._indices[order]
-            dup = (f_sorted[1:] == f_sorted[:-1]) & (i_sorted[1:] == i_sorted[:-1])
-            repeated[f_sorted[1:][dup]] = True
-            he = self.halfedges
-            d = np.take(self._vertices, he[:, 1], axis=0) - np.take(self._vertices, he[:, 0], axis=0)
-            lengths2 = np.einsum("ij,ij->i", d, d)
-            longest2 = np.maximum.reduceat(lengths2, self._offsets[:-1])
+            return self._triangle_geometry[2]
+        repeated = np.zeros(self.n_faces, bool)
+        null = self.halfedge_edge < 0
+        repeated[self.corner_face[null]] = True
+        # an index repeated non-consecutively (e.g. a quad 0 1 0 2) gives no null edge
+        order = np.lexsort((self._indices, self.corner_face))
+        f_sorted = self.corner_face[order]
+        i_sorted = self._indices[order]
+        dup = (f_sorted[1:] == f_sorted[:-1]) & (i_sorted[1:] == i_sorted[:-1])
+        repeated[f_sorted[1:][dup]] = True
+        he = self.halfedges
+        d = np.take(self._vertices, he[:, 1], axis=0) - np.take(self._vertices, he[:, 0], axis=0)
+        lengths2 = np.einsum("ij,ij->i", d, d)
+        longest2 = np.maximum.reduceat(lengths2, self._offsets[:-1])
         area = self.face_areas
         tiny = area <= 1e-12 * longest2
         return repeated | tiny
@@ -457,11 +427,7 @@ class Mesh:
         Such an edge joins faces of opposite orientation (a flipped face); the vertex normals there
         are unreliable. :func:`curv.repair.orient_faces` fixes them.
         """
-        he = self.halfedge_edge
-        ok = he >= 0
-        forward = self.halfedges[ok, 0] < self.halfedges[ok, 1]
-        n_forward = np.bincount(he[ok], weights=forward, minlength=self.edges.shape[0])
-        return (self.edge_face_count == 2) & (n_forward != 1)
+        return (self.edge_face_count == 2) & (self._edge_data[5] != 1)
 
     @cached_property
     def duplicate_vertices(self) -> np.ndarray:
@@ -483,17 +449,13 @@ class Mesh:
     @cached_property
     def border_vertices(self) -> np.ndarray:
         """(n,) bool: vertices on a border edge or a non-manifold edge."""
-        out = np.zeros(self.n_vertices, bool)
-        bad = self.border_edges | self.nonmanifold_edges
-        out[self.edges[bad].reshape(-1)] = True
-        return out
+        return self._vertex_flags[1]
 
     @cached_property
     def isolated_vertices(self) -> np.ndarray:
         """(n,) bool: vertices that no face uses."""
-        used = np.zeros(self.n_vertices, bool)
-        used[self._indices] = True
-        return ~used
+        indptr = self.vertex_corners[0]
+        return indptr[1:] == indptr[:-1]
 
     @cached_property
     def nonmanifold_vertices(self) -> np.ndarray:
@@ -502,34 +464,21 @@ class Mesh:
         Counted as: the faces around v, linked when they share an edge at v, form more than one
         group. Vertices on non-manifold edges are included too.
         """
-        # Corner graph: two corners at the same vertex are linked when their faces share an edge
-        # at that vertex; the components of the graph are the fans. Vertices on edges with more
-        # than two faces are non-manifold anyway (below), so only edges with exactly two
-        # halfedges link: each links its two corners at either end, and every component holds
-        # the corners of one vertex.
-        idx = self._indices
-        nxt = self.corner_next
-        h = idx.size
-        he_edge = self.halfedge_edge
-        ok = np.flatnonzero(he_edge >= 0)
-        # halfedges grouped by edge (a counting sort)
-        by_edge = sp.coo_matrix((np.ones(ok.size, np.int8), (he_edge[ok], ok)),
-                                shape=(self.edges.shape[0], h)).tocsr()
-        first = by_edge.indptr[:-1][self.edge_face_count == 2]
-        h1 = by_edge.indices[first].astype(np.int64)
-        h2 = by_edge.indices[first + 1].astype(np.int64)
-        a, b = idx[h1], idx[nxt[h1]]  # h1 runs a -> b; h2 joins the same two vertices
-        at_a = np.where(idx[h2] == a, h2, nxt[h2])
-        at_b = np.where(idx[h2] == b, h2, nxt[h2])
-        links = sp.coo_matrix((np.ones(2 * h1.size, np.int8), (np.concatenate([h1, nxt[h1]]),
-                                                               np.concatenate([at_a, at_b]))), shape=(h, h))
-        ncomp, labels = sp.csgraph.connected_components(links, directed=True, connection="weak")
-        fan_vertex = np.empty(ncomp, np.int64)
-        fan_vertex[labels] = idx
-        fans = np.bincount(fan_vertex, minlength=self.n_vertices)
-        out = fans > 1
-        out[self.edges[self.nonmanifold_edges].reshape(-1)] = True
-        return out
+        # two corners at v are linked when their faces share an edge at v with exactly two faces;
+        # the linked groups are the fans (curv.connectivity.vertex_flags)
+        return self._vertex_flags[0]
+
+    @cached_property
+    def inconsistent_vertices(self) -> np.ndarray:
+        """(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of opposite orientation meet there)."""
+        return self._vertex_flags[2]
+
+    @cached_property
+    def _vertex_flags(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(nonmanifold, border, inconsistent)`` vertex flags in one pass over the corners, without
+        the edge table (:func:`curv.connectivity.vertex_flags`)."""
+        indptr, corners = self.vertex_corners
+        return _kernels.vertex_flags(indptr, corners, self._indices, self.corner_next, self.corner_prev)
 
     @cached_property
     def components(self) -> tuple[int, np.ndarray]:
@@ -594,3 +543,13 @@ class Mesh:
     def __repr__(self) -> str:
         kinds = "triangles" if self.is_triangular else "polygons"
         return f"Mesh({self.n_vertices} vertices, {self.n_faces} {kinds})"
+
+
+def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple[int, int]) -> sp.csr_matrix:
+    """A CSR matrix from sorted, duplicate-free rows, with the index dtype scipy would choose."""
+    small = max(shape) < 2**31 and indices.size < 2**31
+    dtype = np.int32 if small else np.int64
+    out = sp.csr_matrix((data, indices.astype(dtype), indptr.astype(dtype)), shape=shape, copy=False)
+    out.has_sorted_indices = True
+    out.has_canonical_format = True
+    return out

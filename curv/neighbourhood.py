@@ -24,11 +24,11 @@ from .jit import jit, jit_parallel, launch, prange, thread_slices, threads
 from .mesh import Mesh
 from .ranges import Range, ball_radii
 
-__all__ = ["ball_support", "new_scratch", "expansion_adjacency", "supports", "Neighbourhood",
+__all__ = ["ball_support", "new_scratch", "new_queues", "expansion_adjacency", "supports", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
-QUEUE_START = 256
-"""Initial queue length of a thread's scratch; it doubles whenever a support needs more."""
+QUEUE_START = 0
+"""Length of the queue a kernel starts with: :func:`ball_support` replaces it by a full-length one."""
 
 
 @jit
@@ -47,17 +47,28 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
         Vertex coordinates.
     stamp : (n,) int64
         The calling thread's visited marks: ``stamp[q] == p`` once q was seen from p. Never reset:
-        a new centre has a new mark.
-    queue : (q,) int64
-        The calling thread's queue; replaced by a longer one when full.
+        a new centre has a new mark. Take the thread's row of the stamps once, outside the loop
+        over vertices: slicing ``stamps[t]`` anew for every vertex made a fit kernel 8x slower.
+    queue : (n,) int64
+        The calling thread's queue, a slot per vertex (its row of :func:`new_queues`): a support
+        can never overflow it, and pages it never reaches cost no memory. (A shorter one is
+        replaced by a full-length one before the search; prefer passing the row, since numba's
+        parallel loops mishandle an array rebound inside them in some expressions.)
 
     Returns
     -------
     count : int
         ``queue[0] == p`` and ``queue[1:count]`` is the support (centre excluded), in BFS order.
-    queue : (q',) int64
-        The queue, possibly reallocated: keep it for the next centre.
+    queue : (n,) int64
+        The queue: keep it for the next centre.
+
+    Notes
+    -----
+    Growing the queue inside the search loop instead (rebinding the array there) made numba
+    reload it on every access: ten times slower.
     """
+    if queue.size < stamp.size:
+        queue = np.empty(stamp.size, np.int64)
     px, py, pz = x[p], y[p], z[p]
     queue[0] = p
     stamp[p] = p
@@ -76,10 +87,6 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
             dy = y[q] - py
             dz = z[q] - pz
             if dx * dx + dy * dy + dz * dz <= radius2:
-                if count == queue.size:
-                    longer = np.empty(2 * queue.size, np.int64)
-                    longer[:count] = queue[:count]
-                    queue = longer
                 queue[count] = q
                 count += 1
     return count, queue
@@ -88,6 +95,14 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
 def new_scratch(n_vertices: int, parts: int) -> np.ndarray:
     """(parts, n) int64 visited stamps for :func:`ball_support`, one row per thread slice."""
     return np.full((parts, n_vertices), -1, np.int64)
+
+
+def new_queues(n_vertices: int, parts: int) -> np.ndarray:
+    """(parts, n) int64 queues for :func:`ball_support`, one row per thread slice.
+
+    Uninitialised: a page the searches never reach is never touched and costs no memory.
+    """
+    return np.empty((parts, n_vertices), np.int64)
 
 
 def expansion_adjacency(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -110,9 +125,9 @@ def expansion_adjacency(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 @jit_parallel
-def _support_counts(centres, radius2, indptr, indices, x, y, z, stamps, starts, stops, counts):
+def _support_counts(centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, counts):
     for t in prange(starts.size):
-        queue = np.empty(QUEUE_START, np.int64)
+        queue = queues[t]
         stamp = stamps[t]
         for i in range(starts[t], stops[t]):
             p = centres[i]
@@ -121,14 +136,16 @@ def _support_counts(centres, radius2, indptr, indices, x, y, z, stamps, starts, 
 
 
 @jit_parallel
-def _support_fill(centres, radius2, indptr, indices, x, y, z, stamps, starts, stops, out_ptr, out):
+def _support_fill(centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, out_ptr, out):
     for t in prange(starts.size):
-        queue = np.empty(QUEUE_START, np.int64)
+        queue = queues[t]
         stamp = stamps[t]
         for i in range(starts[t], stops[t]):
             p = centres[i]
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
-            out[out_ptr[i]:out_ptr[i + 1]] = queue[1:count]
+            start = out_ptr[i]
+            for j in range(1, count):
+                out[start + j - 1] = queue[j]
 
 
 def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None
@@ -156,14 +173,15 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None
     x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
     parts = max(1, min(threads(), centres.size))
     stamps = new_scratch(mesh.n_vertices, parts)
+    queues = new_queues(mesh.n_vertices, parts)
     starts, stops = thread_slices(centres.size, parts)
     counts = np.empty(centres.size, np.int64)
-    launch(_support_counts, centres, radius2, indptr, indices, x, y, z, stamps, starts, stops, counts)
+    launch(_support_counts, centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, counts)
     out_ptr = np.zeros(centres.size + 1, np.int64)
     np.cumsum(counts, out=out_ptr[1:])
     out = np.empty(out_ptr[-1], np.int64)
     stamps.fill(-1)
-    launch(_support_fill, centres, radius2, indptr, indices, x, y, z, stamps, starts, stops, out_ptr, out)
+    launch(_support_fill, centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, out_ptr, out)
     return out_ptr, out
 
 

@@ -8,13 +8,15 @@ normal the paper's study uses (§5.1). Area and angle weights are there for comp
 from __future__ import annotations
 
 import enum
+import math
 
 import numpy as np
 
-from .corners import CornerChunk, map_vertex_chunks
+from .jit import jit, jit_parallel, launch, prange
 from .mesh import Mesh
 
-__all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "max_corner_weights", "unusable_normal_vertices"]
+__all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "unusable_normal_vertices", "max_normal",
+           "max_weight", "unit", "KERNELS"]
 
 
 class NormalWeighting(str, enum.Enum):
@@ -41,31 +43,87 @@ def unusable_normal_vertices(mesh: Mesh) -> np.ndarray:
     or an endpoint of an edge whose two faces disagree on orientation), the averaged normal mixes
     unrelated sheets.
     """
-    out = mesh.nonmanifold_vertices.copy()
-    out[mesh.edges[mesh.inconsistent_edges].reshape(-1)] = True
-    return out
+    return mesh.nonmanifold_vertices | mesh.inconsistent_vertices
 
 
-def max_corner_weights(cross: tuple, a_len2: np.ndarray, b_len2: np.ndarray) -> list:
-    """Max (1999) weighted normal of each corner from its two edge vectors a and b.
+@jit
+def max_normal(p, lo, hi, corners, indices, corner_next, corner_prev, x):
+    """Max (1999) normal of vertex p, unnormalised: sum over its corners of ``(a x b) / (|a|^2 |b|^2)``.
 
-    Parameters
-    ----------
-    cross : three (k,) float64
-        Components of ``a x b``, a and b the edges from the corner's vertex to the next and to the
-        previous vertex of its face.
-    a_len2, b_len2 : (k,) float64
-        ``|a|^2`` and ``|b|^2``.
+    a and b are the edges from p to the next and to the previous vertex of the corner's face; a
+    corner with a zero-length edge gives nothing. ``corners[lo:hi]`` are the corners at p.
 
     Returns
     -------
-    list of three (k,) float64
-        ``(a x b) / (|a|^2 |b|^2)``; zero where an edge has zero length.
+    sx, sy, sz : float
     """
-    with np.errstate(invalid="ignore", divide="ignore"):
-        inv = 1.0 / (a_len2 * b_len2)
-    inv[~np.isfinite(inv)] = 0.0  # a zero-length edge: the corner has no direction to give
-    return [c * inv for c in cross]
+    sx, sy, sz = 0.0, 0.0, 0.0
+    for i in range(lo, hi):
+        c = corners[i]
+        b, q = indices[corner_next[c]], indices[corner_prev[c]]
+        ax, ay, az = x[b, 0] - x[p, 0], x[b, 1] - x[p, 1], x[b, 2] - x[p, 2]
+        bx, by, bz = x[q, 0] - x[p, 0], x[q, 1] - x[p, 1], x[q, 2] - x[p, 2]
+        wx, wy, wz = max_weight(ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx,
+                                ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
+        sx += wx
+        sy += wy
+        sz += wz
+    return sx, sy, sz
+
+
+@jit
+def max_weight(cx, cy, cz, a2, b2):
+    """One corner's term of the Max normal: ``(a x b) / (|a|^2 |b|^2)`` from ``c = a x b``, ``|a|^2``,
+    ``|b|^2``; 0 where an edge has (almost) zero length."""
+    denominator = a2 * b2
+    if denominator == 0.0:
+        return 0.0, 0.0, 0.0
+    inv = 1.0 / denominator
+    if not math.isfinite(inv):
+        return 0.0, 0.0, 0.0
+    return cx * inv, cy * inv, cz * inv
+
+
+@jit
+def unit(sx, sy, sz):
+    """``s / |s|``; NaN when ``|s|`` is (near) zero (as :func:`normalize_rows`)."""
+    norm = math.sqrt(sx * sx + sy * sy + sz * sz)
+    if not norm > 1e-300:
+        return math.nan, math.nan, math.nan
+    return sx / norm, sy / norm, sz / norm
+
+
+MAX, AREA, ANGLE = 0, 1, 2
+"""Weighting codes of the kernel."""
+
+
+@jit_parallel
+def _vertex_normals(indptr, corners, indices, corner_next, corner_prev, corner_face, x, weighting, face_weight, out):
+    for p in prange(indptr.size - 1):
+        lo, hi = indptr[p], indptr[p + 1]
+        if weighting == MAX:
+            sx, sy, sz = max_normal(p, lo, hi, corners, indices, corner_next, corner_prev, x)
+        else:
+            sx, sy, sz = 0.0, 0.0, 0.0
+            for i in range(lo, hi):
+                c = corners[i]
+                f = corner_face[c]
+                w = 1.0
+                if weighting == ANGLE:
+                    # the corner angle atan2(|a x b|, a . b)
+                    b, q = indices[corner_next[c]], indices[corner_prev[c]]
+                    ax, ay, az = x[b, 0] - x[p, 0], x[b, 1] - x[p, 1], x[b, 2] - x[p, 2]
+                    bx, by, bz = x[q, 0] - x[p, 0], x[q, 1] - x[p, 1], x[q, 2] - x[p, 2]
+                    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+                    w = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
+                sx += face_weight[f, 0] * w
+                sy += face_weight[f, 1] * w
+                sz += face_weight[f, 2] * w
+        out[p, 0], out[p, 1], out[p, 2] = unit(sx, sy, sz)
+
+
+KERNELS = (_vertex_normals,)
+"""The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""
 
 
 def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX) -> np.ndarray:
@@ -85,32 +143,14 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
         degenerate.
     """
     weighting = NormalWeighting(weighting)
-    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, k]) for k in range(3))
     if weighting is NormalWeighting.AREA:
-        face_weight = mesh.face_vector_areas
+        code, face_weight = AREA, mesh.face_vector_areas
     elif weighting is NormalWeighting.ANGLE:
-        face_weight = np.nan_to_num(mesh.face_normals)
-    acc = np.zeros((mesh.n_vertices, 3))
-    corner_face = mesh.corner_face
-
-    def work(chunk: CornerChunk) -> None:
-        # edges from the corner's vertex to the next and to the previous corner of its face
-        here = [chunk.expand(coord) for coord in xyz]
-        ax, ay, az = (np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
-        bx, by, bz = (np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
-        cross = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
-        if weighting is NormalWeighting.MAX:
-            w = max_corner_weights(cross, ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
-        else:
-            fw = np.take(face_weight, np.take(corner_face, chunk.corners), axis=0)
-            if weighting is NormalWeighting.AREA:
-                w = list(fw.T)
-            else:
-                sin = np.sqrt(cross[0] ** 2 + cross[1] ** 2 + cross[2] ** 2)
-                angle = np.arctan2(sin, ax * bx + ay * by + az * bz)
-                w = [fw[:, k] * angle for k in range(3)]
-        for k in range(3):
-            acc[chunk.start:chunk.stop, k] = chunk.sum(w[k])
-
-    map_vertex_chunks(mesh, work)
-    return normalize_rows(acc)
+        code, face_weight = ANGLE, np.nan_to_num(mesh.face_normals)
+    else:
+        code, face_weight = MAX, np.zeros((0, 3))
+    indptr, corners = mesh.vertex_corners
+    out = np.empty((mesh.n_vertices, 3))
+    launch(_vertex_normals, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev,
+           mesh.corner_face, mesh.vertices, code, face_weight, out)
+    return out

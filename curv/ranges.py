@@ -141,14 +141,14 @@ def resolve(spec, range=None, radius=None) -> Range:
     if not spec.has_support:
         if k not in spec.ranges:
             raise EstimatorError(
-                f"estimator {spec.name!r} uses its fixed 1-ring and has only range "
-                f"{range_label(spec.ranges[0])}; got {range!r}")
+                f"estimator {spec.name!r} has no range {range!r}; allowed: "
+                f"{', '.join(range_label(r) for r in spec.ranges)} (a fixed 1-ring formula)")
         return Range(k=k)
     smallest = min(spec.ranges)
     if k < smallest:
         raise EstimatorError(
-            f"estimator {spec.name!r} needs a range of at least {range_label(smallest)} "
-            f"({FORMS}); got {range!r}")
+            f"estimator {spec.name!r} has no range {range!r}; allowed: any k >= {smallest:g} "
+            f"({', '.join(range_label(r) for r in spec.ranges)} are the paper's), or radius=r in mesh units")
     return Range(k=k)
 
 

@@ -17,10 +17,13 @@ def test_unknown_method_lists_the_known_ones(sphere):
     assert isinstance(err.value, ValueError)
 
 
-@pytest.mark.parametrize("method, bad, allowed", [("meyer", 2, "R1"), ("ru", 3, "R2"), ("mru", 1, "R2, R3, R4"),
-                                                  ("an", 5, "R2, R3, R4"), ("nc", 2.5, "R1, R2, R3, R4")])
+@pytest.mark.parametrize("method, bad, allowed", [
+    ("meyer", 2, "R1 (a fixed 1-ring formula)"), ("ru", 3, "R2 (a fixed 1-ring formula)"),
+    ("mru", 1, "any k >= 2 (R2, R3, R4 are the paper's), or radius=r in mesh units"),
+    ("an", 1.5, "any k >= 2 (R2, R3, R4 are the paper's), or radius=r in mesh units"),
+    ("nc", 0.5, "any k >= 1 (R1, R2, R3, R4 are the paper's), or radius=r in mesh units")])
 def test_unsupported_range_names_the_allowed_ones(sphere, method, bad, allowed):
-    with pytest.raises(ValueError, match=f"no range {bad!r}; allowed: {allowed}$"):
+    with pytest.raises(ValueError, match=f"no range {bad!r}; allowed: {allowed}$".replace("(", r"\(").replace(")", r"\)")):
         curv.estimate(sphere, method, bad)
 
 
@@ -108,3 +111,15 @@ def test_value_smoothing_averages_neighbours_only_over_valid_vertices():
 def test_not_a_mesh_is_rejected():
     with pytest.raises(curv.MeshError, match="expected a curv.Mesh"):
         curv.estimate(np.zeros((3, 3)), "nc", 1)
+
+
+def test_fitted_normals_option(sphere):
+    fit = curv.estimate(sphere, "mru", 2, normals="fit")
+    assert fit.info["normals"] == "fit R2"
+    assert curv.estimate(sphere, "mru", 2).info["normals"] == "max"
+    # the jet normals of a sphere are radial
+    radial = sphere.vertices / np.linalg.norm(sphere.vertices, axis=1, keepdims=True)
+    np.testing.assert_allclose(np.abs(np.einsum("ij,ij->i", fit.normals, radial)), 1.0, atol=1e-6)
+    np.testing.assert_allclose(fit.k1[fit.valid], 0.5, rtol=0.02)
+    with pytest.raises(curv.EstimatorError, match="'fit'"):
+        curv.estimate(sphere, "mru", 2, normals="jet")

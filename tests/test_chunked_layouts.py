@@ -1,7 +1,9 @@
-"""The work layouts behind the estimators: corners grouped by vertex, segment ids, padded fit groups.
+"""How the work is cut must not show in the results: chunks of vertices per kernel call, threads.
 
-Each layout is checked against the plain computation it replaces, and the estimators built on them
-are checked not to depend on how the work is cut (chunk size, block size, thread count).
+The 1-ring kernels (normals, meyer, ru) compute every vertex from its own corners only, so their
+results are identical to the bit whatever the chunks and the thread count; the support-based
+estimators are checked to rounding. A mesh whose unreferenced vertices fill whole chunks guards
+against chunks without a single corner.
 """
 
 from __future__ import annotations
@@ -10,12 +12,22 @@ import numpy as np
 import pytest
 
 import curv
-from curv import corners as corners_module
-from curv.corners import map_vertex_chunks
-from curv.estimators._lsq import padded_groups
-from curv.neighbourhood import segment_ids
+from curv.estimators.meyer import iter_meyer
+from curv.estimators.rusinkiewicz import iter_ru
 from curv.normals import unusable_normal_vertices, vertex_normals
+from curv.validity import Reason
 from tests.meshes import icosphere, torus_grid
+
+CHUNKS = [1, 7, 256, 1000, 3000, None]
+"""Vertices per kernel call (None: the adaptive default)."""
+
+
+def _run(generator):
+    while True:
+        try:
+            next(generator)
+        except StopIteration as stop:
+            return stop.value
 
 
 def _mixed_mesh() -> curv.Mesh:
@@ -23,6 +35,11 @@ def _mixed_mesh() -> curv.Mesh:
     v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0.3], [2, 1, 0.2], [5, 5, 5]], float)
     faces = [[0, 1, 2, 3], [1, 4, 5], [1, 5, 2]]
     return curv.Mesh(v, faces)
+
+
+def _assert_same(a, b):
+    for name in ("k1", "k2", "d1", "d2", "reason"):
+        assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=name != "reason"), name
 
 
 @pytest.mark.parametrize("mesh", [icosphere(2), _mixed_mesh()], ids=["sphere", "mixed"])
@@ -34,77 +51,72 @@ def test_vertex_corners_group_every_corner_once_by_vertex(mesh):
     assert np.array_equal(mesh.face_indices[corners], owner)
 
 
-@pytest.mark.parametrize("chunk", [1, 3, 64, 100_000])
-@pytest.mark.parametrize("workers", [1, 2])
-def test_chunks_cover_every_vertex_and_sum_like_bincount(chunk, workers):
-    mesh = _mixed_mesh() if chunk < 64 else icosphere(3)
-    values = np.random.default_rng(0).normal(size=mesh.face_indices.size)
-    summed = np.full(mesh.n_vertices, np.nan)
-    touched = np.zeros(mesh.n_vertices, int)
-
-    def work(ch):
-        assert np.array_equal(ch.vertex, mesh.face_indices[ch.corners])
-        assert np.array_equal(ch.nxt, mesh.face_indices[mesh.corner_next[ch.corners]])
-        assert np.array_equal(ch.prv, mesh.face_indices[mesh.corner_prev[ch.corners]])
-        assert np.array_equal(ch.expand(np.arange(mesh.n_vertices)), ch.vertex)
-        summed[ch.start:ch.stop] = ch.sum(values[ch.corners])
-        touched[ch.start:ch.stop] += 1
-
-    map_vertex_chunks(mesh, work, chunk=chunk, workers=workers)
-    assert (touched == 1).all()
-    expected = np.bincount(mesh.face_indices, weights=values, minlength=mesh.n_vertices)
-    assert np.allclose(summed, expected, rtol=0, atol=1e-12)
+@pytest.mark.parametrize("chunk", CHUNKS)
+def test_meyer_and_ru_do_not_depend_on_the_chunks_or_threads(chunk, monkeypatch):
+    mesh, _, _ = torus_grid(40, 18)
+    normals = vertex_normals(mesh)
+    reference = {"meyer": _run(iter_meyer(mesh, None, None)), "ru": _run(iter_ru(mesh, normals, None))}
+    monkeypatch.setenv("CURV_THREADS", "1")
+    meyer = _run(iter_meyer(mesh, None, None, chunk=chunk))
+    _assert_same(reference["meyer"], meyer)
+    assert np.array_equal(reference["meyer"].normals, meyer.normals)
+    _assert_same(reference["ru"], _run(iter_ru(mesh, normals, None, chunk=chunk)))
 
 
-def test_chunk_errors_reach_the_caller():
-    def work(ch):
-        if ch.start > 0:
-            raise RuntimeError("boom in a worker")
-
-    with pytest.raises(RuntimeError, match="boom in a worker"):
-        map_vertex_chunks(icosphere(2), work, chunk=16, workers=2)
-
-
-@pytest.mark.parametrize("counts", [[3, 0, 2, 0, 0, 1], [0, 0], [5], [0, 4, 0]])
-def test_segment_ids_match_repeat_with_empty_segments(counts):
-    indptr = np.concatenate([[0], np.cumsum(counts)])
-    expected = np.repeat(np.arange(len(counts)), counts)
-    assert np.array_equal(segment_ids(indptr), expected)
+@pytest.mark.parametrize("weighting", ["max", "area", "angle"])
+def test_normals_do_not_depend_on_the_threads(weighting, monkeypatch):
+    mesh, _, _ = torus_grid(40, 18)
+    reference = vertex_normals(mesh, weighting=weighting)
+    monkeypatch.setenv("CURV_THREADS", "1")
+    assert np.array_equal(vertex_normals(mesh, weighting=weighting), reference)
 
 
-def test_padded_groups_cover_each_centre_once_with_little_padding():
-    counts = np.random.default_rng(1).integers(0, 400, 5000)
-    groups = padded_groups(counts, min_group=1)
-    rows = np.concatenate([r for r, _ in groups])
-    assert np.array_equal(np.sort(rows), np.arange(counts.size))
-    for r, width in groups:
-        assert (counts[r] <= width).all()
-        assert width <= np.maximum(counts[r], 1).min() * 9 / 8 + 1
-    assert sum(r.size * w for r, w in groups) <= 1.15 * np.maximum(counts, 1).sum()
-
-
-def test_small_padded_groups_merge_upwards():
-    counts = np.array([1] * 3 + [10] * 300 + [50] * 2)
-    groups = padded_groups(counts, min_group=256)
-    assert len(groups) == 2
-    widths = [w for _, w in groups]
-    assert widths == sorted(widths) and widths[-1] >= 50
-    assert sum(r.size for r, _ in groups) == counts.size
-
-
-@pytest.mark.parametrize("method,k", [("meyer", 1), ("ru", 2), ("nc", 3), ("qs", 2), ("an", 3), ("mru", 2),
-                                      ("csm", 2)])
+@pytest.mark.parametrize("method,k", [("nc", 3), ("qs", 2), ("an", 3), ("mru", 2), ("csm", 2)])
 def test_estimates_do_not_depend_on_how_the_work_is_cut(method, k, monkeypatch):
     mesh, _, _ = torus_grid(40, 18)
     reference = curv.estimate(mesh, method, k)
     monkeypatch.setenv("CURV_THREADS", "1")
-    monkeypatch.setattr(corners_module, "CHUNK_VERTICES", 7)
-    # small neighbourhood blocks as well (ignored by the 1-ring estimators)
     cut = curv.estimate(mesh, method, k, block_size=37)
     assert np.array_equal(reference.valid, cut.valid)
     ok = reference.valid
     assert np.allclose(reference.k1[ok], cut.k1[ok], rtol=0, atol=1e-10)
     assert np.allclose(reference.k2[ok], cut.k2[ok], rtol=0, atol=1e-10)
+
+
+def _padded_sphere(pad: int = 3000):
+    """An icosphere with ``pad`` unreferenced vertices before it and ``pad`` after it."""
+    sphere = icosphere(3)
+    rng = np.random.default_rng(0)
+    v = np.concatenate([rng.normal(size=(pad, 3)) + 5.0, sphere.vertices, rng.normal(size=(pad, 3)) - 5.0])
+    return sphere, curv.Mesh(v, sphere.triangles + pad), pad
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+def test_isolated_vertices_filling_whole_chunks(chunk):
+    sphere, padded, pad = _padded_sphere()
+    used = slice(pad, pad + sphere.n_vertices)
+    isolated = padded.isolated_vertices
+    assert isolated.sum() == 2 * pad and not isolated[used].any()
+
+    normals = vertex_normals(padded)
+    assert np.array_equal(normals[used], vertex_normals(sphere))
+    assert np.isnan(normals[isolated]).all()
+
+    for method, k in (("meyer", 1), ("ru", 2)):
+        alone = curv.estimate(sphere, method, k)
+        res = curv.estimate(padded, method, k, block_size=chunk)
+        for name in ("k1", "k2", "d1", "d2", "normals", "reason"):
+            assert np.array_equal(getattr(res, name)[used], getattr(alone, name), equal_nan=True), (method, name)
+        assert alone.valid.all()
+        assert not res.valid[isolated].any()
+        assert (res.reason[isolated] == Reason.DEGENERATE).all()
+        assert np.isnan(res.k1[isolated]).all() and np.isnan(res.normals[isolated]).all()
+
+    # the estimators themselves, before the API's rules, already call them degenerate
+    raw = _run(iter_meyer(padded, None, None, chunk=chunk))
+    assert (raw.reason[isolated] == Reason.DEGENERATE).all()
+    raw = _run(iter_ru(padded, normals, None, chunk=chunk))
+    assert (raw.reason[isolated] == Reason.DEGENERATE).all()
 
 
 def test_meyer_computes_the_same_normals_as_vertex_normals():

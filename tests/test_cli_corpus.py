@@ -124,7 +124,10 @@ def test_cli_triangle_only_estimator_on_polygons_is_one_line():
 
 def test_cli_unknown_estimator_and_range_are_one_line():
     path = CASES["sphere"].path
-    for args, text in ((["-m", "nope"], "unknown estimator"), (["-m", "mru", "-r", "R9"], "allowed: R2, R3, R4")):
+    for args, text in ((["-m", "nope"], "unknown estimator"), (["-m", "mru", "-r", "R1"], "allowed: any k >= 2"),
+                       (["-m", "qs", "-r", "two"], "a number k >= 1 such as 2 or 2.5"),
+                       (["-m", "meyer", "--radius", "0.3"], "takes no radius"),
+                       (["-m", "qs", "-r", "2", "--radius", "0.3"], "either range= or radius=")):
         proc = _run(["estimate", path, "-q", *args])
         assert proc.returncode == 2
         line = proc.stderr.strip()

@@ -1,126 +1,159 @@
-"""Geometry of the triangle at every corner of a :class:`curv.corners.CornerChunk` (meyer, ru).
+"""The triangle at a corner, seen from the corner's vertex: the shared helpers of meyer and ru.
 
-Each corner is seen from its own vertex ``a``; ``b`` and ``c`` are the next and previous vertices
-of its triangle. Vectors are kept as three (k,) component arrays: the chunk's arrays stay small
-and contiguous, and 1-D gathers are several times faster than gathering rows of (n, 3) arrays.
+A corner of triangle (a, b, c) at vertex ``a`` has the edges ``ab = b - a`` and ``ac = c - a``
+(b and c the next and previous vertices of its face). Everything a 1-ring estimator needs from
+the triangle follows from them and their three dot products; the kernels loop over the corners
+of each vertex (:attr:`curv.Mesh.vertex_corners`) and call :func:`corner_triangle`.
+
+Kernels compiled with numba's default error model raise on a float division by zero (and a
+parallel kernel may then stop without a word), so every division here is guarded.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
 
 import numpy as np
 
-from ..corners import CornerChunk
+from ..jit import jit
 from ..validity import Reason
 
-__all__ = ["TriangleCorners", "dot", "cross", "closed_ring_reasons"]
+__all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag"]
 
-Vec = tuple[np.ndarray, np.ndarray, np.ndarray]
-
-
-def dot(a: Vec, b: Vec) -> np.ndarray:
-    """Row-wise dot product of two vectors given as three (k,) component arrays."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def cross(a: Vec, b: Vec) -> Vec:
-    """Cross product of two vectors given as three (k,) component arrays."""
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+OK = np.uint8(Reason.OK)
+BORDER = np.uint8(Reason.BORDER)
+SINGULAR = np.uint8(Reason.SINGULAR)
+DEGENERATE = np.uint8(Reason.DEGENERATE)
+NONMANIFOLD = np.uint8(Reason.NONMANIFOLD)
 
 
-@dataclass
-class TriangleCorners:
-    """Edges, cotangents and mixed Voronoi area of the corners of one chunk.
-
-    Attributes
-    ----------
-    ab, ac : three (k,) float64
-        Edge vectors from the corner's vertex to the next and to the previous vertex.
-    normal : three (k,) float64
-        ``ab x ac``: the face normal times twice the area.
-    ab_len2, ac_len2 : (k,) float64
-        Squared edge lengths.
-    twice_area : (k,) float64
-        Twice the triangle's area, ``|ab x ac|``.
-    degenerate : (k,) bool
-        The corner's face is degenerate (:attr:`curv.Mesh.degenerate_faces`).
-    cos_a : (k,) float64
-        ``ab . ac`` (the corner angle's cosine times both edge lengths).
-    cot_b, cot_c : (k,) float64
-        Cotangents at the other two corners (0 on degenerate faces).
-    mixed_area : (k,) float64
-        The corner's share of Meyer's mixed area ``A_mixed`` (0 on degenerate faces): its Voronoi
-        area in a non-obtuse triangle, half the triangle at an obtuse corner, a quarter at the other
-        corners of an obtuse triangle.
-    """
-
-    ab: Vec
-    ac: Vec
-    normal: Vec
-    ab_len2: np.ndarray
-    ac_len2: np.ndarray
-    twice_area: np.ndarray
-    degenerate: np.ndarray
-    cos_a: np.ndarray
-    cot_b: np.ndarray
-    cot_c: np.ndarray
-    mixed_area: np.ndarray
-
-    @classmethod
-    def of(cls, chunk: CornerChunk, xyz: Vec, degenerate_faces: np.ndarray,
-           corner_face: np.ndarray) -> "TriangleCorners":
-        """Compute them for ``chunk`` from the vertex coordinates ``xyz`` (three (n,) arrays)."""
-        here = [chunk.expand(coord) for coord in xyz]
-        ab = tuple(np.take(coord, chunk.nxt) - p for coord, p in zip(xyz, here))
-        ac = tuple(np.take(coord, chunk.prv) - p for coord, p in zip(xyz, here))
-        normal = cross(ab, ac)
-        twice = np.sqrt(dot(normal, normal))
-        bad = np.take(degenerate_faces, np.take(corner_face, chunk.corners))
-        twice_safe = np.where(bad, 1.0, twice)
-        ab_len2, ac_len2, cos_a = dot(ab, ab), dot(ac, ac), dot(ab, ac)
-        # (a - b).(c - b) and (a - c).(b - c), from the dot products already at hand
-        cos_b, cos_c = ab_len2 - cos_a, ac_len2 - cos_a
-        cot_b, cot_c = cos_b / twice_safe, cos_c / twice_safe
-        # edge ab faces corner c, edge ac faces corner b
-        area = 0.125 * (cot_c * ab_len2 + cot_b * ac_len2)
-        area = np.where(cos_a < 0, 0.25 * twice, np.where((cos_b < 0) | (cos_c < 0), 0.125 * twice, area))
-        for arr in (cot_b, cot_c, area):
-            arr[bad] = 0.0
-        return cls(ab, ac, normal, ab_len2, ac_len2, twice, bad, cos_a, cot_b, cot_c, area)
-
-    def angle(self) -> np.ndarray:
-        """(k,) float64 corner angle at ``a`` in radians (0 on degenerate faces)."""
-        out = np.arctan2(self.twice_area, self.cos_a)
-        out[self.degenerate] = 0.0
-        return out
-
-
-def closed_ring_reasons(chunk: CornerChunk, tc: TriangleCorners, singular: np.ndarray, normals: np.ndarray,
-                        border_vertices: np.ndarray, nonmanifold: np.ndarray) -> np.ndarray:
-    """Reason codes of a chunk's vertices for an estimator that needs a closed, clean 1-ring.
-
-    Later rules override earlier ones: SINGULAR where ``singular``; BORDER on or next to a border;
-    DEGENERATE touching a degenerate face or without a finite normal; NONMANIFOLD where
-    ``nonmanifold`` (the chunk's rows).
+@jit
+def corner_triangle(x, a, b, c, degenerate):
+    """Edges, cotangents and mixed Voronoi area of the corner at ``a`` of triangle (a, b, c).
 
     Parameters
     ----------
-    chunk, tc : CornerChunk, TriangleCorners
-    singular : (r,) bool
-    normals : (r, 3) float64
-        The chunk's vertex normals.
-    border_vertices : (n,) bool
-        :attr:`curv.Mesh.border_vertices`.
-    nonmanifold : (r,) bool
+    x : (n, 3) float64
+        Vertex positions.
+    a, b, c : int
+        The corner's vertex, the next and the previous vertex of its face.
+    degenerate : bool
+        The face is degenerate (:attr:`curv.Mesh.degenerate_faces`).
 
     Returns
     -------
-    (r,) uint8
+    abx, aby, abz, acx, acy, acz : float
+        ``ab = b - a``, ``ac = c - a``.
+    nx, ny, nz : float
+        ``ab x ac``, the face normal times twice the area.
+    ab2, ac2 : float
+        ``|ab|^2``, ``|ac|^2``.
+    twice_area : float
+        ``|ab x ac|``.
+    cos_a : float
+        ``ab . ac`` (cosine of the angle at a times both edge lengths).
+    cot_b, cot_c : float
+        Cotangents at b and c (0 on a degenerate face).
+    mixed_area : float
+        The corner's share of Meyer's ``A_mixed`` (0 on a degenerate face): its Voronoi area in a
+        non-obtuse triangle, half the triangle at an obtuse corner a, a quarter when b or c is obtuse.
     """
-    reason = np.full(chunk.stop - chunk.start, Reason.OK, np.uint8)
-    reason[singular] = Reason.SINGULAR
-    reason[chunk.ring_any(border_vertices)] = Reason.BORDER
-    reason[chunk.any(tc.degenerate) | ~np.isfinite(normals).all(axis=1)] = Reason.DEGENERATE
-    reason[nonmanifold] = Reason.NONMANIFOLD
-    return reason
+    abx, aby, abz = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
+    acx, acy, acz = x[c, 0] - x[a, 0], x[c, 1] - x[a, 1], x[c, 2] - x[a, 2]
+    nx = aby * acz - abz * acy
+    ny = abz * acx - abx * acz
+    nz = abx * acy - aby * acx
+    twice_area = math.sqrt(nx * nx + ny * ny + nz * nz)
+    ab2 = abx * abx + aby * aby + abz * abz
+    ac2 = acx * acx + acy * acy + acz * acz
+    cos_a = abx * acx + aby * acy + abz * acz
+    if degenerate or twice_area == 0.0:  # (the second never happens on a face that is not degenerate)
+        return abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, ac2, twice_area, cos_a, 0.0, 0.0, 0.0
+    # (a - b).(c - b) and (a - c).(b - c), from the dot products at hand
+    cos_b = ab2 - cos_a
+    cos_c = ac2 - cos_a
+    cot_b = cos_b / twice_area
+    cot_c = cos_c / twice_area
+    if cos_a < 0:
+        area = 0.25 * twice_area
+    elif cos_b < 0 or cos_c < 0:
+        area = 0.125 * twice_area
+    else:
+        # edge ab faces corner c, edge ac faces corner b
+        area = 0.125 * (cot_c * ab2 + cot_b * ac2)
+    return abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, ac2, twice_area, cos_a, cot_b, cot_c, area
+
+
+@jit
+def turn_by_corner(re, im, turns, twice_area, cos_a, degenerate):
+    """Add the corner angle ``atan2(|ab x ac|, ab . ac)`` to an angle sum kept as a complex number.
+
+    The sum of the angles of a vertex's corners is the argument of the product of the complex
+    numbers ``ab . ac + i |ab x ac|`` (each of argument in [0, pi]), plus 2 pi for every time the
+    product passed the positive real axis: one multiplication per corner instead of an ``atan2``.
+    :func:`angle_sum` reads the sum off. A degenerate corner adds nothing (angle 0).
+
+    Parameters
+    ----------
+    re, im : float
+        The product so far (start with 1, 0).
+    turns : int
+        Completed turns so far (start with 0).
+
+    Returns
+    -------
+    re, im, turns
+    """
+    if degenerate:
+        return re, im, turns
+    below = im < 0.0 or (im == 0.0 and re < 0.0)  # argument in [pi, 2 pi)
+    re, im = re * cos_a - im * twice_area, re * twice_area + im * cos_a
+    if below and im >= 0.0:  # an angle below pi took the argument past 2 pi
+        turns += 1
+    # keep the magnitude (a product of edge lengths squared) in range; powers of two scale exactly
+    size = max(abs(re), abs(im))
+    if size > 2.0**500:
+        re, im = re * 2.0**-500, im * 2.0**-500
+    elif 0.0 < size < 2.0**-500:
+        re, im = re * 2.0**500, im * 2.0**500
+    return re, im, turns
+
+
+@jit
+def angle_sum(re, im, turns):
+    """The angle sum accumulated by :func:`turn_by_corner`: ``arg(re + i im)`` in [0, 2 pi) plus the turns."""
+    angle = math.atan2(im, re)
+    if angle < 0.0:
+        angle += 2.0 * math.pi
+    return angle + 2.0 * math.pi * turns
+
+
+@jit
+def ring_flag(p, lo, hi, corners, indices, corner_next, corner_prev, flags):
+    """Whether ``flags`` is set at p or at an edge neighbour of p (the next and previous vertices
+    of the corners ``corners[lo:hi]`` at p)."""
+    if flags[p]:
+        return True
+    for i in range(lo, hi):
+        c = corners[i]
+        if flags[indices[corner_next[c]]] or flags[indices[corner_prev[c]]]:
+            return True
+    return False
+
+
+@jit
+def ring_reason(singular, border, degenerate, nonmanifold):
+    """Reason code of a vertex for an estimator that needs a closed, clean 1-ring.
+
+    Later rules override earlier ones: SINGULAR, then BORDER (on or next to a border), then
+    DEGENERATE (a degenerate face around it, or no finite normal), then NONMANIFOLD.
+    """
+    if nonmanifold:
+        return NONMANIFOLD
+    if degenerate:
+        return DEGENERATE
+    if border:
+        return BORDER
+    if singular:
+        return SINGULAR
+    return OK

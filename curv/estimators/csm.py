@@ -1,6 +1,7 @@
 """Cohen-Steiner & Morvan (2003): the normal-cycle curvature tensor averaged over a ball (R1-R4).
 
-For vertex p and the ball B of radius ``k * mesh.longest_edge[p]`` around it::
+For vertex p and the ball B of radius ``r(p)`` around it (``k * mesh.longest_edge[p]`` at range
+Rk, or a fixed radius: :func:`curv.ranges.ball_radii`)::
 
     T(p) = 1 / area(B ∩ mesh) * sum_e beta(e) |e ∩ B| ê êᵀ
 
@@ -12,299 +13,376 @@ its eigenvalue 1/r along the axis, the direction of zero curvature).
 
 What is approximated
 --------------------
-The edges and faces considered are those touching p or a vertex of its Rk support
-(:func:`curv.neighbourhood.iter_neighbourhoods`: vertices reachable from p along edges without
-leaving B). Edges and faces whose vertices all lie outside that support are ignored even when they
-graze B (e.g. a long edge passing through the rim of the ball, or a part of the surface that
-re-enters the ball without a path inside it). Everything else is exact: ``|e ∩ B|`` is the
-segment/sphere intersection and ``area(B ∩ face)`` the exact area of the triangle within the disc
+The edges and faces considered are those touching p or a vertex of its support
+(:func:`curv.neighbourhood.ball_support`: vertices reachable from p along edges without leaving
+B). Edges and faces whose vertices all lie outside that support are ignored even when they graze B
+(e.g. a long edge passing through the rim of the ball, or a part of the surface that re-enters the
+ball without a path inside it). Everything else is exact: ``|e ∩ B|`` is the segment/sphere
+intersection and ``area(B ∩ face)`` the exact area of the triangle within the disc
 ``B ∩ plane of the face`` (circular sectors plus triangles, per edge).
+
+How it runs
+-----------
+One parallel kernel per chunk of vertices (:func:`curv.jit.iter_chunks`); per vertex it searches
+the support and visits every edge and face touching it once (per-thread stamps over edges and
+faces, like the search's own visited stamps over vertices), so no (centre, edge) pairs are stored.
+The per-edge ``beta(e) / |e|`` and the per-face unit normals and areas are computed once per mesh.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-import scipy.sparse as sp
 
+from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
-from .._legacy_neighbourhood import Neighbourhood, segment_ids
+from ..neighbourhood import QUEUE_START, ball_support, expansion_adjacency, new_scratch
 from ..validity import Reason
-from .registry import EstimatorSpec, iter_blockwise, register
+from ._small_linalg import sym3_eigen
+from .registry import EstimatorSpec, empty_principal, register
 
-__all__ = ["iter_csm", "edge_tensors", "segment_ball", "triangle_ball_area"]
+__all__ = ["iter_csm", "segment_in_ball", "disc_triangle_area", "triangle_in_ball_area", "face_geometry",
+           "edge_beta_scale", "support_flags"]
 
-PAIR_CHUNK = 32768
-"""(centre, edge or face) pairs clipped per vectorised step: temporaries stay in cache."""
+BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
+"""Bits of the per-vertex flags a support may hit (:func:`support_flags`)."""
 
-_SYM = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-"""The six entries (i, j) of a symmetric 3x3 tensor stored as a row of 6."""
-
-
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.einsum("ij,ij->i", a, b)
+_OK, _BORDER, _SINGULAR = int(Reason.OK), int(Reason.BORDER), int(Reason.SINGULAR)
+_DEGENERATE, _NONMANIFOLD = int(Reason.DEGENERATE), int(Reason.NONMANIFOLD)
 
 
-def edge_tensors(mesh: Mesh) -> np.ndarray:
-    """``beta(e) * |e| * ê êᵀ`` for every edge, as 6 symmetric entries.
+# ---------------------------------------------------------------------------- clipping helpers
+@jit
+def segment_in_ball(sx, sy, sz, dx, dy, dz, radius2):
+    """Fraction of the segment ``s + t d``, t in [0, 1], inside the ball of squared radius ``radius2`` at 0.
 
-    Parameters
-    ----------
-    mesh : Mesh
-        Triangle mesh, consistently oriented.
-
-    Returns
-    -------
-    (e, 6) float64
-        Entries xx, xy, xz, yy, yz, zz; zero rows for edges without exactly two faces or next to a
-        degenerate face (their vertices are invalid anyway).
+    Solves ``|s + t d|^2 = radius2`` for t and clips the root interval to [0, 1]; 0 when the line
+    misses the ball.
     """
-    ef = mesh.edge_faces
-    nf = mesh.face_normals
-    d = mesh.edge_vectors
-    length = mesh.edge_lengths
-    two = (mesh.edge_face_count == 2) & (ef[:, 1] >= 0)
-    beta = np.zeros(d.shape[0])
-    n0, n1 = nf[ef[two, 0]], nf[ef[two, 1]]
-    # slot 0 is the face in which the edge runs edges[:, 0] -> edges[:, 1]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        beta[two] = np.arctan2(_dot(np.cross(n0, n1), d[two]) / length[two], _dot(n0, n1))
-        scale = np.where(length > 0, beta / length, 0.0)
-    beta[~np.isfinite(beta)] = 0.0
-    scale[~np.isfinite(scale)] = 0.0
-    # beta |e| ê êᵀ = beta / |e| * d dᵀ
-    return np.stack([scale * d[:, i] * d[:, j] for i, j in _SYM], axis=1)
-
-
-def segment_ball(start: np.ndarray, direction: np.ndarray, radius: np.ndarray):
-    """Parameter interval of the segments ``start + t * direction``, t in [0, 1], inside a ball.
-
-    Parameters
-    ----------
-    start : (k, 3) float64
-        Segment starts relative to the ball centre.
-    direction : (k, 3) float64
-        Segment vectors (end - start).
-    radius : (k,) float64
-        Ball radii.
-
-    Returns
-    -------
-    t1, t2 : (k,) float64
-        ``0 <= t1 <= t2 <= 1``; ``t1 == t2`` where the segment misses the ball.
-    """
-    a = _dot(direction, direction)
-    b = _dot(direction, start)
-    c = _dot(start, start) - radius * radius
+    a = dx * dx + dy * dy + dz * dz
+    b = dx * sx + dy * sy + dz * sz
+    c = sx * sx + sy * sy + sz * sz - radius2
     disc = b * b - a * c
-    hit = (disc > 0) & (a > 0)
-    sq = np.sqrt(np.where(hit, disc, 0.0))
-    inv = 1.0 / np.where(hit, a, 1.0)
-    t1 = np.clip((-b - sq) * inv, 0.0, 1.0)
-    t2 = np.clip((-b + sq) * inv, 0.0, 1.0)
-    t1 = np.where(hit, t1, 0.0)
-    t2 = np.where(hit, t2, 0.0)
-    return t1, t2
+    if not (disc > 0.0 and a > 0.0):
+        return 0.0
+    sq = math.sqrt(disc)
+    t1 = min(max((-b - sq) / a, 0.0), 1.0)
+    t2 = min(max((-b + sq) / a, 0.0), 1.0)
+    return t2 - t1
 
 
-def face_frames(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Orthonormal frame and 2-D corner coordinates of every triangle.
+@jit
+def _chord(ax, ay, bx, by, rho2):
+    """Parameters ``t1 <= t2`` in [0, 1] of the part of edge a -> b inside the disc of squared radius ``rho2``.
+
+    ``(0, 1)`` for an edge inside the disc, ``(0, 0)`` where its line misses the disc.
+    """
+    dx = bx - ax
+    dy = by - ay
+    if ax * ax + ay * ay <= rho2 and bx * bx + by * by <= rho2:
+        return 0.0, 1.0
+    a = dx * dx + dy * dy
+    b = dx * ax + dy * ay
+    c = ax * ax + ay * ay - rho2
+    disc = b * b - a * c
+    if not (disc > 0.0 and a > 0.0):
+        return 0.0, 0.0
+    sq = math.sqrt(disc)
+    return min(max((-b - sq) / a, 0.0), 1.0), min(max((-b + sq) / a, 0.0), 1.0)
+
+
+@jit
+def _angle(ax, ay, bx, by):
+    """Signed angle from direction a to direction b."""
+    return math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+
+
+@jit
+def _corner_sectors(ex, ey, t_exit, cx, cy, nx, ny, t_entry):
+    """Signed angle of the circular sectors at corner c of the fan from the disc centre.
+
+    The edge into c leaves the disc at e (``t_exit < 1``: a sector from e to c), the edge out of
+    c enters it at n (``t_entry > 0``: a sector from c to n). Where both are true crossings of the
+    circle (0 < t < 1) the two sectors are one, from e to n: each part is less than pi/2 (from a
+    point of the circle outwards along a line), so their sum is one ``atan2``.
+    """
+    out_of = t_exit < 1.0
+    into = t_entry > 0.0
+    if out_of and into and t_exit > 0.0 and t_entry < 1.0:
+        return _angle(ex, ey, nx, ny)
+    angle = 0.0
+    if out_of:
+        angle += _angle(ex, ey, cx, cy)
+    if into:
+        angle += _angle(cx, cy, nx, ny)
+    return angle
+
+
+@jit
+def disc_triangle_area(p0x, p0y, p1x, p1y, p2x, p2y, rho2):
+    """Area of a counter-clockwise 2-D triangle inside the disc of squared radius ``rho2`` at 0.
+
+    Summed as the fan from the disc centre over the boundary: a straight triangle over the part
+    of each edge inside the disc (its chord), circular sectors of radius ``sqrt(rho2)`` where the
+    boundary is outside (before and after each chord; a missed edge is one sector end to end).
+    """
+    # chord of edge i (corner i -> corner i + 1): from a_i = corner + s_i d to b_i = corner + t_i d
+    s0, t0 = _chord(p0x, p0y, p1x, p1y, rho2)
+    s1, t1 = _chord(p1x, p1y, p2x, p2y, rho2)
+    s2, t2 = _chord(p2x, p2y, p0x, p0y, rho2)
+    a0x, a0y = p0x + s0 * (p1x - p0x), p0y + s0 * (p1y - p0y)
+    b0x, b0y = p0x + t0 * (p1x - p0x), p0y + t0 * (p1y - p0y)
+    a1x, a1y = p1x + s1 * (p2x - p1x), p1y + s1 * (p2y - p1y)
+    b1x, b1y = p1x + t1 * (p2x - p1x), p1y + t1 * (p2y - p1y)
+    a2x, a2y = p2x + s2 * (p0x - p2x), p2y + s2 * (p0y - p2y)
+    b2x, b2y = p2x + t2 * (p0x - p2x), p2y + t2 * (p0y - p2y)
+    straight = 0.5 * ((a0x * b0y - a0y * b0x) + (a1x * b1y - a1y * b1x) + (a2x * b2y - a2y * b2x))
+    # sectors around each corner: after the chord of the edge into it, before that of the edge out
+    angle = (_corner_sectors(b2x, b2y, t2, p0x, p0y, a0x, a0y, s0)
+             + _corner_sectors(b0x, b0y, t0, p1x, p1y, a1x, a1y, s1)
+             + _corner_sectors(b1x, b1y, t1, p2x, p2y, a2x, a2y, s2))
+    return straight + 0.5 * rho2 * angle
+
+
+@jit
+def triangle_in_ball_area(ox, oy, oz, radius2, ex, ey, ez, fx, fy, fz, nx, ny, nz):
+    """Exact area of a triangle inside a ball: triangle ∩ (ball ∩ plane of the triangle).
 
     Parameters
     ----------
-    mesh : Mesh
-        Triangle mesh.
-
-    Returns
-    -------
-    frame : (m, 9) float64
-        ``u_f, v_f, n_f`` (unit, right-handed): u_f along the edge from corner 0 to corner 1.
-        Zero rows on degenerate faces.
-    corners : (m, 3) float64
-        ``(x1, x2, y2)``: corner 0 is the frame origin, corner 1 is ``(x1, 0)``, corner 2 is
-        ``(x2, y2)`` (``y2 > 0`` for a counter-clockwise triangle).
-    """
-    tri = mesh.triangles
-    v = mesh.vertices
-    e0 = np.take(v, tri[:, 1], axis=0) - np.take(v, tri[:, 0], axis=0)
-    e2 = np.take(v, tri[:, 2], axis=0) - np.take(v, tri[:, 0], axis=0)
-    x1 = np.linalg.norm(e0, axis=1)
-    bad = mesh.degenerate_faces | ~(x1 > 0)
-    n_f = np.where(bad[:, None], 0.0, np.nan_to_num(mesh.face_normals))
-    u_f = e0 / np.where(bad, 1.0, x1)[:, None]
-    u_f[bad] = 0.0
-    v_f = np.cross(n_f, u_f)
-    frame = np.concatenate([u_f, v_f, n_f], axis=1)
-    corners = np.stack([x1, _dot(e2, u_f), _dot(e2, v_f)], axis=1)
-    return frame, corners
-
-
-def _sector_angles(ax, ay, bx, by, where: np.ndarray, out: np.ndarray) -> None:
-    """Add the signed angle from direction a to direction b to ``out``, at the entries ``where`` only.
-
-    ``arctan2`` costs some 30 ns an entry; most pieces of the clipped fan have no sector (an edge
-    end inside the disc), so only the others are evaluated.
-    """
-    idx = np.flatnonzero(where)
-    if idx.size:
-        ax, ay, bx, by = (np.take(x, idx) for x in (ax, ay, bx, by))
-        out[idx] += np.arctan2(ax * by - ay * bx, ax * bx + ay * by)
-
-
-def triangle_ball_area(offset: np.ndarray, radius: np.ndarray, frame: np.ndarray,
-                       corners: np.ndarray) -> np.ndarray:
-    """Exact area of triangles within balls: triangle ∩ (ball ∩ plane of the triangle).
-
-    Works in the plane of each triangle: the ball meets it in a disc around the foot of the
-    centre; the area is summed over the three edges as (sector, triangle, sector) pieces of the
-    fan from that foot: circular sectors where the edge is outside the disc, a straight triangle
-    where it is inside.
-
-    Parameters
-    ----------
-    offset : (k, 3) float64
+    ox, oy, oz : float
         Ball centre minus corner 0 of the triangle.
-    radius : (k,) float64
-        Ball radii.
-    frame, corners : (k, 9), (k, 3) float64
-        Rows of :func:`face_frames` for the triangles.
+    radius2 : float
+        Squared ball radius.
+    ex, ey, ez, fx, fy, fz : float
+        Corners 1 and 2 minus corner 0.
+    nx, ny, nz : float
+        Unit normal of the triangle (``e x f`` direction).
 
     Returns
     -------
-    (k,) float64
-        Areas; 0 where the plane misses the ball.
+    float
+        The area; 0 where the plane misses the ball.
     """
-    ox, oy, oz = offset[:, 0], offset[:, 1], offset[:, 2]
-    cx, cy, dist = (ox * frame[:, 3 * j] + oy * frame[:, 3 * j + 1] + oz * frame[:, 3 * j + 2] for j in range(3))
-    rho2 = radius * radius - dist * dist
-    # triangle corners relative to the foot of the centre, counter-clockwise
-    px = (-cx, corners[:, 0] - cx, corners[:, 1] - cx)
-    py = (-cy, -cy, corners[:, 2] - cy)
-    straight = np.zeros_like(cx)
-    angle = np.zeros_like(cx)  # all sectors have the radius sqrt(rho2): sum their angles
-    for i in range(3):
-        ax, ay = px[i], py[i]
-        bx, by = px[(i + 1) % 3], py[(i + 1) % 3]
-        dx, dy = bx - ax, by - ay
-        a = dx * dx + dy * dy
-        b = dx * ax + dy * ay
-        c = ax * ax + ay * ay - rho2
-        disc = b * b - a * c
-        hit = (disc > 0) & (a > 0)
-        sq = np.sqrt(np.where(hit, disc, 0.0))
-        inv = 1.0 / np.where(hit, a, 1.0)
-        t1 = np.where(hit, np.clip((-b - sq) * inv, 0.0, 1.0), 0.0)
-        t2 = np.where(hit, np.clip((-b + sq) * inv, 0.0, 1.0), 0.0)
-        p1x, p1y = ax + t1 * dx, ay + t1 * dy
-        p2x, p2y = ax + t2 * dx, ay + t2 * dy
-        straight += 0.5 * (p1x * p2y - p1y * p2x)
-        # a sector before the chord where the edge starts outside the disc, one after it where it
-        # ends outside (a missed edge is one sector from a to b: t1 = t2 = 0)
-        _sector_angles(ax, ay, p1x, p1y, t1 > 0, angle)
-        _sector_angles(p2x, p2y, bx, by, t2 < 1, angle)
-    return np.where(rho2 > 0, straight + 0.5 * rho2 * angle, 0.0)
+    # frame of the face: u along corner 0 -> 1, v = n x u; corner 1 is (x1, 0), corner 2 (x2, y2)
+    x1 = math.sqrt(ex * ex + ey * ey + ez * ez)
+    ux, uy, uz = ex / x1, ey / x1, ez / x1
+    vx = ny * uz - nz * uy
+    vy = nz * ux - nx * uz
+    vz = nx * uy - ny * ux
+    x2 = fx * ux + fy * uy + fz * uz
+    y2 = fx * vx + fy * vy + fz * vz
+    # foot of the centre (cu, cv) and its height h over the plane: the disc has radius^2 r^2 - h^2
+    cu = ox * ux + oy * uy + oz * uz
+    cv = ox * vx + oy * vy + oz * vz
+    h = ox * nx + oy * ny + oz * nz
+    rho2 = radius2 - h * h
+    if not rho2 > 0.0:
+        return 0.0
+    return disc_triangle_area(-cu, -cv, x1 - cu, -cv, x2 - cu, y2 - cv, rho2)
 
 
-def _with_centres(nb: Neighbourhood, n: int) -> sp.csr_matrix:
-    """(c, n) int32 CSR indicator of each centre's support, the centre itself included."""
-    c = nb.size
-    indptr = nb.indptr + np.arange(c + 1)
-    indices = np.empty(indptr[-1], np.int64)
-    first = indptr[:-1]
-    indices[first] = nb.vertices
-    rest = np.ones(indices.size, bool)
-    rest[first] = False
-    indices[rest] = nb.indices
-    return sp.csr_matrix((np.ones(indices.size, np.int32), indices, indptr), shape=(c, n))
+# ---------------------------------------------------------------------------- eigen
+@jit
+def _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, out):
+    """Curvatures and directions of a normal-cycle tensor T at a vertex with unit normal n.
+
+    Drops the eigenvector closest to n; of the other two (ascending), each eigenvector is the
+    principal direction of the *other* eigenvalue. Writes ``out[:] = ka, kb, da (3), db (3)`` with
+    ``ka <= kb``, ``db`` the tangent-projected eigenvector of ka and ``da = n x db``.
+    """
+    sym3_eigen(tensor, values, vectors)
+    drop = 0
+    best = -1.0
+    for j in range(3):
+        along = abs(vectors[0, j] * nx + vectors[1, j] * ny + vectors[2, j] * nz)
+        if along > best:
+            best = along
+            drop = j
+    ia = 1 if drop == 0 else 0
+    ib = 1 if drop == 2 else 2
+    bx, by, bz = vectors[0, ia], vectors[1, ia], vectors[2, ia]
+    dn = bx * nx + by * ny + bz * nz
+    bx -= dn * nx
+    by -= dn * ny
+    bz -= dn * nz
+    norm = math.sqrt(bx * bx + by * by + bz * bz)
+    bx /= norm
+    by /= norm
+    bz /= norm
+    out[0] = values[ia]
+    out[1] = values[ib]
+    out[2] = ny * bz - nz * by
+    out[3] = nz * bx - nx * bz
+    out[4] = nx * by - ny * bx
+    out[5] = bx
+    out[6] = by
+    out[7] = bz
 
 
-def _row_ids(m: sp.csr_matrix) -> np.ndarray:
-    return segment_ids(m.indptr)
+# ---------------------------------------------------------------------------- per-mesh arrays
+def face_geometry(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals (m, 3) and areas (m,) of the triangles; zeros on degenerate faces."""
+    degenerate = mesh.degenerate_faces
+    normal = np.where(degenerate[:, None], 0.0, mesh.face_normals)
+    area = np.where(degenerate, 0.0, mesh.face_areas)
+    return normal, area
 
 
-class _MeshData:
-    """Per-mesh arrays shared by all blocks."""
+@jit_parallel
+def _edge_beta_scale(edges, edge_faces, two, x, y, z, face_normal, out):
+    for e in prange(edges.shape[0]):
+        out[e] = 0.0
+        f0, f1 = edge_faces[e, 0], edge_faces[e, 1]
+        if not two[e] or f1 < 0:
+            continue
+        a, b = edges[e, 0], edges[e, 1]
+        dx, dy, dz = x[b] - x[a], y[b] - y[a], z[b] - z[a]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        n0x, n0y, n0z = face_normal[f0, 0], face_normal[f0, 1], face_normal[f0, 2]
+        n1x, n1y, n1z = face_normal[f1, 0], face_normal[f1, 1], face_normal[f1, 2]
+        zero0 = n0x == 0.0 and n0y == 0.0 and n0z == 0.0
+        zero1 = n1x == 0.0 and n1y == 0.0 and n1z == 0.0
+        if zero0 or zero1 or not length > 0.0:
+            continue  # next to a degenerate face: its vertices are invalid anyway
+        # beta = signed angle from n0 to n1 about the edge (slot 0: the face where it runs a -> b)
+        sx = n0y * n1z - n0z * n1y
+        sy = n0z * n1x - n0x * n1z
+        sz = n0x * n1y - n0y * n1x
+        beta = math.atan2((sx * dx + sy * dy + sz * dz) / length, n0x * n1x + n0y * n1y + n0z * n1z)
+        scale = beta / length  # beta |e| ê êᵀ = beta / |e| d dᵀ
+        if math.isfinite(scale):
+            out[e] = scale
 
-    def __init__(self, mesh: Mesh):
-        self.tensors = edge_tensors(mesh)
-        self.frame, self.corners = face_frames(mesh)
-        self.vertex_edges = mesh.vertex_edges.astype(np.int32)
-        self.vertex_faces = mesh.vertex_faces.astype(np.int32)
-        degenerate_at = self.vertex_faces @ mesh.degenerate_faces.astype(np.int32) > 0
-        self.flags = np.stack([mesh.border_vertices, mesh.nonmanifold_vertices, degenerate_at],
-                              axis=1).astype(np.int32)
 
+def edge_beta_scale(mesh: Mesh, face_normal: np.ndarray) -> np.ndarray:
+    """(e,) ``beta(e) / |e|`` per edge, so that ``beta |e| ê êᵀ = scale * d dᵀ`` with d the edge vector.
 
-def _clipped_edges(mesh: Mesh, nb: Neighbourhood, rows: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """Fraction of each edge inside the ball of its row's centre; (k,) for (k,) pairs."""
-    v = mesh.vertices
-    out = np.empty(rows.size)
-    for s in range(0, rows.size, PAIR_CHUNK):
-        r, e = rows[s:s + PAIR_CHUNK], edges[s:s + PAIR_CHUNK]
-        start = np.take(v, mesh.edges[e, 0], axis=0) - np.take(v, nb.vertices[r], axis=0)
-        t1, t2 = segment_ball(start, mesh.edge_vectors[e], nb.radius[r])
-        out[s:s + PAIR_CHUNK] = t2 - t1
+    Zero for edges without exactly two faces or next to a degenerate face (their vertices are
+    invalid anyway). ``face_normal`` is the first output of :func:`face_geometry`.
+    """
+    out = np.empty(mesh.edges.shape[0])
+    x, y, z = _columns(mesh)
+    two = mesh.edge_face_count == 2
+    launch(_edge_beta_scale, mesh.edges, mesh.edge_faces, two, x, y, z, face_normal, out)
     return out
 
 
-def _clipped_faces(mesh: Mesh, nb: Neighbourhood, rows: np.ndarray, faces: np.ndarray, data: "_MeshData"):
-    """Area of each face inside the ball of its row's centre; (k,) for (k,) pairs."""
-    v = mesh.vertices
-    first = mesh.triangles[:, 0]
-    out = np.empty(rows.size)
-    for s in range(0, rows.size, PAIR_CHUNK):
-        r, f = rows[s:s + PAIR_CHUNK], faces[s:s + PAIR_CHUNK]
-        offset = np.take(v, nb.vertices[r], axis=0) - np.take(v, first[f], axis=0)
-        out[s:s + PAIR_CHUNK] = triangle_ball_area(offset, nb.radius[r], data.frame[f], data.corners[f])
-    out[~np.isfinite(out)] = 0.0
-    return out
+def support_flags(mesh: Mesh) -> np.ndarray:
+    """(n,) uint8 per-vertex bits a support may hit: border, non-manifold, on a degenerate face."""
+    flags = mesh.border_vertices.astype(np.uint8) * BORDER_BIT
+    flags |= mesh.nonmanifold_vertices.astype(np.uint8) * NONMANIFOLD_BIT
+    degenerate = mesh.degenerate_faces
+    if degenerate.any():
+        flags[mesh.triangles[degenerate].reshape(-1)] |= DEGENERATE_BIT
+    return flags
 
 
-def _block_tensor(mesh: Mesh, nb: Neighbourhood, data: _MeshData):
-    """Tensor (c, 6), ball area (c,) and flag hits (c, 3) of one block of centres."""
-    support = _with_centres(nb, mesh.n_vertices)
-    hits = support @ data.flags  # (c, 3): border, nonmanifold, degenerate-face vertices in the support
-
-    # edges with 2 endpoints in the support are wholly inside the (convex) ball; 1 -> clip
-    inc = support @ data.vertex_edges
-    inc.sum_duplicates()
-    part = np.flatnonzero(inc.data == 1)
-    frac = np.ones(inc.data.size)
-    frac[part] = _clipped_edges(mesh, nb, _row_ids(inc)[part], inc.indices[part])
-    tensor = sp.csr_matrix((frac, inc.indices, inc.indptr), shape=inc.shape) @ data.tensors
-
-    faces_in = support @ data.vertex_faces
-    faces_in.sum_duplicates()
-    areas = mesh.face_areas[faces_in.indices]
-    part = np.flatnonzero(faces_in.data < 3)
-    areas[part] = _clipped_faces(mesh, nb, _row_ids(faces_in)[part], faces_in.indices[part], data)
-    area = np.bincount(_row_ids(faces_in), weights=areas, minlength=nb.size)
-    return tensor, area, hits
+def _columns(mesh: Mesh):
+    return tuple(np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
 
 
-def _principal_from_tensor3(tensor: np.ndarray, normals: np.ndarray):
-    """Curvatures and directions of (c, 6) normal-cycle tensors at vertices with (c, 3) normals."""
-    c = tensor.shape[0]
-    full = np.empty((c, 3, 3))
-    for col, (i, j) in enumerate(_SYM):
-        full[:, i, j] = tensor[:, col]
-        full[:, j, i] = tensor[:, col]
-    values, vectors = np.linalg.eigh(full)
-    along = np.abs(np.einsum("cij,ci->cj", vectors, normals))
-    drop = np.argmax(along, axis=1)
-    keep = np.sort(np.stack([(drop + 1) % 3, (drop + 2) % 3], axis=1), axis=1)
-    idx = np.arange(c)
-    ka, kb = values[idx, keep[:, 0]], values[idx, keep[:, 1]]
-    # the eigenvector of one eigenvalue is the principal direction of the other
-    db = vectors[idx, :, keep[:, 0]]
-    db -= _dot(db, normals)[:, None] * normals
-    with np.errstate(invalid="ignore", divide="ignore"):
-        db /= np.linalg.norm(db, axis=1, keepdims=True)
-    da = np.cross(normals, db)
-    return ka, kb, da, db
+def _csr(matrix) -> tuple[np.ndarray, np.ndarray]:
+    return matrix.indptr.astype(np.int64), matrix.indices.astype(np.int64)
 
 
-def iter_csm(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
-    """Normal-cycle tensor over the ball of radius ``k`` longest 1-ring edges.
+# ---------------------------------------------------------------------------- the kernel
+@jit_parallel
+def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
+               vf_ptr, vf_idx, tri, face_normal, face_area, flags, normals,
+               vstamps, estamps, fstamps, k1, k2, d1, d2, reason):
+    parts = vstamps.shape[0]
+    for t in prange(parts):
+        queue = np.empty(QUEUE_START, np.int64)
+        values = np.empty(3)
+        vectors = np.empty((3, 3))
+        tensor = np.empty((3, 3))
+        res = np.empty(8)
+        vstamp, estamp, fstamp = vstamps[t], estamps[t], fstamps[t]
+        for p in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
+            r2 = radius2[p]
+            count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
+            px, py, pz = x[p], y[p], z[p]
+            hit = 0
+            # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle); area(B ∩ mesh)
+            t00 = t01 = t02 = t11 = t12 = t22 = 0.0
+            area = 0.0
+            for i in range(count):
+                v = queue[i]
+                hit |= flags[v]
+                for j in range(ve_ptr[v], ve_ptr[v + 1]):
+                    e = ve_idx[j]
+                    if estamp[e] == p:
+                        continue
+                    estamp[e] = p
+                    s = beta_scale[e]
+                    if s == 0.0:
+                        continue
+                    a, b = edges[e, 0], edges[e, 1]
+                    ax, ay, az = x[a] - px, y[a] - py, z[a] - pz
+                    dx, dy, dz = x[b] - x[a], y[b] - y[a], z[b] - z[a]
+                    bx, by, bz = ax + dx, ay + dy, az + dz
+                    frac = 1.0  # both ends in the (convex) ball: all of e
+                    if ax * ax + ay * ay + az * az > r2 or bx * bx + by * by + bz * bz > r2:
+                        frac = segment_in_ball(ax, ay, az, dx, dy, dz, r2)
+                    w = s * frac
+                    t00 += w * dx * dx
+                    t01 += w * dx * dy
+                    t02 += w * dx * dz
+                    t11 += w * dy * dy
+                    t12 += w * dy * dz
+                    t22 += w * dz * dz
+                for j in range(vf_ptr[v], vf_ptr[v + 1]):
+                    f = vf_idx[j]
+                    if fstamp[f] == p:
+                        continue
+                    fstamp[f] = p
+                    if face_area[f] == 0.0:
+                        continue  # degenerate: flagged at its vertices
+                    c0, c1, c2 = tri[f, 0], tri[f, 1], tri[f, 2]
+                    ox, oy, oz = px - x[c0], py - y[c0], pz - z[c0]
+                    ex, ey, ez = x[c1] - x[c0], y[c1] - y[c0], z[c1] - z[c0]
+                    fx, fy, fz = x[c2] - x[c0], y[c2] - y[c0], z[c2] - z[c0]
+                    if (ox * ox + oy * oy + oz * oz <= r2
+                            and (ex - ox) ** 2 + (ey - oy) ** 2 + (ez - oz) ** 2 <= r2
+                            and (fx - ox) ** 2 + (fy - oy) ** 2 + (fz - oz) ** 2 <= r2):
+                        area += face_area[f]
+                    else:
+                        part = triangle_in_ball_area(ox, oy, oz, r2, ex, ey, ez, fx, fy, fz,
+                                                     face_normal[f, 0], face_normal[f, 1], face_normal[f, 2])
+                        if math.isfinite(part):
+                            area += part
+            nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
+            normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
+            singular = not (area > 0.0 and math.isfinite(t00 + t01 + t02 + t11 + t12 + t22))
+            code = _OK
+            if not singular and normal_ok:
+                inv = 1.0 / area
+                tensor[0, 0], tensor[1, 1], tensor[2, 2] = t00 * inv, t11 * inv, t22 * inv
+                tensor[0, 1] = tensor[1, 0] = t01 * inv
+                tensor[0, 2] = tensor[2, 0] = t02 * inv
+                tensor[1, 2] = tensor[2, 1] = t12 * inv
+                _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, res)
+                k1[p], k2[p] = res[0], res[1]
+                for c in range(3):
+                    d1[p, c] = res[2 + c]
+                    d2[p, c] = res[5 + c]
+                if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
+                    singular = True
+            if singular:
+                code = _SINGULAR
+            if hit & BORDER_BIT:
+                code = _BORDER
+            if hit & DEGENERATE_BIT or not normal_ok:
+                code = _DEGENERATE
+            if hit & NONMANIFOLD_BIT:
+                code = _NONMANIFOLD
+            reason[p] = code
+
+
+def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):
+    """Normal-cycle tensor over the ball of radius ``radii[p]`` around every vertex p.
 
     Parameters
     ----------
@@ -313,44 +391,53 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None 
         a non-manifold vertex or a degenerate face are marked invalid).
     normals : (n, 3) float64
         Unit vertex normals; they only pick which eigenvector of T is the normal.
-    k : int
-        Range factor: the ball radius in longest-1-ring-edge units.
-    block_size : int, optional
-        Centre vertices per block.
+    radii : (n,) float64
+        Ball radius of every vertex (:func:`curv.ranges.ball_radii` with ``uses_normals=False``).
+    chunk : int, optional
+        Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
 
     Yields
     ------
     float
-        Fraction done.
+        Fraction done (the points where a caller may cancel).
 
     Returns
     -------
     Principal
+        ``k1 <= k2`` as the tensor gives them; ``reason`` BORDER, DEGENERATE, NONMANIFOLD or
+        SINGULAR where the estimate is not usable.
     """
-    mesh.triangles  # noqa: B018  (raises MeshError on polygons)
-    data = _MeshData(mesh)
-    normal_ok = np.isfinite(normals).all(axis=1)
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)  # MeshError on polygons
+    n = mesh.n_vertices
+    x, y, z = _columns(mesh)
+    # the mesh's connectivity may not be built yet: one piece per step, so that cancel stays prompt
+    for name in ("degenerate_faces", "face_normals", "edges", "edge_faces", "adjacency", "vertex_edges", "vertex_faces",
+                 "border_vertices", "nonmanifold_vertices"):
+        getattr(mesh, name)
+        yield 0.0
+    face_normal, face_area = face_geometry(mesh)
+    beta_scale = edge_beta_scale(mesh, face_normal)
+    flags = support_flags(mesh)
+    yield 0.0
+    indptr, indices = expansion_adjacency(mesh)
+    ve_ptr, ve_idx = _csr(mesh.vertex_edges)
+    vf_ptr, vf_idx = _csr(mesh.vertex_faces)
+    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
+    normals = np.ascontiguousarray(normals, dtype=np.float64)
+    edges = np.ascontiguousarray(mesh.edges, dtype=np.int64)
+    parts = threads()
+    vstamps = new_scratch(n, parts)
+    estamps = np.full((parts, edges.shape[0]), -1, np.int64)
+    fstamps = np.full((parts, tri.shape[0]), -1, np.int64)
+    out = empty_principal(n)
 
-    def block_result(nb: Neighbourhood):
-        ids = nb.vertices
-        tensor, area, hits = _block_tensor(mesh, nb, data)
-        singular = ~(area > 0) | ~np.isfinite(tensor).all(axis=1)
-        usable = ~singular & normal_ok[ids]
-        ka = np.full(ids.size, np.nan)
-        kb = np.full(ids.size, np.nan)
-        da = np.full((ids.size, 3), np.nan)
-        db = np.full((ids.size, 3), np.nan)
-        if usable.any():
-            scaled = tensor[usable] / area[usable, None]
-            ka[usable], kb[usable], da[usable], db[usable] = _principal_from_tensor3(scaled, normals[ids[usable]])
-        reason = np.full(ids.size, Reason.OK, np.uint8)
-        reason[singular | ~np.isfinite(da).all(axis=1)] = Reason.SINGULAR
-        reason[hits[:, 0] > 0] = Reason.BORDER
-        reason[(hits[:, 2] > 0) | ~normal_ok[ids]] = Reason.DEGENERATE
-        reason[hits[:, 1] > 0] = Reason.NONMANIFOLD
-        return ka, kb, da, db, reason
+    def run(lo: int, hi: int) -> None:
+        launch(_csm_chunk, lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
+               vf_ptr, vf_idx, tri, face_normal, face_area, flags, normals, vstamps, estamps, fstamps,
+               out.k1, out.k2, out.d1, out.d2, out.reason)
 
-    return (yield from iter_blockwise(mesh, k, block_result, block_size=block_size))
+    yield from iter_chunks(n, run, chunk=chunk)
+    return out
 
 
 register(EstimatorSpec(
@@ -358,4 +445,5 @@ register(EstimatorSpec(
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",
+    kernels=(_edge_beta_scale, _csm_chunk),
 ))

@@ -20,25 +20,125 @@ angle ``atan2(y, x) / 2``; the curvature values stay those of the formula above.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..corners import CornerChunk, map_vertex_chunks
-from ..frames import tangent_frames
+from .. import connectivity
+from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
-from ..normals import max_corner_weights, normalize_rows, unusable_normal_vertices
-from ._lsq import MIN_TANGENT_LENGTH
-from ._triangle_corners import TriangleCorners, closed_ring_reasons
+from ..normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
+from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
+from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, turn_by_corner
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_meyer"]
 
+FIT_RCOND = 1e-10
+"""The direction fit is singular when its 2x2 determinant is below this times its scale squared."""
 
-def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
-    """Meyer et al. operators on the 1-ring (``k`` must be 1; ``block_size`` is unused).
+TINY2 = MIN_TANGENT_LENGTH**2
+"""An edge whose tangent part is below MIN_TANGENT_LENGTH of its length gives no direction."""
 
-    The corners around each vertex are processed in cache-sized chunks of vertices on a thread
-    pool (:mod:`curv.corners`): every corner contributes its face's cotangent terms, angle and
-    mixed-area share to its own vertex, so a chunk needs no data from any other chunk.
+
+@jit_parallel
+def _meyer(lo, hi, parts, width, indptr, corners, indices, corner_next, corner_prev, corner_face, x,
+           degenerate_faces, border, nonmanifold, unusable, own_normals, normals, k1, k2, d1, d2, reason):
+    for t in prange(parts):
+        # the leaving edges ab of the current vertex's corners, for the direction fit
+        edge_x, edge_y, edge_z = np.empty(width), np.empty(width), np.empty(width)
+        start, stop = lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
+        for p in range(start, stop):
+            c_lo, c_hi = indptr[p], indptr[p + 1]
+            a_mixed = 0.0
+            turn_re, turn_im, turns = 1.0, 0.0, 0  # sum of the corner angles theta (turn_by_corner)
+            kx = ky = kz = 0.0  # 2 A_mixed K(p): sum of (p - q_j)(cot a_j + cot b_j), one term per corner
+            sx = sy = sz = 0.0  # the Max normal, unnormalised
+            touches_degenerate = False
+            for i in range(c_lo, c_hi):
+                c = corners[i]
+                bad = degenerate_faces[corner_face[c]]
+                touches_degenerate |= bad
+                (abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, ac2, twice_area, cos_a, cot_b, cot_c,
+                 area) = corner_triangle(x, p, indices[corner_next[c]], indices[corner_prev[c]], bad)
+                # (a - b) cot c + (a - c) cot b
+                kx += -(cot_c * abx + cot_b * acx)
+                ky += -(cot_c * aby + cot_b * acy)
+                kz += -(cot_c * abz + cot_b * acz)
+                a_mixed += area
+                turn_re, turn_im, turns = turn_by_corner(turn_re, turn_im, turns, twice_area, cos_a, bad)
+                wx, wy, wz = max_weight(nx, ny, nz, ab2, ac2)
+                sx += wx
+                sy += wy
+                sz += wz
+                edge_x[i - c_lo], edge_y[i - c_lo], edge_z[i - c_lo] = abx, aby, abz
+            if own_normals:
+                # the Max normal (as vertex_normals), NaN where the fan has no meaningful normal
+                nx, ny, nz = unit(sx, sy, sz)
+                if unusable[p]:
+                    nx, ny, nz = math.nan, math.nan, math.nan
+                normals[p, 0], normals[p, 1], normals[p, 2] = nx, ny, nz
+            else:
+                nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
+            ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
+            # direction fit on the edges a -> b (in a closed ring every leaving edge appears once):
+            # tangent angle phi of the edge, normal curvature kn = 2 (p - q).N / |p - q|^2
+            a00 = a01 = a11 = r0 = r1 = t0 = t1 = 0.0
+            for i in range(c_hi - c_lo):
+                abx, aby, abz = edge_x[i], edge_y[i], edge_z[i]
+                u = abx * ux + aby * uy + abz * uz
+                v = abx * vx + aby * vy + abz * vz
+                w = abx * nx + aby * ny + abz * nz
+                l2 = u * u + v * v
+                if l2 > TINY2 * (l2 + w * w):
+                    inv = 1.0 / l2
+                    kn = -2.0 * w / (l2 + w * w)
+                else:
+                    inv = kn = 0.0
+                c2 = (u * u - v * v) * inv  # cos 2 phi
+                s2 = 2.0 * u * v * inv  # sin 2 phi
+                a00 += c2 * c2
+                a01 += c2 * s2
+                a11 += s2 * s2
+                r0 += kn * c2
+                r1 += kn * s2
+                t0 += c2
+                t1 += s2
+
+            empty = not a_mixed > 0
+            safe_area = 1.0 if empty else a_mixed
+            kx, ky, kz = kx / (2.0 * safe_area), ky / (2.0 * safe_area), kz / (2.0 * safe_area)
+            # H = sign(K . N) |K| / 2; K_G = (2 pi - sum theta) / A_mixed
+            h = 0.5 * _sign(kx * nx + ky * ny + kz * nz) * math.sqrt(kx * kx + ky * ky + kz * kz)
+            kg = (2.0 * math.pi - angle_sum(turn_re, turn_im, turns)) / safe_area
+            disc = h * h - kg
+            root = math.sqrt(disc) if disc > 0.0 else (disc if math.isnan(disc) else 0.0)
+            # trace-constrained fit x cos2phi + y sin2phi = kn - H: a 2x2 system in closed form; only
+            # the angle of (x, y) is needed, and det > 0 where the system is regular
+            b0 = r0 - h * t0
+            b1 = r1 - h * t1
+            det = a00 * a11 - a01 * a01
+            scale = max(a00, a11) if not (math.isnan(a00) or math.isnan(a11)) else math.nan
+            fit_singular = not det > FIT_RCOND * scale * scale
+            theta = 0.5 * math.atan2(a00 * b1 - a01 * b0, a11 * b0 - a01 * b1)
+            cs, sn = math.cos(theta), math.sin(theta)
+            k1[p] = h + root
+            k2[p] = h - root
+            d1[p, 0], d1[p, 1], d1[p, 2] = cs * ux + sn * vx, cs * uy + sn * vy, cs * uz + sn * vz
+            d2[p, 0], d2[p, 1], d2[p, 2] = -sn * ux + cs * vx, -sn * uy + cs * vy, -sn * uz + cs * vz
+            finite = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
+            reason[p] = ring_reason(empty or fit_singular,
+                                    ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, border),
+                                    touches_degenerate or not finite, nonmanifold[p])
+
+
+def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, chunk: int | None = None):
+    """Meyer et al. operators on the closed 1-ring of every vertex (a fixed range: ``radii`` is None).
+
+    One kernel call per chunk of vertices: every vertex sums, over its corners, the cotangent terms,
+    angle and mixed-area share of the corner's triangle and the direction-fit terms of its leaving
+    edge. Vertices need nothing from each other, so the result does not depend on the chunks or
+    the threads.
 
     Parameters
     ----------
@@ -47,9 +147,12 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     normals : (n, 3) float64 or None
         Unit vertex normals: the sign of H and the tangent frame of the direction fit. None: compute
         the Max-weighted normals from the same corners (returned in ``Principal.normals``, NaN
-        where :func:`curv.normals.unusable_normal_vertices`).
-    k : int
-        Range; only 1.
+        where :func:`curv.normals.unusable_normal_vertices`; identical to
+        :func:`curv.normals.vertex_normals` there).
+    radii : None
+        Unused (the estimator has no range support).
+    chunk : int, optional
+        Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
 
     Yields
     ------
@@ -64,81 +167,36 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | Non
     out = empty_principal(n)
     if not mesh.is_triangular:
         mesh.triangles  # raises the MeshError that names the polygon sizes
-    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
-    degenerate_faces = mesh.degenerate_faces
-    corner_face = mesh.corner_face
-    border_vertices, nonmanifold = mesh.border_vertices, mesh.nonmanifold_vertices
+    indptr, corners = mesh.vertex_corners
     own_normals = normals is None
     if own_normals:
         normals = np.empty((n, 3))
         unusable = unusable_normal_vertices(mesh)
-    yield 0.1
+    else:
+        normals = np.ascontiguousarray(normals, dtype=np.float64)
+        unusable = np.zeros(0, bool)
+    width = int(np.diff(indptr).max(initial=0)) + 1
+    args = (width, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
+            mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices, unusable,
+            own_normals, normals, out.k1, out.k2, out.d1, out.d2, out.reason)
 
-    def work(chunk: CornerChunk) -> None:
-        rows = slice(chunk.start, chunk.stop)
-        tc = TriangleCorners.of(chunk, xyz, degenerate_faces, corner_face)
-        ab = tc.ab
-        # mean-curvature normal: (a - b) cot c + (a - c) cot b, summed over the corners
-        hterm = [-(tc.cot_c * e1 + tc.cot_b * e2) for e1, e2 in zip(ab, tc.ac)]
-        area, angle = tc.mixed_area, tc.angle()
+    def run(lo: int, hi: int) -> None:
+        launch(_meyer, lo, hi, max(1, min(threads(), hi - lo)), *args)
 
-        if own_normals:
-            summed = np.stack([chunk.sum(w) for w in max_corner_weights(tc.normal, tc.ab_len2, tc.ac_len2)],
-                              axis=1)
-            nrm = normalize_rows(summed)
-            nrm[unusable[rows]] = np.nan
-            normals[rows] = nrm
-        # direction fit on the edge a -> b (in a closed ring every leaving edge appears once)
-        nrm = normals[rows]
-        U, V = tangent_frames(nrm)
-        u, v, w = (sum(e * np.take(F[:, c], chunk.local) for c, e in enumerate(ab))
-                   for F in (U, V, nrm))
-        l2 = u * u + v * v
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ok = l2 > (MIN_TANGENT_LENGTH**2) * (l2 + w * w)
-            inv = np.where(ok, 1.0 / l2, 0.0)
-            kn = np.where(ok, -2.0 * w / (l2 + w * w), 0.0)
-        c2 = (u * u - v * v) * inv
-        s2 = 2.0 * u * v * inv
-        a_mixed, angle_sum, a00, a01, a11, r0, r1, t0, t1, hx, hy, hz = (
-            chunk.sum(x) for x in (area, angle, c2 * c2, c2 * s2, s2 * s2, kn * c2, kn * s2, c2, s2, *hterm))
-
-        empty = ~(a_mixed > 0)
-        safe_area = np.where(empty, 1.0, a_mixed)
-        hx, hy, hz = (x / (2.0 * safe_area) for x in (hx, hy, hz))
-        with np.errstate(invalid="ignore"):
-            sign = np.sign(hx * nrm[:, 0] + hy * nrm[:, 1] + hz * nrm[:, 2])
-        h = 0.5 * sign * np.sqrt(hx * hx + hy * hy + hz * hz)
-        kg = (2.0 * np.pi - angle_sum) / safe_area
-        root = np.sqrt(np.maximum(h * h - kg, 0.0))
-        # trace-constrained fit x cos2phi + y sin2phi = kn - H: a 2x2 system in closed form; only
-        # the angle of (x, y) is needed, and det > 0 where the system is regular
-        b0 = r0 - h * t0
-        b1 = r1 - h * t1
-        det = a00 * a11 - a01 * a01
-        fit_singular = ~(det > FIT_RCOND * np.maximum(a00, a11) ** 2)
-        theta = 0.5 * np.arctan2(a00 * b1 - a01 * b0, a11 * b0 - a01 * b1)
-        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
-        out.k1[rows] = h + root
-        out.k2[rows] = h - root
-        out.d1[rows] = c * U + s * V
-        out.d2[rows] = -s * U + c * V
-        out.reason[rows] = closed_ring_reasons(chunk, tc, empty | fit_singular, nrm, border_vertices,
-                                               nonmanifold[rows])
-
-    map_vertex_chunks(mesh, work)
-    yield 0.9
+    yield from iter_chunks(n, run, chunk=chunk)
     if own_normals:
         out.normals = normals
-    yield 1.0
     return out
 
 
-_COLUMNS = 9
-"""Per-vertex sums besides the mean-curvature vector: mixed area, angle sum, direction-fit sums (7)."""
-
-FIT_RCOND = 1e-10
-"""The direction fit is singular when its 2x2 determinant is below this times its scale squared."""
+@jit
+def _sign(value):
+    """``np.sign``: -1, 0 or 1, NaN for NaN."""
+    if value > 0.0:
+        return 1.0
+    if value < 0.0:
+        return -1.0
+    return value  # 0 or NaN
 
 
 register(EstimatorSpec(
@@ -146,6 +204,7 @@ register(EstimatorSpec(
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Meyer, Desbrun, Schröder, Barr 2003, Discrete differential-geometry operators for "
               "triangulated 2-manifolds",
-    computes_normals=True,
+    computes_normals=True, has_support=False,
+    kernels=(_meyer, *connectivity.KERNELS, *NORMAL_KERNELS),
     summary="cotan mean-curvature normal and angle defect over the mixed Voronoi area",
 ))

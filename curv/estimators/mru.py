@@ -1,42 +1,80 @@
 """Modified Rusinkiewicz (paper §4.2): per-vertex least squares of normal differences.
 
-For every neighbour q in range, the shape operator maps the tangent offset of ``q - p`` to the
-tangent part of ``N_q - N_p`` (eq. 4.1/4.2, with our sign convention dN = W t): two equations in the
-three unknowns (e, f, g) per neighbour. No per-face step, so it works on any polygon mesh.
+For every neighbour q in range, the shape operator maps the tangent offset (u, v) of ``q - p`` to
+the tangent part (a, b) of ``N_q - N_p`` (eq. 4.1/4.2, with our sign convention dN = W t): two
+equations ``[u v 0] (e f g)^T = a`` and ``[0 u v] (e f g)^T = b`` per neighbour. N_p is orthogonal
+to its own frame's U and V, so only N_q enters (a, b). No per-face step, so it works on any polygon
+mesh. One kernel: the ball search and the normal equations run neighbour by neighbour.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
-from ._lsq import LocalPairs, normal_equations, run_fit, solve_normal_equations
+from ..neighbourhood import ball_support
+from ._local_fit import MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, run_fit, slice_bounds, solve_sym3, tangent_frame
 from .registry import EstimatorSpec, register
 
 
-def _fit_mru(pairs: LocalPairs, normals: tuple):
-    u, v = pairs.u, pairs.v
-    # tangent part of N_q - N_p: N_p is orthogonal to its own frame's U and V, so only N_q remains
-    a, b, _ = pairs.project(normals)
-    ok = pairs.usable & np.isfinite(a) & np.isfinite(b)
-    m = ok.astype(float)
-    u, v = u * m, v * m
-    a, b = np.where(ok, a, 0.0), np.where(ok, b, 0.0)
-    # [u v 0] (e f g)^T = a ;  [0 u v] (e f g)^T = b
-    ata, atb = normal_equations(pairs, [([u, v, None], a), ([None, u, v], b)])
-    x, singular = solve_normal_equations(ata, atb)
-    used = pairs.row_sum(m)
-    return x[:, 0], x[:, 1], x[:, 2], used, singular
+@jit
+def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
+    """Normal-difference least squares at vertex p over its support ``queue[1:count]``."""
+    n0, n1, n2 = nx[p], ny[p], nz[p]
+    if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
+        mark_degenerate(p, k1, k2, d1, d2, reason)
+        return
+    frame = tangent_frame(n0, n1, n2)
+    ux, uy, uz, vx, vy, vz = frame
+    tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
+    # normal equations of the two equation kinds: rows (u, v, 0) and (0, u, v)
+    suu = suv = svv = sau = sav = sbu = sbv = 0.0
+    used = 0
+    for i in range(1, count):
+        q = queue[i]
+        dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
+        u = dx * ux + dy * uy + dz * uz
+        v = dx * vx + dy * vy + dz * vz
+        a = nx[q] * ux + ny[q] * uy + nz[q] * uz
+        b = nx[q] * vx + ny[q] * vy + nz[q] * vz
+        if not (u * u + v * v > tiny2) or not (math.isfinite(a) and math.isfinite(b)):
+            continue
+        used += 1
+        suu += u * u
+        suv += u * v
+        svv += v * v
+        sau += a * u
+        sav += a * v
+        sbu += b * u
+        sbv += b * v
+    # AᵀA = [[uu, uv, 0], [uv, uu + vv, uv], [0, uv, vv]], Aᵀb = (au, av + bu, bv)
+    e, f, g, singular = solve_sym3(suu, suv, 0.0, suu + svv, suv, svv, sau, sav + sbu, sbv)
+    finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
 
 
-def iter_mru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
-    """Normal-difference least squares over neighbours within (k-1) longest 1-ring edges."""
-    return (yield from run_fit(mesh, normals, k - 1, _fit_mru, min_pairs=3, block_size=block_size))
+@jit_parallel
+def _mru_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+    parts = stamps.shape[0]
+    for t in prange(parts):
+        queue = queues[t]
+        stamp = stamps[t]
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for p in range(start, stop):
+            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
+            _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
+
+
+def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):
+    """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk)."""
+    return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk))
 
 
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
     triangles_only=False, uses_normals=True, closed_ring=False,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
-    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)",
+    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel,),
 ))

@@ -12,7 +12,6 @@ from typing import Callable, Generator
 import numpy as np
 
 from ..errors import EstimatorError
-from ..mesh import Mesh
 from ..result import Principal
 
 __all__ = ["EstimatorSpec", "ESTIMATORS", "register", "get_spec", "EstimatorFunction"]
@@ -54,6 +53,9 @@ class EstimatorSpec:
     has_support : bool
         Collects a range support (any real range >= its smallest named one, or a radius). False for
         the fixed 1-ring formulas (``meyer``, ``ru``), which take only their one named range.
+    in_paper : bool
+        One of the paper's seven estimators (its 20 variants are the study's core; the others run
+        as extra rows beside them).
     kernels : tuple
         The numba dispatchers the estimator calls, so that a caller can announce a first-run
         compilation (:func:`curv.jit.compile_pending`).
@@ -74,22 +76,8 @@ class EstimatorSpec:
     summary: str = ""
     computes_normals: bool = False
     has_support: bool = True
+    in_paper: bool = True
     kernels: tuple = field(default=(), repr=False, compare=False)
-
-    def support_factor(self, k: int) -> int:
-        """Radius of the collected support in longest-1-ring-edge units for range Rk."""
-        return k - 1 if self.uses_normals else k
-
-    def check_range(self, k) -> int:
-        """Validate a range and return it as int; :class:`EstimatorError` names the allowed ones."""
-        try:
-            ki = int(k)
-        except (TypeError, ValueError):
-            ki = None
-        if ki is None or ki != k or ki not in self.ranges:
-            allowed = ", ".join(f"R{r}" for r in self.ranges)
-            raise EstimatorError(f"estimator {self.name!r} has no range {k!r}; allowed: {allowed}")
-        return ki
 
     def variants(self) -> list[tuple[str, int]]:
         """``[(name, k), ...]`` for every supported range."""
@@ -119,44 +107,6 @@ def get_spec(name: str) -> EstimatorSpec:
 def all_variants() -> list[tuple[str, int]]:
     """Every (name, range) pair of the registry, in registry order."""
     return [v for spec in ESTIMATORS.values() for v in spec.variants()]
-
-
-def iter_blockwise(mesh: Mesh, factor: float, block_fn, *, block_size: int | None = None
-                   ) -> Generator[float, None, Principal]:
-    """Run a per-block estimator over all range supports (threaded) and assemble the result.
-
-    Parameters
-    ----------
-    mesh : Mesh
-    factor : float
-        Support radius in longest-1-ring-edge units.
-    block_fn : callable
-        ``block_fn(neighbourhood) -> (k1, k2, d1, d2, reason)`` for the block's centre vertices:
-        (c,), (c,), (c, 3), (c, 3), (c,) uint8.
-    block_size : int, optional
-        Vertices per block.
-
-    Yields
-    ------
-    float
-        Fraction of vertices done (the points where a caller may cancel).
-
-    Returns
-    -------
-    Principal
-    """
-    from .._legacy_neighbourhood import map_neighbourhoods
-
-    n = mesh.n_vertices
-    out = empty_principal(n)
-    done = 0
-    for nb, (k1, k2, d1, d2, reason) in map_neighbourhoods(mesh, factor, block_fn, block_size=block_size):
-        ids = nb.vertices
-        out.k1[ids], out.k2[ids], out.d1[ids], out.d2[ids] = k1, k2, d1, d2
-        out.reason[ids] = reason
-        done += ids.size
-        yield done / n
-    return out
 
 
 def empty_principal(n: int) -> Principal:

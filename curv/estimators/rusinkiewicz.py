@@ -13,12 +13,15 @@ uses the vertex normals of the whole 1-ring, hence range R2.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..corners import CornerChunk, map_vertex_chunks
-from ..frames import principal_from_tensor, solve_sym3, tangent_frames
+from .. import connectivity
+from ..jit import iter_chunks, jit, jit_parallel, launch, prange
 from ..mesh import Mesh
-from ._triangle_corners import TriangleCorners, closed_ring_reasons, cross, dot
+from ._local_fit import solve_sym3, store_principal, tangent_frame
+from ._triangle_corners import corner_triangle, ring_flag, ring_reason
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_ru"]
@@ -27,13 +30,124 @@ MIN_ROTATION_COS = -1.0 + 1e-9
 """A face whose normal is (almost) opposite the vertex normal has no defined rotation onto it."""
 
 
-def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None = None):
-    """Rusinkiewicz's estimator (``k`` must be 2; ``block_size`` is unused).
+@jit_parallel
+def _ru(lo, hi, indptr, corners, indices, corner_next, corner_prev, corner_face, x, degenerate_faces, border,
+        nonmanifold, normals, k1, k2, d1, d2, reason):
+    for p in prange(lo, hi):
+        c_lo, c_hi = indptr[p], indptr[p + 1]
+        nax, nay, naz = normals[p, 0], normals[p, 1], normals[p, 2]  # N_p
+        ux, uy, uz, vx, vy, vz = tangent_frame(nax, nay, naz)  # (U_p, V_p)
+        total = e = f = g = 0.0
+        any_bad = any_opposite = touches_degenerate = False
+        for i in range(c_lo, c_hi):
+            c = corners[i]
+            b, q = indices[corner_next[c]], indices[corner_prev[c]]
+            degenerate = degenerate_faces[corner_face[c]]
+            touches_degenerate |= degenerate
+            nbx, nby, nbz = normals[b, 0], normals[b, 1], normals[b, 2]
+            ncx, ncy, ncz = normals[q, 0], normals[q, 1], normals[q, 2]
+            (abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, _, twice_area, _, _, _,
+             area) = corner_triangle(x, p, b, q, degenerate)
+            if (degenerate or twice_area == 0.0 or ab2 == 0.0
+                    or not (math.isfinite(nax) and math.isfinite(nbx) and math.isfinite(ncx))):
+                # no face frame, or a normal missing: the corner gives nothing (and spoils p)
+                any_bad = True
+                continue
+            # face frame: n_f, u_f along ab, v_f = n_f x u_f
+            nfx, nfy, nfz = nx / twice_area, ny / twice_area, nz / twice_area
+            ab_len = math.sqrt(ab2)
+            ufx, ufy, ufz = abx / ab_len, aby / ab_len, abz / ab_len
+            vfx = nfy * ufz - nfz * ufy
+            vfy = nfz * ufx - nfx * ufz
+            vfz = nfx * ufy - nfy * ufx
 
-    Works corner by corner in cache-sized chunks of vertices on a thread pool
-    (:mod:`curv.corners`): every corner solves its face's tensor in a frame of its own (three
-    times per face in all, which is cheaper than gathering a stored per-face tensor back) and
-    rotates it into its vertex's frame, so chunks need nothing from each other.
+            # 1. the face tensor W (dN = W t) from its three edges and the normal differences along
+            # them, in (u_f, v_f): rows [eu ev 0] -> nu and [0 eu ev] -> nv, by normal equations
+            a00 = a01 = a11 = b0 = b1 = b2 = 0.0
+            for k in range(3):
+                if k == 0:  # a -> b
+                    ex, ey, ez = abx, aby, abz
+                    dx, dy, dz = nbx - nax, nby - nay, nbz - naz
+                elif k == 1:  # b -> c
+                    ex, ey, ez = acx - abx, acy - aby, acz - abz
+                    dx, dy, dz = ncx - nbx, ncy - nby, ncz - nbz
+                else:  # c -> a
+                    ex, ey, ez = -acx, -acy, -acz
+                    dx, dy, dz = nax - ncx, nay - ncy, naz - ncz
+                eu = ex * ufx + ey * ufy + ez * ufz
+                ev = ex * vfx + ey * vfy + ez * vfz
+                nu = dx * ufx + dy * ufy + dz * ufz
+                nv = dx * vfx + dy * vfy + dz * vfz
+                a00 += eu * eu
+                a01 += eu * ev
+                a11 += eu * eu + ev * ev
+                b0 += eu * nu
+                b1 += ev * nu + eu * nv
+                b2 += ev * nv
+            # the 3x3 normal matrix is [[a00, a01, 0], [a01, a11, a01], [0, a01, a11 - a00]]
+            fe, ff, fg, face_singular = solve_sym3(a00, a01, 0.0, a11, a01, a11 - a00, b0, b1, b2)
+            if face_singular:
+                any_bad = True
+                continue
+
+            # 2. rotate the face frame onto N_p: R takes n_f to N_p (Rodrigues with the
+            # unnormalised axis a = n_f x N_p): R y = cos y + a x y + a (a.y) / (1 + cos). We need
+            # U.(R u_f) = (R^T U).u_f, and R^T is the same formula with -a.
+            cos = nfx * nax + nfy * nay + nfz * naz
+            opposite = not cos > MIN_ROTATION_COS
+            axx = -(nfy * naz - nfz * nay)
+            axy = -(nfz * nax - nfx * naz)
+            axz = -(nfx * nay - nfy * nax)
+            inv = 0.0 if opposite else 1.0 / (1.0 + cos)
+            # R^T U and R^T V, in the face frame: (uu, uv) and (vu, vv)
+            uu, uv = _rotated_coords(ux, uy, uz, axx, axy, axz, cos, inv, ufx, ufy, ufz, vfx, vfy, vfz)
+            vu, vv = _rotated_coords(vx, vy, vz, axx, axy, axz, cos, inv, ufx, ufy, ufz, vfx, vfy, vfz)
+            # (a, b)^T W (c, d) with W = [[e, f], [f, g]]
+            e_p = fe * uu * uu + 2.0 * ff * uu * uv + fg * uv * uv
+            f_p = fe * uu * vu + ff * (uu * vv + uv * vu) + fg * uv * vv
+            g_p = fe * vu * vu + 2.0 * ff * vu * vv + fg * vv * vv
+
+            # 3. average over the corners, weighted by the mixed Voronoi area
+            if opposite:
+                any_opposite = True
+                continue
+            total += area
+            if area > 0:
+                e += area * e_p
+                f += area * f_p
+                g += area * g_p
+        empty = not total > 0
+        safe = 1.0 if empty else total
+        store_principal(p, e / safe, f / safe, g / safe, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2)
+        singular = empty or any_opposite or not math.isfinite(k1[p]) or any_bad
+        finite = math.isfinite(nax) and math.isfinite(nay) and math.isfinite(naz)
+        # the neighbours' normals enter the estimate: a non-manifold neighbour spoils it too
+        reason[p] = ring_reason(singular,
+                                ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, border),
+                                touches_degenerate or not finite,
+                                ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, nonmanifold))
+
+
+@jit
+def _rotated_coords(bx, by, bz, ax, ay, az, cos, inv, ufx, ufy, ufz, vfx, vfy, vfz):
+    """``(R^T b . u_f, R^T b . v_f)`` for the rotation of :func:`_ru` (axis a, cosine, 1 / (1 + cos))."""
+    tx = ay * bz - az * by
+    ty = az * bx - ax * bz
+    tz = ax * by - ay * bx
+    along = (ax * bx + ay * by + az * bz) * inv
+    rx = cos * bx + tx + ax * along
+    ry = cos * by + ty + ay * along
+    rz = cos * bz + tz + az * along
+    return rx * ufx + ry * ufy + rz * ufz, rx * vfx + ry * vfy + rz * vfz
+
+
+def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int | None = None):
+    """Rusinkiewicz's estimator on the 1-ring with its normals (range R2; ``radii`` is None).
+
+    One kernel call per chunk of vertices: every corner solves its face's tensor in a frame of its
+    own (three times per face in all, cheaper than storing and gathering a per-face tensor) and
+    rotates it into its vertex's frame, so vertices need nothing from each other and the result
+    does not depend on the chunks or the threads.
 
     Parameters
     ----------
@@ -41,8 +155,10 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
         Closed triangle mesh (vertices with an open or non-manifold 1-ring are marked invalid).
     normals : (n, 3) float64
         Unit vertex normals, used for the normal differences and as the vertex frames.
-    k : int
-        Range; only 2.
+    radii : None
+        Unused (the estimator has no range support).
+    chunk : int, optional
+        Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
 
     Yields
     ------
@@ -57,91 +173,22 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, k: int, *, block_size: int | None =
     out = empty_principal(n)
     if not mesh.is_triangular:
         mesh.triangles  # raises the MeshError that names the polygon sizes
-    xyz = tuple(np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
-    nxyz = tuple(np.ascontiguousarray(normals[:, c]) for c in range(3))
-    degenerate_faces = mesh.degenerate_faces
-    corner_face = mesh.corner_face
-    border_vertices, nonmanifold = mesh.border_vertices, mesh.nonmanifold_vertices
-    yield 0.1
+    indptr, corners = mesh.vertex_corners
+    args = (indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
+            mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
+            np.ascontiguousarray(normals, dtype=np.float64), out.k1, out.k2, out.d1, out.d2, out.reason)
 
-    def work(chunk: CornerChunk) -> None:
-        rows = slice(chunk.start, chunk.stop)
-        tc = TriangleCorners.of(chunk, xyz, degenerate_faces, corner_face)
-        ab, ac = tc.ab, tc.ac
-        n_a = tuple(chunk.expand(c) for c in nxyz)
-        n_b = tuple(np.take(c, chunk.nxt) for c in nxyz)
-        n_c = tuple(np.take(c, chunk.prv) for c in nxyz)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            n_f = tuple(x / tc.twice_area for x in cross(ab, ac))
-            u_f = tuple(x / np.sqrt(dot(ab, ab)) for x in ab)
-        v_f = cross(n_f, u_f)
+    def run(lo: int, hi: int) -> None:
+        launch(_ru, lo, hi, *args)
 
-        # 1. the face tensor W (dN = W t) from its three edges, in the face frame (u_f, v_f)
-        a00, a01, a11, b0, b1, b2 = (np.zeros(ab[0].size) for _ in range(6))
-        edges = (ab, tuple(y - x for x, y in zip(ab, ac)), tuple(-x for x in ac))
-        dns = (tuple(y - x for x, y in zip(n_a, n_b)), tuple(y - x for x, y in zip(n_b, n_c)),
-               tuple(y - x for x, y in zip(n_c, n_a)))
-        for edge, dn in zip(edges, dns):
-            eu, ev = dot(edge, u_f), dot(edge, v_f)
-            nu, nv = dot(dn, u_f), dot(dn, v_f)
-            # rows [eu ev 0] -> nu and [0 eu ev] -> nv
-            a00 += eu * eu
-            a01 += eu * ev
-            a11 += eu * eu + ev * ev
-            b0 += eu * nu
-            b1 += ev * nu + eu * nv
-            b2 += ev * nv
-        # the 3x3 normal matrix is [[a00, a01, 0], [a01, a11, a01], [0, a01, a22]] with a22 = a11 - a00
-        efg, face_singular = solve_sym3(a00, a01, np.zeros_like(a00), a11, a01, a11 - a00, b0, b1, b2)
-        finite = np.isfinite(n_a[0]) & np.isfinite(n_b[0]) & np.isfinite(n_c[0])
-        bad = face_singular | tc.degenerate | ~finite
-
-        # 2. rotate the face frame onto the vertex normal: R takes n_f to N_a (Rodrigues with the
-        # unnormalised axis a = n_f x N_a): R x = c x + a x x + a (a.x) / (1 + c). We need
-        # U.(R u_f) = (R^T U).u_f, and R^T is the same formula with -a.
-        cos = dot(n_f, n_a)
-        opposite = ~(cos > MIN_ROTATION_COS)
-        axis = tuple(-x for x in cross(n_f, n_a))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            inv = np.where(opposite, 0.0, 1.0 / (1.0 + cos))
-        nrm = normals[rows]
-        U, V = tangent_frames(nrm)
-        coords = []
-        for frame in (U, V):
-            basis = tuple(np.take(frame[:, c], chunk.local) for c in range(3))
-            turn = cross(axis, basis)
-            along = dot(axis, basis) * inv
-            rt = tuple(cos * b + t + a * along for b, t, a in zip(basis, turn, axis))
-            coords.append((dot(rt, u_f), dot(rt, v_f)))
-        (uu, uv), (vu, vv) = coords
-        fe, ff, fg = (np.where(bad, 0.0, efg[:, c]) for c in range(3))
-        # (a, b)^T W (c, d) with W = [[e, f], [f, g]]
-        e_p = fe * uu * uu + 2.0 * ff * uu * uv + fg * uv * uv
-        f_p = fe * uu * vu + ff * (uu * vv + uv * vu) + fg * uv * vv
-        g_p = fe * vu * vu + 2.0 * ff * vu * vv + fg * vv * vv
-
-        # 3. average over the corners, weighted by the mixed Voronoi area
-        w = np.where(bad | opposite, 0.0, tc.mixed_area)
-        total = chunk.sum(w)
-        empty = ~(total > 0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            e, f, g = (chunk.sum(np.where(w > 0, w * val, 0.0)) / np.where(empty, 1.0, total)
-                       for val in (e_p, f_p, g_p))
-        k1, k2, d1, d2 = principal_from_tensor(e, f, g, U, V)
-        out.k1[rows], out.k2[rows], out.d1[rows], out.d2[rows] = k1, k2, d1, d2
-        singular = empty | chunk.any(opposite & ~bad) | ~np.isfinite(k1) | chunk.any(bad)
-        # the neighbours' normals enter the estimate: a non-manifold neighbour spoils it too
-        out.reason[rows] = closed_ring_reasons(chunk, tc, singular, nrm, border_vertices,
-                                               chunk.ring_any(nonmanifold))
-
-    map_vertex_chunks(mesh, work)
-    yield 1.0
+    yield from iter_chunks(n, run, chunk=chunk)
     return out
 
 
 register(EstimatorSpec(
     name="ru", title="Rusinkiewicz", ranges=(2,), function=iter_ru,
-    triangles_only=True, uses_normals=True, closed_ring=True,
+    triangles_only=True, uses_normals=True, closed_ring=True, has_support=False,
+    kernels=(_ru, *connectivity.KERNELS),
     reference="Rusinkiewicz 2004, Estimating curvatures and their derivatives on triangle meshes",
     summary="per-face tensors from normal differences, rotated to the vertex frames, area-weighted",
 ))

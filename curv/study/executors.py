@@ -30,9 +30,11 @@ class InlineExecutor(Executor):
         return future
 
 
-def _ignore_sigint() -> None:
-    """Pool initializer: Ctrl-C is the parent's to handle; it stops the workers itself."""
+def _init_worker() -> None:
+    """Pool initializer: Ctrl-C is the parent's to handle (it stops the workers itself), and each
+    worker runs its kernels on one thread: the pool already keeps every core busy."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.environ["CURV_THREADS"] = "1"
 
 
 @contextmanager
@@ -65,7 +67,7 @@ def open_executor(*, scheduler=None, workers: int | None = None) -> Iterator[Exe
     if workers == 0:
         yield InlineExecutor()
         return
-    pool = ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1, initializer=_ignore_sigint)
+    pool = ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1, initializer=_init_worker)
     try:
         yield pool
     finally:

@@ -1,0 +1,454 @@
+"""Connectivity kernels behind :class:`curv.Mesh`: counting sorts over corners, halfedges and edges.
+
+Every table is built in linear time (plus tiny sorts of the few halfedges that share a low vertex),
+without hashing or sorting global keys:
+
+- :func:`group_corners` groups the corners by their vertex (a stable counting sort);
+- :func:`edge_table` lists the halfedges around each vertex u (from its corners), sorts that small
+  list by the other endpoint w and numbers the distinct w > u: edges come out in lexicographic order;
+- :func:`vertex_incidence` lists, per vertex, its edges in increasing edge order, which is also
+  increasing neighbour order (all edges ``(q, p)`` with ``q < p`` precede the edges ``(p, r)``);
+- :func:`vertex_flags` finds border, non-manifold and inconsistently oriented vertices from the
+  same lists (counting the fans of faces around each vertex), without the edge table;
+- :func:`triangle_geometry` gives the vector area, area and degeneracy of every triangle.
+
+The :class:`curv.Mesh` properties wrap them; their meaning is documented there.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .jit import jit, jit_parallel, launch, prange, threads
+
+__all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
+           "vertex_flags", "triangle_geometry", "KERNELS"]
+
+SMALL_GROUP = 32
+"""The halfedges around a vertex are sorted by insertion up to this many; more (a vertex with a
+huge fan) by a heap sort, so that no vertex costs quadratic time."""
+
+
+@jit
+def group_corners(vertex_of, n):
+    """Stable counting sort of items by their vertex.
+
+    Parameters
+    ----------
+    vertex_of : (h,) int64
+        Vertex of each item (corner), in ``0 .. n-1``.
+    n : int
+
+    Returns
+    -------
+    indptr : (n + 1,) int64
+    items : (h,) int64
+        The items of vertex v are ``items[indptr[v]:indptr[v + 1]]``, in increasing order.
+    """
+    indptr = np.zeros(n + 1, np.int64)
+    for c in range(vertex_of.size):
+        indptr[vertex_of[c] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:-1].copy()
+    items = np.empty(vertex_of.size, np.int64)
+    for c in range(vertex_of.size):
+        v = vertex_of[c]
+        items[fill[v]] = c
+        fill[v] += 1
+    return indptr, items
+
+
+@jit
+def _before(key, value, i, j):
+    return key[i] < key[j] or (key[i] == key[j] and value[i] < value[j])
+
+
+@jit
+def _sift_down(key, value, root, end):
+    while 2 * root + 1 < end:
+        child = 2 * root + 1
+        if child + 1 < end and _before(key, value, child, child + 1):
+            child += 1
+        if not _before(key, value, root, child):
+            return
+        key[root], key[child] = key[child], key[root]
+        value[root], value[child] = value[child], value[root]
+        root = child
+
+
+@jit
+def _sort_pairs(key, value, k):
+    """Sort the pairs ``(key[i], value[i])``, ``i < k``, in increasing order (key first).
+
+    By insertion when short; a heap sort beyond :data:`SMALL_GROUP`, so that a vertex with a
+    huge fan does not cost quadratic time.
+    """
+    if k <= SMALL_GROUP:
+        for i in range(1, k):
+            kk, v = key[i], value[i]
+            j = i - 1
+            while j >= 0 and (key[j] > kk or (key[j] == kk and value[j] > v)):
+                key[j + 1], value[j + 1] = key[j], value[j]
+                j -= 1
+            key[j + 1], value[j + 1] = kk, v
+        return
+    for root in range(k // 2 - 1, -1, -1):
+        _sift_down(key, value, root, k)
+    for end in range(k - 1, 0, -1):
+        key[0], key[end] = key[end], key[0]
+        value[0], value[end] = value[end], value[0]
+        _sift_down(key, value, 0, end)
+
+
+@jit
+def _upper_halfedges(u, corners_u, indices, corner_next, corner_prev, key, halfedge):
+    """The halfedges between u and a higher vertex, sorted by (other endpoint, backward, id).
+
+    Every halfedge with u at one end is either the one leaving a corner c at u (c itself) or the
+    one arriving at it (``corner_prev[c]``): gathering both over u's corners lists each such
+    halfedge once.
+
+    Parameters
+    ----------
+    corners_u : (k,) int64
+        The corners at u.
+    key, halfedge : (>= 2k,) int64
+        Scratch that receives, per halfedge, the sort key ``2 w + backward`` (w its other endpoint;
+        backward: it runs from w down to u) and its id.
+
+    Returns
+    -------
+    int
+        Number of halfedges written. Those of one edge (u, w) are consecutive, as many as the edge
+        has faces, the ones running u -> w first.
+    """
+    k = 0
+    for i in range(corners_u.size):
+        c = corners_u[i]
+        w = indices[corner_next[c]]
+        if w > u:  # leaving u: u -> w
+            key[k], halfedge[k] = 2 * w, c
+            k += 1
+        h = corner_prev[c]
+        w = indices[h]
+        if w > u:  # arriving at u: w -> u
+            key[k], halfedge[k] = 2 * w + 1, h
+            k += 1
+    _sort_pairs(key, halfedge, k)
+    return k
+
+
+@jit
+def _slice(count, t, parts):
+    return count * t // parts, count * (t + 1) // parts
+
+
+@jit_parallel
+def _count_edges(indptr, corners, indices, corner_next, corner_prev, width, parts, low_edges):
+    # low_edges[u]: the distinct w > u around u, i.e. the edges (u, w) numbered at u
+    n = indptr.size - 1
+    for t in prange(parts):
+        key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            k = _upper_halfedges(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, key,
+                                 halfedge)
+            count = 0
+            for i in range(k):
+                if i == 0 or key[i] >> 1 != key[i - 1] >> 1:
+                    count += 1
+            low_edges[u] = count
+
+
+@jit_parallel
+def _number_edges(indptr, corners, indices, corner_next, corner_prev, corner_face, width, parts, edge_start,
+                  edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count):
+    n = indptr.size - 1
+    for t in prange(parts):
+        key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            k = _upper_halfedges(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, key,
+                                 halfedge)
+            e = edge_start[u] - 1
+            for i in range(k):
+                w = key[i] >> 1
+                if i == 0 or w != key[i - 1] >> 1:
+                    e += 1
+                    edges[e, 0] = u
+                    edges[e, 1] = w
+                h = halfedge[i]
+                halfedge_edge[h] = e
+                r = face_count[e]
+                if r < 2:
+                    edge_faces[e, r] = corner_face[h]
+                    edge_halfedges[e, r] = h
+                face_count[e] = r + 1
+                forward_count[e] += 1 - (key[i] & 1)
+
+
+def _ring_width(indptr: np.ndarray) -> int:
+    """Scratch length for the halfedges around the busiest vertex: two per corner."""
+    return int(2 * np.diff(indptr).max(initial=0)) + 1
+
+
+def edge_table(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+               corner_prev: np.ndarray, corner_face: np.ndarray):
+    """The undirected edges of the halfedges ``indices[c] -> indices[corner_next[c]]``.
+
+    Each edge (u, w), u < w, is numbered at u, from the halfedges around u (:func:`_upper_halfedges`).
+
+    Parameters
+    ----------
+    indptr, corners : (n + 1,), (h,) int64
+        Corners grouped by vertex (:func:`group_corners`).
+    indices, corner_next, corner_prev, corner_face : (h,) int64
+        :attr:`Mesh.face_indices`, :attr:`Mesh.corner_next`, :attr:`Mesh.corner_prev`,
+        :attr:`Mesh.corner_face`.
+
+    Returns
+    -------
+    edges : (e, 2) int64
+        Sorted unique pairs, ``edges[:, 0] < edges[:, 1]``.
+    halfedge_edge : (h,) int64
+        Edge of each halfedge; -1 where both ends are the same vertex.
+    face_count : (e,) int64
+        Halfedges (faces) per edge.
+    edge_faces : (e, 2) int64
+        Faces of the first two halfedges of each edge, the halfedges running low -> high first
+        (then in corner order); -1 where there is none.
+    edge_halfedges : (e, 2) int64
+        Those two halfedges; -1 where there is none.
+    forward_count : (e,) int64
+        Halfedges of each edge running from ``edges[:, 0]`` to ``edges[:, 1]``.
+    """
+    n = indptr.size - 1
+    width, parts = _ring_width(indptr), threads()
+    low_edges = np.empty(n, np.int64)
+    launch(_count_edges, indptr, corners, indices, corner_next, corner_prev, width, parts, low_edges)
+    edge_start = np.zeros(n + 1, np.int64)
+    np.cumsum(low_edges, out=edge_start[1:])
+    ne = int(edge_start[-1])
+    edges = np.empty((ne, 2), np.int64)
+    halfedge_edge = np.full(indices.size, -1, np.int64)
+    face_count = np.zeros(ne, np.int64)
+    edge_faces = np.full((ne, 2), -1, np.int64)
+    edge_halfedges = np.full((ne, 2), -1, np.int64)
+    forward_count = np.zeros(ne, np.int64)
+    launch(_number_edges, indptr, corners, indices, corner_next, corner_prev, corner_face, width, parts,
+           edge_start, edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count)
+    return edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count
+
+
+@jit
+def vertex_incidence(edges, n):
+    """The edges of each vertex, in increasing edge order (which is increasing neighbour order).
+
+    Parameters
+    ----------
+    edges : (e, 2) int64
+        Sorted unique edges (:func:`edge_table`).
+    n : int
+
+    Returns
+    -------
+    indptr : (n + 1,) int64
+    neighbours : (2e,) int64
+        The other endpoint of each incident edge, sorted within each vertex.
+    edge_ids : (2e,) int64
+        The incident edges themselves.
+    """
+    indptr = np.zeros(n + 1, np.int64)
+    for e in range(edges.shape[0]):
+        indptr[edges[e, 0] + 1] += 1
+        indptr[edges[e, 1] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:-1].copy()
+    neighbours = np.empty(2 * edges.shape[0], np.int64)
+    edge_ids = np.empty(2 * edges.shape[0], np.int64)
+    for e in range(edges.shape[0]):
+        p, q = edges[e, 0], edges[e, 1]
+        neighbours[fill[p]] = q
+        edge_ids[fill[p]] = e
+        fill[p] += 1
+        neighbours[fill[q]] = p
+        edge_ids[fill[q]] = e
+        fill[q] += 1
+    return indptr, neighbours, edge_ids
+
+
+@jit_parallel
+def longest_incident_edges(indptr, neighbours, vertices, out):
+    """``out[p]`` = max |q - p| over the neighbours q of p (0 without one)."""
+    for p in prange(indptr.size - 1):
+        longest = 0.0
+        for i in range(indptr[p], indptr[p + 1]):
+            q = neighbours[i]
+            # squares do not see the sign: the same length as Mesh.edge_lengths, to the bit
+            dx = vertices[q, 0] - vertices[p, 0]
+            dy = vertices[q, 1] - vertices[p, 1]
+            dz = vertices[q, 2] - vertices[p, 2]
+            length = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if length > longest:
+                longest = length
+        out[p] = longest
+
+
+@jit
+def vertex_face_incidence(indptr, corners, corner_face):
+    """CSR of the faces at each vertex with the number of the vertex's corners in each.
+
+    Parameters
+    ----------
+    indptr, corners : (n + 1,), (h,) int64
+        Corners grouped by vertex, in increasing order (:func:`group_corners`).
+    corner_face : (h,) int64
+
+    Returns
+    -------
+    face_ptr : (n + 1,) int64
+    faces : (k,) int64
+        Increasing within each vertex.
+    counts : (k,) int32
+    """
+    n = indptr.size - 1
+    face_ptr = np.zeros(n + 1, np.int64)
+    for v in range(n):
+        distinct = 0
+        last = -1
+        for i in range(indptr[v], indptr[v + 1]):
+            f = corner_face[corners[i]]
+            if f != last:
+                distinct += 1
+                last = f
+        face_ptr[v + 1] = face_ptr[v] + distinct
+    faces = np.empty(face_ptr[n], np.int64)
+    counts = np.zeros(face_ptr[n], np.int32)
+    for v in range(n):
+        k = face_ptr[v] - 1
+        last = -1
+        for i in range(indptr[v], indptr[v + 1]):
+            f = corner_face[corners[i]]
+            if f != last:
+                k += 1
+                last = f
+                faces[k] = f
+            counts[k] += 1
+    return face_ptr, faces, counts
+
+
+@jit
+def _root(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@jit_parallel
+def _vertex_flags(indptr, corners, indices, corner_next, corner_prev, width, parts, nonmanifold, border,
+                  inconsistent):
+    n = indptr.size - 1
+    for t in prange(parts):
+        other, corner, outgoing = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
+        parent = np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            # the halfedges at u (leaving or arriving at each of its corners), by other endpoint;
+            # corner[k] = 2 (position of the corner at u) + (1 if the halfedge leaves u)
+            k = 0
+            for i in range(indptr[u + 1] - indptr[u]):
+                c = corners[indptr[u] + i]
+                w = indices[corner_next[c]]
+                if w != u:
+                    other[k], corner[k] = w, 2 * i + 1
+                    k += 1
+                w = indices[corner_prev[c]]
+                if w != u:
+                    other[k], corner[k] = w, 2 * i
+                    k += 1
+                parent[i] = i
+            _sort_pairs(other, corner, k)
+            fans = indptr[u + 1] - indptr[u]
+            on_border = on_nonmanifold_edge = on_inconsistent_edge = False
+            start = 0
+            for i in range(1, k + 1):
+                if i < k and other[i] == other[start]:
+                    continue
+                # halfedges start .. i-1 are those of edge (u, other[start]): one per face
+                faces = i - start
+                if faces == 2:
+                    # the two faces are one fan at u; opposite orientation if both run the same way
+                    a, b = _root(parent, corner[start] >> 1), _root(parent, corner[start + 1] >> 1)
+                    if a != b:
+                        parent[max(a, b)] = min(a, b)
+                        fans -= 1
+                    if (corner[start] & 1) == (corner[start + 1] & 1):
+                        on_inconsistent_edge = True
+                elif faces == 1:
+                    on_border = True
+                else:
+                    on_nonmanifold_edge = True
+                start = i
+            nonmanifold[u] = fans > 1 or on_nonmanifold_edge
+            border[u] = on_border or on_nonmanifold_edge
+            inconsistent[u] = on_inconsistent_edge
+
+
+def vertex_flags(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+                 corner_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-vertex topology flags from the halfedges around each vertex (no edge table needed).
+
+    The halfedges at u, grouped by their other endpoint w, are exactly those of the edges (u, w),
+    one per face; everything below is local to u, so vertices run in parallel.
+
+    Returns
+    -------
+    nonmanifold : (n,) bool
+        On an edge with more than two faces, or the faces around u form several fans (two corners
+        at u are in one fan when their faces share an edge at u that has exactly two faces).
+    border : (n,) bool
+        On an edge with one face or more than two.
+    inconsistent : (n,) bool
+        On an edge with two faces that run it the same way (faces of opposite orientation).
+    """
+    n = indptr.size - 1
+    out = np.empty(n, np.bool_), np.empty(n, np.bool_), np.empty(n, np.bool_)
+    launch(_vertex_flags, indptr, corners, indices, corner_next, corner_prev, _ring_width(indptr), threads(), *out)
+    return out
+
+
+@jit_parallel
+def triangle_geometry(tri, vertices, vector_area, area, degenerate):
+    """Per triangle (p0, p1, p2): Newell vector area ``(p1 - p0) x (p2 - p0) / 2``, its norm, and
+    degeneracy (a repeated index, or area <= 1e-12 times the squared longest side)."""
+    for f in prange(tri.shape[0]):
+        i, j, k = tri[f, 0], tri[f, 1], tri[f, 2]
+        ax = vertices[j, 0] - vertices[i, 0]
+        ay = vertices[j, 1] - vertices[i, 1]
+        az = vertices[j, 2] - vertices[i, 2]
+        bx = vertices[k, 0] - vertices[i, 0]
+        by = vertices[k, 1] - vertices[i, 1]
+        bz = vertices[k, 2] - vertices[i, 2]
+        nx = 0.5 * (ay * bz - az * by)
+        ny = 0.5 * (az * bx - ax * bz)
+        nz = 0.5 * (ax * by - ay * bx)
+        vector_area[f, 0] = nx
+        vector_area[f, 1] = ny
+        vector_area[f, 2] = nz
+        a = math.sqrt(nx * nx + ny * ny + nz * nz)
+        area[f] = a
+        cx = vertices[k, 0] - vertices[j, 0]
+        cy = vertices[k, 1] - vertices[j, 1]
+        cz = vertices[k, 2] - vertices[j, 2]
+        longest2 = max(ax * ax + ay * ay + az * az, cx * cx + cy * cy + cz * cz, bx * bx + by * by + bz * bz)
+        degenerate[f] = i == j or j == k or i == k or a <= 1e-12 * longest2
+
+
+KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
+           vertex_face_incidence, _vertex_flags, triangle_geometry)
+"""The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""

@@ -1,0 +1,265 @@
+"""What the per-vertex least-squares estimators (nc, qs, an, mru) share: numba helpers and the driver.
+
+Each of them writes, for every neighbour q in the support of vertex p, a few linear equations in
+the unknowns of a local fit, expressed in p's tangent frame (U, V, N). The kernels accumulate the
+normal equations ``AᵀA x = Aᵀb`` neighbour by neighbour while the ball search runs, so nothing per
+pair is ever stored; the helpers below solve them and turn the fitted shape operator
+``W = [[e, f], [f, g]]`` into principal curvatures and directions.
+
+Every fit kernel has the same arguments (see :func:`run_fit`) and writes its vertices' rows of
+``k1, k2, d1, d2, reason``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Generator
+
+import numpy as np
+
+from ..jit import iter_chunks, jit, launch, threads
+from ..mesh import Mesh
+from ..neighbourhood import expansion_adjacency, new_queues, new_scratch
+from ..result import Principal
+from ..validity import Reason
+
+__all__ = ["run_fit", "tangent_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
+           "mark_degenerate", "slice_bounds",
+           "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
+
+MIN_TANGENT_LENGTH = 1e-9
+"""Neighbours whose tangent-plane offset is below this fraction of the ball radius carry no direction."""
+
+MIN_PAIRS = 3
+"""Fewer usable neighbours than this make the vertex ``TOO_FEW_NEIGHBOURS`` (the fits have 3
+curvature unknowns)."""
+
+RCOND = 1e-10
+"""A system is singular when its determinant is below this (scaled) bound."""
+
+OK = np.uint8(Reason.OK)
+TOO_FEW = np.uint8(Reason.TOO_FEW_NEIGHBOURS)
+SINGULAR = np.uint8(Reason.SINGULAR)
+DEGENERATE = np.uint8(Reason.DEGENERATE)
+
+
+@jit
+def tangent_frame(nx, ny, nz):
+    """Orthonormal tangent basis (U, V) with U x V = N, crossing N with its least-aligned axis.
+
+    Returns
+    -------
+    ux, uy, uz, vx, vy, vz : float
+        NaN where N is not finite.
+    """
+    ax, ay, az = abs(nx), abs(ny), abs(nz)
+    # the coordinate axis least aligned with N (first on ties); N x axis is never near zero
+    if ax <= ay and ax <= az:
+        ux, uy, uz = 0.0, nz, -ny
+    elif ay <= az:
+        ux, uy, uz = -nz, 0.0, nx
+    else:
+        ux, uy, uz = ny, -nx, 0.0
+    norm = math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux /= norm
+    uy /= norm
+    uz /= norm
+    vx = ny * uz - nz * uy
+    vy = nz * ux - nx * uz
+    vz = nx * uy - ny * ux
+    return ux, uy, uz, vx, vy, vz
+
+
+@jit
+def solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2):
+    """Solve a symmetric 3x3 system by Cramer's rule.
+
+    Returns
+    -------
+    x0, x1, x2 : float
+    singular : bool
+        ``|det A| <= RCOND * max|a_ij|^3`` (the x are then NaN).
+    """
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    scale = max(abs(a00), abs(a01), abs(a02), abs(a11), abs(a12), abs(a22))
+    if not abs(det) > RCOND * scale * scale * scale:
+        return math.nan, math.nan, math.nan, True
+    inv = 1.0 / det
+    return ((c00 * b0 + c01 * b1 + c02 * b2) * inv,
+            (c01 * b0 + c11 * b1 + c12 * b2) * inv,
+            (c02 * b0 + c12 * b1 + c22 * b2) * inv,
+            False)
+
+
+@jit
+def solve_scaled(ata, atb, x):
+    """Solve a small symmetric system ``ata x = atb`` after Jacobi scaling, in place.
+
+    The scaled matrix ``S A S`` (``S = diag(1/sqrt(a_ii))``) has a unit diagonal; it is called
+    singular when its determinant is at most ``RCOND**2`` (or a diagonal entry is not positive).
+    Gaussian elimination with partial pivoting; ``ata`` and ``atb`` are overwritten.
+
+    Parameters
+    ----------
+    ata : (p, p) float64
+    atb : (p,) float64
+    x : (p,) float64
+        Receives the solution (NaN if singular).
+
+    Returns
+    -------
+    bool
+        Whether the system is singular.
+    """
+    p = atb.size
+    scale = np.empty(p)
+    for i in range(p):
+        d = ata[i, i]
+        if not (d > 0.0 and math.isfinite(d)):
+            x[:] = math.nan
+            return True
+        scale[i] = 1.0 / math.sqrt(d)
+    for i in range(p):
+        atb[i] *= scale[i]
+        for j in range(p):
+            ata[i, j] *= scale[i] * scale[j]
+    det = 1.0
+    for col in range(p):
+        piv = col
+        for r in range(col + 1, p):
+            if abs(ata[r, col]) > abs(ata[piv, col]):
+                piv = r
+        if piv != col:
+            det = -det
+            for j in range(p):
+                ata[col, j], ata[piv, j] = ata[piv, j], ata[col, j]
+            atb[col], atb[piv] = atb[piv], atb[col]
+        pivot = ata[col, col]
+        det *= pivot
+        if pivot == 0.0:
+            x[:] = math.nan
+            return True
+        for r in range(col + 1, p):
+            factor = ata[r, col] / pivot
+            if factor != 0.0:
+                for j in range(col, p):
+                    ata[r, j] -= factor * ata[col, j]
+                atb[r] -= factor * atb[col]
+    if not (det > RCOND * RCOND):
+        x[:] = math.nan
+        return True
+    for i in range(p - 1, -1, -1):
+        acc = atb[i]
+        for j in range(i + 1, p):
+            acc -= ata[i, j] * x[j]
+        x[i] = acc / ata[i, i]
+    for i in range(p):
+        x[i] *= scale[i]
+    return False
+
+
+@jit
+def store_principal(p, e, f, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2):
+    """Eigen-decompose W = [[e, f], [f, g]] in the frame (U, V) and write row p of the outputs.
+
+    k1 = H + sqrt(((e - g)/2)^2 + f^2) >= k2; d1 at angle theta = atan2(f, (e - g)/2) / 2 from U,
+    d2 = N x d1.
+    """
+    half = 0.5 * (e - g)
+    mean = 0.5 * (e + g)
+    rad = math.hypot(half, f)
+    theta = 0.5 * math.atan2(f, half)
+    c = math.cos(theta)
+    s = math.sin(theta)
+    k1[p] = mean + rad
+    k2[p] = mean - rad
+    d1[p, 0] = c * ux + s * vx
+    d1[p, 1] = c * uy + s * vy
+    d1[p, 2] = c * uz + s * vz
+    d2[p, 0] = -s * ux + c * vx
+    d2[p, 1] = -s * uy + c * vy
+    d2[p, 2] = -s * uz + c * vz
+
+
+@jit
+def slice_bounds(lo, hi, t, parts):
+    """Vertices ``start .. stop-1`` of slice t of ``parts`` equal slices of ``lo .. hi-1``."""
+    return lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
+
+
+@jit
+def finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason):
+    """Write vertex p's principal curvatures, directions and reason from its fitted (e, f, g).
+
+    ``frame`` is (ux, uy, uz, vx, vy, vz) from :func:`tangent_frame`; ``used`` the number of
+    usable neighbours.
+    """
+    ux, uy, uz, vx, vy, vz = frame
+    store_principal(p, e, f, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2)
+    if used < MIN_PAIRS:
+        reason[p] = TOO_FEW
+    elif singular or not math.isfinite(k1[p]):
+        reason[p] = SINGULAR
+    else:
+        reason[p] = OK
+
+
+@jit
+def mark_degenerate(p, k1, k2, d1, d2, reason):
+    """Vertex p has no usable normal, so no frame to fit in."""
+    k1[p] = math.nan
+    k2[p] = math.nan
+    d1[p, :] = math.nan
+    d2[p, :] = math.nan
+    reason[p] = DEGENERATE
+
+
+def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None
+            ) -> Generator[float, None, Principal]:
+    """Run a fit kernel over all vertices, a chunk of vertices per call, and assemble the result.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    normals : (n, 3) float64
+        Unit vertex normals (NaN rows: no frame, the vertex is ``DEGENERATE``).
+    radii : (n,) float64
+        Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
+    kernel : numba dispatcher
+        ``kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2,
+        reason)`` estimates the vertices ``lo .. hi-1``, splitting them into ``stamps.shape[0]``
+        slices, each with its own row of the stamps and queues.
+    chunk : int, optional
+        Vertices per call (default adaptive).
+
+    Yields
+    ------
+    float
+        Fraction of vertices done.
+
+    Returns
+    -------
+    Principal
+    """
+    n = mesh.n_vertices
+    adj_ptr, adj = expansion_adjacency(mesh)
+    x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+    nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
+    radius = np.ascontiguousarray(radii, dtype=np.float64)
+    stamps = new_scratch(n, threads())
+    queues = new_queues(n, stamps.shape[0])
+    k1, k2 = np.empty(n), np.empty(n)
+    d1, d2 = np.empty((n, 3)), np.empty((n, 3))
+    reason = np.empty(n, np.uint8)
+
+    def run(lo: int, hi: int) -> None:
+        launch(kernel, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason)
+
+    yield from iter_chunks(n, run, chunk=chunk)
+    return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason)

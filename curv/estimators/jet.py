@@ -1,0 +1,403 @@
+"""Osculating jet fitting (Cazals & Pouget, SGP 2003), over the range support.
+
+At each vertex p, with support S(p) = p and the vertices of its ball (:mod:`curv.neighbourhood`):
+
+1. **Frame.** PCA of S(p): the eigenvector of the smallest eigenvalue of the covariance about the
+   centroid is the height axis ``e3`` (turned to agree with the given vertex normal), the largest
+   gives ``e1``, ``e2 = e3 x e1``. The origin is p.
+2. **Fit.** In coordinates divided by ``h`` (the largest distance from p to its support, for
+   conditioning), least squares of the height ``w = J(u, v) = sum_{i+j<=d} J_ij u^i v^j`` over S(p):
+   ``N_d = (d+1)(d+2)/2`` unknowns, constant and linear terms included, so the jet finds its own
+   tangent plane. Normal equations, Jacobi-scaled, Cholesky; fewer than ``N_d`` points is
+   ``TOO_FEW_NEIGHBOURS``, an estimated reciprocal condition number below :data:`RCOND` is
+   ``SINGULAR``.
+3. **Differential quantities** of the graph ``(u, v, J(u, v))`` at ``(0, 0)``: the jet normal
+   ``n = (-J_10, -J_01, 1) / sqrt(1 + J_10^2 + J_01^2)``, first fundamental form ``E = 1 + J_10^2``,
+   ``F = J_10 J_01``, ``G = 1 + J_01^2``, second ``L = 2 J_20 / |.|``, ``M = J_11 / |.|``,
+   ``N = 2 J_02 / |.|``; the shape operator ``I^-1 II`` in an orthonormal tangent basis, its
+   eigenpairs the principal curvatures (sign of the house: ``W = -II`` for a graph along ``n``,
+   so an outward sphere gives +1/r) and directions, mapped back to 3-D and to unscaled units.
+
+Which normal: the given vertex normal (Max by default) only orients the fit and is the normal the
+result reports; k1, k2 are the jet's own (its normal ``n``). The directions are carried from the
+jet's tangent plane to the reported normal's by the smallest rotation taking ``n`` to it, so they are
+tangent to the reported normal (the angle between the two is the fit's normal correction: a degree
+or less on the study's meshes). :func:`curv.fitted_normals.fitted_normals` gives the jet normals.
+
+Works on any polygon mesh and on borders (a one-sided fit there).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import EstimatorError
+from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..mesh import Mesh
+from ..neighbourhood import ball_support, expansion_adjacency, new_scratch
+from ..validity import Reason
+from ._local_fit import slice_bounds
+from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
+from .registry import EstimatorSpec, empty_principal, register
+
+__all__ = ["iter_jet", "DEFAULT_DEGREE", "DEGREES", "RCOND", "unknowns", "jet_normals"]
+
+DEGREES = (2, 3, 4)
+"""The jet degrees offered."""
+
+DEFAULT_DEGREE = 2
+"""Degree of :func:`iter_jet` unless told otherwise (measured on the study's protocol meshes:
+see docs/ACCURACY.md)."""
+
+MAX_UNKNOWNS = 15
+"""Unknowns of a degree-4 jet."""
+
+RCOND = 1e-12
+"""A fit whose scaled normal matrix has an estimated reciprocal condition number below this (a
+least-squares matrix condition above 1e6) is ``SINGULAR``."""
+
+_OK = int(Reason.OK)
+_TOO_FEW = int(Reason.TOO_FEW_NEIGHBOURS)
+_SINGULAR = int(Reason.SINGULAR)
+_DEGENERATE = int(Reason.DEGENERATE)
+
+
+def unknowns(degree: int) -> int:
+    """``N_d = (d+1)(d+2)/2``: coefficients of a bivariate polynomial of degree d."""
+    return (degree + 1) * (degree + 2) // 2
+
+
+@jit
+def _scratch():
+    """Per-thread scratch of :func:`fit_jet`: normal matrix, vectors, 3x3 work."""
+    m = np.empty((MAX_UNKNOWNS, MAX_UNKNOWNS))
+    vec = np.empty((5, MAX_UNKNOWNS))  # rhs, coefficients, scaling, 2 work rows
+    cov = np.empty((3, 3))
+    frame = np.empty((3, 3))
+    evec = np.empty((4, 3))  # eigenvectors (columns of the first 3 rows), eigenvalues (last row)
+    return m, vec, cov, frame, evec
+
+
+@jit
+def _monomials(u, v, degree, out):
+    """``out[1, t(t+1)/2 + j] = u^(t-j) v^j`` for total degree t = 0..degree, j = 0..t."""
+    out[1, 0] = 1.0
+    idx = 1
+    for t in range(1, degree + 1):
+        # the monomials of degree t from those of degree t-1: times u, and the last one also times v
+        prev = idx - t
+        for j in range(t):
+            out[1, idx + j] = out[1, prev + j] * u
+        out[1, idx + t] = out[1, prev + t - 1] * v
+        idx += t + 1
+
+
+@jit
+def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec):
+    """Fit the degree-``degree`` jet of the support of ``p`` (steps 1 and 2 of the module notes).
+
+    Parameters
+    ----------
+    p : int
+        Centre vertex; ``queue[:count]`` is its support with ``queue[0] == p``.
+    x, y, z : (n,) float64
+        Vertex coordinates.
+    normals : (n, 3) float64
+        ``normals[p]`` orients the fit (the vertex normal); NaN gives ``DEGENERATE``.
+    degree : int
+    m, vec, cov, frame, evec
+        Per-thread scratch from :func:`_scratch`. On success ``frame`` rows are ``e1, e2, e3``
+        (world coordinates) and ``vec[1, :N_d]`` holds the coefficients ``J`` in the order of
+        :func:`_monomials`, for coordinates divided by the returned ``h``.
+
+    Returns
+    -------
+    reason : int
+        ``Reason`` code (``OK`` when fitted).
+    h : float
+        The coordinate scale: largest distance from p to a support vertex.
+    """
+    nd = (degree + 1) * (degree + 2) // 2
+    if count < nd:
+        return _TOO_FEW, 0.0
+    rx, ry, rz = normals[p, 0], normals[p, 1], normals[p, 2]
+    if not (math.isfinite(rx) and math.isfinite(ry) and math.isfinite(rz)):
+        return _DEGENERATE, 0.0
+    px, py, pz = x[p], y[p], z[p]
+    # centroid c and covariance sum (q - c)(q - c)^T, from offsets to p for accuracy
+    cx = cy = cz = 0.0
+    h2 = 0.0
+    for i in range(count):
+        q = queue[i]
+        dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
+        cx += dx
+        cy += dy
+        cz += dz
+        h2 = max(h2, dx * dx + dy * dy + dz * dz)
+    if not h2 > 0.0:
+        return _DEGENERATE, 0.0
+    cx /= count
+    cy /= count
+    cz /= count
+    for a in range(3):
+        for b in range(3):
+            cov[a, b] = 0.0
+    for i in range(count):
+        q = queue[i]
+        dx, dy, dz = x[q] - px - cx, y[q] - py - cy, z[q] - pz - cz
+        cov[0, 0] += dx * dx
+        cov[0, 1] += dx * dy
+        cov[0, 2] += dx * dz
+        cov[1, 1] += dy * dy
+        cov[1, 2] += dy * dz
+        cov[2, 2] += dz * dz
+    cov[1, 0] = cov[0, 1]
+    cov[2, 0] = cov[0, 2]
+    cov[2, 1] = cov[1, 2]
+    sym3_eigen(cov, evec)
+    # e3: least variance (the height axis), turned towards the reference normal; e1: most variance
+    sign = 1.0 if evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz >= 0.0 else -1.0
+    for a in range(3):
+        frame[2, a] = sign * evec[a, 0]
+        frame[0, a] = evec[a, 2]
+    frame[1, 0] = frame[2, 1] * frame[0, 2] - frame[2, 2] * frame[0, 1]
+    frame[1, 1] = frame[2, 2] * frame[0, 0] - frame[2, 0] * frame[0, 2]
+    frame[1, 2] = frame[2, 0] * frame[0, 1] - frame[2, 1] * frame[0, 0]
+    # normal equations of the height fit in coordinates divided by h
+    inv_h = 1.0 / math.sqrt(h2)
+    for a in range(nd):
+        vec[0, a] = 0.0
+        for b in range(a, nd):
+            m[a, b] = 0.0
+    for i in range(count):
+        q = queue[i]
+        dx, dy, dz = (x[q] - px) * inv_h, (y[q] - py) * inv_h, (z[q] - pz) * inv_h
+        u = dx * frame[0, 0] + dy * frame[0, 1] + dz * frame[0, 2]
+        v = dx * frame[1, 0] + dy * frame[1, 1] + dz * frame[1, 2]
+        w = dx * frame[2, 0] + dy * frame[2, 1] + dz * frame[2, 2]
+        _monomials(u, v, degree, vec)
+        for a in range(nd):
+            ma = vec[1, a]
+            vec[0, a] += ma * w
+            for b in range(a, nd):
+                m[a, b] += ma * vec[1, b]
+    rcond = solve_spd_scaled(m, vec, nd)
+    if not rcond >= RCOND:
+        return _SINGULAR, 0.0
+    for a in range(nd):
+        if not math.isfinite(vec[1, a]):
+            return _SINGULAR, 0.0
+    return _OK, math.sqrt(h2)
+
+
+@jit
+def _to_world(frame, a, b, c, out, row):
+    """``out[row] = a e1 + b e2 + c e3`` for the frame rows ``e1, e2, e3``."""
+    for k in range(3):
+        out[row, k] = a * frame[0, k] + b * frame[1, k] + c * frame[2, k]
+
+
+@jit
+def jet_normal(vec, frame, out, row):
+    """Write the unit normal of the fitted jet (coefficients ``vec[1]``) at the origin to ``out[row]``."""
+    ju, jv = vec[1, 1], vec[1, 2]
+    inv = 1.0 / math.sqrt(1.0 + ju * ju + jv * jv)
+    _to_world(frame, -ju * inv, -jv * inv, inv, out, row)
+
+
+@jit
+def jet_principal(vec, frame, h, normals, out_k, out_d1, out_d2, row):
+    """Principal curvatures and directions of the jet at the origin (step 3 of the module notes).
+
+    The jet's coefficients are ``vec[1]`` (:func:`fit_jet`). Writes ``out_k[0, row], out_k[1, row]``
+    (k1 >= k2, in mesh units) and unit directions ``out_d1[row]``, ``out_d2[row]``, rotated into the
+    tangent plane of ``normals[row]``.
+
+    Returns
+    -------
+    int
+        ``Reason.OK``, or ``DEGENERATE`` when the jet normal is 90 degrees or more from ``normals[row]``.
+    """
+    ju, jv = vec[1, 1], vec[1, 2]
+    juu, juv, jvv = 2.0 * vec[1, 3], vec[1, 4], 2.0 * vec[1, 5]
+    wn = math.sqrt(1.0 + ju * ju + jv * jv)
+    # jet normal n and the tangents S_u = (1, 0, J_u), S_v = (0, 1, J_v), in the PCA frame
+    n0, n1, n2 = -ju / wn, -jv / wn, 1.0 / wn
+    # second fundamental form in the (S_u, S_v) basis: L, M, N = S_xy . n
+    el, em, en = juu / wn, juv / wn, jvv / wn
+    # orthonormal tangent basis T1 = S_u / |S_u|, T2 = n x T1; S_u = s T1, S_v = a T1 + b T2
+    s = math.sqrt(1.0 + ju * ju)
+    t10, t11, t12 = 1.0 / s, 0.0, ju / s
+    t20, t21, t22 = n1 * t12 - n2 * t11, n2 * t10 - n0 * t12, n0 * t11 - n1 * t10
+    a = jv * t12  # S_v . T1
+    b = t21 + jv * t22  # S_v . T2
+    # II in T: P^-T II P^-1 with P = [[s, a], [0, b]]; the shape operator is -II (house sign)
+    i00, i01, i11 = 1.0 / s, -a / (s * b), 1.0 / b
+    e = -(i00 * i00 * el)
+    f = -(i00 * (i01 * el + i11 * em))
+    g = -(i01 * i01 * el + 2.0 * i01 * i11 * em + i11 * i11 * en)
+    k1, k2, c, sn = sym2_eigen(e, f, g)
+    out_k[0, row] = k1 / h
+    out_k[1, row] = k2 / h
+    # d1 = c T1 + s T2, d2 = n x d1 = -s T1 + c T2, then to world coordinates
+    _to_world(frame, c * t10 + sn * t20, c * t11 + sn * t21, c * t12 + sn * t22, out_d1, row)
+    _to_world(frame, -sn * t10 + c * t20, -sn * t11 + c * t21, -sn * t12 + c * t22, out_d2, row)
+    # carry the directions to the tangent plane of the reference normal r: smallest rotation taking n to r
+    nw0 = n0 * frame[0, 0] + n1 * frame[1, 0] + n2 * frame[2, 0]
+    nw1 = n0 * frame[0, 1] + n1 * frame[1, 1] + n2 * frame[2, 1]
+    nw2 = n0 * frame[0, 2] + n1 * frame[1, 2] + n2 * frame[2, 2]
+    rx, ry, rz = normals[row, 0], normals[row, 1], normals[row, 2]
+    cosine = nw0 * rx + nw1 * ry + nw2 * rz
+    if not cosine > 0.0:
+        return _DEGENERATE
+    ax0, ax1, ax2 = nw1 * rz - nw2 * ry, nw2 * rx - nw0 * rz, nw0 * ry - nw1 * rx
+    _rotate(out_d1, row, ax0, ax1, ax2, cosine)
+    _rotate(out_d2, row, ax0, ax1, ax2, cosine)
+    return _OK
+
+
+@jit
+def _rotate(out, row, ax0, ax1, ax2, cosine):
+    """Rotate ``out[row]`` by Rodrigues with the unnormalised axis ``a = n x r`` and ``c = n . r``:
+    ``R v = c v + a x v + a (a . v) / (1 + c)``."""
+    v0, v1, v2 = out[row, 0], out[row, 1], out[row, 2]
+    dot = (ax0 * v0 + ax1 * v1 + ax2 * v2) / (1.0 + cosine)
+    out[row, 0] = cosine * v0 + (ax1 * v2 - ax2 * v1) + ax0 * dot
+    out[row, 1] = cosine * v1 + (ax2 * v0 - ax0 * v2) + ax1 * dot
+    out[row, 2] = cosine * v2 + (ax0 * v1 - ax1 * v0) + ax2 * dot
+
+
+@jit_parallel
+def _jet_kernel(lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason):
+    parts = stamps.shape[0]
+    for t in prange(parts):
+        stamp = stamps[t]
+        queue = queues[t]
+        m, vec, cov, frame, evec = _scratch()
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for p in range(start, stop):
+            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
+            code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
+            if code == _OK:
+                code = jet_principal(vec, frame, h, normals, k, d1, d2, p)
+            reason[p] = code
+
+
+@jit_parallel
+def _jet_normal_kernel(lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, out, reason):
+    parts = stamps.shape[0]
+    for t in prange(parts):
+        stamp = stamps[t]
+        queue = queues[t]
+        m, vec, cov, frame, evec = _scratch()
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for p in range(start, stop):
+            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
+            code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
+            if code == _OK:
+                jet_normal(vec, frame, out, p)
+            reason[p] = code
+
+
+def check_degree(degree) -> int:
+    """The degree as an int; :class:`~curv.errors.EstimatorError` unless it is one of :data:`DEGREES`."""
+    if isinstance(degree, (bool, np.bool_)) or degree not in DEGREES:
+        raise EstimatorError(f"jet degree must be one of {', '.join(map(str, DEGREES))}; got {degree!r}")
+    return int(degree)
+
+
+def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray):
+    indptr, indices = expansion_adjacency(mesh)
+    x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
+    ref = np.ascontiguousarray(normals, dtype=np.float64)
+    parts = max(1, min(threads(), mesh.n_vertices))
+    # A queue as long as the mesh per thread: ball_support never has to grow it. Growing it inside
+    # the prange body (reassigning the array there) returned garbage supports on large balls.
+    queues = np.empty((parts, mesh.n_vertices), np.int64)
+    return radius2, indptr, indices, x, y, z, ref, new_scratch(mesh.n_vertices, parts), queues
+
+
+def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
+             degree: int = DEFAULT_DEGREE):
+    """Osculating jet of degree ``degree`` over each vertex's ball support.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Any polygon mesh.
+    normals : (n, 3) float64
+        Unit vertex normals; they orient each fit and its curvature sign (NaN rows: ``DEGENERATE``).
+    radii : (n,) float64
+        Ball radius of every vertex (:func:`curv.ranges.ball_radii`, ``uses_normals=False``).
+    chunk : int, optional
+        Vertices per kernel call (default adaptive).
+    degree : {2, 3, 4}
+        Jet degree; the support must hold at least ``(d+1)(d+2)/2`` points, the centre included.
+
+    Yields
+    ------
+    float
+        Fraction of vertices done.
+
+    Returns
+    -------
+    Principal
+        k1 >= k2 of the jet, directions tangent to ``normals``; reasons ``TOO_FEW_NEIGHBOURS``,
+        ``SINGULAR``, ``DEGENERATE`` where there is no fit.
+    """
+    degree = check_degree(degree)
+    n = mesh.n_vertices
+    out = empty_principal(n)
+    k = np.full((2, n), np.nan)
+    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii)
+
+    def run(lo, hi):
+        launch(_jet_kernel, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues,
+               k, out.d1, out.d2, out.reason)
+
+    yield from iter_chunks(n, run, chunk=chunk)
+    out.k1, out.k2 = k[0], k[1]
+    bad = out.reason != _OK
+    out.d1[bad] = np.nan
+    out.d2[bad] = np.nan
+    out.k1[bad] = np.nan
+    out.k2[bad] = np.nan
+    return out
+
+
+def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree: int = DEFAULT_DEGREE,
+                chunk: int | None = None):
+    """Unit normals of the jets fitted over each vertex's ball support, a generator.
+
+    Parameters as in :func:`iter_jet` (``reference`` orients each fit).
+
+    Returns
+    -------
+    normals : (n, 3) float64
+        NaN where there is no fit.
+    reason : (n,) uint8
+    """
+    degree = check_degree(degree)
+    n = mesh.n_vertices
+    out = np.full((n, 3), np.nan)
+    reason = np.zeros(n, np.uint8)
+    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, reference, radii)
+
+    def run(lo, hi):
+        launch(_jet_normal_kernel, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
+
+    yield from iter_chunks(n, run, chunk=chunk)
+    out[reason != _OK] = np.nan
+    return out, reason
+
+
+register(EstimatorSpec(
+    name="jet", in_paper=False, title="Osculating jet fitting", ranges=(1, 2, 3, 4), function=iter_jet,
+    triangles_only=False, uses_normals=False, closed_ring=False,
+    reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
+    summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
+    kernels=(_jet_kernel,),
+))

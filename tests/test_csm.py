@@ -1,0 +1,136 @@
+"""The csm kernel's pieces: exact clipping, chunking, fixed radii, reasons and cancel."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import curv
+from curv.estimators.csm import disc_triangle_area, iter_csm, segment_in_ball, triangle_in_ball_area
+from curv.normals import vertex_normals
+from curv.ranges import Range, ball_radii
+from curv.validity import Reason
+from tests.meshes import icosphere
+
+
+def _drain(gen):
+    fractions = []
+    try:
+        while True:
+            fractions.append(float(next(gen)))
+    except StopIteration as stop:
+        return stop.value, fractions
+
+
+def _csm(mesh, k=2.0, *, radius=None, chunk=None):
+    rng = Range(radius=radius) if radius is not None else Range(k=k)
+    return _drain(iter_csm(mesh, vertex_normals(mesh), ball_radii(mesh, rng, uses_normals=False), chunk=chunk))
+
+
+# ---------------------------------------------------------------------------- clipping
+@pytest.mark.parametrize("start, direction, radius, expected", [
+    ((-2.0, 0.0, 0.0), (4.0, 0.0, 0.0), 1.0, 0.5),     # through the centre: 2 of 4
+    ((0.0, 0.0, 0.0), (3.0, 0.0, 0.0), 1.0, 1 / 3),    # from the centre outwards
+    ((0.1, 0.0, 0.0), (0.5, 0.0, 0.0), 1.0, 1.0),      # wholly inside
+    ((-2.0, 1.5, 0.0), (4.0, 0.0, 0.0), 1.0, 0.0),     # misses
+    ((-2.0, 0.6, 0.0), (4.0, 0.0, 0.0), 1.0, 0.4),     # chord of half-length 0.8
+])
+def test_segment_in_ball(start, direction, radius, expected):
+    assert segment_in_ball(*start, *direction, radius ** 2) == pytest.approx(expected, abs=1e-14)
+
+
+def test_disc_triangle_area_known_cases():
+    big = (-10.0, -10.0, 20.0, -10.0, -10.0, 20.0)  # contains the unit disc
+    assert disc_triangle_area(*big, 1.0) == pytest.approx(math.pi, rel=1e-14)
+    tri = (0.1, 0.1, 0.4, 0.1, 0.1, 0.3)  # inside the unit disc
+    assert disc_triangle_area(*tri, 1.0) == pytest.approx(0.5 * 0.3 * 0.2, rel=1e-14)
+    # centre at a corner of angle 90 degrees, small disc: a quarter disc
+    assert disc_triangle_area(0.0, 0.0, 5.0, 0.0, 0.0, 5.0, 0.25) == pytest.approx(math.pi * 0.25 / 4, rel=1e-14)
+    # centre on an edge: half a disc
+    assert disc_triangle_area(-5.0, 0.0, 5.0, 0.0, 0.0, 5.0, 0.01) == pytest.approx(math.pi * 0.01 / 2, rel=1e-13)
+    # disc away from the triangle
+    assert disc_triangle_area(3.0, 3.0, 4.0, 3.0, 3.0, 4.0, 1.0) == 0.0
+
+
+def test_triangle_in_ball_area_matches_sampling():
+    rng = np.random.default_rng(4)
+    a, b, c = np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.2, 0.1]), np.array([0.3, 0.9, -0.2])
+    n = np.cross(b - a, c - a)
+    n /= np.linalg.norm(n)
+    # barycentric samples of the triangle, area-uniform
+    u, v = rng.random(400_000), rng.random(400_000)
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    pts = a + u[:, None] * (b - a) + v[:, None] * (c - a)
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a))
+    for centre, radius in [((0.5, 0.4, 0.3), 0.45), ((0.0, 0.0, 0.0), 0.7), ((1.2, 0.0, 0.0), 0.6)]:
+        centre = np.asarray(centre)
+        inside = (np.linalg.norm(pts - centre, axis=1) <= radius).mean() * area
+        got = triangle_in_ball_area(*(centre - a), radius ** 2, *(b - a), *(c - a), *n)
+        assert got == pytest.approx(inside, abs=3e-3 * area)
+    # a ball that holds the whole triangle, and one that misses its plane
+    assert triangle_in_ball_area(*(-a), 100.0, *(b - a), *(c - a), *n) == pytest.approx(area, rel=1e-13)
+    assert triangle_in_ball_area(*(n * 2.0), 1.0, *(b - a), *(c - a), *n) == 0.0
+
+
+# ---------------------------------------------------------------------------- the estimator
+def test_chunks_do_not_change_the_result():
+    mesh = icosphere(3)
+    ref, _ = _csm(mesh, 2.5)
+    for chunk in (1, 7, 300):
+        got, fractions = _csm(mesh, 2.5, chunk=chunk)
+        np.testing.assert_array_equal(got.reason, ref.reason)
+        np.testing.assert_array_equal(got.k1, ref.k1)
+        np.testing.assert_array_equal(got.d2, ref.d2)
+        assert fractions == sorted(fractions) and fractions[-1] == 1.0
+        assert len(fractions) >= mesh.n_vertices // chunk
+
+
+def test_fixed_radius_on_a_sphere():
+    mesh = icosphere(4, radius=2.0)
+    res, _ = _csm(mesh, radius=0.4)
+    assert (res.reason == Reason.OK).all()
+    # ka <= kb, both close to 1/2 (within the lattice bias of a ball of some 2.5 edges)
+    assert (res.k1 <= res.k2).all()
+    np.testing.assert_allclose(res.k1, 0.5, rtol=0.08)
+    np.testing.assert_allclose(res.k2, 0.5, rtol=0.08)
+    # a ball twice as large: the same radius everywhere, so the same support size everywhere
+    wide, _ = _csm(mesh, radius=0.8)
+    np.testing.assert_allclose(wide.k2, 0.5, rtol=0.08)
+    assert np.ptp(wide.k2) < np.ptp(res.k2)
+
+
+def test_results_change_continuously_with_the_range():
+    mesh = icosphere(3)
+    a, _ = _csm(mesh, 2.0)
+    b, _ = _csm(mesh, 2.0 + 1e-7)
+    np.testing.assert_allclose(b.k1, a.k1, atol=1e-5)
+    np.testing.assert_allclose(b.k2, a.k2, atol=1e-5)
+
+
+def test_border_and_degenerate_reasons():
+    full = icosphere(3)
+    tri = full.triangles
+    holed = curv.Mesh(full.vertices, tri[1:])
+    res, _ = _csm(holed, 2.0)
+    hole = tri[0]
+    assert (res.reason[hole] == Reason.BORDER).all()
+    far = np.linalg.norm(full.vertices - full.vertices[hole].mean(axis=0), axis=1) > 1.0
+    assert (res.reason[far] == Reason.OK).all()
+    # a zero-area face (a vertex moved onto the opposite edge): the supports that touch it are DEGENERATE
+    a, b, c = tri[0]
+    v = full.vertices.copy()
+    v[a] = 0.5 * (v[b] + v[c])
+    res, _ = _csm(curv.Mesh(v, tri), 1.0)
+    assert (res.reason[[a, b, c]] == Reason.DEGENERATE).all()
+    assert (res.reason[far] == Reason.OK).all()
+
+
+def test_closing_the_generator_stops_early():
+    mesh = icosphere(4)
+    gen = iter_csm(mesh, vertex_normals(mesh), ball_radii(mesh, Range(k=2.0), uses_normals=False), chunk=64)
+    for _ in range(5):
+        next(gen)
+    gen.close()  # a cancel: no error, nothing left running
