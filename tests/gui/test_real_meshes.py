@@ -79,3 +79,18 @@ def test_sample_meshes_open_and_estimate(qtbot, window, ui, name):
     ui.wait_ready(timeout=60_000)
     assert not window.doc.failures, window.doc.failures
     assert window.doc.result(0).valid.any()
+
+
+def test_mesh_report_dock_reloads_with_a_repair(qtbot, window, ui, tmp_path):
+    path = _sphere_with_unreferenced(tmp_path, n_extra=30)
+    window.open_path(path)
+    qtbot.waitUntil(lambda: window.doc.mesh is not None and window.doc.mesh.n_vertices == 672, timeout=TIMEOUT_MS)
+    ui.wait_ready()
+    panel = window.mesh_panel
+    assert "30 isolated vertices" in panel.text.text() and panel.reload.isEnabled()
+    panel.repairs["remove_unreferenced"].setChecked(True)
+    panel.reload.click()
+    qtbot.waitUntil(lambda: window.doc.mesh.n_vertices == 642, timeout=TIMEOUT_MS)
+    ui.wait_ready()
+    assert window.doc.source.repairs == ("remove_unreferenced",)
+    assert "repair:" in panel.text.text() and panel.repairs["remove_unreferenced"].isChecked()
