@@ -443,7 +443,7 @@ class MainWindow(QMainWindow):
         self.move(avail.x() + (avail.width() - w) // 2, avail.y() + (avail.height() - h) // 2)
         self.resizeDocks([self.docks["source"], self.docks["inspect"]], [int(w * 0.18), int(w * 0.23)],
                          Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["inspect"], self.docks["readout"]], [int(h * 0.72), int(h * 0.2)],
+        self.resizeDocks([self.docks["inspect"], self.docks["readout"]], [int(h * 0.66), int(h * 0.26)],
                          Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["source"], self.docks["mesh"]], [int(h * 0.5), int(h * 0.4)],
                          Qt.Orientation.Vertical)

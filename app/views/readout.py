@@ -3,7 +3,7 @@ truth and error (rows from :mod:`app.model.readout`)."""
 
 from __future__ import annotations
 
-from PySide6.QtWidgets import QTextBrowser
+from PySide6.QtWidgets import QTextBrowser, QTextEdit
 
 from app.model import Document, readout_columns, readout_rows
 from app.model.readout import fmt_vec
@@ -18,6 +18,7 @@ class Readout(QTextBrowser):
         super().__init__(parent)
         self.doc = doc
         self.setMinimumHeight(150)
+        self.setLineWrapMode(QTextEdit.LineWrapMode.NoWrap)  # a table of numbers scrolls sideways, never wraps
         doc.picked_changed.connect(lambda i: self.refresh())
         doc.mesh_changed.connect(lambda change: self.refresh())
         doc.result_changed.connect(lambda key: self.refresh())
