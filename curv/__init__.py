@@ -24,6 +24,8 @@ _LAZY = {
     "load": ("curv.io", "load"),
     "save_ply": ("curv.io", "save_ply"),
     "surfaces": ("curv.surfaces", None),
+    "advise": ("curv.advisor", "advise"),
+    "Advice": ("curv.advisor", "Advice"),
 }
 
 __all__ = [

@@ -1,4 +1,4 @@
-"""Command line: ``curv list``, ``curv estimate``, ``curv study``.
+"""Command line: ``curv list``, ``curv estimate``, ``curv advise``, ``curv study``.
 
 Errors in the input end the program with a one-line message on stderr and a non-zero status,
 never a traceback.
@@ -106,6 +106,8 @@ def _cmd_estimate(args) -> int:
     from .ranges import resolve
     from .validity import describe_reasons
 
+    if args.method == "auto":
+        args.method, args.range = _advised_method(args)
     spec = get_spec(args.method)
     rng = resolve(spec, args.range, args.radius)
     if args.output:
@@ -166,6 +168,48 @@ def _cmd_estimate(args) -> int:
     return 0
 
 
+def _advised_method(args) -> tuple[str, str]:
+    """``--method auto``: the advisor's (method, range) for the input, announced on stdout."""
+    from .advisor import advise
+    from .io import load
+
+    if args.range is not None or args.radius is not None:
+        raise CurvError("--method auto chooses the range too; drop --range/--radius")
+    mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
+                orient=args.orient, remove_unreferenced=args.remove_unreferenced)
+    adv = advise(mesh)
+    print(f"auto: {adv.method} R{adv.range} ({adv.why})", flush=True)
+    return adv.method, str(adv.range)
+
+
+def _cmd_advise(args) -> int:
+    import json
+
+    from .advisor import advise
+    from .io import load
+
+    mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
+                orient=args.orient, remove_unreferenced=args.remove_unreferenced)
+    adv = advise(mesh)
+    if args.json:
+        print(json.dumps({"input": args.input, **adv.as_dict()}, indent=2))
+        return 0
+    f = adv.features
+    kinds = ", ".join(f"{n} {k}-gons" if k != 3 else f"{n} triangles" for k, n in f.polygon_kinds.items())
+    print(f"{args.input}: {f.n_vertices} vertices; {kinds}; {100 * f.border_share:.1f} % on a border")
+    print(f"  noise        {f.noise:.4f} mean edges ({f.noise_level:.2f} of the paper's level)")
+    print(f"  irregularity {f.irregularity_deg:.1f} degrees RMS from 60")
+    print(f"  density      {f.density:.4f} (mean edge x median |k1|+|k2|)")
+    print(f"advice: {adv.why}")
+    print(f"{'rank':>4}  {'variant':<9} predicted median e_rel")
+    shown = adv.ranking[: args.top]
+    for i, (method, k, erel) in enumerate(shown, 1):
+        print(f"{i:>4}  {method + ' R' + str(k):<9} {erel:.3g}")
+    if len(adv.ranking) > len(shown):
+        print(f"  ... {len(adv.ranking) - len(shown)} more (--top N, --json)")
+    return 0
+
+
 def _hints(args, rep) -> list[str]:
     """Repairs that would likely help, for the defects the report shows."""
     out = []
@@ -199,7 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p_est = sub.add_parser("estimate", help="estimate curvature on a mesh file")
     p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
-    p_est.add_argument("--method", "-m", default="mru", help="estimator name (see `curv list`); default mru")
+    p_est.add_argument("--method", "-m", default="mru", help="estimator name (see `curv list`), or auto (ask `curv advise`); default mru")
     p_est.add_argument("--range", "-r", help="range k of Rk: 2, R2 or any real k such as 2.5 (at least the "
                        "estimator's smallest); default R2, or the estimator's one range (meyer R1)")
     p_est.add_argument("--radius", type=float, help="instead of --range: the same ball radius in mesh units at "
@@ -222,6 +266,17 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("--no-memory-check", dest="memory_check", action="store_false",
                        help="estimate even when the predicted peak memory exceeds the available memory")
     p_est.set_defaults(func=_cmd_estimate)
+
+    p_adv = sub.add_parser("advise", help="which estimator and range for this mesh (from the study)")
+    p_adv.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
+    p_adv.add_argument("--json", action="store_true", help="features, ranking and advice as JSON")
+    p_adv.add_argument("--top", type=int, default=12, help="variants of the ranking shown; default 12")
+    for flag, text in (("--merge-vertices", "merge vertices at identical positions"),
+                       ("--remove-degenerate", "drop zero-area / repeated-index faces"),
+                       ("--orient", "make face orientation consistent"),
+                       ("--remove-unreferenced", "drop vertices no face uses")):
+        p_adv.add_argument(flag, action="store_true", help=text)
+    p_adv.set_defaults(func=_cmd_advise)
 
     try:
         from .study.cli import add_study_parser

@@ -69,10 +69,12 @@ def _choose_cache_dir() -> None:
 
 _choose_cache_dir()
 
-jit = njit(cache=True, nogil=True)
+# error_model="numpy": a float division by zero gives inf/NaN as in numpy (and so lands in a
+# validity check) instead of raising, which inside a parallel loop was swallowed and left rows unset
+jit = njit(cache=True, nogil=True, error_model="numpy")
 """Serial kernel or helper: ``@jit``."""
 
-jit_parallel = njit(cache=True, nogil=True, parallel=True)
+jit_parallel = njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 """Parallel kernel whose outer loop is a ``prange``: ``@jit_parallel``."""
 
 prange = numba.prange

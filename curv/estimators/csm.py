@@ -43,6 +43,7 @@ from ._small_linalg import sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_csm", "segment_in_ball", "disc_triangle_area", "triangle_in_ball_area", "face_geometry",
+           "face_frames", "face_in_ball_area",
            "edge_beta_scale", "support_flags"]
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
@@ -185,14 +186,15 @@ def triangle_in_ball_area(ox, oy, oz, radius2, ex, ey, ez, fx, fy, fz, nx, ny, n
 
 # ---------------------------------------------------------------------------- eigen
 @jit
-def _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, out):
+def _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, out):
     """Curvatures and directions of a normal-cycle tensor T at a vertex with unit normal n.
 
     Drops the eigenvector closest to n; of the other two (ascending), each eigenvector is the
-    principal direction of the *other* eigenvalue. Writes ``out[:] = ka, kb, da (3), db (3)`` with
+    principal direction of the *other* eigenvalue. ``tensor`` (3, 3) is overwritten, ``vectors``
+    (4, 3) is scratch for :func:`sym3_eigen`. Writes ``out[:] = ka, kb, da (3), db (3)`` with
     ``ka <= kb``, ``db`` the tangent-projected eigenvector of ka and ``da = n x db``.
     """
-    sym3_eigen(tensor, values, vectors)
+    sym3_eigen(tensor, vectors)  # vectors[:3, j]: eigenvector of the eigenvalue vectors[3, j]
     drop = 0
     best = -1.0
     for j in range(3):
@@ -211,8 +213,8 @@ def _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, out):
     bx /= norm
     by /= norm
     bz /= norm
-    out[0] = values[ia]
-    out[1] = values[ib]
+    out[0] = vectors[3, ia]
+    out[1] = vectors[3, ib]
     out[2] = ny * bz - nz * by
     out[3] = nz * bx - nx * bz
     out[4] = nx * by - ny * bx
@@ -228,6 +230,62 @@ def face_geometry(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     normal = np.where(degenerate[:, None], 0.0, mesh.face_normals)
     area = np.where(degenerate, 0.0, mesh.face_areas)
     return normal, area
+
+
+@jit_parallel
+def _face_frames(tri, x, y, z, face_normal, out):
+    for f in prange(tri.shape[0]):
+        c0, c1, c2 = tri[f, 0], tri[f, 1], tri[f, 2]
+        ex, ey, ez = x[c1] - x[c0], y[c1] - y[c0], z[c1] - z[c0]
+        fx, fy, fz = x[c2] - x[c0], y[c2] - y[c0], z[c2] - z[c0]
+        nx, ny, nz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
+        x1 = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if not x1 > 0.0:
+            x1 = 1.0  # degenerate: never clipped (zero area)
+        ux, uy, uz = ex / x1, ey / x1, ez / x1
+        vx = ny * uz - nz * uy
+        vy = nz * ux - nx * uz
+        vz = nx * uy - ny * ux
+        out[f, 0], out[f, 1], out[f, 2] = ux, uy, uz
+        out[f, 3], out[f, 4], out[f, 5] = vx, vy, vz
+        out[f, 6], out[f, 7], out[f, 8] = nx, ny, nz
+        out[f, 9] = x1
+        out[f, 10] = fx * ux + fy * uy + fz * uz
+        out[f, 11] = fx * vx + fy * vy + fz * vz
+
+
+def face_frames(mesh: Mesh, face_normal: np.ndarray) -> np.ndarray:
+    """(m, 12) per triangle: its frame u, v, n (u along corner 0 -> 1, v = n x u) and its corners in it.
+
+    Columns ``ux uy uz vx vy vz nx ny nz x1 x2 y2``: corner 0 is the origin, corner 1 ``(x1, 0)``,
+    corner 2 ``(x2, y2)``. ``face_normal`` is the first output of :func:`face_geometry`. Once per
+    mesh, so that clipping a face to a ball needs no square root or division.
+    """
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    x, y, z = _columns(mesh)
+    out = np.empty((tri.shape[0], 12))
+    launch(_face_frames, tri, x, y, z, face_normal, out)
+    return out
+
+
+@jit
+def face_in_ball_area(frames, f, ox, oy, oz, radius2, area):
+    """Exact area of triangle f (:func:`face_frames` row, full area ``area``) inside a ball.
+
+    ``o`` is the ball centre minus corner 0 of the face. The whole area where all three corners
+    are inside (the ball is convex), else :func:`disc_triangle_area` in the plane of the face.
+    """
+    cu = ox * frames[f, 0] + oy * frames[f, 1] + oz * frames[f, 2]
+    cv = ox * frames[f, 3] + oy * frames[f, 4] + oz * frames[f, 5]
+    h = ox * frames[f, 6] + oy * frames[f, 7] + oz * frames[f, 8]
+    x1, x2, y2 = frames[f, 9], frames[f, 10], frames[f, 11]
+    rho2 = radius2 - h * h  # squared radius of the disc B ∩ plane, around the foot (cu, cv)
+    if not rho2 > 0.0:
+        return 0.0
+    if cu * cu + cv * cv <= rho2 and (x1 - cu) ** 2 + cv * cv <= rho2 and (x2 - cu) ** 2 + (y2 - cv) ** 2 <= rho2:
+        return area
+    part = disc_triangle_area(-cu, -cv, x1 - cu, -cv, x2 - cu, y2 - cv, rho2)
+    return part if math.isfinite(part) else 0.0
 
 
 @jit_parallel
@@ -290,13 +348,12 @@ def _csr(matrix) -> tuple[np.ndarray, np.ndarray]:
 # ---------------------------------------------------------------------------- the kernel
 @jit_parallel
 def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
-               vf_ptr, vf_idx, tri, face_normal, face_area, flags, normals,
+               vf_ptr, vf_idx, tri, frames, face_area, flags, normals,
                vstamps, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
         queue = np.empty(QUEUE_START, np.int64)
-        values = np.empty(3)
-        vectors = np.empty((3, 3))
+        vectors = np.empty((4, 3))
         tensor = np.empty((3, 3))
         res = np.empty(8)
         vstamp, estamp, fstamp = vstamps[t], estamps[t], fstamps[t]
@@ -340,19 +397,8 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
                     fstamp[f] = p
                     if face_area[f] == 0.0:
                         continue  # degenerate: flagged at its vertices
-                    c0, c1, c2 = tri[f, 0], tri[f, 1], tri[f, 2]
-                    ox, oy, oz = px - x[c0], py - y[c0], pz - z[c0]
-                    ex, ey, ez = x[c1] - x[c0], y[c1] - y[c0], z[c1] - z[c0]
-                    fx, fy, fz = x[c2] - x[c0], y[c2] - y[c0], z[c2] - z[c0]
-                    if (ox * ox + oy * oy + oz * oz <= r2
-                            and (ex - ox) ** 2 + (ey - oy) ** 2 + (ez - oz) ** 2 <= r2
-                            and (fx - ox) ** 2 + (fy - oy) ** 2 + (fz - oz) ** 2 <= r2):
-                        area += face_area[f]
-                    else:
-                        part = triangle_in_ball_area(ox, oy, oz, r2, ex, ey, ez, fx, fy, fz,
-                                                     face_normal[f, 0], face_normal[f, 1], face_normal[f, 2])
-                        if math.isfinite(part):
-                            area += part
+                    c0 = tri[f, 0]
+                    area += face_in_ball_area(frames, f, px - x[c0], py - y[c0], pz - z[c0], r2, face_area[f])
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
             singular = not (area > 0.0 and math.isfinite(t00 + t01 + t02 + t11 + t12 + t22))
@@ -363,7 +409,7 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
                 tensor[0, 1] = tensor[1, 0] = t01 * inv
                 tensor[0, 2] = tensor[2, 0] = t02 * inv
                 tensor[1, 2] = tensor[2, 1] = t12 * inv
-                _principal_from_normal_cycle(tensor, nx, ny, nz, values, vectors, res)
+                _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, res)
                 k1[p], k2[p] = res[0], res[1]
                 for c in range(3):
                     d1[p, c] = res[2 + c]
@@ -417,6 +463,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         yield 0.0
     face_normal, face_area = face_geometry(mesh)
     beta_scale = edge_beta_scale(mesh, face_normal)
+    frames = face_frames(mesh, face_normal)
+    del face_normal
     flags = support_flags(mesh)
     yield 0.0
     indptr, indices = expansion_adjacency(mesh)
@@ -427,13 +475,13 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     edges = np.ascontiguousarray(mesh.edges, dtype=np.int64)
     parts = threads()
     vstamps = new_scratch(n, parts)
-    estamps = np.full((parts, edges.shape[0]), -1, np.int64)
-    fstamps = np.full((parts, tri.shape[0]), -1, np.int64)
+    estamps = np.full((parts, edges.shape[0]), -1, np.int32)  # vertex ids fit; half the cache lines
+    fstamps = np.full((parts, tri.shape[0]), -1, np.int32)
     out = empty_principal(n)
 
     def run(lo: int, hi: int) -> None:
         launch(_csm_chunk, lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
-               vf_ptr, vf_idx, tri, face_normal, face_area, flags, normals, vstamps, estamps, fstamps,
+               vf_ptr, vf_idx, tri, frames, face_area, flags, normals, vstamps, estamps, fstamps,
                out.k1, out.k2, out.d1, out.d2, out.reason)
 
     yield from iter_chunks(n, run, chunk=chunk)
@@ -445,5 +493,5 @@ register(EstimatorSpec(
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",
-    kernels=(_edge_beta_scale, _csm_chunk),
+    kernels=(_edge_beta_scale, _face_frames, _csm_chunk),
 ))

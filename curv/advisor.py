@@ -1,0 +1,381 @@
+"""Which estimator for this mesh? Measured mesh features -> ranked estimator variants (from the study).
+
+>>> adv = curv.advise(mesh)                        # doctest: +SKIP
+>>> adv.method, adv.range, adv.expected_erel, adv.why
+('mru', 4, 0.12, 'noise about 0.6 of the paper's level, irregular (22 degrees): mru R4, expected median e_rel 0.12')
+
+The advisor measures the three features the paper's study varies (density, noise, irregularity,
+see :class:`MeshFeatures`) and predicts the median e_rel of every candidate variant from a table
+of study results (``curv/data/advisor_table.json``, built by :mod:`curv.advisor_table`; the module is not named ``advise`` so that importing it cannot shadow the function ``curv.advise``). The
+table holds one point per study mesh: the advisor's own features measured on that mesh, and the
+median e_rel every variant reached on it against the exact curvature. A prediction is the
+Gaussian-kernel weighted mean of ``log(e_rel)`` over the table's meshes in the scaled feature space
+``(log density, noise level, irregularity)``; scales and bandwidth are the table's (the bandwidth
+chosen by leave-one-out regret when the table is built). Because the table's coordinates are
+measured exactly as on the user's mesh, a bias of a measure cancels instead of misplacing the
+mesh; far outside the table the nearest meshes decide (the grid's edge acts as a clip). There is
+no hand-written rule: a different table gives different advice.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from dataclasses import asdict, dataclass, field
+from importlib import resources
+
+import numpy as np
+
+from .errors import MeshError
+from .mesh import Mesh
+
+__all__ = ["Advice", "MeshFeatures", "advise", "measure_features", "load_table", "TABLE_RESOURCE",
+           "FIT_METHOD", "FIT_RANGE"]
+
+TABLE_RESOURCE = "data/advisor_table.json"
+"""The table inside the ``curv`` package (see :mod:`curv.advisor_table`)."""
+
+FIT_METHOD = "qs"
+FIT_RANGE = 3
+"""The local fit the noise and density measures use: the quadratic height fit at R3 (it works on
+polygons and at borders, and over R3 its curvature is not yet dominated by the noise it measures)."""
+
+_MAD_TO_SIGMA = 1.4826
+"""Median absolute deviation -> standard deviation of a Gaussian."""
+
+
+@dataclass(frozen=True)
+class MeshFeatures:
+    """What the advisor measured on a mesh.
+
+    Attributes
+    ----------
+    irregularity_deg : float
+        The paper's irregularity (§5.1), RMS deviation of all triangle angles from 60 degrees,
+        measured in 3D on the mesh as given (polygons fan-triangulated from their first corner) and
+        corrected for the angle jitter the noise itself adds:
+        ``sqrt(max(raw² - (c * noise level)², 0))``, ``c`` calibrated on the study's meshes (stored
+        with the table). The study sets its irregularity on the planar hexagon before lifting it
+        onto the surface; the lift of a steep patch adds its own distortion, which this 3D measure
+        (the mesh the estimators see) includes: a regular hexagon lifted onto a steep quadratic
+        patch measures about 25 degrees.
+    noise : float
+        Estimated standard deviation per coordinate of Gaussian vertex noise, as a fraction of the
+        mean edge length (the study's unit: its 100 % level is
+        :data:`curv.study.protocol.NOISE_FRACTION` = 0.1). Measured as the robust spread of the
+        1-ring residuals of a local quadric: at every validly fitted vertex p the ``qs`` fit at R3
+        gives k1, k2, d1, d2 in the frame of p's normal n; each 1-ring neighbour j gives the residual
+        ``n·(x_j - x_p) + (k1 u² + k2 v²) / 2`` with ``u = d1·(x_j - x_p)``, ``v = d2·(x_j - x_p)``;
+        ``raw = 1.4826 MAD(residuals) / mean edge``. The fit's own model error and the absorbed part
+        of the noise are removed by a calibration ``raw² = a² + (b noise)²`` fitted on the study's
+        meshes of known noise: ``noise = sqrt(max(raw² - a², 0)) / b``.
+    density : float
+        Dimensionless resolution: mean edge length times the median of ``|k1| + |k2|`` over the
+        validly fitted vertices of the same R3 fit (the table's axis uses the exact curvature of
+        the study's surfaces). A sphere of radius r with edge h gives about 2 h / r.
+    border_share : float
+        Share of the vertices on a border.
+    polygon_kinds : dict
+        Face size -> number of faces, e.g. ``{3: 6000}`` or ``{3: 10, 4: 5000}``.
+    n_vertices : int
+    mean_edge : float
+        Mean edge length in mesh units.
+    noise_raw : float
+        The uncalibrated noise measure (``raw`` above).
+    irregularity_raw_deg : float
+        The uncorrected RMS angle deviation.
+    """
+
+    irregularity_deg: float
+    noise: float
+    density: float
+    border_share: float
+    polygon_kinds: dict = field(default_factory=dict)
+    n_vertices: int = 0
+    mean_edge: float = float("nan")
+    noise_raw: float = float("nan")
+    irregularity_raw_deg: float = float("nan")
+
+    @property
+    def noise_level(self) -> float:
+        """:attr:`noise` as a fraction of the paper's 100 % level."""
+        from .study.protocol import NOISE_FRACTION
+
+        return self.noise / NOISE_FRACTION
+
+    @property
+    def triangular(self) -> bool:
+        return set(self.polygon_kinds) <= {3}
+
+
+@dataclass(frozen=True)
+class Advice:
+    """The advisor's answer for one mesh.
+
+    Attributes
+    ----------
+    features : MeshFeatures
+    ranking : list of (str, int, float)
+        Every candidate ``(method, range, predicted median e_rel)``, best first.
+    method : str
+        Recommended estimator (registry name).
+    range : int
+        Its range k of Rk.
+    expected_erel : float
+        Predicted median e_rel of the recommendation.
+    why : str
+        One line for a person.
+    """
+
+    features: MeshFeatures
+    ranking: list
+    method: str
+    range: int
+    expected_erel: float
+    why: str
+
+    def as_dict(self) -> dict:
+        """A JSON-ready dict (``features``, ``ranking`` as a list of dicts, the recommendation)."""
+        f = asdict(self.features)
+        f["polygon_kinds"] = {str(k): v for k, v in self.features.polygon_kinds.items()}
+        f["noise_level"] = self.features.noise_level
+        return {
+            "method": self.method, "range": self.range, "expected_erel": self.expected_erel, "why": self.why,
+            "features": f,
+            "ranking": [{"method": m, "range": r, "expected_erel": e} for m, r, e in self.ranking],
+        }
+
+
+# ---------------------------------------------------------------------------- features
+def polygon_kinds(mesh: Mesh) -> dict:
+    """Face size -> count, in increasing size."""
+    sizes, counts = np.unique(mesh.face_sizes, return_counts=True)
+    return {int(s): int(c) for s, c in zip(sizes, counts)}
+
+
+def fan_triangles(mesh: Mesh) -> np.ndarray:
+    """(t, 3) int64: the triangles, and every polygon fan-triangulated from its first corner."""
+    faces = mesh.faces
+    parts = [np.stack([faces[:, 0], faces[:, i], faces[:, i + 1]], axis=1)[faces[:, i + 1] >= 0]
+             for i in range(1, faces.shape[1] - 1)]
+    return np.concatenate(parts) if parts else np.empty((0, 3), np.int64)
+
+
+def angle_deviation_deg(vertices: np.ndarray, triangles: np.ndarray) -> float:
+    """RMS deviation of the 3D triangle angles from 60 degrees (degenerate triangles left out)."""
+    p = vertices[triangles]
+    a = np.roll(p, -1, axis=1) - p
+    b = np.roll(p, -2, axis=1) - p
+    cross = np.linalg.norm(np.cross(a, b), axis=2)
+    dot = np.einsum("mij,mij->mi", a, b)
+    ok = np.all(cross > 0, axis=1)
+    if not ok.any():
+        return float("nan")
+    ang = np.degrees(np.arctan2(cross[ok], dot[ok]))
+    return float(np.sqrt(np.mean((ang - 60.0) ** 2)))
+
+
+def _fit_residuals(mesh: Mesh, res) -> np.ndarray:
+    """Residuals of each validly fitted vertex's quadric at its 1-ring neighbours (all directed edges)."""
+    adj = mesh.adjacency.tocoo()
+    p, j = adj.row.astype(np.int64), adj.col.astype(np.int64)
+    keep = res.valid[p] & (p != j)
+    p, j = p[keep], j[keep]
+    dx = mesh.vertices[j] - mesh.vertices[p]
+    h = np.einsum("ij,ij->i", res.normals[p], dx)
+    u = np.einsum("ij,ij->i", res.d1[p], dx)
+    v = np.einsum("ij,ij->i", res.d2[p], dx)
+    # positive curvature bends away from the normal: the neighbours lie below the tangent plane
+    return h + 0.5 * (res.k1[p] * u * u + res.k2[p] * v * v)
+
+
+def raw_measures(mesh: Mesh, *, normals=None) -> dict:
+    """The uncalibrated measures: ``noise_raw``, ``irregularity_raw_deg``, ``density`` and the rest.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    normals : (n, 3) array_like, optional
+        Vertex normals for the fit; default Max-weighted.
+
+    Returns
+    -------
+    dict
+        Keys ``noise_raw``, ``irregularity_raw_deg``, ``density``, ``border_share``,
+        ``polygon_kinds``, ``n_vertices``, ``mean_edge``.
+
+    Raises
+    ------
+    MeshError
+        When no vertex can be fitted (too small or degenerate a mesh).
+    """
+    from .api import estimate
+
+    edge = float(mesh.mean_edge_length)
+    if not (np.isfinite(edge) and edge > 0):
+        raise MeshError("cannot advise on a mesh without edges of positive length")
+    res = estimate(mesh, method=FIT_METHOD, range=FIT_RANGE, normals=normals)
+    if not res.valid.any():
+        raise MeshError(f"cannot advise: the {FIT_METHOD} R{FIT_RANGE} fit is invalid at every vertex")
+    r = _fit_residuals(mesh, res)
+    r = r[np.isfinite(r)]
+    mad = float(np.median(np.abs(r - np.median(r)))) if r.size else float("nan")
+    scale = np.abs(res.k1[res.valid]) + np.abs(res.k2[res.valid])
+    return {
+        "noise_raw": _MAD_TO_SIGMA * mad / edge,
+        "irregularity_raw_deg": angle_deviation_deg(mesh.vertices, fan_triangles(mesh)),
+        "density": edge * float(np.median(scale)),
+        "border_share": float(mesh.border_vertices.mean()) if mesh.n_vertices else 0.0,
+        "polygon_kinds": polygon_kinds(mesh),
+        "n_vertices": int(mesh.n_vertices),
+        "mean_edge": edge,
+    }
+
+
+def calibrate_noise(noise_raw: float, calibration: dict) -> float:
+    """``sqrt(max(raw² - a², 0)) / b`` (see :attr:`MeshFeatures.noise`)."""
+    a, b = calibration["noise_floor"], calibration["noise_gain"]
+    return float(np.sqrt(max(noise_raw**2 - a**2, 0.0)) / b)
+
+
+def calibrate_irregularity(raw_deg: float, noise: float, calibration: dict) -> float:
+    """``sqrt(max(raw² - (c noise_level)², 0))`` (see :attr:`MeshFeatures.irregularity_deg`)."""
+    from .study.protocol import NOISE_FRACTION
+
+    c = calibration["irregularity_noise_deg"]
+    return float(np.sqrt(max(raw_deg**2 - (c * noise / NOISE_FRACTION) ** 2, 0.0)))
+
+
+def measure_features(mesh: Mesh, *, normals=None, table: dict | None = None) -> MeshFeatures:
+    """Measure the advisor's :class:`MeshFeatures` (calibrated with ``table``'s calibration)."""
+    table = load_table() if table is None else table
+    raw = raw_measures(mesh, normals=normals)
+    cal = table["calibration"]
+    noise = calibrate_noise(raw["noise_raw"], cal)
+    irr = calibrate_irregularity(raw["irregularity_raw_deg"], noise, cal)
+    return MeshFeatures(irregularity_deg=irr, noise=noise, **raw)
+
+
+# ---------------------------------------------------------------------------- table and prediction
+@functools.lru_cache(maxsize=1)
+def _packaged_table() -> str:
+    return resources.files("curv").joinpath(TABLE_RESOURCE).read_text()
+
+
+def load_table(path=None) -> dict:
+    """The advisor's table: the packaged one, or a JSON file written by :mod:`curv.advisor_table`."""
+    if path is None:
+        return json.loads(_packaged_table())
+    with open(path) as fh:
+        return json.load(fh)
+
+
+def table_coordinates(table: dict, density, noise_level, irregularity_deg) -> np.ndarray:
+    """Feature-space coordinates of the table's kernel: ``(log density, noise level, irregularity)``
+    each divided by the table's scale for that axis. Arrays broadcast; returns (..., 3)."""
+    scales = np.asarray(table["kernel"]["scales"], float)
+    x = np.stack(np.broadcast_arrays(np.log(np.maximum(density, 1e-12)), noise_level, irregularity_deg), axis=-1)
+    return x / scales
+
+
+def kernel_predict(points: np.ndarray, log_values: np.ndarray, query: np.ndarray, bandwidth: float) -> np.ndarray:
+    """Gaussian-kernel weighted mean of ``log_values`` at ``query``, NaN entries left out per column.
+
+    Parameters
+    ----------
+    points : (p, 3) float64
+        Scaled coordinates of the table's meshes.
+    log_values : (p, v) float64
+        log median e_rel of each variant on each mesh (NaN where it has none).
+    query : (3,) float64
+    bandwidth : float
+        Kernel width in scaled units.
+
+    Returns
+    -------
+    (v,) float64
+        Predicted median e_rel of every variant (NaN where no mesh has a value).
+    """
+    d2 = np.sum((points - query) ** 2, axis=1) / bandwidth**2
+    have = np.isfinite(log_values)
+    dist = np.where(have, d2[:, None], np.inf)
+    nearest = dist.min(axis=0)
+    # shifted per variant: far from every point the nearest meshes with a value still count
+    with np.errstate(invalid="ignore"):
+        w = np.where(have, np.exp(-0.5 * (dist - np.where(np.isfinite(nearest), nearest, 0.0))), 0.0)
+    total = w.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.sum(w * np.where(have, log_values, 0.0), axis=0) / np.where(total > 0, total, np.nan)
+    return np.exp(mean)
+
+
+def predict(table: dict, features: MeshFeatures) -> dict:
+    """Predicted median e_rel of every variant of the table at ``features`` (NaN where it has none)."""
+    points = np.asarray(table["points"], float)
+    q = table_coordinates(table, features.density, features.noise_level, features.irregularity_deg)
+    pred = kernel_predict(table_coordinates(table, *points.T), np.log(np.asarray(table["median_erel"], float)),
+                          q, table["kernel"]["bandwidth"])
+    return dict(zip(table["variants"], pred.tolist()))
+
+
+def candidates(table: dict, features: MeshFeatures) -> list[str]:
+    """Variant ids of the table the mesh admits: registered, and triangle-only ones only on triangles."""
+    from .estimators import ESTIMATORS
+
+    out = []
+    for vid in table["variants"]:
+        name = vid.partition(":")[0]
+        spec = ESTIMATORS.get(name)
+        if spec is None or (spec.triangles_only and not features.triangular):
+            continue
+        out.append(vid)
+    return out
+
+
+def _why(features: MeshFeatures, method: str, k: int, erel: float) -> str:
+    level = features.noise_level
+    noise = "no measurable noise" if level < 0.05 else f"noise about {level:.1f} of the paper's level"
+    irr = features.irregularity_deg
+    shape = "regular" if irr < 5 else ("mildly irregular" if irr < 12 else "irregular")
+    polys = "" if features.triangular else ", polygons"
+    border = f", {100 * features.border_share:.0f} % border" if features.border_share >= 0.05 else ""
+    return (f"{noise}, {shape} ({irr:.0f} degrees), density {features.density:.2g}{polys}{border}: "
+            f"{method} R{k}, expected median e_rel {erel:.2g}")
+
+
+def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
+    """Recommend an estimator and range for ``mesh`` from the study's results.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    normals : (n, 3) array_like, optional
+        Vertex normals for the measuring fit; default Max-weighted (the study's).
+    table : dict, optional
+        A table from :func:`load_table`; default the packaged one.
+
+    Returns
+    -------
+    Advice
+
+    Raises
+    ------
+    MeshError
+        When the features cannot be measured (no valid fit anywhere).
+    """
+    from .study.protocol import Variant
+
+    table = load_table() if table is None else table
+    features = measure_features(mesh, normals=normals, table=table)
+    pred = predict(table, features)
+    ranking = []
+    for vid in candidates(table, features):
+        if np.isfinite(pred[vid]):
+            v = Variant.from_id(vid)
+            ranking.append((v.method, v.range, pred[vid]))
+    if not ranking:
+        raise MeshError("cannot advise: no estimator of the table applies to this mesh")
+    ranking.sort(key=lambda t: t[2])
+    method, k, erel = ranking[0]
+    return Advice(features=features, ranking=ranking, method=method, range=k, expected_erel=erel,
+                  why=_why(features, method, k, erel))
