@@ -30,12 +30,12 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--noise", type=float, default=0.0, help="Gaussian noise in mean edge lengths")
     src.add_argument("--seed", type=int, default=0)
     est = p.add_argument_group("estimate and display")
-    est.add_argument("--method", default="mru", help="estimator of pane A")
-    est.add_argument("--range", default="2", help="range k of Rk for pane A (2 or R2)")
+    est.add_argument("--method", help="estimator of pane A (default: the last session's panes, else mru)")
+    est.add_argument("--range", help="range k of Rk for pane A (2, R2, 2.5 or R2.5)")
+    est.add_argument("--radius", type=float, help="fixed support radius of pane A in mesh units (instead of --range)")
     est.add_argument("--compare", action="append", default=[], metavar="M:R", help="add a pane (up to 3)")
     est.add_argument("--difference", action="store_true", help="show the A - B difference pane")
-    est.add_argument("--quantity", default="mean",
-                     help="mean, gaussian, k1, k2, shape_index, curvedness")
+    est.add_argument("--quantity", default="mean", help=", ".join(_quantity_names()))
     est.add_argument("--show", default="estimate", help="estimate, exact, error or e_rel (analytic sources)")
     est.add_argument("--directions", action="store_true", help="draw principal direction glyphs")
     est.add_argument("--cmap", help="colour map for the shown field")
@@ -47,11 +47,10 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _parse_range(text: str) -> int:
-    t = str(text).strip().upper().removeprefix("R")
-    if not t.isdigit():
-        raise ValueError(f"range must look like 2 or R2, got {text!r}")
-    return int(t)
+def _quantity_names() -> list[str]:
+    from curv.quantities import QUANTITIES
+
+    return list(QUANTITIES)
 
 
 def configure(window, args) -> object:
@@ -62,28 +61,33 @@ def configure(window, args) -> object:
     ValueError
         An unknown estimator, range, quantity, surface or colour map (message names the allowed ones).
     """
-    import curv
+    from curv import ranges
+    from curv.errors import EstimatorError
+    from curv.estimators import ESTIMATORS
+    from curv.surfaces import SURFACES
 
     from app.model import FileSource, Layer, LimitMode, Pane, Quantity, SurfaceSource, colormap_names
     from app.views.main_window import DEFAULT_SOURCE
 
-    panes = [(args.method, args.range)] + [tuple(c.split(":", 1)) if ":" in c else (c, "2") for c in args.compare]
+    explicit = args.method is not None or args.range is not None or args.radius is not None or args.compare
+    panes = [(args.method or "mru", args.range or "2")] + [tuple(c.split(":", 1)) if ":" in c else (c, "2") for c in args.compare]
     if len(panes) > 4:
         raise ValueError("at most 4 panes (--compare up to 3 times)")
     checked = []
-    for method, k in panes:
-        spec = curv.ESTIMATORS.get(method)
-        if spec is None:
-            raise ValueError(f"unknown estimator {method!r}; choose one of {', '.join(curv.ESTIMATORS)}")
-        k = _parse_range(k)
-        if k not in spec.ranges:
-            raise ValueError(f"estimator {method!r} has no range R{k}; allowed: "
-                             + ", ".join(f"R{r}" for r in spec.ranges))
-        checked.append(Pane(method, k))
+    for i, (method, k) in enumerate(panes):
+        if method not in ESTIMATORS:
+            raise ValueError(f"unknown estimator {method!r}; choose one of {', '.join(ESTIMATORS)}")
+        try:
+            value = ranges.parse_range(k)
+            radius = args.radius if i == 0 else None
+            checked.append(Pane(method, int(value) if float(value).is_integer() else value, radius).validated())
+        except EstimatorError as exc:
+            raise ValueError(str(exc)) from None
     doc = window.doc
-    doc.set_pane_count(len(checked))
-    for i, pane in enumerate(checked):
-        doc.set_pane(i, method=pane.method, range=pane.range)
+    if explicit or args.screenshot:  # otherwise the panes remembered from the last session stay
+        doc.set_pane_count(len(checked))
+        for i, pane in enumerate(checked):
+            doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
     doc.set_difference(args.difference)
     try:
         quantity, layer = Quantity(args.quantity), Layer(args.show)
@@ -98,7 +102,7 @@ def configure(window, args) -> object:
         changes[key] = args.cmap
     if args.limits:
         lo, hi = (float(x) for x in args.limits.split(","))
-        changes.update(limit_mode=LimitMode.MANUAL, manual=(lo, hi))
+        changes.update(limit_mode=LimitMode.MANUAL, manual=(lo, hi), lock_limits=True)  # asked for: keep them
     doc.display.update(**changes)
     window.pending_layer = layer  # applied once the source (and its truth) is there
     if args.mesh:
@@ -107,7 +111,7 @@ def configure(window, args) -> object:
         return FileSource(str(Path(args.mesh).expanduser()))
     if args.surface or args.param or args.random or args.vertices:
         name = args.surface or DEFAULT_SOURCE.name
-        surfaces = curv.surfaces.SURFACES
+        surfaces = SURFACES
         if name not in surfaces:
             raise ValueError(f"unknown surface {name!r}; choose one of {', '.join(surfaces)}")
         params = {}

@@ -13,6 +13,13 @@ pane, as the Inspect panel does) and reports
 - stall: the longest gap of a 10 ms QTimer heartbeat from the click until the result arrived
   (target: < 100 ms), and while the mesh was loaded and first shown (that includes the first render).
   The colouring itself runs on the GUI thread (it is the "colour" column).
+
+``--cancel`` measures Cancel instead: it starts the estimate, clicks the real Cancel button a few
+seconds in (``--cancel-after``), and reports how long until the window is idle again (controller
+not busy, Cancel hidden), how long until the worker thread has really stopped (it stops at the
+estimator's next yield), and whether the keyboard focus stayed where it was::
+
+    .venv/bin/python benchmarks/bench_viewer.py --cancel --sizes 250000 --method csm --range 4
 """
 
 from __future__ import annotations
@@ -111,18 +118,73 @@ def run(sizes, method, k):
     return rows
 
 
+def run_cancel(sizes, method, k, *, after: float, repeats: int):
+    from PySide6.QtCore import QSettings, QThreadPool, Qt
+    from PySide6.QtTest import QTest
+    from PySide6.QtWidgets import QApplication
+
+    from app.model import SurfaceSource
+    from app.views.main_window import MainWindow
+
+    app = QApplication.instance() or QApplication([])
+    tmp = Path(os.environ.get("TMPDIR", "/tmp")) / "curvlab-bench-cancel.ini"
+    win = MainWindow(settings=QSettings(str(tmp), QSettings.Format.IniFormat))
+    win.quiet = True
+    win.resize(1600, 1000)
+    win.show()
+    win.activateWindow()
+    doc, ctl = win.doc, win.controller
+    pool = QThreadPool.globalInstance()
+    print(f"{'vertices':>9} {'estimate':>10} {'cancel at s':>11} {'idle ms':>8} {'worker stopped ms':>17} focus kept")
+    for n in sizes:
+        win.open_surface(SurfaceSource(name="torus", n_vertices=n))
+        wait(app, lambda: doc.mesh is not None and doc.mesh.n_vertices > 0.5 * n and not ctl.busy)
+        wait(app, lambda: pool.activeThreadCount() == 0)
+        for r in range(repeats):
+            win.inspect.quantity.setFocus()
+            app.processEvents()
+            focused = QApplication.focusWidget()
+            ctl.recompute((method, f"R{k}")) if (method, f"R{k}") in doc.results else None
+            doc.set_pane(0, method=method, range=k)
+            if (method, f"R{k}") in doc.failures:
+                ctl.recompute((method, f"R{k}"))
+            t_start = time.perf_counter()
+            wait(app, lambda: time.perf_counter() - t_start > after * (1 + r) / repeats)
+            if not ctl.busy:
+                print(f"{doc.mesh.n_vertices:>9} finished before the cancel point; use a larger mesh or range")
+                break
+            t0 = time.perf_counter()
+            QTest.mouseClick(win.cancel_button, Qt.MouseButton.LeftButton)
+            wait(app, lambda: not ctl.busy and not win.cancel_button.isVisible())
+            idle = time.perf_counter() - t0
+            wait(app, lambda: pool.activeThreadCount() == 0)
+            stopped = time.perf_counter() - t0
+            print(f"{doc.mesh.n_vertices:>9} {method + ' R' + str(k):>10} {t0 - t_start:>11.2f} {1000 * idle:>8.1f} "
+                  f"{1000 * stopped:>17.0f} {QApplication.focusWidget() is focused}")
+            doc.set_pane(0, method="mru", range=2)
+            wait(app, lambda: not ctl.busy)
+            wait(app, lambda: pool.activeThreadCount() == 0)
+    win.close()
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", type=int, nargs="+", default=[100_000, 1_000_000])
     p.add_argument("--method", default="nc")
     p.add_argument("--range", type=int, default=2)
+    p.add_argument("--cancel", action="store_true", help="measure Cancel latency instead")
+    p.add_argument("--cancel-after", type=float, default=3.0, help="seconds into the estimate of the last cancel")
+    p.add_argument("--repeats", type=int, default=3)
     args = p.parse_args(argv)
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY") and shutil.which("xvfb-run") \
             and not os.environ.get("CURVLAB_BENCH_CHILD"):
         os.environ["CURVLAB_BENCH_CHILD"] = "1"
         cmd = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", sys.executable, *sys.argv]
         os.execvp(cmd[0], cmd)
-    run(args.sizes, args.method, args.range)
+    if args.cancel:
+        run_cancel(args.sizes, args.method, args.range, after=args.cancel_after, repeats=args.repeats)
+    else:
+        run(args.sizes, args.method, args.range)
 
 
 if __name__ == "__main__":

@@ -102,8 +102,8 @@ def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng) -> None
 def _cmd_estimate(args) -> int:
     from .api import iter_estimate
     from .estimators import get_spec
+    from .io import check_output_suffix, load, peek_counts, save_result
     from .ranges import resolve
-    from .io import load, peek_counts, save_ply
     from .validity import describe_reasons
 
     if args.method == "auto":
@@ -111,6 +111,10 @@ def _cmd_estimate(args) -> int:
     spec = get_spec(args.method)
     rng = resolve(spec, args.range, args.radius)
     if args.output:
+        try:
+            check_output_suffix(args.output)
+        except ValueError as exc:
+            raise CurvOutputError(str(exc)) from None
         _check_output(args.output)
     counts = peek_counts(args.input)
     if counts is not None:  # refuse before reading a file that will not fit
@@ -138,8 +142,8 @@ def _cmd_estimate(args) -> int:
     t_est = time.perf_counter() - t1
     if args.output:
         try:
-            save_ply(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
-                     clim=tuple(args.clim) if args.clim else None)
+            save_result(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
+                        clim=tuple(args.clim) if args.clim else None)
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
     rep = mesh.report()
@@ -151,6 +155,10 @@ def _cmd_estimate(args) -> int:
     for line in _hints(args, rep):
         print(f"  hint: {line}")
     reasons = describe_reasons(res.reason)
+    n_isolated = int(mesh.isolated_vertices.sum())
+    if n_isolated and reasons.get("DEGENERATE", 0) >= n_isolated:  # unreferenced vertices: say so
+        reasons["DEGENERATE"] -= n_isolated
+        reasons = {**{k: v for k, v in reasons.items() if v}, "ISOLATED (no face)": n_isolated}
     invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
     print(f"{res.method} {res.info['range_label']}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
           f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
@@ -223,6 +231,10 @@ class CurvMemoryError(CurvError, MemoryError):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .io import OUTPUT_FORMATS
+    from .quantities import QUANTITIES
+    from .quantities import describe as describe_quantities
+
     parser = argparse.ArgumentParser(prog="curv", description="Curvature estimation on surface meshes.")
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -236,10 +248,10 @@ def build_parser() -> argparse.ArgumentParser:
                        "estimator's smallest); default R2, or the estimator's one range (meyer R1)")
     p_est.add_argument("--radius", type=float, help="instead of --range: the same ball radius in mesh units at "
                        "every vertex")
-    p_est.add_argument("--output", "-o", help="write a coloured binary PLY with the curvature properties")
-    p_est.add_argument("--quantity", default="mean",
-                       choices=["mean", "gaussian", "k1", "k2", "shape_index", "curvedness"],
-                       help="what the PLY colours show; default mean")
+    p_est.add_argument("--output", "-o", help="write the result: " + "; ".join(
+        f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items()))
+    p_est.add_argument("--quantity", default="mean", choices=list(QUANTITIES),
+                       help="what the output colours show; default mean (" + "; ".join(describe_quantities()) + ")")
     p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
     p_est.add_argument("--clim", nargs=2, type=float, metavar=("LO", "HI"), help="colour limits")
     p_est.add_argument("--normals", choices=["max", "area", "angle", "fit"], default="max",

@@ -1,22 +1,30 @@
 """Colour mapping of per-vertex values, shared by the PLY export and the viewer.
 
-Signed quantities get a diverging map centred on zero; unsigned ones a sequential map. Limits are
-robust percentiles by default, so a few outliers do not wash out the picture. Invalid vertices are
-drawn in a neutral grey.
+Signed quantities whose values straddle zero get a diverging map centred on zero; everything else
+(unsigned quantities, and signed ones of one sign, such as H on a torus) a sequential map over the
+values' own span, so that the whole map is used. A quantity with a natural range (shape index)
+is drawn over that range. Limits are robust percentiles by default, so a few outliers do not wash
+out the picture. Invalid vertices are drawn in a colour none of the maps uses near its middle.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["INVALID_RGBA", "SIGNED", "default_cmap", "auto_limits", "widen", "colour_table", "apply_table", "map_colors"]
+from .quantities import QUANTITIES
 
-INVALID_RGBA = (150, 150, 150, 255)
-"""Neutral grey for vertices without a trustworthy value."""
+__all__ = ["INVALID_RGBA", "SIGNED", "CLIP_SHADE", "default_cmap", "auto_limits", "diverges", "widen",
+           "colour_table", "apply_table", "map_colors"]
 
-SIGNED = {"mean": True, "gaussian": True, "k1": True, "k2": True, "shape_index": True,
-          "curvedness": False, "error_rel": False, "error": True, "exact": True}
-"""Whether a quantity has a meaningful zero (diverging map, symmetric limits)."""
+INVALID_RGBA = (214, 0, 214, 255)
+"""Magenta for vertices without a trustworthy value: no packaged map has it near its middle
+(a neutral grey would read as coolwarm's zero)."""
+
+CLIP_SHADE = 0.6
+"""Values beyond the colour limits are drawn in the map's end colours darkened by this factor."""
+
+SIGNED = {**{q.name: q.signed for q in QUANTITIES.values()}, "error_rel": False, "error": True, "exact": True}
+"""Whether a quantity has a meaningful zero (diverging map, symmetric limits when it straddles 0)."""
 
 
 def default_cmap(quantity: str) -> str:
@@ -24,8 +32,13 @@ def default_cmap(quantity: str) -> str:
     return "coolwarm" if SIGNED.get(quantity, True) else "viridis"
 
 
+def diverges(clim: tuple[float, float], *, signed: bool) -> bool:
+    """True when a field is drawn with a diverging map: signed and its limits straddle zero."""
+    return bool(signed and clim[0] < 0.0 < clim[1])
+
+
 def auto_limits(values: np.ndarray, *, signed: bool, percentiles: tuple[float, float] = (2.0, 98.0),
-                minmax: bool = False) -> tuple[float, float]:
+                minmax: bool = False, natural: tuple[float, float] | None = None) -> tuple[float, float]:
     """Colour limits from the finite values.
 
     Parameters
@@ -33,17 +46,22 @@ def auto_limits(values: np.ndarray, *, signed: bool, percentiles: tuple[float, f
     values : (n,) float64
         NaN entries are ignored.
     signed : bool
-        Symmetric limits ``(-a, a)`` with ``a`` the larger absolute bound.
+        Symmetric limits ``(-a, a)`` with ``a`` the larger absolute bound, when the values
+        straddle zero (values of one sign keep their own span).
     percentiles : (lo, hi)
         Percentiles in [0, 100].
     minmax : bool
         Use the minimum and maximum instead of the percentiles.
+    natural : (lo, hi), optional
+        The quantity's own range (shape index: (-1, 1)); returned as it is.
 
     Returns
     -------
     (lo, hi) : tuple of float
         ``lo < hi`` always (a constant field gets a small window around its value).
     """
+    if natural is not None:
+        return float(natural[0]), float(natural[1])
     v = np.asarray(values, dtype=np.float64)
     finite = v[np.isfinite(v)]
     if finite.size == 0:
@@ -52,15 +70,15 @@ def auto_limits(values: np.ndarray, *, signed: bool, percentiles: tuple[float, f
         lo, hi = float(finite.min()), float(finite.max())
     else:
         lo, hi = (float(x) for x in np.percentile(finite, percentiles))
-    if signed:
+    if signed and lo < 0.0 < hi:
         a = max(abs(lo), abs(hi))
         lo, hi = -a, a
     return widen(lo, hi)
 
 
 def widen(lo: float, hi: float) -> tuple[float, float]:
-    """``(lo, hi)`` unchanged when ``hi > lo``, else a small window around the value."""
-    if hi > lo:
+    """``(lo, hi)`` unchanged when ``hi > lo`` by more than rounding, else a small window around the value."""
+    if hi - lo > 1e-9 * max(abs(lo), abs(hi)):
         return lo, hi
     pad = max(abs(lo) * 1e-3, 1e-12)
     return lo - pad, hi + pad
@@ -74,7 +92,8 @@ def colour_table(cmap: str, size: int = 256) -> np.ndarray:
 
 
 def apply_table(values: np.ndarray, clim: tuple[float, float], table: np.ndarray, *,
-                valid: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
+                valid: np.ndarray | None = None, out: np.ndarray | None = None,
+                clip_shade: float | None = None) -> np.ndarray:
     """RGBA colours of ``values`` through an RGB ``table`` between ``clim``.
 
     Parameters
@@ -88,6 +107,9 @@ def apply_table(values: np.ndarray, clim: tuple[float, float], table: np.ndarray
         Vertices to colour; the others, and non-finite values, get :data:`INVALID_RGBA`.
     out : (n, 4) uint8, optional
         Written in place (e.g. a viewport's colour array).
+    clip_shade : float, optional
+        Values strictly beyond the limits get the end colours times this factor (see
+        :data:`CLIP_SHADE`), so that clipping is visible; default: plain end colours.
 
     Returns
     -------
@@ -105,6 +127,9 @@ def apply_table(values: np.ndarray, clim: tuple[float, float], table: np.ndarray
         out = np.empty((v.shape[0], 4), dtype=np.uint8)
     out[:, :3] = table[idx]
     out[:, 3] = 255
+    if clip_shade is not None:
+        beyond = ~bad & ((v < lo) | (v > hi))
+        out[beyond, :3] = (table[idx[beyond]] * clip_shade).astype(np.uint8)
     out[bad] = INVALID_RGBA
     return out
 

@@ -13,13 +13,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .colors import SIGNED, auto_limits, map_colors
+from .colors import SIGNED, auto_limits, diverges, map_colors
 from .errors import LoadError, MeshError
 from .mesh import Mesh
+from .quantities import QUANTITIES
 from .repair import repair
 from .result import Curvature
 
-__all__ = ["load", "save_ply", "read_arrays", "peek_counts"]
+__all__ = ["load", "save_ply", "save_vtu", "save_result", "check_output_suffix", "OUTPUT_FORMATS",
+           "read_arrays", "peek_counts"]
 
 _MESHIO_SUFFIXES = {".obj"}
 
@@ -290,7 +292,7 @@ def _face_list_bytes(mesh: Mesh) -> bytes:
 
 def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", cmap: str | None = None,
              clim: tuple[float, float] | None = None, colors: np.ndarray | None = None,
-             extra: dict[str, np.ndarray] | None = None) -> Path:
+             extra: dict[str, np.ndarray] | None = None, comment: str | None = None) -> Path:
     """Write a binary PLY with vertex colours and curvature properties, atomically.
 
     Parameters
@@ -311,11 +313,15 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
         Colours to write as they are (the viewer passes what it shows); overrides quantity/cmap/clim.
     extra : dict of str -> (n,) float, optional
         More float vertex properties (e.g. ``error_rel``).
+    comment : str, optional
+        The header comment saying what the colours show; default names the quantity, the
+        estimator, the range, the colour map and the limits (pass your own when ``colors`` show
+        something else, as the viewer does).
 
     Returns
     -------
     Path
-        The written file. Properties: x, y, z, red, green, blue, alpha (uchar), k1, k2, mean,
+        The written file, with the permissions a plain ``open(path, "w")`` would give. Properties: x, y, z, red, green, blue, alpha (uchar), k1, k2, mean,
         gaussian, d1x..d1z, d2x..d2z (float), valid (uchar), plus ``extra``; faces as
         ``vertex_indices`` lists.
     """
@@ -328,9 +334,15 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
     if colors is None:
         values = curvature.quantity(quantity)
         signed = SIGNED.get(quantity, True)
-        cmap = cmap or ("coolwarm" if signed else "viridis")
-        lim = clim if clim is not None else auto_limits(values[curvature.valid], signed=signed)
+        spec = QUANTITIES.get(quantity)
+        lim = clim if clim is not None else auto_limits(values[curvature.valid], signed=signed,
+                                                        natural=spec.natural if spec else None)
+        cmap = cmap or ("coolwarm" if diverges(lim, signed=signed) else "viridis")
         colors = map_colors(values, cmap=cmap, clim=lim, valid=curvature.valid)
+        if comment is None:
+            comment = describe_colours(curvature, quantity, cmap, lim)
+    elif comment is None:
+        comment = f"curvlab: {_result_label(curvature)}, colours given by the caller"
     colors = np.asarray(colors)
     if colors.shape != (n, 4):
         raise ValueError(f"colors must have shape ({n}, 4), got {colors.shape}")
@@ -358,19 +370,143 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
     face_kind.data = np.empty(mesh.n_faces, dtype=[("vertex_indices", "i4", (3,))])
     vertex_element = PlyElement.describe(vert, "vertex")
     ply = PlyData([vertex_element, face_kind], text=False, byte_order="<",
-                  comments=[f"curvlab: {curvature.method} R{curvature.range}, colours show {quantity}"])
-    header = ply.header.encode("ascii") + b"\n"
+                  comments=[" ".join(comment.split())])
+    header = ply.header.encode("ascii", errors="replace") + b"\n"
+
+    def write(fh):
+        fh.write(header)
+        fh.write(vert.astype(vertex_element.dtype("<"), copy=False).tobytes())
+        fh.write(_face_list_bytes(mesh))
+
+    return _atomic_write(path, write)
+
+
+def _result_label(curvature: Curvature) -> str:
+    from .ranges import range_label
+
+    rng = curvature.range
+    if curvature.info.get("range_label"):
+        return f"{curvature.method} {curvature.info['range_label']}"
+    label = range_label(rng) if isinstance(rng, (int, float, np.integer, np.floating)) else str(rng or "")
+    return f"{curvature.method} {label}".strip()
+
+
+def describe_colours(curvature: Curvature, field: str, cmap: str, clim: tuple[float, float]) -> str:
+    """``curvlab: mru R2, colours show mean (coolwarm, limits -1.234 .. 1.234)``: the export comment."""
+    return (f"curvlab: {_result_label(curvature)}, colours show {field} ({cmap}, "
+            f"limits {clim[0]:.4g} .. {clim[1]:.4g})")
+
+
+def _normal_mode(path: Path) -> int:
+    """The permission bits ``open(path, "w")`` would leave: the old file's, else 0666 minus the umask."""
+    try:
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        mask = os.umask(0)
+        os.umask(mask)
+        return 0o666 & ~mask
+
+
+def _atomic_write(path: Path, write) -> Path:
+    """Write through ``write(fh)`` into a temporary file beside ``path``, then rename it over ``path``.
+
+    A failure never leaves a partial file; the result has the permissions of a plain write
+    (``mkstemp`` creates 0600 files).
+    """
     folder = path.parent if str(path.parent) else Path(".")
+    mode = _normal_mode(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     try:
         with os.fdopen(fd, "wb") as fh:
-            fh.write(header)
-            fh.write(vert.astype(vertex_element.dtype("<"), copy=False).tobytes())
-            fh.write(_face_list_bytes(mesh))
+            write(fh)
             fh.flush()
+            os.fchmod(fh.fileno(), mode)
             os.fsync(fh.fileno())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def save_vtu(path, mesh: Mesh, curvature: Curvature, *, colors: np.ndarray | None = None,
+             extra: dict[str, np.ndarray] | None = None) -> Path:
+    """Write a VTK XML unstructured grid (``.vtu``, through meshio) with the curvature as point data.
+
+    Parameters
+    ----------
+    path : str or Path
+    mesh : Mesh
+        Triangles, quads and other polygons become VTK triangle, quad and polygon cells.
+    curvature : Curvature
+    colors : (n, 4) uint8, optional
+        Stored as the ``rgba`` point array (the colours on screen).
+    extra : dict of str -> (n,) float, optional
+        More point arrays (e.g. ``error_rel``).
+
+    Returns
+    -------
+    Path
+        Point data: ``k1``, ``k2``, ``mean``, ``gaussian`` (n,), ``d1``, ``d2`` (n, 3), ``valid``
+        and ``reason`` (n,) uint8, ``extra``, ``rgba``; written atomically like :func:`save_ply`.
+    """
+    import meshio
+
+    path = Path(path)
+    n = mesh.n_vertices
+    if curvature.k1.shape[0] != n:
+        raise MeshError(f"curvature has {curvature.k1.shape[0]} values but the mesh has {n} vertices")
+    data = {name: np.asarray(getattr(curvature, name), np.float64) for name in _FLOAT_PROPS}
+    data.update(d1=np.asarray(curvature.d1, np.float64), d2=np.asarray(curvature.d2, np.float64),
+                valid=curvature.valid.astype(np.uint8), reason=np.asarray(curvature.reason, np.uint8))
+    data.update({k: np.asarray(v, np.float64) for k, v in (extra or {}).items()})
+    if colors is not None:
+        data["rgba"] = np.ascontiguousarray(colors, dtype=np.uint8)
+    cells = []
+    sizes = mesh.face_sizes
+    kinds = {3: "triangle", 4: "quad"}
+    for size in np.unique(sizes):
+        rows = np.flatnonzero(sizes == size)
+        corners = mesh.face_offsets[rows][:, None] + np.arange(size)
+        cells.append((kinds.get(int(size), "polygon"), mesh.face_indices[corners]))
+    grid = meshio.Mesh(np.asarray(mesh.vertices, np.float64), cells, point_data=data)
+    with tempfile.TemporaryDirectory(dir=path.parent if str(path.parent) else ".") as tmp_dir:
+        staged = Path(tmp_dir) / "out.vtu"
+        meshio.write(staged, grid, file_format="vtu")
+        payload = staged.read_bytes()
+    return _atomic_write(path, lambda fh: fh.write(payload))
+
+
+OUTPUT_FORMATS = {".ply": "binary PLY with colours and curvature properties",
+                  ".vtu": "VTK XML unstructured grid with curvature point data (ParaView, pyvista)"}
+"""Output suffixes ``save_result`` writes, each in its own format."""
+
+
+def check_output_suffix(path) -> str:
+    """The lower-case suffix of ``path`` if curvlab writes it; ``ValueError`` naming the ones it does."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in OUTPUT_FORMATS:
+        raise ValueError(f"{path}: cannot write {suffix or 'files without a suffix'}; "
+                         f"use one of {', '.join(OUTPUT_FORMATS)}")
+    return suffix
+
+
+def save_result(path, mesh: Mesh, curvature: Curvature, **kw) -> Path:
+    """Write ``curvature`` in the format of ``path``'s suffix (:data:`OUTPUT_FORMATS`).
+
+    Keywords go to :func:`save_ply` (all of them) or :func:`save_vtu` (``colors``, ``extra``).
+    """
+    if check_output_suffix(path) == ".vtu":
+        kept = {k: v for k, v in kw.items() if k in ("colors", "extra")}
+        if kept.get("colors") is None:
+            from .colors import map_colors as _map
+
+            q = kw.get("quantity", "mean")
+            spec = QUANTITIES.get(q)
+            values = curvature.quantity(q)
+            lim = kw.get("clim") or auto_limits(values[curvature.valid], signed=SIGNED.get(q, True),
+                                                natural=spec.natural if spec else None)
+            cmap = kw.get("cmap") or ("coolwarm" if diverges(lim, signed=SIGNED.get(q, True)) else "viridis")
+            kept["colors"] = _map(values, cmap=cmap, clim=lim, valid=curvature.valid)
+        return save_vtu(path, mesh, curvature, **kept)
+    return save_ply(path, mesh, curvature, **kw)

@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .quantities import QUANTITIES as _REGISTRY
+from .quantities import compute as _compute
 from .validity import Reason
 
 __all__ = ["Principal", "Curvature"]
@@ -105,11 +107,9 @@ class Curvature:
         return float(self.valid.mean()) if self.valid.size else 0.0
 
     def quantity(self, name: str) -> np.ndarray:
-        """A per-vertex scalar by name: ``k1``, ``k2``, ``mean``, ``gaussian``, ``shape_index``, ``curvedness``."""
-        if name not in QUANTITIES:
-            raise ValueError(f"unknown quantity {name!r}; choose one of {', '.join(QUANTITIES)}")
-        return getattr(self, name)
+        """A per-vertex scalar by name, one of :data:`curv.quantities.QUANTITIES` (``ValueError`` otherwise)."""
+        return _compute(name, self.k1, self.k2)
 
 
-QUANTITIES = ("mean", "gaussian", "k1", "k2", "shape_index", "curvedness")
-"""Names accepted by :meth:`Curvature.quantity`, in display order."""
+QUANTITIES = tuple(_REGISTRY)
+"""Names accepted by :meth:`Curvature.quantity`, in display order (from :mod:`curv.quantities`)."""

@@ -93,8 +93,22 @@ def test_cli_unreadable_file_as_unprivileged_user(tmp_path):
         target = folder / "locked.ply"
         shutil.copyfile(CASES["sphere"].path, target)
         os.chmod(target, 0)
-        proc = subprocess.run([setpriv, "--reuid=65534", "--regid=65534", "--clear-groups", CURV, "estimate",
-                               str(target), "-q"], capture_output=True, text=True, timeout=120)
+        # the checkout may sit where the unprivileged user cannot enter (a clone under mktemp -d):
+        # run a world-readable copy of the package, with numba's cache in a folder it may write
+        src = folder / "src"
+        shutil.copytree(Path(curv.__file__).parent, src / "curv",
+                        ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+        cache = folder / "numba-cache"
+        cache.mkdir()
+        os.chmod(cache, 0o777)
+        for root, dirs, files in os.walk(src):
+            os.chmod(root, 0o755)
+            for name in files:
+                os.chmod(Path(root) / name, 0o644)
+        env = {**os.environ, "PYTHONPATH": str(src), "NUMBA_CACHE_DIR": str(cache)}
+        proc = subprocess.run([setpriv, "--reuid=65534", "--regid=65534", "--clear-groups", sys.executable,
+                               "-m", "curv.cli", "estimate", str(target), "-q"], capture_output=True, text=True,
+                              timeout=120, env=env, cwd=str(folder))
         shutil.rmtree(folder)
         case = type(case)(**{**case.__dict__, "path": target})
     assert proc.returncode == 2, proc.stderr

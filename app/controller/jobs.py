@@ -6,7 +6,10 @@ shows any more. Stale results are recognised by a generation number and dropped.
 
 from __future__ import annotations
 
-import curv
+import inspect
+import time
+
+from curv.api import iter_estimate
 from PySide6.QtCore import QObject, QThreadPool, Signal
 from superqt.utils import create_worker
 
@@ -25,14 +28,15 @@ class Controller(QObject):
     document : Document
     prepare : callable, optional
         ``prepare(mesh)`` run in the source worker after loading (e.g. to build render geometry off
-        the GUI thread); its value is :attr:`prepared` when ``mesh_changed`` fires.
+        the GUI thread); its value reaches the views as ``MeshChange.geometry``.
 
     Signals
     -------
     busy_changed(bool)
         Something is (no longer) running.
     progress(str, float)
-        What runs and the fraction done (``-1``: unknown).
+        What runs and the fraction done (``-1``: unknown); the text includes the estimator's own
+        status message when it yields one (``curv.jit.Progress.message``, e.g. first-run compiling).
     message(str)
         Informational status text.
     failed(str)
@@ -48,9 +52,10 @@ class Controller(QObject):
         super().__init__(parent)
         self.doc = document
         self.prepare = prepare
-        self.prepared = None
-        """What ``prepare(mesh)`` built in the worker for the current mesh (set before ``mesh_changed``)."""
         self._generation = 0
+        self._messages: dict = {}
+        self.cancelled_at: float | None = None
+        """``perf_counter`` time of the last cancel (for measuring how soon the workers stop)."""
         self._source_job = None
         self._estimates: dict[tuple[str, int], object] = {}
         self._fractions: dict[tuple[str, int], float] = {}
@@ -73,9 +78,10 @@ class Controller(QObject):
         if self._source_job is not None:
             self.progress.emit(f"Loading {self._source_job[1].label}", -1.0)
         elif self._estimates:
-            names = ", ".join(f"{m} R{r}" for m, r in self._estimates)
+            names = ", ".join(f"{m} {r}" for m, r in self._estimates)
             frac = sum(self._fractions.values()) / len(self._fractions)
-            self.progress.emit(f"Estimating {names}", frac)
+            notes = "; ".join(dict.fromkeys(m for m in self._messages.values() if m))
+            self.progress.emit(f"Estimating {names}" + (f": {notes}" if notes else ""), frac)
 
     # -- sources --------------------------------------------------------------------------------
     def open_source(self, source) -> None:
@@ -97,8 +103,8 @@ class Controller(QObject):
         if gen != self._generation or self._closed:
             return
         self._source_job = None
-        self.prepared = out.prepared
-        self.doc.set_mesh(out.source, out.mesh, out.truth)
+        self.doc.set_mesh(out.source, out.mesh, out.truth, report=out.report, repairs=out.repairs,
+                          geometry=out.prepared)
         self.message.emit(f"{out.source.label}: {'; '.join(out.report[:2])}")
         self.request_missing()
         self._update_busy()
@@ -131,11 +137,15 @@ class Controller(QObject):
         self.request_missing()
 
     def _start_estimate(self, key) -> None:
-        method, k = key
+        pane = self.doc.pane_for(key)
         gen = self._generation
-        block = int(min(max(self.doc.mesh.n_vertices // 40, 2000), 50000))  # ~40 progress/cancel points
+        kwargs = pane.estimate_kwargs()
+        if "radius" in kwargs and not _ACCEPTS.get("radius"):
+            self.doc.set_failure(key, f"{pane.title} failed: this curv does not take radius= yet")
+            self.failed.emit(self.doc.failures[key])
+            return
         box = []  # the worker, for the callbacks (they must exist before it does)
-        worker = create_worker(curv.iter_estimate, self.doc.mesh, method, k, block_size=block,
+        worker = create_worker(iter_estimate, self.doc.mesh, pane.method, **kwargs,
                                _start_thread=False, _connect={
             "yielded": lambda f: self._estimate_progress(box[0], key, f),
             "returned": lambda res: self._estimate_done(box[0], gen, key, res),
@@ -151,6 +161,7 @@ class Controller(QObject):
     def _estimate_progress(self, worker, key, fraction) -> None:
         if self._estimates.get(key) is worker:
             self._fractions[key] = float(fraction)
+            self._messages[key] = getattr(fraction, "message", "") or ""
             self._update_busy()
 
     def _estimate_done(self, worker, gen, key, result) -> None:
@@ -161,27 +172,32 @@ class Controller(QObject):
         n_bad = int((~result.valid).sum())
         secs = result.info.get("seconds")
         took = f" in {secs:.2f} s" if secs is not None else ""
-        self.message.emit(f"{key[0]} R{key[1]}{took}; {n_bad} invalid vertices")
+        self.message.emit(f"{key[0]} {key[1]}{took}; {n_bad} invalid vertices")
         self._update_busy()
 
     def _estimate_failed(self, worker, gen, key, exc) -> None:
         if not self._current(worker, gen, key):
             return
         self._forget(key)
-        msg = f"{key[0]} R{key[1]} failed: {_one_line(exc)}"
+        msg = f"{key[0]} {key[1]} failed: {_one_line(exc)}"
         self.doc.set_failure(key, msg)
         self._update_busy()
         self.failed.emit(msg)
 
     # -- stopping -------------------------------------------------------------------------------
     def cancel(self) -> None:
-        """Stop everything running; panes fall back to their last result."""
+        """Stop everything running; panes fall back to their last result.
+
+        Returns at once: each worker stops at its next yield (the estimators yield every chunk of
+        vertices); nothing here waits for it.
+        """
+        self.cancelled_at = time.perf_counter()
         was_source = self._source_job is not None
         keys = list(self._estimates)
         self._stop_all()
         self._generation += 1 if was_source else 0
         for key in keys:
-            self.doc.set_failure(key, f"{key[0]} R{key[1]} cancelled")
+            self.doc.set_failure(key, f"{key[0]} {key[1]} cancelled")
         self._update_busy()
         if was_source or keys:
             self.message.emit("Cancelled")
@@ -189,6 +205,7 @@ class Controller(QObject):
     def _forget(self, key) -> None:
         self._estimates.pop(key, None)
         self._fractions.pop(key, None)
+        self._messages.pop(key, None)
 
     def _stop(self, key) -> None:
         worker = self._estimates.get(key)
@@ -208,6 +225,11 @@ class Controller(QObject):
         self._closed = True
         self._stop_all()
         return QThreadPool.globalInstance().waitForDone(timeout_ms)
+
+
+_ACCEPTS = {name: True for name in inspect.signature(iter_estimate).parameters}
+"""Keywords the installed ``curv.iter_estimate`` takes. The chunk size is left to curv: its kernels
+chunk adaptively so that every yield (progress and cancel point) comes within about 0.1 s."""
 
 
 def _one_line(exc: Exception) -> str:

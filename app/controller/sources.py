@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import curv
+from curv.io import load
+from curv.surfaces import make_surface
 
 from app.model.sources import FileSource, SurfaceSource
 
@@ -22,6 +23,8 @@ class Loaded:
     truth : curv.Curvature or None
     report : list of str
         ``mesh.report().lines()``, computed off the GUI thread.
+    repairs : list of str
+        The repairs applied while loading (``mesh.info["repairs"]``).
     prepared : object
         Whatever the controller's ``prepare`` hook built from the mesh (e.g. render geometry).
     """
@@ -31,13 +34,15 @@ class Loaded:
     truth: object
     report: list = field(default_factory=list)
     prepared: object = None
+    repairs: list = field(default_factory=list)
 
 
 def prepare_source(source, prepare=None) -> Loaded:
     """:func:`load_source`, the mesh report, and ``prepare(mesh)`` if given; runs in a worker thread."""
     source, mesh, truth = load_source(source)
     report = mesh.report().lines()
-    return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh))
+    repairs = list(mesh.info.get("repairs", [])) if isinstance(getattr(mesh, "info", None), dict) else []
+    return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh), repairs)
 
 
 def load_source(source):
@@ -59,10 +64,11 @@ def load_source(source):
     """
     if isinstance(source, FileSource):
         # STL stores every triangle with its own corners: merge them, or nothing is connected
-        merge = source.path.lower().endswith(".stl")
-        return source, curv.load(source.path, merge_vertices=merge), None
+        flags = {name: True for name in source.repairs}
+        flags.setdefault("merge_vertices", source.path.lower().endswith(".stl"))
+        return source, load(source.path, **flags), None
     if isinstance(source, SurfaceSource):
-        sampled = curv.surfaces.make_surface(
+        sampled = make_surface(
             source.name, n_vertices=source.n_vertices, irregularity=source.irregularity,
             noise=source.noise, seed=source.seed, random_params=source.random_params, **source.params)
         return source, sampled.mesh, sampled.truth

@@ -4,14 +4,19 @@ Qt widgets subscribe to the :class:`~app.model.events.Event` attributes and push
 through the model's setters, as in napari's layer/_qt split.
 """
 
-from .colour import Colormap, LimitMode, colormap, colormap_names, compute_limits, map_colours
-from .document import Document, Pane
+from .colors import Colormap, LimitMode, colormap, colormap_names, compute_limits, format_limit, map_colours
 from .display import Display, Layer
+from .document import Document, MeshChange, Pane, pane_letter
 from .events import Event
+from .export import ExportPayload, export_payload
 from .quantities import Quantity
+from .readout import readout_columns, readout_rows
+from .scalars import relative_error
 from .sources import FileSource, SurfaceSource
 
 __all__ = [
-    "Colormap", "LimitMode", "colormap", "colormap_names", "compute_limits", "map_colours",
-    "Document", "Pane", "Display", "Layer", "Event", "Quantity", "FileSource", "SurfaceSource",
+    "Colormap", "LimitMode", "colormap", "colormap_names", "compute_limits", "format_limit", "map_colours",
+    "Document", "MeshChange", "Pane", "pane_letter", "Display", "Layer", "Event", "ExportPayload",
+    "export_payload", "Quantity", "readout_columns", "readout_rows", "relative_error", "FileSource",
+    "SurfaceSource",
 ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, fields, replace
 
-from .colour import LimitMode
+from .colors import LimitMode
 from .events import Event
 from .quantities import Quantity
 
@@ -50,8 +50,12 @@ class DisplayState:
         Limits of the ``MANUAL`` mode.
     shared_scale : bool
         One colour scale over every estimate pane (compare mode).
+    lock_limits : bool
+        Keep manual limits when a new mesh opens (otherwise they go back to percentiles).
     show_directions : bool
         Draw d1/d2 glyph lines.
+    show_edges, show_borders, show_points : bool
+        Wireframe overlay, border edges highlighted, vertices as points.
     """
 
     quantity: Quantity = Quantity.MEAN
@@ -62,7 +66,11 @@ class DisplayState:
     percentiles: tuple = (2.0, 98.0)
     manual: tuple = (-1.0, 1.0)
     shared_scale: bool = True
+    lock_limits: bool = False
     show_directions: bool = False
+    show_edges: bool = False
+    show_borders: bool = False
+    show_points: bool = False
 
     @property
     def signed(self) -> bool:
@@ -74,8 +82,30 @@ class DisplayState:
         return self.quantity.signed
 
     @property
-    def cmap_name(self) -> str:
-        return self.diverging_cmap if self.signed else self.sequential_cmap
+    def natural(self) -> tuple[float, float] | None:
+        """The natural range of the shown field (the quantity's, for estimate and exact values)."""
+        return self.quantity.natural if self.layer in (Layer.ESTIMATE, Layer.EXACT) else None
+
+    def field_name(self, *, difference: bool = False) -> str:
+        """What the colours show, for colour bars and export comments (``Mean H error (est - exact)``)."""
+        if self.layer is Layer.E_REL:
+            name = "e_rel (relative error of k1, k2)"
+        elif self.layer is Layer.ERROR:
+            name = f"{self.quantity.title} error (estimate - exact)"
+        elif self.layer is Layer.EXACT:
+            name = f"{self.quantity.title} (exact)"
+        else:
+            name = self.quantity.title
+        return f"A − B of {name}" if difference else name
+
+    def field_title(self, *, difference: bool = False) -> str:
+        """Short colour-bar title."""
+        name = "e_rel" if self.layer is Layer.E_REL else self.quantity.title
+        if self.layer is Layer.ERROR:
+            name += " error"
+        elif self.layer is Layer.EXACT:
+            name += " (exact)"
+        return ("A − B " if difference else "") + name
 
 
 class Display:

@@ -2,42 +2,125 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+from curv import ranges
+from curv.colors import diverges
+from curv.errors import EstimatorError
+from curv.estimators import ESTIMATORS
 
-from .colour import colormap, compute_limits, map_colours
+from .colors import LimitMode, colormap, compute_limits, map_colours
 from .display import Display, Layer
 from .events import Event
 from .scalars import field_values
 
-__all__ = ["Pane", "Document", "MAX_PANES"]
+__all__ = ["Pane", "Document", "MeshChange", "MAX_PANES", "pane_letter", "takes_support"]
+
+
+def takes_support(spec) -> bool:
+    """Whether an estimator takes any real range and a radius (support-based), or only its fixed 1-ring.
+
+    ``EstimatorSpec.has_support`` says so; an estimator with a single named range (meyer, ru) is
+    treated as fixed until every spec sets that field.
+    """
+    return bool(getattr(spec, "has_support", True)) and len(spec.ranges) > 1
 
 MAX_PANES = 4
 
 
+def pane_letter(i: int) -> str:
+    """``A`` for pane 0, ``B`` for pane 1, ..."""
+    return chr(65 + i)
+
+
 @dataclass(frozen=True)
 class Pane:
-    """One estimate view: an estimator and its range."""
+    """One estimate view: an estimator and its range (k of Rk, real allowed) or a fixed radius.
+
+    Attributes
+    ----------
+    method : str
+        Registry name of the estimator.
+    range : int or float
+        k of Rk (an int when whole, so ``Pane("mru", 2)`` and the label ``R2`` agree).
+    radius : float or None
+        Ball radius in mesh units; replaces Rk when given.
+    """
 
     method: str
-    range: int
+    range: float = 2
+    radius: float | None = None
 
     @property
-    def key(self) -> tuple[str, int]:
-        return (self.method, self.range)
+    def label(self) -> str:
+        """``R2``, ``R2.5`` or ``r=0.3``: the range as :mod:`curv.ranges` writes it."""
+        return ranges.Range(radius=self.radius).label if self.radius is not None else ranges.range_label(self.range)
+
+    @property
+    def key(self) -> tuple[str, str]:
+        """``(method, label)``: what results are cached by."""
+        return (self.method, self.label)
+
+    @property
+    def title(self) -> str:
+        """``mru R2``."""
+        return f"{self.method} {self.label}"
+
+    def estimate_kwargs(self) -> dict:
+        """Keyword arguments for ``curv.iter_estimate``: ``range=k`` or ``radius=r``."""
+        return {"radius": self.radius} if self.radius is not None else {"range": self.range}
+
+    def validated(self) -> "Pane":
+        """This pane checked by :func:`curv.ranges.resolve` (``EstimatorError`` naming the allowed forms)."""
+        spec = ESTIMATORS[self.method]
+        if not takes_support(spec):
+            if self.radius is not None or self.range not in spec.ranges:
+                raise EstimatorError(f"estimator {spec.name!r} uses its fixed 1-ring and has only range "
+                                     f"{ranges.range_label(spec.ranges[0])}")
+            return Pane(self.method, spec.ranges[0], None)
+        if self.radius is not None:
+            rng = ranges.resolve(spec, radius=self.radius)
+            return Pane(self.method, self.range, rng.radius)
+        rng = ranges.resolve(spec, range=self.range)
+        return Pane(self.method, rng.value, None)
+
+
+@dataclass(frozen=True)
+class MeshChange:
+    """What ``mesh_changed`` carries: the new source and mesh and what was built for it off the GUI thread.
+
+    Attributes
+    ----------
+    source : FileSource or SurfaceSource
+    mesh : curv.Mesh
+    truth : curv.Curvature or None
+    report : tuple of str
+        ``mesh.report().lines()``.
+    repairs : tuple of str
+        Repairs applied while loading.
+    geometry : object
+        Render geometry built by the controller's ``prepare`` hook (opaque to the model).
+    """
+
+    source: object
+    mesh: object
+    truth: object = None
+    report: tuple = ()
+    repairs: tuple = ()
+    geometry: object = None
 
 
 class Document:
     """The viewer's state, free of Qt and VTK.
 
-    Results are cached by ``(method, range)``: switching a pane to a pair already computed costs
+    Results are cached by ``Pane.key``: switching a pane to a pair already computed costs
     nothing, and changing one pane never touches the others. View index ``i`` is an estimate pane
     for ``i < len(panes)``; when ``difference`` is on, index ``len(panes)`` is the A - B pane.
 
     Events
     ------
-    mesh_changed()
+    mesh_changed(MeshChange)
         New source and mesh (results cleared).
     panes_changed()
         Pane count, difference pane or the active pane changed.
@@ -53,8 +136,10 @@ class Document:
         self.source = None
         self.mesh = None
         self.truth = None
-        self.results: dict[tuple[str, int], object] = {}
-        self.failures: dict[tuple[str, int], str] = {}
+        self.report: tuple = ()
+        self.repairs: tuple = ()
+        self.results: dict[tuple, object] = {}
+        self.failures: dict[tuple, str] = {}
         self.panes: list[Pane] = [default_panes[0]]
         self.default_panes = tuple(default_panes)
         self.difference = False
@@ -69,16 +154,25 @@ class Document:
         self.picked_changed = Event()
 
     # -- source ---------------------------------------------------------------------------------
-    def set_mesh(self, source, mesh, truth=None) -> None:
-        """Replace the mesh; every cached result and the pick are dropped."""
+    def set_mesh(self, source, mesh, truth=None, *, report=(), repairs=(), geometry=None) -> None:
+        """Replace the mesh; every cached result and the pick are dropped.
+
+        Manual colour limits go back to percentiles unless ``display.lock_limits`` is set.
+        """
         self.source, self.mesh, self.truth = source, mesh, truth
+        self.report, self.repairs = tuple(report), tuple(repairs)
         self.results.clear()
         self.failures.clear()
         self._last_good.clear()
         self.picked = None
+        changes = {}
         if truth is None and self.display.layer is not Layer.ESTIMATE:
-            self.display.update(layer=Layer.ESTIMATE)
-        self.mesh_changed.emit()
+            changes["layer"] = Layer.ESTIMATE
+        if self.display.limit_mode is LimitMode.MANUAL and not self.display.lock_limits:
+            changes["limit_mode"] = LimitMode.PERCENTILE
+        if changes:
+            self.display.update(**changes)
+        self.mesh_changed.emit(MeshChange(source, mesh, truth, self.report, self.repairs, geometry))
 
     @property
     def has_truth(self) -> bool:
@@ -93,13 +187,20 @@ class Document:
     def is_difference(self, i: int) -> bool:
         return i == len(self.panes)
 
-    def set_pane(self, i: int, *, method: str | None = None, range: int | None = None) -> None:
-        """Switch pane ``i``'s estimator and/or range."""
+    def set_pane(self, i: int, **changes) -> None:
+        """Change pane ``i``'s ``method``, ``range`` and/or ``radius`` (``radius=None``: back to Rk)."""
         old = self.panes[i]
-        new = Pane(method if method is not None else old.method, range if range is not None else old.range)
+        new = replace(old, **changes)
         if new != old:
             self.panes[i] = new
             self.pane_changed.emit(i)
+
+    def pane_for(self, key) -> Pane:
+        """A pane showing ``key`` (``KeyError`` if none does)."""
+        for p in self.panes:
+            if p.key == key:
+                return p
+        raise KeyError(key)
 
     def set_pane_count(self, n: int) -> None:
         """Show ``n`` panes (1 to :data:`MAX_PANES`); new panes take the next default estimator."""
@@ -124,13 +225,19 @@ class Document:
             self.active = i
             self.panes_changed.emit()
 
-    def missing_keys(self) -> list[tuple[str, int]]:
+    def missing_keys(self) -> list[tuple]:
         """Keys some pane shows that have neither a result nor a failure, in pane order."""
         out = []
         for p in self.panes:
             if p.key not in self.results and p.key not in self.failures and p.key not in out:
                 out.append(p.key)
         return out
+
+    def view_title(self, i: int) -> str:
+        """``A: mru R2`` or ``A − B: mru R2 − nc R2``."""
+        if self.is_difference(i):
+            return f"A − B: {self.panes[0].title} − {self.panes[1].title}"
+        return f"{pane_letter(i)}: {self.panes[i].title}"
 
     # -- results --------------------------------------------------------------------------------
     def set_result(self, key, result) -> None:
@@ -183,22 +290,10 @@ class Document:
     def signed(self, i: int) -> bool:
         return True if self.is_difference(i) else self.display.state.signed
 
-    def cmap(self, i: int):
+    def _cmap_for(self, i: int, clim):
+        """Diverging map when the field is signed and its limits straddle 0, else the sequential one."""
         state = self.display.state
-        return colormap(state.diverging_cmap if self.signed(i) else state.sequential_cmap)
-
-    def limits(self, i: int, values: np.ndarray | None = None) -> tuple[float, float]:
-        """Colour limits of view ``i``: shared over the estimate panes unless disabled."""
-        state = self.display.state
-        kw = dict(mode=state.limit_mode, signed=self.signed(i), percentiles=state.percentiles,
-                  manual=state.manual)
-        if self.is_difference(i):
-            return compute_limits(self.values(i) if values is None else values, **kw)
-        if state.shared_scale and len(self.panes) > 1:
-            parts = [v for v in (self.values(j) for j in range(len(self.panes))) if v is not None]
-            if parts:
-                return compute_limits(np.concatenate(parts), **kw)
-        return compute_limits(self.values(i) if values is None else values, **kw)
+        return colormap(state.diverging_cmap if diverges(clim, signed=self.signed(i)) else state.sequential_cmap)
 
     def fields(self) -> list:
         """The shown field of every view, computing each pane's values and the limits once.
@@ -217,21 +312,36 @@ class Document:
         shared = None
         present = [v for v in values[:len(self.panes)] if v is not None]
         if state.shared_scale and len(self.panes) > 1 and present:
-            shared = compute_limits(np.concatenate(present), signed=state.signed, **kw)
+            shared = compute_limits(np.concatenate(present), signed=state.signed, natural=state.natural, **kw)
         out = []
         for i, v in enumerate(values):
             if v is None:
                 out.append(None)
                 continue
             diff = self.is_difference(i)
-            clim = shared if shared is not None and not diff else compute_limits(v, signed=self.signed(i), **kw)
-            out.append((v, clim, self.cmap(i)))
+            if shared is not None and not diff:
+                clim = shared
+            else:
+                clim = compute_limits(v, signed=self.signed(i), natural=None if diff else state.natural, **kw)
+            out.append((v, clim, self._cmap_for(i, clim)))
         return out
+
+    def field(self, i: int):
+        """``(values, (lo, hi), Colormap)`` of view ``i`` as :meth:`fields` gives it, or None."""
+        fields = self.fields()
+        return fields[i] if i < len(fields) else None
 
     def colours(self, i: int, *, out: np.ndarray | None = None):
         """``(values, (lo, hi), rgba)`` for view ``i``, or None if nothing to draw yet."""
-        values = self.values(i)
-        if values is None:
+        f = self.field(i)
+        if f is None:
             return None
-        clim = self.limits(i, values)
-        return values, clim, map_colours(values, clim, self.cmap(i), out=out)
+        values, clim, cmap = f
+        return values, clim, map_colours(values, clim, cmap, out=out)
+
+    def cmap(self, i: int):
+        """The colour map view ``i`` is drawn with (the diverging one until its field is there)."""
+        f = self.field(i)
+        if f is not None:
+            return f[2]
+        return colormap(self.display.state.diverging_cmap if self.signed(i) else self.display.state.sequential_cmap)

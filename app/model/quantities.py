@@ -1,41 +1,42 @@
-"""The per-vertex scalar quantities the viewer can colour by."""
+"""The per-vertex scalar quantities the viewer can colour by: an enum over :mod:`curv.quantities`.
+
+Adding a quantity to the curv registry adds it here, to the menus and to the help text.
+"""
 
 from __future__ import annotations
 
 import enum
 
+from curv.quantities import QUANTITIES, QuantitySpec
+
 __all__ = ["Quantity"]
 
 
-class Quantity(enum.Enum):
-    """A scalar of :class:`curv.Curvature`; the value is the name :meth:`Curvature.quantity` takes."""
+class _QuantityEnum(enum.Enum):
+    """A scalar of :class:`curv.Curvature`; the value is its registry name."""
 
-    MEAN = "mean"
-    GAUSSIAN = "gaussian"
-    K1 = "k1"
-    K2 = "k2"
-    SHAPE_INDEX = "shape_index"
-    CURVEDNESS = "curvedness"
+    @property
+    def spec(self) -> QuantitySpec:
+        return QUANTITIES[self.value]
 
     @property
     def title(self) -> str:
         """Label for menus and colour bars."""
-        return _TITLES[self]
+        return self.spec.title
 
     @property
     def signed(self) -> bool:
-        """True when the quantity takes both signs (drawn with a diverging map centred on 0)."""
-        return self is not Quantity.CURVEDNESS
+        """True when the quantity takes both signs with a meaningful zero."""
+        return self.spec.signed
+
+    @property
+    def natural(self) -> tuple[float, float] | None:
+        """The quantity's own range (shape index: (-1, 1)), or None."""
+        return self.spec.natural
 
     def __str__(self) -> str:
         return self.title
 
 
-_TITLES = {
-    Quantity.MEAN: "Mean H",
-    Quantity.GAUSSIAN: "Gaussian K",
-    Quantity.K1: "k1",
-    Quantity.K2: "k2",
-    Quantity.SHAPE_INDEX: "Shape index",
-    Quantity.CURVEDNESS: "Curvedness",
-}
+Quantity = _QuantityEnum("Quantity", [(name.upper(), name) for name in QUANTITIES], module=__name__)
+"""Enum of the registry's quantities: ``Quantity.MEAN``, ``Quantity("rms")``, ..."""

@@ -3,11 +3,30 @@
 from __future__ import annotations
 
 import numpy as np
+from curv.metrics import curvature_error
 
 from .display import DisplayState, Layer
-from .errors import relative_error
 
-__all__ = ["field_values"]
+__all__ = ["field_values", "relative_error"]
+
+
+def relative_error(estimate, truth) -> np.ndarray:
+    """Per-vertex e_rel (paper eq. 5.2) with NaN where it has no finite value.
+
+    Parameters
+    ----------
+    estimate, truth : curv.Curvature
+        Same mesh; ``truth`` holds the exact values.
+
+    Returns
+    -------
+    (n,) float64
+        NaN where the estimate is invalid or the exact curvature is zero (flat point): such
+        vertices are drawn as invalid rather than saturated.
+    """
+    e = curvature_error(estimate, truth)
+    e[~np.isfinite(e)] = np.nan
+    return e
 
 
 def field_values(result, truth, state: DisplayState) -> np.ndarray:

@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["FileSource", "SurfaceSource", "HEXAGON_SIZES"]
+from curv.surfaces.hexagon import PAPER_VERTEX_COUNTS as HEXAGON_SIZES
 
-HEXAGON_SIZES = (217, 817, 3169, 12481)
-"""Vertex counts of the paper's subdivided hexagon (Monge patches)."""
+__all__ = ["FileSource", "SurfaceSource", "HEXAGON_SIZES", "snap_hexagon_count"]
+
+
+def snap_hexagon_count(n: int) -> int:
+    """The hexagon vertex count ``3 s (s + 1) + 1`` nearest ``n`` (s >= 1)."""
+    s = max(1, round((-3 + math.sqrt(max(9 + 12 * (n - 1), 0))) / 6))
+    return min((3 * t * (t + 1) + 1 for t in (max(s - 1, 1), s, s + 1)), key=lambda c: (abs(c - n), c))
 
 
 @dataclass(frozen=True)
@@ -16,6 +22,9 @@ class FileSource:
     """A mesh read from ``path``."""
 
     path: str
+    repairs: tuple = ()
+    """Opt-in repairs to apply when loading (``merge_vertices``, ``remove_degenerate``, ``orient``,
+    ``remove_unreferenced``)."""
 
     @property
     def label(self) -> str:

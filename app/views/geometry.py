@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import curv
 import numpy as np
+from curv.normals import vertex_normals
 import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray
 
-__all__ = ["mesh_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample"]
+__all__ = ["mesh_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample", "border_lines",
+           "Geometry"]
 
 
 def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
@@ -34,9 +35,34 @@ def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
     return poly
 
 
-def prepare_geometry(mesh) -> tuple[pv.PolyData, float]:
-    """Render geometry of ``mesh`` and its mean edge length; safe to run in a worker thread."""
-    return mesh_polydata(mesh, curv.vertex_normals(mesh)), float(mesh.mean_edge_length)
+class Geometry(tuple):
+    """``(polydata, mean edge length, border lines)`` built off the GUI thread."""
+
+    @property
+    def base(self) -> pv.PolyData:
+        return self[0]
+
+    @property
+    def edge_length(self) -> float:
+        return self[1]
+
+    @property
+    def borders(self) -> pv.PolyData:
+        return self[2]
+
+
+def border_lines(mesh) -> pv.PolyData:
+    """The border edges of ``mesh`` (edges with one face) as line cells."""
+    edges = np.asarray(mesh.edges)[np.asarray(mesh.border_edges, bool)]
+    if edges.size == 0:
+        return pv.PolyData()
+    lines = np.column_stack([np.full(len(edges), 2), edges]).ravel()
+    return pv.PolyData(np.ascontiguousarray(mesh.vertices, dtype=np.float64), lines=lines)
+
+
+def prepare_geometry(mesh) -> Geometry:
+    """Render geometry of ``mesh``, its mean edge length and border lines; safe to run in a worker thread."""
+    return Geometry((mesh_polydata(mesh, vertex_normals(mesh)), float(mesh.mean_edge_length), border_lines(mesh)))
 
 
 def glyph_subsample(n: int, *, count: int = 2000, seed: int = 0) -> np.ndarray:

@@ -7,6 +7,8 @@ from PySide6.QtCore import QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QColor, QPainter, QPen
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
+from app.model.colors import format_limit
+
 __all__ = ["Histogram", "histogram_counts"]
 
 _MARGIN = 8
@@ -31,6 +33,9 @@ def histogram_counts(values: np.ndarray, clim: tuple[float, float], *, bins: int
         span = hi - lo
         lo = min(lo - 0.1 * span, p_lo)
         hi = max(hi + 0.1 * span, p_hi)
+    if not hi - lo > 1e-9 * max(abs(lo), abs(hi), 1e-300):  # a constant field: a small window around it
+        pad = max(abs(lo), abs(hi), 1e-12) * 1e-3
+        lo, hi = lo - pad, hi + pad
     counts, edges = np.histogram(finite, bins=bins, range=(lo, hi))
     return counts, edges, n_nan
 
@@ -42,7 +47,7 @@ class Histogram(QWidget):
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
-        self.setMinimumHeight(110)
+        self.setMinimumHeight(130)
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
         self.setMouseTracking(True)
         self.counts = np.zeros(0, int)
@@ -63,7 +68,9 @@ class Histogram(QWidget):
 
     # -- coordinates ----------------------------------------------------------------------------
     def _plot_rect(self) -> QRectF:
-        return QRectF(_MARGIN, _MARGIN, self.width() - 2 * _MARGIN, self.height() - 2 * _MARGIN - _LABEL_H)
+        """The bars' area: a text row above it (invalid count) and one below (the limits)."""
+        top = _MARGIN + _LABEL_H
+        return QRectF(_MARGIN, top, self.width() - 2 * _MARGIN, self.height() - top - _MARGIN - _LABEL_H)
 
     def x_of(self, value: float) -> float:
         """Widget x of a data value."""
@@ -90,9 +97,13 @@ class Histogram(QWidget):
         lo, hi = self.clim
         n_col = self.table.shape[0]
         p.setPen(Qt.PenStyle.NoPen)
+        from curv.colors import CLIP_SHADE
+
         for c, a, b in zip(self.counts, self.edges[:-1], self.edges[1:]):
-            t = np.clip(((a + b) / 2 - lo) / (hi - lo), 0, 1)
-            rgb = self.table[int(round(t * (n_col - 1)))]
+            t = ((a + b) / 2 - lo) / (hi - lo)
+            rgb = self.table[int(round(np.clip(t, 0, 1) * (n_col - 1)))]
+            if t < 0 or t > 1:  # clipped on the mesh: drawn darkened there too
+                rgb = (rgb * CLIP_SHADE).astype(np.uint8)
             p.setBrush(QColor(int(rgb[0]), int(rgb[1]), int(rgb[2])))
             x0, x1 = self.x_of(a), self.x_of(b)
             h = r.height() * (np.sqrt(c / top) if c else 0.0)  # sqrt: keeps tails visible
@@ -110,9 +121,9 @@ class Histogram(QWidget):
         hi_rect = (QRectF(x_hi + 3, r.bottom() + 2, width, _LABEL_H), left_align) if x_hi + width + 3 <= self.width() \
             else (QRectF(x_hi - width - 3, r.bottom() + 2, width, _LABEL_H), right_align)
         for (rect, align), v in zip((lo_rect, hi_rect), self.clim):
-            p.drawText(rect, align, f"{v:.4g}")
-        if self.n_nan:
-            p.drawText(QRectF(r.left(), r.top() + 2, r.width() - 4, _LABEL_H), Qt.AlignmentFlag.AlignRight,
+            p.drawText(rect, align, format_limit(v))
+        if self.n_nan:  # in its own row above the bars: never under a bar or a limit line
+            p.drawText(QRectF(r.left(), _MARGIN - 2, r.width(), _LABEL_H), Qt.AlignmentFlag.AlignRight,
                        f"{self.n_nan} invalid (not shown)")
 
     # -- dragging -------------------------------------------------------------------------------

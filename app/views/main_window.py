@@ -1,27 +1,32 @@
-"""The main window: viewports in the centre, docks for source / inspect / compare / readout,
-a status bar with progress and Cancel, menus for files and export."""
+"""The main window: viewports in the centre, docks for source / mesh / compare (left) and inspect /
+picked vertex (right), a status bar with progress and Cancel, menus for files, export, view,
+estimate and help."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import curv
 import numpy as np
+from curv.estimators import ESTIMATORS
+from curv.io import save_ply, save_vtu
 from PySide6.QtCore import QSettings, Qt, Signal
-from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtGui import QAction, QGuiApplication, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QScrollArea,
 )
 
 from app.controller import Controller
-from app.model import Document, FileSource, Layer, Pane, SurfaceSource, colormap_names
-from app.model.colour import map_colours
+from app.model import Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, export_payload, map_colours
+from app.packaged import resource, sample_names
 
 from .compare_panel import ComparePanel
 from .geometry import direction_glyphs, glyph_subsample, prepare_geometry
+from .help import about_text, guide_text
 from .inspect_panel import InspectPanel
+from .mesh_panel import MeshPanel
 from .pane_grid import PaneGrid
 from .readout import Readout
+from .session import restore_session, save_session
 from .source_panel import SourcePanel
 
 __all__ = ["MainWindow", "MESH_FILTER", "DEFAULT_SOURCE"]
@@ -29,6 +34,8 @@ __all__ = ["MainWindow", "MESH_FILTER", "DEFAULT_SOURCE"]
 MESH_FILTER = "Meshes (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf);;All files (*)"
 DEFAULT_SOURCE = SurfaceSource(name="saddle", n_vertices=3169)
 MAX_RECENT = 8
+GLYPH_PIXELS = 900
+"""One direction glyph per this many pixels of a pane at most, so glyphs never bury the colours."""
 
 
 class MainWindow(QMainWindow):
@@ -37,8 +44,8 @@ class MainWindow(QMainWindow):
     Parameters
     ----------
     settings : QSettings, optional
-        Where the last directory, colour maps, recent files and layout persist (default: the
-        user's ``curvlab`` settings).
+        Where the last directory, colour maps, recent files, panes, limits and layout persist
+        (default: the user's ``curvlab`` settings).
     """
 
     error_shown = Signal(str)
@@ -47,28 +54,34 @@ class MainWindow(QMainWindow):
     def __init__(self, *, settings: QSettings | None = None) -> None:
         super().__init__()
         self.setWindowTitle("curvlab")
+        try:
+            self.setWindowIcon(QIcon(str(resource("curvlab.svg"))))
+        except FileNotFoundError:
+            pass
         self.setAcceptDrops(True)
         self.settings = settings if settings is not None else QSettings("curvlab", "curvlab")
         self.quiet = False
         self.pending_layer: Layer | None = None
-        names = [n for n in ("mru", "nc", "qs", "meyer", "ru", "an", "csm") if n in curv.ESTIMATORS]
-        defaults = tuple(Pane(n, 2 if 2 in curv.ESTIMATORS[n].ranges else curv.ESTIMATORS[n].ranges[0])
-                         for n in names)
+        names = [n for n in ("mru", "nc", "qs", "meyer", "ru", "an", "csm") if n in ESTIMATORS]
+        defaults = tuple(Pane(n, 2 if 2 in ESTIMATORS[n].ranges else ESTIMATORS[n].ranges[0]) for n in names)
         self.doc = Document(default_panes=defaults)
         self.controller = Controller(self.doc, self, prepare=prepare_geometry)
         self.grid = PaneGrid(self)
         self.setCentralWidget(self.grid)
-        self._glyph_index = None
+        self._geometry = None
+        self._drawn = None  # what the viewports show (see _scene): unchanged scenes are not re-rendered
 
         self.source_panel = SourcePanel()
         self.inspect = InspectPanel(self.doc)
         self.compare = ComparePanel(self.doc)
+        self.mesh_panel = MeshPanel(self.doc)
         self.readout = Readout(self.doc)
         self.docks = {}
         for key, title, widget, area in [
             ("source", "Source", self.source_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
-            ("inspect", "Inspect", self.inspect, Qt.DockWidgetArea.RightDockWidgetArea),
+            ("mesh", "Mesh report", self.mesh_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("compare", "Compare", self.compare, Qt.DockWidgetArea.LeftDockWidgetArea),
+            ("inspect", "Inspect", self.inspect, Qt.DockWidgetArea.RightDockWidgetArea),
             ("readout", "Picked vertex", self.readout, Qt.DockWidgetArea.RightDockWidgetArea),
         ]:
             dock = QDockWidget(title, self)
@@ -77,19 +90,22 @@ class MainWindow(QMainWindow):
             scroll.setWidgetResizable(True)
             scroll.setWidget(widget)
             scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-            scroll.setMinimumWidth(widget.minimumSizeHint().width() + 20)
+            scroll.setMinimumWidth(min(widget.minimumSizeHint().width() + 20, 360))
             dock.setWidget(scroll)
             self.addDockWidget(area, dock)
             self.docks[key] = dock
-        self.resizeDocks([self.docks["source"], self.docks["inspect"]], [270, 330], Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["source"], self.docks["compare"]], [330, 120], Qt.Orientation.Vertical)
-        self.resizeDocks([self.docks["inspect"], self.docks["readout"]], [560, 200], Qt.Orientation.Vertical)
+        self.tabifyDockWidget(self.docks["mesh"], self.docks["compare"])
+        self.docks["compare"].raise_()
 
         self.status_label = QLabel()
+        self.status_label.setMinimumWidth(0)
         self.progress = QProgressBar()
         self.progress.setMaximumWidth(220)
         self.progress.setRange(0, 100)
         self.cancel_button = QPushButton("Cancel")
+        # clicking Cancel (or its disappearing) must not move the keyboard focus
+        self.cancel_button.setFocusPolicy(Qt.FocusPolicy.NoFocus)
+        self.cancel_button.setToolTip("Stop the running work (Esc)")
         self.statusBar().addWidget(self.status_label, 1)
         self.statusBar().addPermanentWidget(self.progress)
         self.statusBar().addPermanentWidget(self.cancel_button)
@@ -104,19 +120,36 @@ class MainWindow(QMainWindow):
         self.action_open = QAction("&Open…", self, shortcut=QKeySequence.StandardKey.Open,
                                    triggered=self.open_dialog)
         self.recent_menu = file_menu.addMenu("Open &Recent")
-        self.action_export_ply = QAction("Export coloured &PLY…", self, triggered=self.export_ply_dialog)
-        self.action_export_png = QAction("Export &screenshot…", self, triggered=self.export_png_dialog)
+        self.sample_menu = file_menu.addMenu("Open &Sample")
+        for name in sample_names():
+            self.sample_menu.addAction(name, lambda n=name: self.open_path(str(resource(f"samples/{n}"))))
+        self.action_export_ply = QAction("Export coloured &PLY…", self, shortcut="Ctrl+E",
+                                         triggered=self.export_ply_dialog)
+        self.action_export_vtu = QAction("Export &VTK (.vtu) for ParaView…", self, shortcut="Ctrl+Shift+E",
+                                         triggered=self.export_vtu_dialog)
+        self.action_export_png = QAction("Export &screenshot (PNG)…", self, shortcut="Ctrl+Shift+S",
+                                         triggered=self.export_png_dialog)
         self.action_quit = QAction("&Quit", self, shortcut=QKeySequence.StandardKey.Quit, triggered=self.close)
         file_menu.insertAction(self.recent_menu.menuAction(), self.action_open)
         file_menu.addSeparator()
-        file_menu.addActions([self.action_export_ply, self.action_export_png])
+        file_menu.addActions([self.action_export_ply, self.action_export_vtu, self.action_export_png])
         file_menu.addSeparator()
         file_menu.addAction(self.action_quit)
         view_menu = self.menuBar().addMenu("&View")
-        view_menu.addAction(QAction("&Reset camera", self, shortcut="R", triggered=self.grid.reset_camera))
+        self.action_reset_camera = QAction("&Reset camera", self, shortcut="R", triggered=self.grid.reset_camera)
+        view_menu.addAction(self.action_reset_camera)
         view_menu.addSeparator()
         for dock in self.docks.values():
             view_menu.addAction(dock.toggleViewAction())
+        est_menu = self.menuBar().addMenu("&Estimate")
+        self.action_recompute = QAction("&Recompute active pane", self, shortcut="F5",
+                                        triggered=lambda: self.controller.recompute(self.doc.panes[self.doc.active].key))
+        self.action_cancel = QAction("&Cancel", self, shortcut="Esc", triggered=self.controller.cancel)
+        est_menu.addActions([self.action_recompute, self.action_cancel])
+        help_menu = self.menuBar().addMenu("&Help")
+        help_menu.addAction(QAction("Estimators and ranges…", self, shortcut=QKeySequence.StandardKey.HelpContents,
+                                    triggered=self.show_guide))
+        help_menu.addAction(QAction("&About curvlab", self, triggered=self.show_about))
         self._update_recent_menu()
 
     def _connect(self) -> None:
@@ -134,17 +167,19 @@ class MainWindow(QMainWindow):
         self.cancel_button.clicked.connect(ctl.cancel)
         self.source_panel.source_requested.connect(ctl.open_source)
         self.source_panel.open_requested.connect(self.open_dialog)
+        self.mesh_panel.reload_requested.connect(ctl.open_source)
         self.inspect.recompute_requested.connect(lambda: ctl.recompute(doc.panes[doc.active].key))
+        self.inspect.message.connect(lambda text: self.show_status(text, error=True))
         self.compare.link_toggled.connect(self.grid.set_linked)
         self.grid.activated.connect(lambda i: doc.set_active(i) if i < len(doc.panes) else None)
         self.grid.vertex_picked.connect(doc.set_picked)
 
     # -- sources --------------------------------------------------------------------------------
-    def open_path(self, path) -> None:
+    def open_path(self, path, *, repairs: tuple = ()) -> None:
         """Load a mesh file in the background (the current scene stays until it succeeds)."""
         path = str(Path(path).expanduser())
         self.settings.setValue("last_dir", str(Path(path).resolve().parent))
-        self.controller.open_source(FileSource(path))
+        self.controller.open_source(FileSource(path, tuple(repairs)))
 
     def open_surface(self, source: SurfaceSource) -> None:
         """Mesh an analytic surface in the background and show it in the source panel."""
@@ -154,7 +189,7 @@ class MainWindow(QMainWindow):
     def open_source_then(self, source) -> None:
         """Open a :class:`FileSource` or :class:`SurfaceSource`."""
         if isinstance(source, FileSource):
-            self.open_path(source.path)
+            self.open_path(source.path, repairs=source.repairs)
         else:
             self.open_surface(source)
 
@@ -189,26 +224,27 @@ class MainWindow(QMainWindow):
         self.recent_menu.setEnabled(bool(self._recent()))
 
     # -- model events ---------------------------------------------------------------------------
-    def _on_mesh(self) -> None:
+    def _on_mesh(self, change: MeshChange) -> None:
         doc = self.doc
-        if isinstance(doc.source, FileSource):
-            self._add_recent(str(Path(doc.source.path).resolve()))
-        prepared = self.controller.prepared  # built in the worker; rebuilt here only if missing
-        base, edge = prepared if prepared is not None else prepare_geometry(doc.mesh)
-        self.grid.set_geometry(base, edge_length=edge)
-        self._glyph_index = glyph_subsample(doc.mesh.n_vertices, count=min(1500, max(doc.mesh.n_vertices // 6, 1)))
-        self.setWindowTitle(f"curvlab — {doc.source.label}")
-        if isinstance(doc.source, SurfaceSource):
-            self.source_panel.set_source(doc.source)
+        if isinstance(change.source, FileSource):
+            self._add_recent(str(Path(change.source.path).resolve()))
+        self._geometry = change.geometry if change.geometry is not None else prepare_geometry(change.mesh)
+        self.grid.set_geometry(self._geometry.base, edge_length=self._geometry.edge_length)
+        self._drawn = None
+        self.setWindowTitle(f"curvlab — {change.source.label}")
+        if isinstance(change.source, SurfaceSource):
+            self.source_panel.set_source(change.source)
+        self.source_panel.show_current(change.source)
         layer, self.pending_layer = self.pending_layer, None
-        if layer is not None and layer.needs_truth and doc.truth is None:
-            self.show_error(f"{layer.title} needs an analytic source; {doc.source.label} has no exact curvature")
+        if layer is not None and layer.needs_truth and change.truth is None:
+            self.show_error(f"{layer.title} needs an analytic source; {change.source.label} has no exact curvature")
         elif layer is not None:
             doc.display.update(layer=layer)
         self.redraw()
 
     def _on_panes(self) -> None:
         self.grid.set_count(self.doc.view_count)
+        self._drawn = None
         self.controller.request_missing()
         self.redraw()
         self._on_picked(self.doc.picked)
@@ -221,27 +257,42 @@ class MainWindow(QMainWindow):
             self.update_titles()
 
     def _on_display(self, names: set) -> None:
-        for key in names & {"diverging_cmap", "sequential_cmap"}:
-            self.settings.setValue(f"cmap/{key}", getattr(self.doc.display, key))
         self.redraw()
 
     def _on_picked(self, index) -> None:
-        point = None if index is None else self.doc.mesh.vertices[index]
+        point = None if index is None or self.doc.mesh is None else self.doc.mesh.vertices[index]
         for vp in self.grid.viewports:
             vp.set_marker(point)
         self.grid.render_all()
 
     # -- drawing --------------------------------------------------------------------------------
-    def redraw(self) -> None:
-        """Recolour every viewport in place from the document and render."""
+    def _scene(self) -> tuple:
+        """Everything the viewports' pixels depend on (results by identity)."""
+        doc = self.doc
+        results = tuple(id(doc.results.get(p.key)) for p in doc.panes)
+        return (id(doc.mesh), tuple(doc.panes), results, doc.view_count, doc.active, doc.picked,
+                doc.display.state, len(self.grid.viewports))
+
+    def redraw(self, *, force: bool = False) -> None:
+        """Recolour every viewport in place from the document and render.
+
+        A scene that is already on screen is not recoloured or rendered again (only the titles
+        are updated): cancelling an estimate reverts the pane to the result it still shows, and
+        must not stall the GUI on a render of a large mesh.
+        """
         doc = self.doc
         if doc.mesh is None:
             return
+        scene = self._scene()
+        if not force and scene == self._drawn:
+            self.update_titles()
+            return
+        self._drawn = scene
         fields = doc.fields()
         state = doc.display.state
         for i, (vp, field) in enumerate(zip(self.grid.viewports, fields)):
-            vp.set_active(i == doc.active and len(doc.panes) > 1)
-            title = self._field_title(i)
+            vp.set_active(i == doc.active and len(doc.panes) > 1, difference=doc.is_difference(i))
+            title = state.field_title(difference=doc.is_difference(i))
             if field is None:
                 vp.set_colours(None)
             else:
@@ -250,14 +301,20 @@ class MainWindow(QMainWindow):
                 vp.set_colours(vp.colours, clim=clim, cmap=cmap, title=title)
             res = doc.result(i) if i < len(doc.panes) else None
             if state.show_directions and res is not None:
+                w, h = vp.plotter.width(), vp.plotter.height()
+                count = int(min(1500, max(doc.mesh.n_vertices // 6, 1), max(w * h // GLYPH_PIXELS, 50)))
                 vp.set_glyphs(direction_glyphs(doc.mesh.vertices, res, length=1.6 * doc.mesh.mean_edge_length,
-                                               index=self._glyph_index))
+                                               index=glyph_subsample(doc.mesh.n_vertices, count=count)))
             else:
                 vp.set_glyphs(None)
+            vp.set_overlays(edges=state.show_edges, points=state.show_points,
+                            borders=self._geometry.borders if state.show_borders and self._geometry else None)
+            vp.set_marker(None if doc.picked is None else doc.mesh.vertices[doc.picked])
         self.update_titles()
         self.grid.render_all()
         res = doc.result(doc.active)
-        self.inspect.show_values(fields[doc.active] if fields else None, table=doc.cmap(doc.active).table,
+        active = fields[doc.active] if fields else None
+        self.inspect.show_values(active, table=(active[2] if active else doc.cmap(doc.active)).table,
                                  n_invalid=None if res is None else int((~res.valid).sum()),
                                  n_vertices=doc.mesh.n_vertices)
 
@@ -268,20 +325,11 @@ class MainWindow(QMainWindow):
 
     def _pane_title(self, i: int) -> str:
         doc = self.doc
-        if doc.is_difference(i):
-            return f"A − B: {doc.panes[0].method} R{doc.panes[0].range} − {doc.panes[1].method} R{doc.panes[1].range}"
-        pane = doc.panes[i]
-        spec = curv.ESTIMATORS.get(pane.method)
-        return f"{chr(65 + i)}: {pane.method} R{pane.range}" + (f" — {spec.title}" if spec else "")
-
-    def _field_title(self, i: int) -> str:
-        st = self.doc.display.state
-        name = "e_rel" if st.layer is Layer.E_REL else st.quantity.title
-        if st.layer is Layer.ERROR:
-            name += " error"
-        elif st.layer is Layer.EXACT:
-            name += " (exact)"
-        return ("A − B " if self.doc.is_difference(i) else "") + name
+        title = doc.view_title(i)
+        if not doc.is_difference(i) and doc.view_count <= 2:  # more panes: short headers (full in the tooltip)
+            spec = ESTIMATORS.get(doc.panes[i].method)
+            title += f" — {spec.title}" if spec else ""
+        return title
 
     def _pane_message(self, i: int) -> str:
         doc = self.doc
@@ -312,6 +360,8 @@ class MainWindow(QMainWindow):
     def _set_busy(self, busy: bool) -> None:
         self.progress.setVisible(busy)
         self.cancel_button.setVisible(busy)
+        if hasattr(self, "action_cancel"):  # _set_busy runs once before the menus exist
+            self.action_cancel.setEnabled(busy)
         self.update_titles()
 
     def _on_progress(self, label: str, fraction: float) -> None:
@@ -320,27 +370,35 @@ class MainWindow(QMainWindow):
         else:
             self.progress.setRange(0, 100)
             self.progress.setValue(int(round(100 * fraction)))
-        self.progress.setFormat(f"%p%")
+        self.progress.setFormat("%p%")
         self.progress.setToolTip(label)
         self.show_status(label + "…")
 
+    # -- help -------------------------------------------------------------------------------------
+    def show_about(self) -> None:
+        QMessageBox.about(self, "About curvlab", about_text())
+
+    def show_guide(self) -> None:
+        box = QMessageBox(QMessageBox.Icon.NoIcon, "Estimators and ranges", guide_text(), parent=self)
+        box.setTextFormat(Qt.TextFormat.RichText)
+        box.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        box.open()
+
     # -- export ---------------------------------------------------------------------------------
     def export_ply(self, path) -> Path:
-        """Write the active pane as a coloured PLY: its colours exactly as shown plus the curvature
-        properties, and for an analytic source ``error_rel``, ``error_<q>`` and ``exact_<q>``."""
-        doc = self.doc
-        res = doc.result(doc.active)
-        if res is None:
-            raise RuntimeError("the active pane has no result to export yet")
-        q = doc.display.quantity.value
-        extra = {}
-        if doc.truth is not None:
-            from app.model.errors import relative_error
-            extra = {"error_rel": relative_error(res, doc.truth),
-                     f"error_{q}": res.quantity(q) - doc.truth.quantity(q),
-                     f"exact_{q}": doc.truth.quantity(q)}
-        colours = np.array(self.grid.viewports[doc.active].colours, dtype=np.uint8)
-        return curv.save_ply(path, doc.mesh, res, quantity=q, colors=colours, extra=extra)
+        """Write the active pane as a coloured PLY: its colours exactly as shown, the curvature
+        properties, the shown field (``shown``) and for an analytic source ``error_rel``,
+        ``error_<q>`` and ``exact_<q>``; the header comment says what the colours show."""
+        payload = export_payload(self.doc)
+        colours = np.array(self.grid.viewports[self.doc.active].colours, dtype=np.uint8)
+        return save_ply(path, self.doc.mesh, payload.result, quantity=self.doc.display.quantity.value,
+                        colors=colours, extra=payload.extra, comment=payload.comment)
+
+    def export_vtu(self, path) -> Path:
+        """Write the active pane as a VTK unstructured grid with the same point data (ParaView, pyvista)."""
+        payload = export_payload(self.doc)
+        colours = np.array(self.grid.viewports[self.doc.active].colours, dtype=np.uint8)
+        return save_vtu(path, self.doc.mesh, payload.result, colors=colours, extra=payload.extra)
 
     def export_png(self, path) -> Path:
         """Save an image of the viewports (all panes) as PNG."""
@@ -353,6 +411,9 @@ class MainWindow(QMainWindow):
     def export_ply_dialog(self) -> None:
         self._export_dialog("Export coloured PLY", "PLY (*.ply)", ".ply", self.export_ply)
 
+    def export_vtu_dialog(self) -> None:
+        self._export_dialog("Export VTK unstructured grid", "VTK XML (*.vtu)", ".vtu", self.export_vtu)
+
     def export_png_dialog(self) -> None:
         self._export_dialog("Export screenshot", "PNG (*.png)", ".png", self.export_png)
 
@@ -360,7 +421,7 @@ class MainWindow(QMainWindow):
         path, _ = QFileDialog.getSaveFileName(self, title, self.settings.value("last_dir", ""), filt)
         if not path:
             return
-        path = path if path.endswith(suffix) else path + suffix
+        path = path if path.lower().endswith(suffix) else path + suffix
         try:
             writer(path)
         except Exception as exc:  # report, never lose the session
@@ -370,25 +431,40 @@ class MainWindow(QMainWindow):
         self.show_status(f"Wrote {path}")
 
     # -- settings and shutdown ------------------------------------------------------------------
+    def _fit_screen(self) -> None:
+        """First launch: most of the available screen, centred (never larger than it)."""
+        screen = self.screen() or QGuiApplication.primaryScreen()
+        if screen is None:
+            self.resize(1400, 860)
+            return
+        avail = screen.availableGeometry()
+        w, h = int(min(avail.width() * 0.94, 1680)), int(min(avail.height() * 0.92, 1050))
+        self.resize(w, h)
+        self.move(avail.x() + (avail.width() - w) // 2, avail.y() + (avail.height() - h) // 2)
+        self.resizeDocks([self.docks["source"], self.docks["inspect"]], [int(w * 0.18), int(w * 0.23)],
+                         Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["inspect"], self.docks["readout"]], [int(h * 0.66), int(h * 0.26)],
+                         Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["source"], self.docks["mesh"]], [int(h * 0.5), int(h * 0.4)],
+                         Qt.Orientation.Vertical)
+
     def _restore_settings(self) -> None:
-        s = self.settings
-        geometry, state = s.value("geometry"), s.value("state")
-        if geometry is not None:
-            self.restoreGeometry(geometry)
+        geometry, state = self.settings.value("geometry"), self.settings.value("state")
+        if geometry is None or not self.restoreGeometry(geometry):
+            self._fit_screen()
         if state is not None:
             self.restoreState(state)
-        changes = {}
-        for key, kind in (("diverging_cmap", "diverging"), ("sequential_cmap", "sequential")):
-            value = s.value(f"cmap/{key}")
-            if value and str(value) in colormap_names(kind):
-                changes[key] = str(value)
-        self.doc.display.update(**changes)
+        restore_session(self.settings, self.doc)
 
-    def closeEvent(self, event) -> None:  # noqa: N802
-        """Stop the workers, save the layout, release the render windows."""
-        self.controller.shutdown(timeout_ms=5000)
+    def _save_settings(self) -> None:
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("state", self.saveState())
+        save_session(self.settings, self.doc)
         self.settings.sync()
+
+    def closeEvent(self, event) -> None:  # noqa: N802
+        """Stop the workers, save the layout and settings, release the render windows."""
+        self.controller.shutdown(timeout_ms=5000)
+        self._save_settings()
         self.grid.close_all()
         super().closeEvent(event)

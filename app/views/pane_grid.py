@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pyvista as pv
-from PySide6.QtCore import Signal
+from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QGridLayout, QWidget
 
 from .viewport import Viewport
@@ -48,6 +48,8 @@ class PaneGrid(QWidget):
             vp = self.viewports.pop()
             self.layout_.removeWidget(vp)
             vp.close_plotter()
+            vp.hide()  # deleteLater waits for the event loop: never leave its frame on screen meanwhile
+            vp.setParent(None)
             vp.deleteLater()
         while len(self.viewports) < n:
             vp = Viewport(len(self.viewports), self)
@@ -57,10 +59,42 @@ class PaneGrid(QWidget):
             if self._base is not None:
                 vp.set_geometry(self._base, edge_length=self._edge)
             self.viewports.append(vp)
-        cols = n if n <= 3 else math.ceil(n / 2)
-        for i, vp in enumerate(self.viewports):
-            self.layout_.addWidget(vp, i // cols, i % cols)
+        self._arrange()
         self.set_linked(self.linked)
+        self._refit_later()  # the panes changed shape: refit once Qt has laid them out
+
+    def rows(self) -> list[int]:
+        """Viewports per row: 1, 2, 3 side by side when the grid is wide (else 2 + 1), 2 x 2, 3 + 2."""
+        n = len(self.viewports)
+        wide = self.width() >= 1.9 * max(self.height(), 1)
+        return {1: [1], 2: [2], 3: [3] if wide else [2, 1], 4: [2, 2], 5: [3, 2]}.get(n, [math.ceil(n / 2)] * 2)
+
+    def _arrange(self) -> None:
+        """Place the viewports row by row; each row shares the full width (no empty cells)."""
+        for vp in self.viewports:
+            self.layout_.removeWidget(vp)
+        cols = 6  # a multiple of every row length
+        i = 0
+        for r, count in enumerate(self.rows()):
+            span = cols // count
+            for c in range(count):
+                if i < len(self.viewports):
+                    self.layout_.addWidget(self.viewports[i], r, c * span, 1, span)
+                i += 1
+        for c in range(cols):
+            self.layout_.setColumnStretch(c, 1)
+        self._arranged = tuple(self.rows())
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        super().resizeEvent(event)
+        if getattr(self, "_arranged", None) != tuple(self.rows()):
+            self._arrange()
+            self._refit_later()
+
+    def _refit_later(self) -> None:
+        """Reset the camera after the pending layout (VTK uses the panes' sizes at the time of the reset)."""
+        if self._base is not None:
+            QTimer.singleShot(0, lambda: self.reset_camera(render=True))
 
     def set_geometry(self, base: pv.PolyData, *, edge_length: float) -> None:
         """Show a new mesh in every viewport and frame it (rendered by the next :meth:`render_all`)."""
@@ -74,7 +108,10 @@ class PaneGrid(QWidget):
         first = self.viewports[0].plotter
         first.view_vector((0.55, -1.0, 0.85), viewup=(0.0, 0.0, 1.0), render=False)
         first.reset_camera(render=False)
-        first.camera.zoom(1.15)
+        # VTK fits the first pane (its aspect included); a linked camera must also fit a narrower pane
+        aspects = [vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports]
+        narrow = min(aspects) / max(min(aspects[0], 1.0), 1e-3) if self.linked else 1.0
+        first.camera.zoom(1.15 * min(1.0, max(narrow, 0.2)))
         if not self.linked:
             for vp in self.viewports[1:]:
                 vp.plotter.renderer.camera = first.camera.copy()

@@ -3,17 +3,17 @@ irregularity and noise. Edits are applied after a short pause (debounced)."""
 
 from __future__ import annotations
 
-import curv
-from PySide6.QtCore import Signal
+from curv.surfaces import SURFACES, MongePatch
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QIntValidator
 from PySide6.QtWidgets import (
-    QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QPushButton, QSpinBox,
-    QVBoxLayout, QWidget,
+    QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QPushButton,
+    QSpinBox, QVBoxLayout, QWidget,
 )
 from superqt import QLabeledDoubleSlider
 from superqt.utils import qdebounced
 
-from app.model.sources import HEXAGON_SIZES, SurfaceSource
+from app.model.sources import HEXAGON_SIZES, FileSource, SurfaceSource, snap_hexagon_count
 
 __all__ = ["SourcePanel"]
 
@@ -29,7 +29,10 @@ class SourcePanel(QWidget):
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
-        self.surfaces = curv.surfaces.SURFACES
+        self.surfaces = SURFACES
+        self.showing = QLabel()
+        self.showing.setWordWrap(True)
+        self.showing.setTextFormat(Qt.TextFormat.RichText)
         self.surface = QComboBox()
         for name, cls in self.surfaces.items():
             self.surface.addItem(getattr(cls, "title", name), name)
@@ -43,9 +46,11 @@ class SourcePanel(QWidget):
         self.density = QComboBox()
         self.density.setEditable(True)
         self.density.setValidator(QIntValidator(20, 5_000_000, self))
-        self.irregularity = QLabeledDoubleSlider()
+        self.irregularity = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
         self.irregularity.setRange(0.0, 25.0)
         self.irregularity.setDecimals(1)
+        self.irregularity.setSingleStep(1.0)  # arrow keys: 1 degree; page keys: 5
+        self.irregularity.setPageStep(5.0)
         self.noise = QDoubleSpinBox()
         self.noise.setRange(0.0, 1.0)
         self.noise.setSingleStep(0.01)
@@ -54,7 +59,10 @@ class SourcePanel(QWidget):
         self.generate = QPushButton("Generate")
         self.open_file = QPushButton("Open mesh file…")
 
-        form = QFormLayout()
+        self.density.setToolTip("Hexagon patches take 3 s (s + 1) + 1 vertices (217, 817, 3169, 12481); "
+                                "a typed count snaps to the nearest one")
+        self.group = QGroupBox("Synthetic surface")
+        form = QFormLayout(self.group)
         form.addRow("Surface", self.surface)
         form.addRow(self.params_box)
         seed_row = QHBoxLayout()
@@ -65,11 +73,16 @@ class SourcePanel(QWidget):
         form.addRow("Irregularity °", self.irregularity)
         form.addRow("Noise", self.noise)
         lay = QVBoxLayout(self)
-        lay.addLayout(form)
+        lay.addWidget(self.showing)
+        lay.addWidget(self.group)
         buttons = QHBoxLayout()
         buttons.addWidget(self.generate)
         buttons.addWidget(self.open_file)
         lay.addLayout(buttons)
+        lay.addStretch(1)
+        for combo in self.findChildren(QComboBox):
+            combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(6)
 
         self._syncing = False
         self._debounced = qdebounced(self._emit, timeout=400)
@@ -89,9 +102,23 @@ class SourcePanel(QWidget):
         params = {} if self.random.isChecked() else {k: s.value() for k, s in self.param_spins.items()}
         text = self.density.currentText().strip()
         n = int(text) if text.isdigit() else self._sizes(name)[1]
+        if issubclass(self.surfaces[name], MongePatch) and n != snap_hexagon_count(n):
+            n = snap_hexagon_count(n)  # the hexagon takes only 3 s (s + 1) + 1 vertices: snap, say so
+            self._syncing, was = True, self._syncing
+            self.density.setEditText(str(n))
+            self._syncing = was
         return SurfaceSource(name=name, params=params, n_vertices=n,
                              irregularity=float(self.irregularity.value()), noise=float(self.noise.value()),
                              seed=int(self.seed.value()), random_params=self.random.isChecked())
+
+    def show_current(self, source) -> None:
+        """Say what the window shows: a file (the surface controls then only generate a new one) or a surface."""
+        if isinstance(source, FileSource):
+            self.showing.setText(f"Showing file <b>{source.label}</b>")
+            self.group.setTitle("Synthetic surface (Generate replaces the file)")
+        elif source is not None:
+            self.showing.setText(f"Showing surface <b>{source.label}</b>")
+            self.group.setTitle("Synthetic surface")
 
     def set_source(self, source: SurfaceSource) -> None:
         """Show ``source`` in the widgets without emitting anything."""
@@ -138,7 +165,7 @@ class SourcePanel(QWidget):
         self.density.blockSignals(False)
         closed = getattr(self.surfaces[name], "closed", False)
         self.irregularity.setEnabled(not closed)
-        can_random = issubclass(self.surfaces[name], curv.surfaces.MongePatch)
+        can_random = issubclass(self.surfaces[name], MongePatch)
         if not can_random:
             self.random.setChecked(False)
         self.random.setEnabled(can_random)

@@ -7,13 +7,20 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Qt, Signal
-from PySide6.QtWidgets import QFrame, QLabel, QVBoxLayout
+from PySide6.QtWidgets import QFrame, QLabel, QSizePolicy, QVBoxLayout
 from pyvistaqt import QtInteractor
 from vtkmodules.vtkCommonCore import vtkLookupTable
 from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
 from vtkmodules.vtkRenderingCore import vtkCellPicker
 
+from app.model.colors import LABEL_FORMAT, contrasting_colours
+
+from .style import PANE_COLOURS
+
 __all__ = ["Viewport"]
+
+_BAR_WIDTH_PX = 420
+_BAR_FRACTION = 0.8
 
 _GREY = np.array([200, 200, 200, 255], dtype=np.uint8)
 
@@ -40,6 +47,9 @@ class Viewport(QFrame):
         self.setLineWidth(2)
         self.title = QLabel(self)
         self.title.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        # a long title must never widen the window: it is clipped, and complete in the tooltip
+        self.title.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.title.setMinimumWidth(0)
         self.plotter = QtInteractor(self, auto_update=False)
         self.plotter.setAcceptDrops(False)  # the main window handles dropped files
         self.plotter.set_background("white")
@@ -52,7 +62,11 @@ class Viewport(QFrame):
         self.colours: np.ndarray | None = None
         self._mesh_actor = None
         self._glyph_actors: list = []
+        self._overlay_actors: dict = {}
+        self.field_title = ""
         self._marker_actor = None
+        self._marker_colour = (255, 208, 0)
+        self.glyph_colours = ((20, 20, 20), (31, 95, 191))
         self._edge = 1.0
         self._lut = vtkLookupTable()
         self._bar = _scalar_bar(self._lut)
@@ -94,20 +108,32 @@ class Viewport(QFrame):
         self.poly.GetPointData().GetArray("rgba").Modified()
 
     def _set_bar(self, clim, cmap, title: str) -> None:
+        from curv.colors import CLIP_SHADE
+
         table = cmap.table
         self._lut.SetNumberOfTableValues(table.shape[0])
         for i, (r, g, b) in enumerate(table / 255.0):
             self._lut.SetTableValue(i, r, g, b, 1.0)
         self._lut.SetRange(*clim)
+        lo, hi = table[0] / 255.0 * CLIP_SHADE, table[-1] / 255.0 * CLIP_SHADE
+        self._lut.SetBelowRangeColor(*lo, 1.0)
+        self._lut.SetAboveRangeColor(*hi, 1.0)
+        self._lut.UseBelowRangeColorOn()
+        self._lut.UseAboveRangeColorOn()
         self._lut.Build()
-        self._bar.SetTitle(title)
+        self._bar.SetTitle("")  # the field's name is in the pane header: a VTK title collides with the labels
+        self.field_title = title
         self._bar.SetVisibility(True)
         self._bar.Modified()
+        self.glyph_colours = tuple(contrasting_colours(cmap, 2))
+        self._marker_colour = contrasting_colours(cmap, 1, avoid=self.glyph_colours)[0]
 
     def set_title(self, text: str, *, status: str = "") -> None:
-        """The pane's header: what it shows, and its status (computing, failed) in red."""
+        """The pane's header: estimator, the field the colours show, and its status (computing, failed) in red."""
         extra = f" &nbsp;<span style='color:#b00020'>{status}</span>" if status else ""
-        self.title.setText(f"{text}{extra}")
+        field = f" &nbsp;·&nbsp; <b>{self.field_title}</b>" if self.field_title and self._bar.GetVisibility() else ""
+        self.title.setText(f"{text}{field}{extra}")
+        self.title.setToolTip(f"{text} {status}".strip())
 
     # -- overlays -------------------------------------------------------------------------------
     def clear_glyphs(self) -> None:
@@ -116,32 +142,62 @@ class Viewport(QFrame):
         self._glyph_actors = []
 
     def set_glyphs(self, lines: tuple[pv.PolyData, pv.PolyData] | None) -> None:
-        """Draw (d1, d2) line glyphs, or remove them."""
+        """Draw (d1, d2) line glyphs in colours that contrast with the map (:attr:`glyph_colours`), or remove them."""
         self.clear_glyphs()
         if lines is None:
             return
-        for poly, colour in zip(lines, ("#202020", "#1f5fbf")):
+        for poly, colour in zip(lines, self.glyph_colours):
             if poly.n_points:
                 self._glyph_actors.append(self.plotter.add_mesh(
-                    poly, color=colour, line_width=2, render=False, reset_camera=False,
-                    pickable=False, lighting=False))
+                    poly, color=tuple(c / 255 for c in colour), line_width=1.5, render=False,
+                    reset_camera=False, pickable=False, lighting=False))
+
+    def set_overlays(self, *, edges: bool, borders: pv.PolyData | None, points: bool) -> None:
+        """Wireframe edges on the mesh, border edges (``borders`` lines) highlighted, vertices as points."""
+        if self._mesh_actor is not None:
+            self._mesh_actor.prop.show_edges = bool(edges)
+            self._mesh_actor.prop.edge_color = (0.25, 0.25, 0.25)
+            self._mesh_actor.prop.line_width = 0.5
+        for name in list(self._overlay_actors):
+            self.plotter.remove_actor(self._overlay_actors.pop(name), render=False)
+        if borders is not None and borders.n_points:
+            self._overlay_actors["borders"] = self.plotter.add_mesh(
+                borders, color=(0.9, 0.1, 0.1), line_width=3, render=False, reset_camera=False,
+                pickable=False, lighting=False)
+        if points and self.poly is not None:
+            self._overlay_actors["points"] = self.plotter.add_mesh(
+                pv.PolyData(np.asarray(self.poly.points)), color=(0.1, 0.1, 0.1), point_size=3,
+                render_points_as_spheres=False, render=False, reset_camera=False, pickable=False, lighting=False)
 
     def set_marker(self, point: np.ndarray | None) -> None:
         """Mark the picked vertex with a small sphere (None hides it)."""
         if self._marker_actor is not None:
             self.plotter.remove_actor(self._marker_actor, render=False)
             self._marker_actor = None
-        if point is not None:
-            sphere = pv.Sphere(radius=0.6 * self._edge, center=np.asarray(point, float))
+        if point is not None:  # a fixed size in pixels: visible at any zoom, in a colour the map lacks
+            marker = pv.PolyData(np.asarray(point, float).reshape(1, 3))
             self._marker_actor = self.plotter.add_mesh(
-                sphere, color="#ffd000", render=False, reset_camera=False, pickable=False)
+                marker, color=tuple(c / 255 for c in self._marker_colour), point_size=16,
+                render_points_as_spheres=True, render=False, reset_camera=False, pickable=False, lighting=False)
 
-    def set_active(self, active: bool) -> None:
-        """Highlight the active pane's frame."""
-        self.setStyleSheet(f"#viewport{self.index} {{ border: 2px solid {'#2a7ae2' if active else '#c8c8c8'}; }}")
+    def set_active(self, active: bool, *, difference: bool = False) -> None:
+        """Frame in the pane's colour, thick when it is the active pane (the Inspect group matches)."""
+        colour = PANE_COLOURS[-1] if difference else PANE_COLOURS[self.index % (len(PANE_COLOURS) - 1)]
+        width = 3 if active else 1
+        self.setStyleSheet(f"#viewport{self.index} {{ border: {width}px solid {colour}; }}")
+        self.title.setStyleSheet(f"background: {colour if active else 'transparent'};"
+                                 f" color: {'white' if active else 'black'}; padding: 1px;")
 
     def render(self) -> None:
+        self._centre_bar()
         self.plotter.render()
+
+    def _centre_bar(self) -> None:
+        """Keep the colour bar centred: its width is capped in pixels, so its left edge depends on the pane."""
+        w = max(self.plotter.width(), 1)
+        frac = min(_BAR_FRACTION, _BAR_WIDTH_PX / w)
+        self._bar.SetWidth(frac)
+        self._bar.SetPosition(0.5 * (1.0 - frac), 0.01)
 
     # -- picking --------------------------------------------------------------------------------
     def pick_display(self, x: float, y: float) -> int | None:
@@ -192,15 +248,23 @@ def _scalar_bar(lut: vtkLookupTable) -> vtkScalarBarActor:
     bar = vtkScalarBarActor()
     bar.SetLookupTable(lut)
     bar.SetOrientationToHorizontal()
-    bar.SetPosition(0.1, 0.02)
-    bar.SetWidth(0.8)
-    bar.SetHeight(0.14)
-    bar.SetMaximumHeightInPixels(70)
-    bar.SetMaximumWidthInPixels(420)
+    bar.SetPosition(0.1, 0.01)
+    bar.SetWidth(_BAR_FRACTION)
+    bar.SetHeight(0.16)
+    bar.SetMaximumHeightInPixels(78)
+    bar.SetMaximumWidthInPixels(_BAR_WIDTH_PX)
     bar.SetNumberOfLabels(3)
-    bar.SetBarRatio(0.3)
-    bar.SetTextPositionToPrecedeScalarBar()  # labels under the bar, title above: no overlap
-    bar.SetLabelFormat("%-#6.3g")
+    bar.SetBarRatio(0.28)
+    bar.SetTextPositionToPrecedeScalarBar()  # labels under the bar
+    bar.SetTextPad(3)
+    bar.SetBelowRangeAnnotation("")
+    bar.SetAboveRangeAnnotation("")
+    bar.SetLabelFormat(LABEL_FORMAT)  # the same digits as the histogram and the limit fields
+    bar.DrawAboveRangeSwatchOn()  # clipped values: the darkened end colours beside the bar
+    bar.DrawBelowRangeSwatchOn()
+    bar.DrawBackgroundOn()  # labels stay readable over a dark mesh
+    bar.GetBackgroundProperty().SetColor(1.0, 1.0, 1.0)
+    bar.GetBackgroundProperty().SetOpacity(0.82)
     bar.UnconstrainedFontSizeOn()
     for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
         prop.SetColor(0.1, 0.1, 0.1)
@@ -208,4 +272,7 @@ def _scalar_bar(lut: vtkLookupTable) -> vtkScalarBarActor:
         prop.ItalicOff()
         prop.BoldOff()
         prop.SetFontSize(12)
+    label = bar.GetLabelTextProperty()  # the end labels overhang the bar: each gets its own light box
+    label.SetBackgroundColor(1.0, 1.0, 1.0)
+    label.SetBackgroundOpacity(0.85)
     return bar

@@ -1,7 +1,7 @@
 """The estimator registry: every estimator family registers its spec here.
 
 The CLI, the viewer and the study list estimators from :data:`ESTIMATORS`; adding an estimator is
-one module with one ``@register(...)`` call.
+one module with one ``register(EstimatorSpec(...))`` call.
 """
 
 from __future__ import annotations

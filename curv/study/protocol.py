@@ -26,15 +26,17 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
+from ..api import Smoothing
 from ..surfaces import PAPER_SURFACES
+from ..surfaces.hexagon import PAPER_VERTEX_COUNTS
 
 __all__ = [
     "DENSITIES", "NOISE_LEVELS", "NOISE_FRACTION", "IRREGULARITIES", "FUNCTIONS", "EXCLUSION_RANGE",
-    "SMOOTH_RANGE", "FIG10_DENSITY", "Smoothing", "Variant", "study_variants", "parse_variants",
+    "SMOOTH_RANGE", "FIG10_DENSITY", "Smoothing", "SMOOTHING_SUFFIX", "Variant", "study_variants", "parse_variants",
     "StudySettings", "Task", "Preset", "preset_settings", "short_name",
 ]
 
-DENSITIES: tuple[int, ...] = (217, 817, 3169, 12481)
+DENSITIES: tuple[int, ...] = PAPER_VERTEX_COUNTS
 """Vertex counts of the subdivided hexagon (3 s^2 + 3 s + 1 for s = 8, 16, 32, 64 segments per side)."""
 
 NOISE_LEVELS: tuple[float, ...] = (0.0, 0.33, 0.66, 1.0)
@@ -59,22 +61,8 @@ FIG10_DENSITY = 3169
 """The density of Fig. 10 (the paper's text; its caption says 'highest sampling density')."""
 
 
-class Smoothing(str, enum.Enum):
-    """Smoothing applied around an estimate; the value is the ``smooth=`` argument of ``curv.estimate``."""
-
-    NONE = "none"
-    MESH = "mesh"
-    """Cotan-Laplacian smoothing of the mesh before the estimate (R2SM)."""
-    VALUES = "values"
-    """Cotan-Laplacian smoothing of the curvature values after the estimate (R2SV)."""
-
-    @property
-    def suffix(self) -> str:
-        return {"none": "", "mesh": "SM", "values": "SV"}[self.value]
-
-    @property
-    def api_value(self) -> str | None:
-        return None if self is Smoothing.NONE else self.value
+SMOOTHING_SUFFIX = {Smoothing.NONE: "", Smoothing.MESH: "SM", Smoothing.VALUES: "SV"}
+"""The paper's variant suffix of each smoothing (R2SM, R2SV); :class:`curv.api.Smoothing` is the one enum."""
 
 
 _SHORT = {"meyer": "My"}
@@ -100,7 +88,7 @@ class Variant:
 
     @property
     def range_label(self) -> str:
-        return f"R{self.range}{self.smooth.suffix}"
+        return f"R{self.range}{SMOOTHING_SUFFIX[self.smooth]}"
 
     @property
     def id(self) -> str:
@@ -117,8 +105,8 @@ class Variant:
         rest = rest.upper().lstrip("R")
         smooth = Smoothing.NONE
         for s in (Smoothing.MESH, Smoothing.VALUES):
-            if rest.endswith(s.suffix):
-                smooth, rest = s, rest[: -len(s.suffix)]
+            if rest.endswith(SMOOTHING_SUFFIX[s]):
+                smooth, rest = s, rest[: -len(SMOOTHING_SUFFIX[s])]
         return cls(method, int(rest), smooth)
 
 

@@ -49,7 +49,7 @@ def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
     for v in variants:
         t0 = time.perf_counter()
         try:
-            res = estimate(tm.mesh, method=v.method, range=v.range, smooth=v.smooth.api_value,
+            res = estimate(tm.mesh, method=v.method, range=v.range, smooth=v.smooth,
                            normals=None if v.smooth is Smoothing.MESH else normals)
             measures, error = summarize(tm.truth, res, tm.evaluated), ""
         except Exception as exc:  # recorded in the row and reported; one bad estimator must not end a study

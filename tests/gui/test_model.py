@@ -9,18 +9,21 @@ pytest.importorskip("app.model")
 
 import curv  # noqa: E402
 from app.model import Document, LimitMode, Pane, colormap, compute_limits, map_colours  # noqa: E402
-from app.model.colour import INVALID_RGBA  # noqa: E402
-from app.model.errors import relative_error  # noqa: E402
+from app.model.colors import INVALID_RGBA  # noqa: E402
+from app.model.scalars import relative_error  # noqa: E402
 
 
 def test_map_colours_ends_centre_and_nan():
     cmap = colormap("coolwarm")
     rgba = map_colours(np.array([-5.0, -1.0, 0.0, 1.0, 5.0, np.nan]), (-1.0, 1.0), cmap)
     assert rgba.dtype == np.uint8 and rgba.shape == (6, 4)
-    np.testing.assert_array_equal(rgba[0, :3], cmap.table[0])   # clipped below
-    np.testing.assert_array_equal(rgba[1, :3], cmap.table[0])
+    from curv.colors import CLIP_SHADE
+
+    np.testing.assert_array_equal(rgba[0, :3], (cmap.table[0] * CLIP_SHADE).astype(np.uint8))  # clipped: darkened
+    np.testing.assert_array_equal(rgba[1, :3], cmap.table[0])                                   # at the limit: end colour
     np.testing.assert_array_equal(rgba[2, :3], cmap.table[128])  # 0 maps to the middle entry
-    np.testing.assert_array_equal(rgba[4, :3], cmap.table[-1])
+    np.testing.assert_array_equal(rgba[4, :3], (cmap.table[-1] * CLIP_SHADE).astype(np.uint8))
+    np.testing.assert_array_equal(rgba[3, :3], cmap.table[-1])
     np.testing.assert_array_equal(rgba[5], INVALID_RGBA)
     assert rgba[0, 2] > rgba[0, 0] and rgba[4, 0] > rgba[4, 2]  # blue low, red high
 
@@ -56,17 +59,19 @@ def test_failure_reverts_pane_to_last_good_and_events_fire():
     seen = []
     doc.pane_changed.connect(lambda i: seen.append(("pane", i)))
     doc.set_mesh("src", mesh)
-    doc.set_result(("mru", 2), _result(3, 1.0))
+    doc.set_result(Pane("mru", 2).key, _result(3, 1.0))
     doc.set_pane(0, method="ru")
-    assert doc.missing_keys() == [("ru", 2)]
-    doc.set_failure(("ru", 2), "ru needs triangles")
-    assert doc.panes[0] == Pane("mru", 2) and ("ru", 2) in doc.failures
+    assert doc.missing_keys() == [Pane("ru", 2).key]
+    doc.set_failure(Pane("ru", 2).key, "ru needs triangles")
+    assert doc.panes[0] == Pane("mru", 2) and Pane("ru", 2).key in doc.failures
     assert seen == [("pane", 0), ("pane", 0)]
     doc.set_pane_count(2)
-    assert doc.panes[1] == Pane("nc", 2) and doc.missing_keys() == [("nc", 2)]
-    doc.set_result(("nc", 2), _result(3, 3.0))
+    assert doc.panes[1] == Pane("nc", 2) and doc.missing_keys() == [Pane("nc", 2).key]
+    doc.set_result(Pane("nc", 2).key, _result(3, 3.0))
     doc.set_difference(True)
     fields = doc.fields()
     assert len(fields) == 3
-    assert fields[0][1] == fields[1][1] == (-3.0, 3.0)          # shared scale over A and B (H = 1, 3)
+    lo, hi = fields[0][1]
+    assert fields[1][1] == (lo, hi) and 1.0 <= lo < hi <= 3.0      # shared scale over A and B (H = 1, 3)
+    assert fields[0][2].kind == "sequential"                       # one sign: the whole sequential map
     np.testing.assert_allclose(fields[2][0], -2.0)               # A - B

@@ -15,7 +15,7 @@ from PySide6.QtCore import QMimeData, QPoint, QPointF, Qt, QUrl  # noqa: E402
 from PySide6.QtGui import QDropEvent  # noqa: E402
 
 from app.model import FileSource, Layer, Pane, Quantity, SurfaceSource, colormap, map_colours  # noqa: E402
-from app.model.errors import relative_error  # noqa: E402
+from app.model.scalars import relative_error  # noqa: E402
 
 
 def _shown(win, i=0):
@@ -135,8 +135,9 @@ def test_cancel_midway_and_supersede(qtbot, window, ui):
     assert window.cancel_button.isVisible()
     qtbot.mouseClick(window.cancel_button, Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: not window.controller.busy, timeout=5000)
-    assert ("mru", 4) in window.doc.failures and "cancelled" in window.doc.failures[("mru", 4)]
-    assert ("mru", 4) not in window.doc.results and not window.cancel_button.isVisible()
+    key = Pane("mru", 4).key
+    assert key in window.doc.failures and "cancelled" in window.doc.failures[key]
+    assert key not in window.doc.results and not window.cancel_button.isVisible()
     assert before is not None
     # a new request supersedes a running one: only the last source ends up in the document
     window.open_surface(SurfaceSource(name="torus", n_vertices=20000))
@@ -153,8 +154,10 @@ def test_switch_quantities_and_layers(qtbot, window, ui):
     window.inspect.quantity.setCurrentEnum(Quantity.GAUSSIAN)
     values, clim, cmap = window.doc.fields()[0]
     np.testing.assert_allclose(values, res.gaussian)
-    np.testing.assert_array_equal(_shown(window), map_colours(res.gaussian, clim, colormap("coolwarm")))
-    assert window.grid.viewports[0]._bar.GetTitle() == "Gaussian K"
+    assert np.nanmax(values) <= 0 and cmap.kind == "sequential"           # K < 0 everywhere: one sign
+    np.testing.assert_array_equal(_shown(window), map_colours(res.gaussian, clim, cmap))
+    vp = window.grid.viewports[0]
+    assert vp.field_title == "Gaussian K" and "Gaussian K" in vp.title.text()
     window.inspect.quantity.setCurrentEnum(Quantity.CURVEDNESS)           # unsigned: sequential map
     values, clim, cmap = window.doc.fields()[0]
     assert cmap.name == "viridis" and clim[0] >= 0

@@ -1,0 +1,87 @@
+"""The picked-vertex readout as rows of text: one column per pane, A − B, and the exact values."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+from curv.validity import Reason
+
+from .document import Document, pane_letter
+from .scalars import relative_error
+
+__all__ = ["readout_columns", "readout_rows", "fmt", "fmt_vec"]
+
+
+def fmt(x) -> str:
+    """A value of the readout (``—`` where there is none)."""
+    return "—" if x is None or not np.isfinite(x) else f"{x:.5g}"
+
+
+def fmt_vec(v) -> str:
+    return "—" if not np.all(np.isfinite(v)) else "(" + ", ".join(f"{c:+.3f}" for c in v) + ")"
+
+
+def _reason(r, index) -> str:
+    if r.valid[index]:
+        return "valid"
+    code = int(r.reason[index]) if r.reason is not None else 0
+    try:
+        return Reason(code).name.lower().replace("_", " ")
+    except ValueError:
+        return f"invalid ({code})"
+
+
+def readout_columns(doc: Document) -> list[str]:
+    """Column headings: ``A: mru R2``, ..., ``A − B`` when the difference pane is on, ``exact``."""
+    heads = [f"{pane_letter(j)}: {pane.title}" for j, pane in enumerate(doc.panes)]
+    if doc.view_count > len(doc.panes):
+        heads.append("A − B")
+    if doc.truth is not None:
+        heads.append("exact")
+    return heads
+
+
+def readout_rows(doc: Document, index: int) -> list[tuple[str, list[str]]]:
+    """Rows ``(label, [value per column])`` for vertex ``index``, columns as :func:`readout_columns`.
+
+    Rows: k1, k2, H, K, d1, d2, the status (``valid`` or the :class:`curv.Reason`), the shown field
+    and, for an analytic source, e_rel.
+    """
+    cols = [doc.result(i) for i in range(len(doc.panes))]
+    diff = doc.view_count > len(doc.panes)
+    a, b = (cols[0], cols[1]) if diff else (None, None)
+    truth = doc.truth
+    values = [doc.values(i) for i in range(doc.view_count)]
+
+    def scalar_row(label, get):
+        row = [fmt(get(r)) if r is not None else "…" for r in cols]
+        if diff:
+            row.append(fmt(get(a) - get(b)) if a is not None and b is not None else "…")
+        if truth is not None:
+            row.append(fmt(get(truth)))
+        return (label, row)
+
+    def vector_row(label, get):
+        row = [fmt_vec(get(r)) if r is not None else "…" for r in cols]
+        row += [""] * diff + ([fmt_vec(get(truth))] if truth is not None else [])
+        return (label, row)
+
+    rows = [scalar_row("k1", lambda r: r.k1[index]), scalar_row("k2", lambda r: r.k2[index]),
+            scalar_row("H", lambda r: r.mean[index]), scalar_row("K", lambda r: r.gaussian[index]),
+            vector_row("d1", lambda r: r.d1[index]), vector_row("d2", lambda r: r.d2[index])]
+    status = [_reason(r, index) if r is not None else "…" for r in cols]
+    status += [""] * diff + (["exact"] if truth is not None else [])
+    rows.append(("status", status))
+    shown = [fmt(v[index]) if v is not None else "…" for v in values]
+    shown += [""] if truth is not None else []
+    rows.append(("shown", shown))
+    if truth is not None:
+        errs = [fmt(relative_error(_at(r, index), _at(truth, index))[0]) if r is not None else "…" for r in cols]
+        rows.append(("e_rel", errs + [""] * diff + [""]))
+    return rows
+
+
+def _at(res, i) -> SimpleNamespace:
+    """The principal curvatures of one vertex, shaped like a one-vertex result."""
+    return SimpleNamespace(k1=res.k1[i:i + 1], k2=res.k2[i:i + 1])

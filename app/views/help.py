@@ -1,0 +1,49 @@
+"""Help texts, derived from the registries (estimators, ranges, quantities)."""
+
+from __future__ import annotations
+
+from html import escape
+
+from curv import __version__, ranges
+from curv.estimators import ESTIMATORS
+from curv.quantities import QUANTITIES
+
+__all__ = ["about_text", "guide_text"]
+
+PAPER = "Multivariate analysis of curvature estimators"
+
+
+def about_text() -> str:
+    """Version, the paper, licences."""
+    import PySide6
+
+    try:
+        import vtk
+        vtk_version = vtk.vtkVersion.GetVTKVersion()
+    except Exception:  # version display only
+        vtk_version = "?"
+    return (f"<h3>curvlab {__version__}</h3>"
+            f"<p>Curvature estimation and inspection on surface meshes: every estimator and range of "
+            f"<i>{PAPER}</i>, with analytic surfaces to check them against.</p>"
+            "<p>curvlab is MIT licensed. It runs on numpy, scipy, numba (BSD), trimesh, meshio, plyfile (MIT), "
+            f"Qt for Python {PySide6.__version__} (LGPLv3), VTK {vtk_version}, pyvista, pyvistaqt (BSD/MIT) and "
+            "superqt (BSD).</p>")
+
+
+def guide_text() -> str:
+    """A short guide: ranges, then one line per estimator and per quantity, from the registries."""
+    rows = []
+    for name, spec in ESTIMATORS.items():
+        named = ", ".join(ranges.range_label(k) for k in spec.ranges)
+        rows.append(f"<tr><td><b>{name}</b></td><td>{escape(spec.title)}</td><td>{named}</td>"
+                    f"<td>{'triangles' if spec.triangles_only else 'polygons'}</td><td>{escape(spec.reference)}</td></tr>")
+    quantities = "".join(f"<li><b>{escape(q.title)}</b>: {escape(q.formula)}</li>" for q in QUANTITIES.values())
+    return ("<h3>Ranges</h3><p>Range <b>Rk</b> (paper §4.1): the support of vertex p is every vertex connected "
+            "to p within k × the longest edge of p's 1-ring. Estimators that also use their neighbours' normals "
+            "(an, mru) collect within (k − 1) × that length. Support-based estimators take any real k from their "
+            "smallest range (e.g. R2.5), or a fixed <b>radius</b> in mesh units; meyer and ru use their fixed "
+            "1-ring.</p><h3>Estimators</h3><table cellspacing=4><tr><th>name</th><th>method</th><th>ranges</th>"
+            "<th>faces</th><th>reference</th></tr>" + "".join(rows) + "</table>"
+            "<h3>Quantities</h3><ul>" + quantities + "</ul>"
+            "<p>Magenta vertices are invalid (border-affected, degenerate, singular fit): their reason shows "
+            "in the picked-vertex readout.</p>")
