@@ -7,11 +7,13 @@
 The advisor measures the three features the paper's study varies (density, noise, irregularity,
 see :class:`MeshFeatures`) and predicts the median e_rel of every candidate variant from a table
 of study results (``curv/data/advisor_table.json``, built by :mod:`curv.advisor_table`; the module is not named ``advise`` so that importing it cannot shadow the function ``curv.advise``). The
-table holds one point per study mesh: the advisor's own features measured on that mesh, and the
-median e_rel every variant reached on it against the exact curvature. A prediction is the
+table holds one point per mesh of a study run (the paper's Monge patches on the hexagon, plus
+noisy closed analytic surfaces, which widen the range of densities and tessellations): the
+advisor's own features measured on that mesh, and the median e_rel every variant reached on it
+against the exact curvature. A prediction is the
 Gaussian-kernel weighted mean of ``log(e_rel)`` over the table's meshes in the scaled feature space
-``(log density, noise level, irregularity)``; scales and bandwidth are the table's (the bandwidth
-chosen by leave-one-out regret when the table is built). Because the table's coordinates are
+``(log density, noise level or its square root, irregularity)``; axis transform, scales and
+bandwidth are the table's (chosen by leave-one-out regret when the table is built). Because the table's coordinates are
 measured exactly as on the user's mesh, a bias of a measure cancels instead of misplacing the
 mesh; far outside the table the nearest meshes decide (the grid's edge acts as a clip). There is
 no hand-written rule: a different table gives different advice.
@@ -68,7 +70,7 @@ class MeshFeatures:
         ``n·(x_j - x_p) + (k1 u² + k2 v²) / 2`` with ``u = d1·(x_j - x_p)``, ``v = d2·(x_j - x_p)``;
         ``raw = 1.4826 MAD(residuals) / mean edge``. The fit's own model error and the absorbed part
         of the noise are removed by a calibration ``raw² = a² + (b noise)²`` fitted on the study's
-        meshes of known noise: ``noise = sqrt(max(raw² - a², 0)) / b``.
+        Monge-patch meshes of known noise (this session's table: a = 0.0005, b = 1.276): ``noise = sqrt(max(raw² - a², 0)) / b``.
     density : float
         Dimensionless resolution: mean edge length times the median of ``|k1| + |k2|`` over the
         validly fitted vertices of the same R3 fit (the table's axis uses the exact curvature of
@@ -272,9 +274,14 @@ def load_table(path=None) -> dict:
 
 def table_coordinates(table: dict, density, noise_level, irregularity_deg) -> np.ndarray:
     """Feature-space coordinates of the table's kernel: ``(log density, noise level, irregularity)``
-    each divided by the table's scale for that axis. Arrays broadcast; returns (..., 3)."""
-    scales = np.asarray(table["kernel"]["scales"], float)
-    x = np.stack(np.broadcast_arrays(np.log(np.maximum(density, 1e-12)), noise_level, irregularity_deg), axis=-1)
+    each divided by the table's scale for that axis; the noise level enters as its square root when
+    the table's ``kernel["noise_axis"]`` is ``"sqrt"`` (errors change fastest near zero noise).
+    Arrays broadcast; returns (..., 3)."""
+    kernel = table["kernel"]
+    scales = np.asarray(kernel["scales"], float)
+    level = np.maximum(noise_level, 0.0)
+    noise = np.sqrt(level) if kernel.get("noise_axis", "linear") == "sqrt" else level
+    x = np.stack(np.broadcast_arrays(np.log(np.maximum(density, 1e-12)), noise, irregularity_deg), axis=-1)
     return x / scales
 
 

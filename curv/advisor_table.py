@@ -5,19 +5,23 @@ irregularities (the study's own tasks, meshes, runner and metrics), then, on eve
 grid, the advisor's own feature measures. It stores
 
 - ``calibration``: the noise measure's floor and gain (``raw² = a² + (b noise)²``, least squares
-  over the grid's meshes of known noise) and the angle jitter per noise level of the irregularity
+  over the study grid's meshes of known noise; the closed surfaces are not used) and the angle jitter per noise level of the irregularity
   measure (``raw² = clean² + (c level)²``, least squares over each mesh and its noise-free twin);
 - ``points``: per mesh, the measured ``(density, noise level, irregularity)``;
 - ``median_erel``: per mesh and variant, the median e_rel against the exact curvature;
-- ``kernel``: the axis scales (standard deviation of each coordinate over the points) and the
-  bandwidth with the lowest leave-one-out mean regret (each mesh advised from all the others);
+- ``kernel``: the noise axis transform (linear or square root), the axis scales (standard
+  deviation of each coordinate over the points) and the bandwidth, the pair with the lowest
+  leave-one-out mean regret (each mesh advised from all the others);
 - ``metadata``: the exact command, the settings, the date, timings.
 
-Regenerate (this session's table, 162 meshes, about 1.5 minutes on 2 busy cores)::
+Regenerate (this session's table: 270 study meshes and 90 closed ones, about 3.5 minutes on 2
+busy cores from scratch)::
 
-    python -m curv.advisor_table --work /tmp/advisor-study --samples 3 \\
-        --densities 817 3169 --noise 0 0.5 1 --irregularity 0 12.5 25 --workers 2
+    python -m curv.advisor_table --work /tmp/advisor-study --samples 3 --densities 817 3169 \\
+        --noise 0 0.1 0.25 0.5 1 --irregularity 0 12.5 25 --workers 2 \\
+        --closed sphere ellipsoid torus --closed-vertices 642 2562
 
+(these are the defaults, so ``python -m curv.advisor_table --work DIR`` is the same run.)
 (217 is left out: on its hexagon no vertex is farther than R4 from the border, so the study
 evaluates none.) A finer table later: more samples, ``--densities 817 3169 12481``, more noise
 and irregularity levels. The study directory resumes, so a long run may be split.
@@ -42,9 +46,11 @@ __all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "fit_calibration", 
 DEFAULT_OUT = Path(__file__).parent / "data" / "advisor_table.json"
 BANDWIDTHS = (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
 """Candidate kernel widths in scaled units, tried by leave-one-out."""
+NOISE_AXES = ("linear", "sqrt")
+"""Candidate transforms of the noise axis, tried by leave-one-out with every bandwidth."""
 
 
-def table_settings(*, samples: int = 3, densities=(817, 3169), noise=(0.0, 0.5, 1.0),
+def table_settings(*, samples: int = 3, densities=(817, 3169), noise=(0.0, 0.1, 0.25, 0.5, 1.0),
                    irregularity=(0.0, 12.5, 25.0), seed: int = 0) -> StudySettings:
     """The study grid of the table: every registry variant at its named ranges, no smoothing variants."""
     selectors = tuple(v.id for v in study_variants(smoothing=False))
@@ -65,6 +71,56 @@ def mesh_features(task: Task) -> dict:
         "irregularity_planar": tm.irregularity, "density_true": raw["mean_edge"] * float(np.median(scale)),
         "noise_raw": raw["noise_raw"], "irregularity_raw": raw["irregularity_raw_deg"], "density": raw["density"],
     }
+
+
+def closed_mesh_point(args: tuple) -> tuple[dict, list[float]]:
+    """Raw measures and every variant's median e_rel on one noisy closed analytic surface.
+
+    ``args = (seed, name, n_vertices, noise_level, sample, variant_ids)``; every vertex is
+    evaluated (no border). The noise directions depend on (seed, name, n_vertices, sample) only.
+    """
+    import zlib
+
+    from .api import estimate
+    from .normals import vertex_normals
+    from .study.metrics import summarize
+    from .study.protocol import Variant
+    from .surfaces import make_surface
+
+    seed, name, n, level, sample, variant_ids = args
+    rng = np.random.default_rng([seed, 7, zlib.crc32(name.encode()), n, sample])
+    s = make_surface(name, n_vertices=n, noise=level * NOISE_FRACTION, seed=rng)
+    raw = raw_measures(s.mesh)
+    scale = np.abs(s.truth.k1) + np.abs(s.truth.k2)
+    row = {"key": [seed, name, n, 0.0, float(level), sample], "noise_true": level * NOISE_FRACTION,
+           "irregularity_planar": float("nan"), "density_true": raw["mean_edge"] * float(np.median(scale)),
+           "noise_raw": raw["noise_raw"], "irregularity_raw": raw["irregularity_raw_deg"], "density": raw["density"]}
+    normals, every = vertex_normals(s.mesh), np.ones(s.mesh.n_vertices, bool)
+    erel = []
+    for vid in variant_ids:
+        v = Variant.from_id(vid)
+        try:
+            erel.append(summarize(s.truth, estimate(s.mesh, method=v.method, range=v.range, normals=normals),
+                                  every)["median_erel"])
+        except Exception:  # recorded as missing, like a failing variant of the study
+            erel.append(float("nan"))
+    return row, erel
+
+
+def closed_points(names, sizes, levels, samples: int, seed: int, variant_ids, workers: int | None):
+    """:func:`closed_mesh_point` over every (name, size, level, sample), in a process pool."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    jobs = [(seed, nm, int(n), float(lv), s, tuple(variant_ids))
+            for s in range(samples) for nm in names for n in sizes for lv in levels]
+    if not jobs:
+        return [], []
+    if workers == 0:
+        out = [closed_mesh_point(j) for j in jobs]
+    else:
+        with ProcessPoolExecutor(workers or None) as pool:
+            out = list(pool.map(closed_mesh_point, jobs))
+    return [r for r, _ in out], [e for _, e in out]
 
 
 def fit_calibration(rows: list[dict]) -> dict:
@@ -109,8 +165,15 @@ def choose_bandwidth(coords: np.ndarray, log_values: np.ndarray) -> tuple[float,
     return min(scores, key=scores.get), scores
 
 
-def build_table(settings: StudySettings, work_dir, *, workers: int | None = None, command: str = "") -> dict:
-    """Run (or resume) the study of ``settings`` in ``work_dir`` and turn it into the advisor's table."""
+def build_table(settings: StudySettings, work_dir, *, workers: int | None = None, command: str = "",
+                closed=(), closed_vertices=(642, 2562)) -> dict:
+    """Run (or resume) the study of ``settings`` in ``work_dir`` and turn it into the advisor's table.
+
+    ``closed`` adds closed analytic surfaces (registry names such as ``"sphere"``, ``"torus"``) at
+    each of ``closed_vertices`` and each noise level of ``settings``, ``settings.samples`` noise
+    draws each: the study's Monge patches cover only a narrow band of densities and none of the
+    regular closed tessellations real meshes resemble.
+    """
     from .study.runner import run
 
     t0 = time.perf_counter()
@@ -131,6 +194,13 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
         i, j = index.get((int(key[0]), str(key[1]), int(key[2]), float(key[3]), float(key[4]), int(key[5]))), col.get(vid)
         if i is not None and j is not None:
             erel[i, j] = value
+    t2 = time.perf_counter()
+    c_rows, c_erel = closed_points(closed, closed_vertices, settings.noise, settings.samples, settings.seed,
+                                   variants, workers)
+    t_closed = time.perf_counter() - t2
+    if c_rows:
+        rows += c_rows
+        erel = np.concatenate([erel, np.array(c_erel, float)])
     erel = np.where(erel > 0, erel, np.nan)
 
     from .advisor import calibrate_irregularity, calibrate_noise
@@ -138,13 +208,17 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
     noise = np.array([calibrate_noise(r["noise_raw"], cal) for r in rows])
     irr = np.array([calibrate_irregularity(r["irregularity_raw"], n, cal) for r, n in zip(rows, noise)])
     points = np.stack([[r["density"] for r in rows], noise / NOISE_FRACTION, irr], axis=1)
-    scales = np.std(np.stack([np.log(points[:, 0]), points[:, 1], points[:, 2]], axis=1), axis=0)
-    scales = np.where(scales > 0, scales, 1.0)
-    table = {"kernel": {"scales": scales.tolist()}}
-    coords = table_coordinates(table, *points.T)
-    bandwidth, scores = choose_bandwidth(coords, np.log(erel))
-    table["kernel"]["bandwidth"] = bandwidth
-    table["kernel"]["loo_mean_regret"] = {str(h): round(s, 4) for h, s in scores.items()}
+    best = None
+    for axis in NOISE_AXES:
+        noise_coord = np.sqrt(points[:, 1]) if axis == "sqrt" else points[:, 1]
+        scales = np.std(np.stack([np.log(points[:, 0]), noise_coord, points[:, 2]], axis=1), axis=0)
+        kernel = {"noise_axis": axis, "scales": np.where(scales > 0, scales, 1.0).tolist()}
+        coords = table_coordinates({"kernel": kernel}, *points.T)
+        bandwidth, scores = choose_bandwidth(coords, np.log(erel))
+        kernel.update(bandwidth=bandwidth, loo_mean_regret={str(h): round(s, 4) for h, s in scores.items()})
+        if best is None or scores[bandwidth] < best["loo_mean_regret"][str(best["bandwidth"])]:
+            best = kernel
+    table = {"kernel": best}
 
     rel = lambda est, true: np.abs(est[true > 0] / true[true > 0] - 1)  # noqa: E731
     true_noise = np.array([r["noise_true"] for r in rows])
@@ -154,7 +228,8 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
             "command": command, "settings": settings.as_dict(), "variants_note": "named ranges, no smoothing",
             "created": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "n_meshes": len(rows),
             "fit": f"{FIT_METHOD} R{FIT_RANGE}", "study_seconds": round(t_study, 1),
-            "features_seconds": round(t_features, 1),
+            "features_seconds": round(t_features, 1), "closed_seconds": round(t_closed, 1),
+            "closed": {"surfaces": list(closed), "vertices": list(closed_vertices) if closed else []},
             "noise_relative_error_at_or_above_a_third": {
                 "median": float(np.median(rel(noise[big], true_noise[big]))),
                 "p90": float(np.percentile(rel(noise[big], true_noise[big]), 90))},
@@ -164,7 +239,7 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
         "variants": variants,
         "columns": ["density", "noise_level", "irregularity_deg"],
         "points": np.round(points, 5).tolist(),
-        "truth": [{"key": r["key"], "noise_true": r["noise_true"], "irregularity_planar": round(r["irregularity_planar"], 3),
+        "truth": [{"key": r["key"], "noise_true": r["noise_true"], "irregularity_planar": (round(r["irregularity_planar"], 3) if np.isfinite(r["irregularity_planar"]) else None),
                    "density_true": round(r["density_true"], 5)} for r in rows],
         "median_erel": [[None if not np.isfinite(x) else float(f"{x:.4g}") for x in row] for row in erel],
     })
@@ -177,15 +252,18 @@ def main(argv=None) -> int:
     parser.add_argument("--work", default="advisor-study", help="study directory (resumes); default ./advisor-study")
     parser.add_argument("--samples", type=int, default=3)
     parser.add_argument("--densities", type=int, nargs="+", default=[817, 3169])
-    parser.add_argument("--noise", type=float, nargs="+", default=[0.0, 0.5, 1.0])
+    parser.add_argument("--noise", type=float, nargs="+", default=[0.0, 0.1, 0.25, 0.5, 1.0])
     parser.add_argument("--irregularity", type=float, nargs="+", default=[0.0, 12.5, 25.0])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=None, help="local processes; default the study's")
+    parser.add_argument("--closed", nargs="*", default=["sphere", "ellipsoid", "torus"], help="closed surfaces to add (sphere ellipsoid torus)")
+    parser.add_argument("--closed-vertices", type=int, nargs="+", default=[642, 2562])
     args = parser.parse_args(argv)
     settings = table_settings(samples=args.samples, densities=args.densities, noise=args.noise,
                               irregularity=args.irregularity, seed=args.seed)
     command = "python -m curv.advisor_table " + " ".join(sys.argv[1:] if argv is None else argv)
-    table = build_table(settings, args.work, workers=args.workers, command=command)
+    table = build_table(settings, args.work, workers=args.workers, command=command,
+                        closed=tuple(args.closed), closed_vertices=tuple(args.closed_vertices))
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, "w") as fh:
         json.dump(table, fh, separators=(",", ":"))
