@@ -4,8 +4,8 @@ The table behind :func:`curv.advise`: a study over a grid of densities, noise le
 irregularities (the study's own tasks, meshes, runner and metrics), then, on every mesh of that
 grid, the advisor's own feature measures. It stores
 
-- ``calibration``: the noise measure's floor and gain (``raw² = a² + (b noise)²``, least squares
-  over the study grid's meshes of known noise; the closed surfaces are not used) and the angle jitter per noise level of the irregularity
+- ``calibration``: the noise measure's floor, density term and gain
+  (``raw² = a² + c density⁴ + (b noise)²``, least squares over all the table's meshes of known noise) and the angle jitter per noise level of the irregularity
   measure (``raw² = clean² + (c level)²``, least squares over each mesh and its noise-free twin);
 - ``points``: per mesh, the measured ``(density, noise level, irregularity)``;
 - ``median_erel``: per mesh and variant, the median e_rel against the exact curvature;
@@ -127,8 +127,9 @@ def fit_calibration(rows: list[dict]) -> dict:
     """Least-squares calibration of the noise and irregularity measures (see the module docstring)."""
     raw = np.array([r["noise_raw"] for r in rows])
     true = np.array([r["noise_true"] for r in rows])
-    design = np.stack([np.ones_like(true), true**2], axis=1)
-    (a2, b2), *_ = np.linalg.lstsq(design, raw**2, rcond=None)
+    density = np.array([r["density"] for r in rows])
+    design = np.stack([np.ones_like(true), density**4, true**2], axis=1)
+    (a2, c4, b2), *_ = np.linalg.lstsq(design, raw**2, rcond=None)
     clean = {tuple(r["key"][:4] + r["key"][5:]): r["irregularity_raw"] for r in rows if r["noise_true"] == 0}
     dl, dy = [], []
     for r in rows:
@@ -139,6 +140,7 @@ def fit_calibration(rows: list[dict]) -> dict:
     dl, dy = np.array(dl), np.array(dy)
     c2 = float(dl @ dy / (dl @ dl)) if dl.size else 0.0
     return {"noise_floor": float(np.sqrt(max(a2, 0.0))), "noise_gain": float(np.sqrt(max(b2, 1e-12))),
+            "noise_density4": float(max(c4, 0.0)),
             "irregularity_noise_deg": float(np.sqrt(max(c2, 0.0)))}
 
 
@@ -184,7 +186,6 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
     t1 = time.perf_counter()
     rows = [mesh_features(t) for t in tasks]
     t_features = time.perf_counter() - t1
-    cal = fit_calibration(rows)
 
     index = {tuple(r["key"]): i for i, r in enumerate(rows)}
     erel = np.full((len(rows), len(variants)), np.nan)
@@ -202,10 +203,11 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
         rows += c_rows
         erel = np.concatenate([erel, np.array(c_erel, float)])
     erel = np.where(erel > 0, erel, np.nan)
+    cal = fit_calibration(rows)
 
     from .advisor import calibrate_irregularity, calibrate_noise
 
-    noise = np.array([calibrate_noise(r["noise_raw"], cal) for r in rows])
+    noise = np.array([calibrate_noise(r["noise_raw"], cal, r["density"]) for r in rows])
     irr = np.array([calibrate_irregularity(r["irregularity_raw"], n, cal) for r, n in zip(rows, noise)])
     points = np.stack([[r["density"] for r in rows], noise / NOISE_FRACTION, irr], axis=1)
     best = None

@@ -117,7 +117,7 @@ def test_ranking_covers_every_candidate_best_first(noisy):
 def test_why_line_names_the_noise_the_irregularity_and_the_choice(noisy):
     adv = advise(noisy.mesh)
     assert "\n" not in adv.why
-    assert f"noise about {adv.features.noise_level:.1f} of the paper's level" in adv.why
+    assert f"noise about {adv.features.noise_level:.2g} of the paper's level" in adv.why
     assert f"({adv.features.irregularity_deg:.0f} degrees)" in adv.why
     assert adv.why.endswith(f"{adv.method} R{adv.range}, expected median e_rel {adv.expected_erel:.2g}")
 
