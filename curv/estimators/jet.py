@@ -62,6 +62,10 @@ least-squares matrix condition above 1e6) is ``SINGULAR``."""
 
 _OK = int(Reason.OK)
 _TOO_FEW = int(Reason.TOO_FEW_NEIGHBOURS)
+MIN_NORMAL_COSINE = 0.2
+"""The PCA normal and the jet's normal must be within about 78 degrees of the vertex normal, or the fit
+does not describe the surface at the vertex (``DEGENERATE``)."""
+
 _SINGULAR = int(Reason.SINGULAR)
 _DEGENERATE = int(Reason.DEGENERATE)
 
@@ -159,8 +163,13 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
     cov[2, 0] = cov[0, 2]
     cov[2, 1] = cov[1, 2]
     sym3_eigen(cov, evec)
+    # The support must be a height field over its PCA plane: a plane far from the vertex normal
+    # (a support wrapping round a thin rim) gives an arbitrary fit whose sign flips with rounding.
+    along = evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz
+    if not abs(along) >= MIN_NORMAL_COSINE * math.sqrt(rx * rx + ry * ry + rz * rz):
+        return _DEGENERATE, 0.0
     # e3: least variance (the height axis), turned towards the reference normal; e1: most variance
-    sign = 1.0 if evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz >= 0.0 else -1.0
+    sign = 1.0 if along >= 0.0 else -1.0
     for a in range(3):
         frame[2, a] = sign * evec[a, 0]
         frame[0, a] = evec[a, 2]
@@ -220,7 +229,7 @@ def jet_principal(vec, frame, h, normals, out_k, out_d1, out_d2, row):
     Returns
     -------
     int
-        ``Reason.OK``, or ``DEGENERATE`` when the jet normal is 90 degrees or more from ``normals[row]``.
+        ``Reason.OK``, or ``DEGENERATE`` when the jet normal is about 78 degrees or more from ``normals[row]``.
     """
     ju, jv = vec[1, 1], vec[1, 2]
     juu, juv, jvv = 2.0 * vec[1, 3], vec[1, 4], 2.0 * vec[1, 5]
@@ -252,7 +261,7 @@ def jet_principal(vec, frame, h, normals, out_k, out_d1, out_d2, row):
     nw2 = n0 * frame[0, 2] + n1 * frame[1, 2] + n2 * frame[2, 2]
     rx, ry, rz = normals[row, 0], normals[row, 1], normals[row, 2]
     cosine = nw0 * rx + nw1 * ry + nw2 * rz
-    if not cosine > 0.0:
+    if not cosine >= MIN_NORMAL_COSINE:
         return _DEGENERATE
     ax0, ax1, ax2 = nw1 * rz - nw2 * ry, nw2 * rx - nw0 * rz, nw0 * ry - nw1 * rx
     _rotate(out_d1, row, ax0, ax1, ax2, cosine)
