@@ -186,3 +186,39 @@ def test_estimate_method_auto_refuses_a_range(tmp_path, capsys, noisy):
     assert main(["estimate", path, "--method", "auto", "--range", "3"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["curv: error: --method auto chooses the range too; drop --range/--radius"]
+
+
+# ------------------------------------------------------------------ the table builder
+def test_calibration_fit_recovers_known_coefficients():
+    from curv.advisor_table import fit_calibration
+
+    rng = np.random.default_rng(0)
+    rows = []
+    for i in range(40):
+        density, clean = rng.uniform(0.02, 0.6), rng.uniform(0, 30)
+        for level in (0.0, 0.3, 1.0):
+            sigma = level * NOISE_FRACTION
+            rows.append({"key": [0, "f", i, 0.0, level, 0], "noise_true": sigma, "density": density,
+                         "noise_raw": np.sqrt(0.002**2 + 0.01 * density**4 + (1.3 * sigma) ** 2),
+                         "irregularity_raw": np.sqrt(clean**2 + (9.0 * level) ** 2)})
+    cal = fit_calibration(rows)
+    assert cal["noise_floor"] == pytest.approx(0.002, rel=1e-6)
+    assert cal["noise_gain"] == pytest.approx(1.3, rel=1e-9)
+    assert cal["noise_density4"] == pytest.approx(0.01, rel=1e-6)
+    assert cal["irregularity_noise_deg"] == pytest.approx(9.0, rel=1e-9)
+
+
+def test_a_tiny_table_builds_and_advises(tmp_path, noisy):
+    from curv.advisor_table import build_table, table_settings
+
+    settings = table_settings(samples=1, densities=(817,), noise=(0.0, 1.0), irregularity=(0.0,))
+    table = build_table(settings, tmp_path / "study", workers=0, command="test", closed=("sphere",),
+                        closed_vertices=(642,))
+    n_meshes = 3 * 2 + 2  # three functions x two noise levels, one sphere at two noise levels
+    assert len(table["points"]) == len(table["median_erel"]) == len(table["truth"]) == n_meshes
+    assert all(len(row) == len(table["variants"]) for row in table["median_erel"])
+    assert table["metadata"]["command"] == "test" and table["metadata"]["settings"]["samples"] == 1
+    assert table["kernel"]["bandwidth"] in (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
+    table = json.loads(json.dumps(table))  # what load_table reads back
+    adv = advise(noisy.mesh, table=table)
+    assert len(adv.ranking) == len(table["variants"])
