@@ -244,6 +244,90 @@ def edge_table(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, cor
 
 
 @jit
+def _ring_neighbours(u, corners_u, indices, corner_next, corner_prev, buf):
+    """The distinct edge neighbours of u, sorted, into ``buf``: the next and previous vertex of
+    each corner at u (not u itself: a face repeating an index has no edge there). Returns their count."""
+    k = 0
+    for c in corners_u:
+        a = indices[corner_next[c]]
+        b = indices[corner_prev[c]]
+        if a != u:
+            buf[k] = a
+            k += 1
+        if b != u:
+            buf[k] = b
+            k += 1
+    # insertion sort: a ring holds a dozen entries
+    for i in range(1, k):
+        value = buf[i]
+        j = i - 1
+        while j >= 0 and buf[j] > value:
+            buf[j + 1] = buf[j]
+            j -= 1
+        buf[j + 1] = value
+    count = 0
+    for i in range(k):
+        if i == 0 or buf[i] != buf[count - 1]:
+            buf[count] = buf[i]
+            count += 1
+    return count
+
+
+@jit_parallel
+def _count_neighbours(indptr, corners, indices, corner_next, corner_prev, width, parts, counts):
+    n = indptr.size - 1
+    for t in prange(parts):
+        buf = np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            counts[u] = _ring_neighbours(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next,
+                                         corner_prev, buf)
+
+
+@jit_parallel
+def _fill_neighbours(indptr, corners, indices, corner_next, corner_prev, width, parts, out_ptr, out):
+    n = indptr.size - 1
+    for t in prange(parts):
+        buf = np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            k = _ring_neighbours(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, buf)
+            start = out_ptr[u]
+            for i in range(k):
+                out[start + i] = buf[i]
+
+
+def ring_neighbours(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+                    corner_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Edge neighbours of every vertex straight from the corners, without the edge table.
+
+    Parameters
+    ----------
+    indptr, corners : (n+1,), (h,) int64
+        Corners grouped by vertex (:func:`group_corners`).
+    indices, corner_next, corner_prev : (h,) int64
+        Vertex of each corner, next and previous corner in its face.
+
+    Returns
+    -------
+    out_ptr : (n+1,) int64
+    neighbours : (a,) int64
+        Sorted, distinct neighbours of vertex v in ``neighbours[out_ptr[v]:out_ptr[v+1]]``: the same
+        as the endpoints of the edge table's edges at v.
+    """
+    n = indptr.size - 1
+    width = _ring_width(indptr)
+    parts = max(1, min(threads(), n))
+    counts = np.empty(n, np.int64)
+    launch(_count_neighbours, indptr, corners, indices, corner_next, corner_prev, width, parts, counts)
+    out_ptr = np.zeros(n + 1, np.int64)
+    np.cumsum(counts, out=out_ptr[1:])
+    out = np.empty(out_ptr[-1], np.int64)
+    launch(_fill_neighbours, indptr, corners, indices, corner_next, corner_prev, width, parts, out_ptr, out)
+    return out_ptr, out
+
+
+@jit
 def vertex_incidence(edges, n):
     """The edges of each vertex, in increasing edge order (which is increasing neighbour order).
 

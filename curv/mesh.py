@@ -302,19 +302,26 @@ class Mesh:
         return _kernels.vertex_incidence(self.edges, self.n_vertices)
 
     @cached_property
+    def _neighbours(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(indptr (n+1,), neighbours (a,))`` int64: each vertex's edge neighbours, sorted, found
+        from its corners (no edge table: a fresh estimate that needs only the 1-ring never builds it)."""
+        indptr, corners = self.vertex_corners
+        return _kernels.ring_neighbours(indptr, corners, self._indices, self.corner_next, self.corner_prev)
+
+    @cached_property
     def adjacency(self) -> sp.csr_matrix:
         """(n, n) symmetric CSR matrix of int8 ones: ``A[i, j] = 1`` when ``i`` and ``j`` share an edge.
 
         Indices are sorted within each row.
         """
-        indptr, neighbours, _ = self._incidence
+        indptr, neighbours = self._neighbours
         n = self.n_vertices
         return _csr(np.ones(neighbours.size, np.int8), neighbours, indptr, (n, n))
 
     @cached_property
     def valence(self) -> np.ndarray:
         """(n,) int64 number of edge neighbours of each vertex."""
-        return np.diff(self._incidence[0])
+        return np.diff(self._neighbours[0])
 
     @cached_property
     def vertex_faces(self) -> sp.csr_matrix:
@@ -335,7 +342,7 @@ class Mesh:
 
         This is the unit of the estimation range (paper §4.1). 0 for a vertex with no edge.
         """
-        indptr, neighbours, _ = self._incidence
+        indptr, neighbours = self._neighbours
         out = np.empty(self.n_vertices)
         launch(_kernels.longest_incident_edges, indptr, neighbours, self._vertices, out)
         return out
