@@ -280,6 +280,12 @@ def _face_list_bytes(mesh: Mesh) -> bytes:
     sizes = mesh.face_sizes
     if sizes.size and sizes.max() > 255:
         raise MeshError(f"a face has {int(sizes.max())} vertices; PLY lists here hold at most 255")
+    if mesh.is_triangular:
+        # one packed record per face (numpy's structured dtypes have no padding unless asked)
+        records = np.empty(mesh.n_faces, dtype=[("count", "u1"), ("corners", "<i4", (3,))])
+        records["count"] = 3
+        records["corners"] = mesh.triangles
+        return records.tobytes()
     offsets = mesh.face_offsets[:-1]
     h = mesh.face_indices.size
     out = np.empty(mesh.n_faces + 4 * h, np.uint8)
