@@ -1,9 +1,11 @@
 """Predict the peak memory of ``curv estimate`` before running it, and what the machine has free.
 
-The model is ``BASE_BYTES + (PER_UNIT_BYTES + FACE_PASS_BYTES[method]) * units + BLOCK_BYTES[method, k]``
-with ``units = n_vertices + n_faces / 2`` (twice the vertex count on a closed triangle mesh). The
-coefficients come from peak RSS of the whole ``curv estimate`` process (reading the file,
-connectivity, normals, the estimator's blocks, the result and the output file), measured with
+The model is ``BASE_BYTES + (PER_UNIT_BYTES + FACE_PASS_BYTES[method]) * units
++ STAMP_BYTES_PER_THREAD * threads * n_vertices`` with ``units = n_vertices + n_faces / 2`` (twice
+the vertex count on a closed triangle mesh). The kernels hold no per-range temporaries (each
+thread's queue has a slot per vertex but touches only its largest support), so the range does not
+enter. The coefficients come from peak RSS of the whole ``curv estimate`` process (reading the file,
+connectivity, normals, the kernels' scratch, the result and the output file), measured with
 ``/usr/bin/time -v`` at 10M vertices and ``benchmarks/bench_estimators.py`` at 1M, rounded up.
 """
 
@@ -16,18 +18,17 @@ __all__ = ["estimate_peak_bytes", "available_bytes", "format_bytes", "MemoryEsti
 BASE_BYTES = 170 * 2**20
 """Interpreter, numpy, scipy and plyfile loaded, before any mesh data."""
 
-PER_UNIT_BYTES = 800.0
+PER_UNIT_BYTES = 580.0
 """Mesh, connectivity, validity masks, normals, report and result arrays per size unit.
 
-Measured with ``/usr/bin/time -v curv estimate`` on a 10M-vertex torus (20M faces, 20M units):
-mru R2 peaked at 13.0 GB resident (640 B per unit above the base), meyer at 10.0 GB (490 B);
-rounded up by about 25 %."""
+Measured with ``/usr/bin/time -v curv estimate`` on a 10M-vertex torus (20M faces, 20M units) with
+the numba kernels: mru R2 peaked at 9.2 GB resident (about 450 B per unit above the base), meyer
+at 8.7 GB; rounded up by about 25 %."""
 
-FACE_PASS_BYTES: dict[str, float] = {"csm": 400.0}
-"""Extra bytes per unit of the estimators with whole-mesh per-edge and per-face arrays: csm (edge
-tensors, face frames) peaked at 1.1 GB above the mesh at 1M vertices, about 0.45 GB more than the
-fits (benchmarks/bench_estimators.py). meyer and ru work in chunks of vertices and peak below the
-fits (0.14 and 0.2 GB at 1M)."""
+FACE_PASS_BYTES: dict[str, float] = {"csm": 500.0, "icc": 400.0}
+"""Extra bytes per unit of the estimators with whole-mesh per-edge and per-face arrays (dihedral
+terms, face frames, per-thread edge and face stamps): at 1M vertices csm peaked 0.96 GB and icc
+0.62 GB above the fits (benchmarks/bench_estimators.py)."""
 
 STAMP_BYTES_PER_THREAD = 8.0
 """Bytes per vertex and kernel thread of the support search's visited stamps (int64)."""
