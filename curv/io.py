@@ -284,7 +284,7 @@ def _face_list_bytes(mesh: Mesh) -> bytes:
         # one packed record per face (numpy's structured dtypes have no padding unless asked)
         records = np.empty(mesh.n_faces, dtype=[("count", "u1"), ("corners", "<i4", (3,))])
         records["count"] = 3
-        records["corners"] = mesh.triangles
+        records["corners"] = mesh.face_indices.reshape(-1, 3)
         return records.tobytes()
     offsets = mesh.face_offsets[:-1]
     h = mesh.face_indices.size

@@ -199,6 +199,8 @@ class Mesh:
     def faces(self) -> np.ndarray:
         """(m, kmax) int64 faces, padded with -1 where a polygon has fewer than kmax vertices."""
         kmax = int(self.face_sizes.max())
+        if self.is_triangular:  # the flat corners already are the rows
+            return self._indices.reshape(-1, 3).copy()
         out = np.full((self.n_faces, kmax), -1, dtype=np.int64)
         col = np.arange(self._indices.size) - np.repeat(self._offsets[:-1], self.face_sizes)
         out[self.corner_face, col] = self._indices
