@@ -80,6 +80,8 @@ def iter_estimate(
             f"use one of: nc, qs, an, mru"
         )
     smooth = Smoothing(smooth or Smoothing.NONE)
+    # before the connectivity and normals: on a first run their kernels compile too
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
     t0 = time.perf_counter()
     work_mesh = mesh
     if smooth is Smoothing.MESH:
@@ -106,7 +108,6 @@ def iter_estimate(
             used_normals = used_normals.copy()
             used_normals[meaningless] = np.nan
     radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
-    yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
     raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size, **options)
     if fused:
         used_normals = raw.normals

@@ -1,0 +1,51 @@
+"""How kernels are launched: compile detection, chunked progress, threads."""
+
+import importlib
+import sys
+
+import numpy as np
+
+from curv import jit as J
+
+
+def test_compile_pending_until_the_kernel_is_compiled_and_cached(tmp_path, monkeypatch):
+    (tmp_path / "fresh_kernel_module.py").write_text(
+        "from curv.jit import jit\n\n@jit\ndef twice(x):\n    return 2 * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = importlib.import_module("fresh_kernel_module")
+    try:
+        assert J.compile_pending([module.twice])
+        assert module.twice(3) == 6
+        assert not J.compile_pending([module.twice])
+        # a new process would find it in the on-disk cache
+        module.twice.overloads.clear()
+        assert not J.compile_pending([module.twice])
+    finally:
+        sys.modules.pop("fresh_kernel_module", None)
+
+
+def test_iter_chunks_covers_everything_once_in_order():
+    seen = []
+    fractions = list(J.iter_chunks(10_000, lambda lo, hi: seen.append((lo, hi))))
+    assert seen[0][0] == 0 and seen[-1][1] == 10_000
+    assert all(a[1] == b[0] for a, b in zip(seen, seen[1:]))
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    fixed = []
+    list(J.iter_chunks(10, lambda lo, hi: fixed.append((lo, hi)), chunk=4))
+    assert fixed == [(0, 4), (4, 8), (8, 10)]
+
+
+def test_curv_threads_caps_the_kernel_threads(monkeypatch):
+    monkeypatch.setenv("CURV_THREADS", "1")
+    assert J.threads() == 1
+    monkeypatch.setenv("CURV_THREADS", "999")
+    assert 1 <= J.threads() <= J.numba.config.NUMBA_NUM_THREADS
+    monkeypatch.setenv("CURV_THREADS", "x")
+    assert J.threads() >= 1
+
+
+def test_progress_is_a_float_with_a_message():
+    p = J.Progress(0.25, J.COMPILE_MESSAGE)
+    assert p == 0.25 and isinstance(p, float) and "first run only" in p.message
+    assert J.Progress(0.5).message == ""
+    assert np.isclose(float(p) + 0.25, 0.5)
