@@ -57,8 +57,9 @@ class Curvature:
         Why a vertex is invalid (:class:`curv.Reason`), ``0`` where valid.
     method : str
         Registry name of the estimator (``"exact"`` for analytic truth).
-    range : int or None
-        The range k of Rk.
+    range : int, float or None
+        The range k of Rk (an int when whole, e.g. 2 for R2; 2.5 for R2.5); None when a fixed
+        ``radius`` was given (``info["radius"]``; ``info["range_label"]`` reads ``R2`` or ``r=0.3``).
     info : dict
         Free-form details: elapsed seconds, smoothing options, ...
     """
@@ -71,7 +72,7 @@ class Curvature:
     valid: np.ndarray
     reason: np.ndarray = None
     method: str = ""
-    range: int | None = None
+    range: int | float | None = None
     info: dict = field(default_factory=dict)
 
     def __post_init__(self):
