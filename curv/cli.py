@@ -58,8 +58,9 @@ def _cmd_list(args) -> int:
     from .estimators import ESTIMATORS
 
     print(f"{'name':<6} {'ranges':<12} {'polygons':<9} {'borders':<8} title / reference")
+    print(f"{'':<6} (k>=1, r: any real range Rk from that k on, or a fixed radius r)")
     for spec in ESTIMATORS.values():
-        ranges = ",".join(f"R{k}" for k in spec.ranges) + ("+" if spec.has_support else "")
+        ranges = f"k>={min(spec.ranges):g}, r" if spec.has_support else ",".join(f"R{k}" for k in spec.ranges)
         print(f"{spec.name:<6} {ranges:<12} {'no' if spec.triangles_only else 'yes':<9} "
               f"{'invalid' if spec.closed_ring else 'fitted':<8} {spec.title}")
         print(f"{'':<37} {spec.reference}")
