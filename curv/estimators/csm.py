@@ -53,6 +53,25 @@ _OK, _BORDER, _SINGULAR = int(Reason.OK), int(Reason.BORDER), int(Reason.SINGULA
 _DEGENERATE, _NONMANIFOLD = int(Reason.DEGENERATE), int(Reason.NONMANIFOLD)
 
 
+@jit
+def support_reason(singular, hit, normal_ok):
+    """Reason code of an estimate over a ball, from what its support touched.
+
+    ``hit`` holds the flags of the support's vertices (BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT:
+    a degenerate face touches it). The most fundamental cause wins: NONMANIFOLD, then DEGENERATE
+    (also for a missing normal), BORDER, SINGULAR, else OK.
+    """
+    if hit & NONMANIFOLD_BIT:
+        return _NONMANIFOLD
+    if hit & DEGENERATE_BIT or not normal_ok:
+        return _DEGENERATE
+    if hit & BORDER_BIT:
+        return _BORDER
+    if singular:
+        return _SINGULAR
+    return _OK
+
+
 # ---------------------------------------------------------------------------- clipping helpers
 @jit
 def segment_in_ball(sx, sy, sz, dx, dy, dz, radius2):
@@ -402,7 +421,6 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
             singular = not (area > 0.0 and math.isfinite(t00 + t01 + t02 + t11 + t12 + t22))
-            code = _OK
             if not singular and normal_ok:
                 inv = 1.0 / area
                 tensor[0, 0], tensor[1, 1], tensor[2, 2] = t00 * inv, t11 * inv, t22 * inv
@@ -416,15 +434,7 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
                     d2[p, c] = res[5 + c]
                 if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
                     singular = True
-            if singular:
-                code = _SINGULAR
-            if hit & BORDER_BIT:
-                code = _BORDER
-            if hit & DEGENERATE_BIT or not normal_ok:
-                code = _DEGENERATE
-            if hit & NONMANIFOLD_BIT:
-                code = _NONMANIFOLD
-            reason[p] = code
+            reason[p] = support_reason(singular, hit, normal_ok)
 
 
 def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):

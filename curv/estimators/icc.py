@@ -51,14 +51,11 @@ from ..mesh import Mesh
 from ..neighbourhood import QUEUE_START, ball_support, expansion_adjacency, new_scratch
 from ..validity import Reason
 from ._local_fit import store_principal, tangent_frame
-from .csm import (BORDER_BIT, DEGENERATE_BIT, NONMANIFOLD_BIT, face_frames, face_geometry, face_in_ball_area,
-                  support_flags)
+from .csm import DEGENERATE_BIT, face_frames, face_geometry, face_in_ball_area, support_flags, support_reason
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures"]
 
-_OK, _BORDER, _SINGULAR = int(Reason.OK), int(Reason.BORDER), int(Reason.SINGULAR)
-_DEGENERATE, _NONMANIFOLD = int(Reason.DEGENERATE), int(Reason.NONMANIFOLD)
 
 EPS = float(np.finfo(np.float64).eps)
 
@@ -206,16 +203,7 @@ def _icc_chunk(lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, f
                     k2[p] = mean[p] - rad
                 if not (math.isfinite(k1[p]) and math.isfinite(k2[p])):
                     singular = True
-            code = _OK
-            if singular:
-                code = _SINGULAR
-            if hit & BORDER_BIT:
-                code = _BORDER
-            if hit & DEGENERATE_BIT or not normal_ok:
-                code = _DEGENERATE
-            if hit & NONMANIFOLD_BIT:
-                code = _NONMANIFOLD
-            reason[p] = code
+            reason[p] = support_reason(singular, hit, normal_ok)
 
 
 def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: int | None,
