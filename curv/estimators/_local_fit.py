@@ -23,7 +23,7 @@ from ..neighbourhood import expansion_adjacency, new_queues, new_scratch
 from ..result import Principal
 from ..validity import Reason
 
-__all__ = ["run_fit", "tangent_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
+__all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
@@ -68,6 +68,14 @@ def tangent_frame(nx, ny, nz):
     vy = nz * ux - nx * uz
     vz = nx * uy - ny * ux
     return ux, uy, uz, vx, vy, vz
+
+
+@jit
+def offset_in_frame(p, q, x, y, z, frame, n0, n1, n2):
+    """The offset ``q - p`` in p's frame: ``(u, v, w)`` along U, V and the normal N = (n0, n1, n2)."""
+    ux, uy, uz, vx, vy, vz = frame
+    dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
+    return (dx * ux + dy * uy + dz * uz, dx * vx + dy * vy + dz * vz, dx * n0 + dy * n1 + dz * n2)
 
 
 @jit

@@ -24,7 +24,7 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, run_fit, slice_bounds,
+from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
                          solve_scaled, solve_sym3, tangent_frame)
 from .registry import EstimatorSpec, register
 
@@ -40,16 +40,12 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
         mark_degenerate(p, k1, k2, d1, d2, reason)
         return
     frame = tangent_frame(n0, n1, n2)
-    ux, uy, uz, vx, vy, vz = frame
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
-        dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
-        u = dx * ux + dy * uy + dz * uz
-        v = dx * vx + dy * vy + dz * vz
-        w = dx * n0 + dy * n1 + dz * n2
+        u, v, w = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
         l2 = u * u + v * v
         if not (l2 > tiny2):
             continue
@@ -78,16 +74,12 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
         mark_degenerate(p, k1, k2, d1, d2, reason)
         return
     frame = tangent_frame(n0, n1, n2)
-    ux, uy, uz, vx, vy, vz = frame
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
-        dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
-        u = dx * ux + dy * uy + dz * uz
-        v = dx * vx + dy * vy + dz * vz
-        w = dx * n0 + dy * n1 + dz * n2
+        u, v, w = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
         if not (u * u + v * v > tiny2):
             continue
         used += 1

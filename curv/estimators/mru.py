@@ -16,7 +16,8 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, run_fit, slice_bounds, solve_sym3, tangent_frame
+from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
+                         solve_sym3, tangent_frame)
 from .registry import EstimatorSpec, register
 
 
@@ -35,9 +36,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
     used = 0
     for i in range(1, count):
         q = queue[i]
-        dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
-        u = dx * ux + dy * uy + dz * uz
-        v = dx * vx + dy * vy + dz * vz
+        u, v, _ = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
         a = nx[q] * ux + ny[q] * uy + nz[q] * uz
         b = nx[q] * vx + ny[q] * vy + nz[q] * vz
         if not (u * u + v * v > tiny2) or not (math.isfinite(a) and math.isfinite(b)):
