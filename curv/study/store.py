@@ -16,7 +16,9 @@ import zlib
 from pathlib import Path
 from typing import Iterable
 
-from .table import COLUMNS, KEY_COLUMNS, Table
+import numpy as np
+
+from .table import _DTYPES, COLUMNS, Table
 
 __all__ = ["ResultsFile", "block_id"]
 
@@ -41,6 +43,24 @@ def _parse(text: str, typ):
     return typ(float(text)) if typ is int else float(text)
 
 
+def _parse_column(texts: tuple[str, ...], typ) -> np.ndarray:
+    """One column's fields as an array of the column's type (ints are written as ints but read
+    through float, like :func:`_parse`). Raises ValueError on a field that does not parse."""
+    if typ is str:
+        return np.array(texts, dtype=object)
+    values = np.array(texts, dtype=np.float64)
+    return values.astype(np.int64) if typ is int else values
+
+
+def _row_parses(fields: list[str], names: list[str]) -> bool:
+    try:
+        for n, f in zip(names, fields):
+            _parse(f, COLUMNS[n])
+    except ValueError:
+        return False
+    return True
+
+
 class ResultsFile:
     """The tidy results of a study run, as a CSV file that only grows.
 
@@ -55,36 +75,47 @@ class ResultsFile:
         self._names = list(COLUMNS)
 
     # ------------------------------------------------------------------ reading
-    def _read_rows(self) -> tuple[list[dict], bool]:
-        """Parsed rows of complete blocks, and whether anything had to be dropped."""
+    def _read_columns(self) -> tuple[dict[str, np.ndarray], bool]:
+        """Columns of the complete blocks, and whether anything had to be dropped.
+
+        Parsed column by column (a 400k-row file in seconds, not minutes); a column that numpy
+        cannot convert (a damaged field) falls back to parsing row by row and drops those rows.
+        """
+        empty = {n: np.zeros(0, _DTYPES[t]) for n, t in COLUMNS.items()}
         if not self.path.exists() or self.path.stat().st_size == 0:
-            return [], False
+            return empty, False
         text = self.path.read_text()
-        lines = text.splitlines(keepends=True)
-        dropped = bool(lines) and not lines[-1].endswith("\n")
-        if dropped:
-            lines = lines[:-1]  # torn last line
-        reader = csv.reader(io.StringIO("".join(lines)))
+        torn = bool(text) and not text.endswith("\n")
+        if torn:
+            text = text[: text.rfind("\n") + 1]  # torn last line
+        reader = csv.reader(io.StringIO(text))
         header = next(reader, None)
         if header != self._names:
             raise ValueError(
                 f"{self.path} has other columns than this version of curv writes; "
                 "use a new --out directory (or move the old results away)"
             )
-        rows = []
-        for fields in reader:
-            if len(fields) != len(self._names):
-                dropped = True
-                continue
-            try:
-                rows.append({n: _parse(f, COLUMNS[n]) for n, f in zip(self._names, fields)})
-            except ValueError:
-                dropped = True
-        counts: dict[str, int] = {}
-        for r in rows:
-            counts[r["block"]] = counts.get(r["block"], 0) + 1
-        complete = [r for r in rows if counts[r["block"]] == r["block_rows"]]
-        return complete, dropped or len(complete) != len(rows)
+        fields = list(reader)
+        whole = [f for f in fields if len(f) == len(self._names)]
+        dropped = torn or len(whole) != len(fields)
+        if not whole:
+            return empty, dropped
+        raw = list(zip(*whole))
+        try:
+            cols = {n: _parse_column(raw[i], COLUMNS[n]) for i, n in enumerate(self._names)}
+        except ValueError:
+            keep = [f for f in whole if _row_parses(f, self._names)]
+            dropped = True
+            if not keep:
+                return empty, dropped
+            raw = list(zip(*keep))
+            cols = {n: _parse_column(raw[i], COLUMNS[n]) for i, n in enumerate(self._names)}
+        _, inverse, counts = np.unique(cols["block"].astype(str), return_inverse=True, return_counts=True)
+        complete = counts[inverse] == cols["block_rows"]
+        if not complete.all():
+            cols = {n: c[complete] for n, c in cols.items()}
+            dropped = True
+        return cols, dropped
 
     def load(self, *, repair: bool = True) -> Table:
         """All complete rows as a :class:`Table`.
@@ -92,21 +123,22 @@ class ResultsFile:
         With ``repair``, a file holding torn or incomplete blocks is rewritten (atomically)
         without them, so that later appends start on a clean line.
         """
-        rows, dirty = self._read_rows()
+        cols, dirty = self._read_columns()
+        table = Table(cols)
         if dirty and repair:
             tmp = self.path.with_suffix(self.path.suffix + ".tmp")
-            tmp.write_text(self._header() + "".join(self._lines(rows)))
+            tmp.write_text(self._header() + "".join(self._lines(table.rows())))
             os.replace(tmp, self.path)
-        return Table.from_rows(rows)
+        return table
 
     def done(self) -> dict[tuple, set[str]]:
         """``{task key: variant ids present}`` over the complete blocks (repairs the file)."""
         table = self.load()
+        keys = zip(table["seed"].tolist(), table["function"].tolist(), table["density"].tolist(),
+                   table["irregularity"].tolist(), table["noise"].tolist(), table["sample"].tolist())
         out: dict[tuple, set[str]] = {}
-        for r in table.rows():
-            key = tuple(r[k] for k in KEY_COLUMNS)
-            key = (int(key[0]), key[1], int(key[2]), float(key[3]), float(key[4]), int(key[5]))
-            out.setdefault(key, set()).add(r["variant"])
+        for key, variant in zip(keys, table["variant"].tolist()):
+            out.setdefault(key, set()).add(variant)
         return out
 
     # ------------------------------------------------------------------ writing

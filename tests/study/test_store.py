@@ -49,6 +49,23 @@ def test_torn_last_line_and_incomplete_block_are_dropped(tmp_path):
     assert len(f.load()) == 4
 
 
+def test_a_damaged_field_drops_its_block_and_keeps_the_rest(tmp_path):
+    path = tmp_path / "r.csv"
+    f = ResultsFile(path)
+    f.append(_rows(KEY_A, ["nc:R1", "mru:R2"]))
+    f.append(_rows(KEY_B, ["nc:R1", "mru:R2"]))
+    lines = path.read_text().splitlines(keepends=True)
+    names = list(COLUMNS)
+    fields = lines[1].split(",")
+    fields[names.index("rms_erel")] = "0.0x3"  # a corrupted number in the first row of block A
+    lines[1] = ",".join(fields)
+    path.write_text("".join(lines))
+    t = f.load()
+    assert len(t) == 2 and set(t["noise"].tolist()) == {1.0}
+    assert f.done() == {KEY_B: {"nc:R1", "mru:R2"}}
+    assert t["rms_erel"][0] == 0.1 / 3  # the kept rows are still bit-exact
+
+
 def test_table_grouping_and_selection():
     t = Table.from_rows([
         {"variant": "a", "density": 1, "rms_erel": 1.0}, {"variant": "a", "density": 1, "rms_erel": 3.0},
