@@ -28,7 +28,7 @@ import numpy as np
 
 from ..api import Smoothing
 from ..surfaces import PAPER_SURFACES
-from ..surfaces.hexagon import PAPER_VERTEX_COUNTS
+from ..surfaces.hexagon import PAPER_VERTEX_COUNTS, hexagon_subdivisions
 
 __all__ = [
     "DENSITIES", "NOISE_LEVELS", "NOISE_FRACTION", "IRREGULARITIES", "FUNCTIONS", "EXCLUSION_RANGE",
@@ -226,7 +226,8 @@ class StudySettings:
     samples : int
         Random surfaces per setting (the paper uses 1000).
     densities : tuple of int
-        Vertex counts, from :data:`DENSITIES`.
+        Vertex counts of the subdivided hexagon, ``3 s (s + 1) + 1`` for some ``s >= 1``: the
+        paper's :data:`DENSITIES` or any other subdivision (e.g. 1801 for s = 24, 7057 for s = 48).
     noise : tuple of float
         Noise levels as fractions of the 100 % level (10 % of the mean edge length).
     irregularity : tuple of float
@@ -254,9 +255,11 @@ class StudySettings:
     def __post_init__(self):
         if self.samples < 1:
             raise ValueError(f"samples must be at least 1, got {self.samples}")
-        bad = [d for d in self.densities if d not in DENSITIES]
-        if bad:
-            raise ValueError(f"density {bad[0]} is not a hexagon subdivision; choose from {DENSITIES}")
+        for d in self.densities:
+            try:
+                hexagon_subdivisions(d)
+            except ValueError as exc:
+                raise ValueError(f"density {d} is not a hexagon subdivision: {exc}") from None
         bad = [f for f in self.functions if f not in FUNCTIONS]
         if bad:
             raise ValueError(f"unknown function {bad[0]!r}; choose from {', '.join(FUNCTIONS)}")

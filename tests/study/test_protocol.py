@@ -77,3 +77,17 @@ def test_random_streams_depend_on_their_key_only():
     assert not np.array_equal(a.noise_rng().random(4), Task(5, "quadratic", 817, 14.0, 0.33, 2).noise_rng().random(4))
     assert not np.array_equal(a.surface_rng().random(4), Task(6, "quadratic", 817, 14.0, 0.33, 1).surface_rng().random(4))
     assert not np.array_equal(a.mesh_rng().random(4), Task(5, "quadratic", 817, 0.0, 0.33, 1).mesh_rng().random(4))
+
+
+def test_any_hexagon_subdivision_is_a_density():
+    from curv.study.testmesh import build_test_mesh
+
+    s = StudySettings(densities=(1801, 7057, 817), noise=(0.0,), irregularity=(0.0,), functions=("quadratic",))
+    assert s.densities == (1801, 7057, 817) and StudySettings().densities == DENSITIES
+    assert [t.density for t in s.tasks()] == [7057, 1801, 817]  # densest first, as for the paper's
+    assert s.fig10_density == 7057  # 3169 not in the grid: the largest
+    assert build_test_mesh(Task(0, "quadratic", 271, 0.0, 0.0, 0)).mesh.n_vertices == 271  # s = 9
+    with pytest.raises(ValueError, match=r"density 818 is not a hexagon subdivision.*nearest: [0-9, ]*817"):
+        StudySettings(densities=(817, 818))
+    with pytest.raises(ValueError, match="hexagon subdivision"):
+        StudySettings(densities=(0,))
