@@ -5,6 +5,7 @@ Examples
 curvlab part.ply
 curvlab --surface torus --method mru --range 3 --quantity gaussian
 curvlab --surface ellipsoid_patch --method mru --range 2 --compare qs:2 --difference --screenshot out.png
+curvlab scan.ply --advise
 """
 
 from __future__ import annotations
@@ -40,6 +41,8 @@ def build_parser() -> argparse.ArgumentParser:
     est.add_argument("--directions", action="store_true", help="draw principal direction glyphs")
     est.add_argument("--cmap", help="colour map for the shown field")
     est.add_argument("--limits", help="colour limits LO,HI (default: symmetric 2-98 %% percentiles)")
+    est.add_argument("--advise", action="store_true",
+                     help="run the advisor on the mesh and show its ranking in the Advice panel")
     snap = p.add_argument_group("scripted snapshot")
     snap.add_argument("--screenshot", metavar="PNG", help="render, save the window image and exit")
     snap.add_argument("--size", default="1400x860", help="window size WxH for the snapshot")
@@ -161,14 +164,18 @@ def main(argv: list[str] | None = None) -> int:
         w, _, h = args.size.partition("x")
         window.requested_size = (int(w), int(h))
         window.resize(int(w), int(h))
-        snapshot = Snapshot(window, args.screenshot, timeout_s=args.timeout)
+        snapshot = Snapshot(window, args.screenshot, timeout_s=args.timeout, wait_for_advice=args.advise)
         window.show()
         window.open_source_then(source)
+        if args.advise:
+            window.advise()  # runs once the source has loaded
         snapshot.start()
         app.exec()
         return snapshot.status
     window.show()
     window.open_source_then(source)
+    if args.advise:
+        window.advise()
     return app.exec()
 
 

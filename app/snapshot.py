@@ -14,12 +14,14 @@ __all__ = ["Snapshot"]
 class Snapshot(QObject):
     """Watches a :class:`MainWindow` and saves ``path`` once all panes are computed and drawn.
 
-    ``status`` is 0 after a successful save, 1 on a load/estimate failure or a timeout.
+    With ``wait_for_advice`` it also waits for the advisor's answer for the shown mesh.
+    ``status`` is 0 after a successful save, 1 on a load/estimate/advice failure or a timeout.
     """
 
-    def __init__(self, window, path, *, timeout_s: float = 300.0) -> None:
+    def __init__(self, window, path, *, timeout_s: float = 300.0, wait_for_advice: bool = False) -> None:
         super().__init__(window)
         self.window, self.path = window, Path(path)
+        self.wait_for_advice = wait_for_advice
         self.status = 1
         self.window.quiet = True  # no dialogs: failures go to stderr
         self._timer = QTimer(self, interval=100)
@@ -34,9 +36,10 @@ class Snapshot(QObject):
         self._deadline.start()
 
     def ready(self) -> bool:
-        """True when a mesh is shown and every pane has its result."""
+        """True when a mesh is shown and every pane has its result (and the advice, if waited for)."""
         doc, ctl = self.window.doc, self.window.controller
-        return doc.mesh is not None and not ctl.busy and all(p.key in doc.results for p in doc.panes)
+        return (doc.mesh is not None and not ctl.busy and all(p.key in doc.results for p in doc.panes)
+                and (not self.wait_for_advice or doc.advice_current))
 
     def _poll(self) -> None:
         if self._done or not self.ready():

@@ -1,7 +1,9 @@
-"""The job controller: one source job and one estimate job per (method, range), all off the GUI thread.
+"""The job controller: one source job, one estimate job per (method, range) and one advisor job, all
+off the GUI thread.
 
 A new source supersedes everything running; a pane switching estimator stops the estimate nobody
-shows any more. Stale results are recognised by a generation number and dropped.
+shows any more. Stale results are recognised by a generation number (the advisor's by its worker)
+and dropped.
 """
 
 from __future__ import annotations
@@ -13,8 +15,9 @@ from curv.api import iter_estimate
 from PySide6.QtCore import QObject, QThreadPool, Signal
 from superqt.utils import create_worker
 
-from app.model import Document
+from app.model import AdviceRecord, Document
 
+from .advice import advice_compile_note, advise_mesh
 from .sources import prepare_source
 
 __all__ = ["Controller"]
@@ -41,8 +44,11 @@ class Controller(QObject):
         Informational status text.
     failed(str)
         A one-line error message (the document keeps its previous state).
+    advising(bool)
+        The advisor started or stopped (finished, failed, cancelled or superseded).
     """
 
+    advising = Signal(bool)
     busy_changed = Signal(bool)
     progress = Signal(str, float)
     message = Signal(str)
@@ -59,14 +65,22 @@ class Controller(QObject):
         self._source_job = None
         self._estimates: dict[tuple[str, int], object] = {}
         self._fractions: dict[tuple[str, int], float] = {}
+        self._advice_job = None
+        self._advice_note = ""
+        self._advise_after_load = False
         self._closed = False
         self._busy = False
 
     # -- state ----------------------------------------------------------------------------------
     @property
     def busy(self) -> bool:
-        """True while a source or estimate job runs."""
-        return self._source_job is not None or bool(self._estimates)
+        """True while a source, estimate or advisor job runs."""
+        return self._source_job is not None or bool(self._estimates) or self._advice_job is not None
+
+    @property
+    def advising_now(self) -> bool:
+        """True while the advisor runs."""
+        return self._advice_job is not None
 
     def running_keys(self) -> list[tuple[str, int]]:
         return list(self._estimates)
@@ -80,8 +94,13 @@ class Controller(QObject):
         elif self._estimates:
             names = ", ".join(f"{m} {r}" for m, r in self._estimates)
             frac = sum(self._fractions.values()) / len(self._fractions)
-            notes = "; ".join(dict.fromkeys(m for m in self._messages.values() if m))
-            self.progress.emit(f"Estimating {names}" + (f": {notes}" if notes else ""), frac)
+            notes = "; ".join(dict.fromkeys(m for m in (*self._messages.values(), self._advice_note) if m))
+            advising = "; advising" if self._advice_job is not None else ""
+            self.progress.emit(f"Estimating {names}{advising}" + (f": {notes}" if notes else ""), frac)
+        elif self._advice_job is not None:  # the advisor reports no fraction: a busy indicator
+            label = self.doc.source.label if self.doc.source is not None else "the mesh"
+            note = f": {self._advice_note}" if self._advice_note else ""
+            self.progress.emit(f"Advising on {label}{note}", -1.0)
 
     # -- sources --------------------------------------------------------------------------------
     def open_source(self, source) -> None:
@@ -107,12 +126,16 @@ class Controller(QObject):
                           geometry=out.prepared)
         self.message.emit(f"{out.source.label}: {'; '.join(out.report[:2])}")
         self.request_missing()
+        if self._advise_after_load:
+            self._advise_after_load = False
+            self._start_advice()
         self._update_busy()
 
     def _source_failed(self, gen: int, source, exc: Exception) -> None:
         if gen != self._generation or self._closed:
             return
         self._source_job = None
+        self._advise_after_load = False  # the advice was asked for the mesh that did not come
         self._update_busy()
         self.failed.emit(f"Could not open {source.label}: {_one_line(exc)}")
 
@@ -134,6 +157,13 @@ class Controller(QObject):
         self.doc.results.pop(key, None)
         self.doc.failures.pop(key, None)
         self._stop(key)
+        self.request_missing()
+
+    def compute_in_pane(self, i: int, pane) -> None:
+        """Show ``pane`` (a validated :class:`~app.model.Pane`) in pane ``i`` and compute it unless its
+        result is known; an earlier failure or cancel of the same pair is retried, not shown again."""
+        self.doc.failures.pop(pane.key, None)
+        self.doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
         self.request_missing()
 
     def _start_estimate(self, key) -> None:
@@ -184,6 +214,69 @@ class Controller(QObject):
         self._update_busy()
         self.failed.emit(msg)
 
+    # -- advice ---------------------------------------------------------------------------------
+    def advise(self) -> None:
+        """Run ``curv.advise`` on the document's mesh; the answer goes to :meth:`Document.set_advice`.
+
+        While a source loads, the advisor runs once its mesh is there. A second request while the
+        advisor runs on the same mesh is ignored (a new mesh stops it). Failures become an
+        :class:`AdviceRecord` with its ``error`` and a ``failed`` message; nothing else changes.
+        """
+        if self._closed:
+            return
+        if self._source_job is not None:
+            self._advise_after_load = True
+            self.message.emit(f"Advice follows once {self._source_job[1].label} has loaded")
+            return
+        if self.doc.mesh is None:
+            self.failed.emit("Nothing to advise on: open a mesh or generate a surface first")
+            return
+        if self._advice_job is None:
+            self._start_advice()
+            self._update_busy()
+
+    def _start_advice(self) -> None:
+        doc = self.doc
+        serial, label = doc.mesh_serial, doc.source.label
+        box = []  # the worker, for the callbacks (they must exist before it does)
+        worker = create_worker(advise_mesh, doc.mesh, mesh_serial=serial, source_label=label,
+                               _start_thread=False, _connect={
+            "returned": lambda record: self._advice_done(box[0], record),
+            "errored": lambda exc: self._advice_failed(box[0], serial, label, exc)})
+        box.append(worker)
+        self._advice_job = worker
+        self._advice_note = advice_compile_note()
+        worker.start()
+        self.advising.emit(True)
+
+    def _advice_done(self, worker, record) -> None:
+        if self._closed or self._advice_job is not worker:
+            return
+        self._forget_advice()
+        self.doc.set_advice(record)
+        adv = record.advice
+        self.message.emit(f"Advice for {record.source_label} in {record.seconds:.2f} s: "
+                          f"{adv.method} R{adv.range}, expected median e_rel {adv.expected_erel:.2g}")
+        self._update_busy()
+
+    def _advice_failed(self, worker, serial, label, exc) -> None:
+        if self._closed or self._advice_job is not worker:
+            return
+        self._forget_advice()
+        reason = _one_line(exc)
+        # curv's messages already begin "cannot advise ..."; say only which mesh
+        msg = f"{label}: {reason}" if reason.lower().startswith("cannot advise") else \
+            f"Could not advise on {label}: {reason}"
+        self.doc.set_advice(AdviceRecord(serial, label, None, error=msg))
+        self._update_busy()
+        self.failed.emit(msg)
+
+    def _forget_advice(self) -> None:
+        if self._advice_job is not None:
+            self._advice_job = None
+            self._advice_note = ""
+            self.advising.emit(False)
+
     # -- stopping -------------------------------------------------------------------------------
     def cancel(self) -> None:
         """Stop everything running; panes fall back to their last result.
@@ -193,13 +286,15 @@ class Controller(QObject):
         """
         self.cancelled_at = time.perf_counter()
         was_source = self._source_job is not None
+        was_advice = self._advice_job is not None or self._advise_after_load
         keys = list(self._estimates)
+        self._advise_after_load = False
         self._stop_all()
         self._generation += 1 if was_source else 0
         for key in keys:
             self.doc.set_failure(key, f"{key[0]} {key[1]} cancelled")
         self._update_busy()
-        if was_source or keys:
+        if was_source or keys or was_advice:
             self.message.emit("Cancelled")
 
     def _forget(self, key) -> None:
@@ -219,6 +314,10 @@ class Controller(QObject):
             self._source_job = None
         for key in list(self._estimates):
             self._stop(key)
+        if self._advice_job is not None:
+            # curv.advise cannot stop midway: its thread finishes and its answer is dropped
+            self._advice_job.quit()
+            self._forget_advice()
 
     def shutdown(self, *, timeout_ms: int = 5000) -> bool:
         """Stop every job and wait for the threads; returns False if some did not finish in time."""

@@ -10,6 +10,7 @@ from curv.colors import diverges
 from curv.errors import EstimatorError
 from curv.estimators import ESTIMATORS
 
+from .advice import AdviceRecord
 from .colors import LimitMode, colormap, compute_limits, map_colours
 from .display import Display, Layer
 from .events import Event
@@ -130,6 +131,9 @@ class Document:
         A result arrived or failed for ``key``.
     picked_changed(index)
         The picked vertex (or None).
+    advice_changed(AdviceRecord or None)
+        The advisor's answer (or failure) arrived; whether it is for the current mesh is
+        :attr:`advice_current` (a new mesh makes the advice stale without this event).
     """
 
     def __init__(self, *, default_panes: tuple[Pane, ...] = (Pane("mru", 2),)) -> None:
@@ -145,6 +149,9 @@ class Document:
         self.difference = False
         self.active = 0
         self.picked: int | None = None
+        self.mesh_serial = 0
+        """Counts the meshes set so far: what an :class:`AdviceRecord` names its mesh by."""
+        self.advice: AdviceRecord | None = None
         self._last_good: dict[int, Pane] = {}
         self.display = Display()
         self.mesh_changed = Event()
@@ -152,6 +159,7 @@ class Document:
         self.pane_changed = Event()
         self.result_changed = Event()
         self.picked_changed = Event()
+        self.advice_changed = Event()
 
     # -- source ---------------------------------------------------------------------------------
     def set_mesh(self, source, mesh, truth=None, *, report=(), repairs=(), geometry=None) -> None:
@@ -160,6 +168,7 @@ class Document:
         Manual colour limits go back to percentiles unless ``display.lock_limits`` is set.
         """
         self.source, self.mesh, self.truth = source, mesh, truth
+        self.mesh_serial += 1  # the advice, if any, now belongs to an earlier mesh
         self.report, self.repairs = tuple(report), tuple(repairs)
         self.results.clear()
         self.failures.clear()
@@ -177,6 +186,18 @@ class Document:
     @property
     def has_truth(self) -> bool:
         return self.truth is not None
+
+    # -- advice ---------------------------------------------------------------------------------
+    def set_advice(self, record: AdviceRecord | None) -> None:
+        """Keep the advisor's answer (or failure) for the mesh ``record.mesh_serial`` names."""
+        self.advice = record
+        self.advice_changed.emit(record)
+
+    @property
+    def advice_current(self) -> bool:
+        """Whether :attr:`advice` holds advice computed for the mesh shown now."""
+        return (self.advice is not None and self.advice.advice is not None
+                and self.advice.mesh_serial == self.mesh_serial)
 
     # -- panes ----------------------------------------------------------------------------------
     @property

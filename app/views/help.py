@@ -44,6 +44,11 @@ def guide_text() -> str:
             "smallest range (e.g. R2.5), or a fixed <b>radius</b> in mesh units; meyer and ru use their fixed "
             "1-ring.</p><h3>Estimators</h3><table cellspacing=4><tr><th>name</th><th>method</th><th>ranges</th>"
             "<th>faces</th><th>reference</th></tr>" + "".join(rows) + "</table>"
+            "<h3>Advice</h3><p><b>Estimate › Advise</b> (Ctrl+Shift+A) measures the mesh's noise, irregularity "
+            "and density and ranks every estimator and range by the median relative error the paper's study "
+            "predicts for such a mesh. <b>Apply</b> in the Advice panel puts the selected row (the recommendation "
+            "unless you pick another) into the active pane and computes it. Advice belongs to the mesh it was "
+            "computed for: on another mesh it is marked stale until you advise again.</p>"
             "<h3>Quantities</h3><ul>" + quantities + "</ul>"
             "<p>Magenta vertices are invalid (border-affected, degenerate, singular fit): their reason shows "
             "in the picked-vertex readout.</p>")

@@ -13,7 +13,7 @@ from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QDoubleValidator
 from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
-    QPushButton, QVBoxLayout, QWidget,
+    QPushButton, QToolButton, QVBoxLayout, QWidget,
 )
 from superqt import QEnumComboBox, QLabeledDoubleRangeSlider
 from superqt.utils import qdebounced
@@ -96,6 +96,8 @@ class InspectPanel(QWidget):
         self.radius.setToolTip("Ball radius in mesh units (the same at every vertex)")
         self.recompute = QPushButton("Recompute")
         self.recompute.setToolTip("Compute the active pane again (F5)")
+        self.advise_button = QToolButton()  # the window binds it to its Advise action
+        self.advise_button.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextOnly)
         self.quantity = QEnumComboBox(enum_class=Quantity)
         self.quantity.setToolTip("<br>".join(f"<b>{q.title}</b>: {q.spec.formula}" for q in Quantity))
         self.layer = QEnumComboBox(enum_class=Layer)
@@ -141,6 +143,7 @@ class InspectPanel(QWidget):
         radius_row.addWidget(self.use_radius)
         radius_row.addWidget(self.radius, 1)
         pane_form.addRow("", radius_row)
+        pane_form.addRow("", self.advise_button)
         self.all_box = QGroupBox("All panes")
         form = QFormLayout(self.all_box)
         form.addRow("Quantity", self.quantity)

@@ -1,5 +1,5 @@
-"""The main window: viewports in the centre, docks for source / mesh / compare (left) and inspect /
-picked vertex (right), a status bar with progress and Cancel, menus for files, export, view,
+"""The main window: viewports in the centre, docks for source / mesh / compare / advice (left) and
+inspect / picked vertex (right), a status bar with progress and Cancel, menus for files, export, view,
 estimate and help."""
 
 from __future__ import annotations
@@ -16,9 +16,12 @@ from PySide6.QtWidgets import (
 )
 
 from app.controller import Controller
-from app.model import Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, export_payload, map_colours
+from app.model import (
+    Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, export_payload, map_colours, pane_letter,
+)
 from app.packaged import resource, sample_names
 
+from .advice_panel import AdvicePanel
 from .compare_panel import ComparePanel
 from .geometry import direction_glyphs, glyph_subsample, prepare_geometry
 from .help import about_text, guide_text
@@ -76,11 +79,13 @@ class MainWindow(QMainWindow):
         self.compare = ComparePanel(self.doc)
         self.mesh_panel = MeshPanel(self.doc)
         self.readout = Readout(self.doc)
+        self.advice_panel = AdvicePanel(self.doc)
         self.docks = {}
         for key, title, widget, area in [
             ("source", "Source", self.source_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("mesh", "Mesh report", self.mesh_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("compare", "Compare", self.compare, Qt.DockWidgetArea.LeftDockWidgetArea),
+            ("advice", "Advice", self.advice_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("inspect", "Inspect", self.inspect, Qt.DockWidgetArea.RightDockWidgetArea),
             ("readout", "Picked vertex", self.readout, Qt.DockWidgetArea.RightDockWidgetArea),
         ]:
@@ -95,6 +100,7 @@ class MainWindow(QMainWindow):
             self.addDockWidget(area, dock)
             self.docks[key] = dock
         self.tabifyDockWidget(self.docks["mesh"], self.docks["compare"])
+        self.tabifyDockWidget(self.docks["compare"], self.docks["advice"])
         self.docks["compare"].raise_()
 
         self.status_label = QLabel()
@@ -145,7 +151,16 @@ class MainWindow(QMainWindow):
         self.action_recompute = QAction("&Recompute active pane", self, shortcut="F5",
                                         triggered=lambda: self.controller.recompute(self.doc.panes[self.doc.active].key))
         self.action_cancel = QAction("&Cancel", self, shortcut="Esc", triggered=self.controller.cancel)
-        est_menu.addActions([self.action_recompute, self.action_cancel])
+        self.action_advise = QAction("&Advise estimator and range", self, shortcut="Ctrl+Shift+A",
+                                     triggered=self.advise)
+        self.action_advise.setIconText("Advise")
+        self.action_advise.setToolTip(
+            "Measure this mesh's noise, irregularity and density and rank the estimators and ranges by the "
+            "error the paper's study predicts; Apply in the Advice panel uses one (Ctrl+Shift+A)")
+        self.action_advise.setStatusTip("Rank the estimators and ranges for this mesh")
+        est_menu.addActions([self.action_recompute, self.action_advise, self.action_cancel])
+        self.inspect.advise_button.setDefaultAction(self.action_advise)
+        self.advice_panel.advise_button.setDefaultAction(self.action_advise)
         help_menu = self.menuBar().addMenu("&Help")
         help_menu.addAction(QAction("Estimators and ranges…", self, shortcut=QKeySequence.StandardKey.HelpContents,
                                     triggered=self.show_guide))
@@ -164,6 +179,9 @@ class MainWindow(QMainWindow):
         ctl.progress.connect(self._on_progress)
         ctl.message.connect(lambda text: self.show_status(text))
         ctl.failed.connect(self.show_error)
+        ctl.advising.connect(self.advice_panel.set_running)
+        doc.advice_changed.connect(lambda record: self.show_dock("advice"))
+        self.advice_panel.apply_requested.connect(self.apply_pane)
         self.cancel_button.clicked.connect(ctl.cancel)
         self.source_panel.source_requested.connect(ctl.open_source)
         self.source_panel.open_requested.connect(self.open_dialog)
@@ -222,6 +240,35 @@ class MainWindow(QMainWindow):
         for path in self._recent():
             self.recent_menu.addAction(path, lambda p=path: self.open_path(p))
         self.recent_menu.setEnabled(bool(self._recent()))
+
+    # -- advice ---------------------------------------------------------------------------------
+    def advise(self) -> None:
+        """Run the advisor on the shown mesh in the background; its panel shows the progress and the answer."""
+        self.show_dock("advice")
+        self.controller.advise()
+
+    def apply_pane(self, pane: Pane) -> None:
+        """Show ``pane``'s estimator and range in the active pane and compute it (the Advice panel's Apply)."""
+        i = self.doc.active
+        self.controller.compute_in_pane(i, pane)
+        self.show_status(f"Pane {pane_letter(i)}: {pane.title}")
+
+    def show_dock(self, key: str) -> None:
+        """Show dock ``key`` and bring it to the front of its tab group.
+
+        The Advice dock shares the left column with the Source dock: when shorter than 70 % of the
+        column it grows to that, so that its summary, features and a good part of the ranking show.
+        """
+        dock = self.docks[key]
+        dock.show()
+        dock.raise_()
+        source = self.docks["source"]
+        if key == "advice" and not dock.isFloating() and source.isVisible() and not source.isFloating() \
+                and self.dockWidgetArea(source) == self.dockWidgetArea(dock):
+            column = source.height() + dock.height()
+            wanted = int(0.7 * column)
+            if dock.height() < wanted:
+                self.resizeDocks([source, dock], [column - wanted, wanted], Qt.Orientation.Vertical)
 
     # -- model events ---------------------------------------------------------------------------
     def _on_mesh(self, change: MeshChange) -> None:

@@ -1,0 +1,132 @@
+"""The advisor's answer for the document's mesh, and its features and ranking as text for a person.
+
+``curv.advise`` measures a mesh (noise, irregularity, density, ...) and ranks the estimator variants
+by the median relative error the paper's study predicts for such a mesh. An :class:`AdviceRecord`
+ties that answer (or the reason there is none) to the mesh it was computed for, so that the views
+never show advice for another mesh as current.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from curv import ranges
+
+__all__ = ["AdviceRecord", "FeatureRow", "RankingRow", "feature_rows", "ranking_rows", "polygon_text",
+           "percent_text"]
+
+
+@dataclass(frozen=True)
+class AdviceRecord:
+    """``curv.advise`` run on one mesh of the document: its :class:`curv.Advice` or why it failed.
+
+    Attributes
+    ----------
+    mesh_serial : int
+        :attr:`Document.mesh_serial` of the mesh it was computed for.
+    source_label : str
+        What that mesh was (``saddle (817 vertices)``, ``part.ply``), to say whose advice it is.
+    advice : curv.Advice or None
+        None when the advisor could not measure the mesh (see ``error``).
+    error : str
+        One-line reason when ``advice`` is None, else empty.
+    seconds : float
+        How long the advisor took.
+    """
+
+    mesh_serial: int
+    source_label: str
+    advice: object = None
+    error: str = ""
+    seconds: float = float("nan")
+
+
+@dataclass(frozen=True)
+class FeatureRow:
+    """One measured feature: its label, its value as text and what it means."""
+
+    label: str
+    text: str
+    tooltip: str
+
+
+@dataclass(frozen=True)
+class RankingRow:
+    """One ranked variant as shown: estimator, range label, predicted median e_rel and its text."""
+
+    method: str
+    range: int
+    range_label: str
+    expected_erel: float
+    erel_text: str
+    recommended: bool
+
+
+def percent_text(fraction: float) -> str:
+    """``0.52`` -> ``52 %``, ``0.013`` -> ``1.3 %``: whole percent from 10 % up, one decimal below."""
+    value = 100.0 * fraction
+    return f"{value:.0f} %" if abs(value) >= 10 else f"{value:.1f} %"
+
+
+def polygon_text(kinds: dict) -> str:
+    """``{3: 1536}`` -> ``1536 triangles``; ``{3: 10, 4: 5000}`` -> ``10 triangles, 5000 quads``."""
+    names = {3: "triangles", 4: "quads"}
+    parts = [f"{count} {names.get(size, f'{size}-gons')}" for size, count in sorted(kinds.items())]
+    return ", ".join(parts) or "no faces"
+
+
+def feature_rows(features) -> list[FeatureRow]:
+    """The measured features of a :class:`curv.advisor.MeshFeatures`, in the order a person reads them.
+
+    Parameters
+    ----------
+    features : curv.advisor.MeshFeatures
+
+    Returns
+    -------
+    list of FeatureRow
+        Irregularity, noise, density, border, polygons, vertices.
+    """
+    from curv.study.protocol import NOISE_FRACTION
+
+    f = features
+    return [
+        FeatureRow("Irregularity", f"{f.irregularity_deg:.1f}° RMS from 60°",
+                   "The paper's irregularity (§5.1): RMS deviation of every triangle angle from 60°, measured in "
+                   "3D on the mesh as given (polygons fan-triangulated) and corrected for the jitter noise adds. "
+                   "0° is a regular tessellation; the study goes up to 25°."),
+        FeatureRow("Noise", f"{f.noise:.2g} × mean edge ({percent_text(f.noise_level)} of the paper's level)",
+                   "Estimated standard deviation of the vertex noise per coordinate, in mean edge lengths "
+                   "(the robust spread of the residuals of a local quadric fit, qs R3). In brackets as a share "
+                   f"of the paper's 100 % noise level, {NOISE_FRACTION:g} × the mean edge."),
+        FeatureRow("Density", f"{f.density:.2g} (mean edge × |k1|+|k2|)",
+                   "Dimensionless resolution: the mean edge length times the median of |k1| + |k2| of a local "
+                   "quadratic fit (qs R3). Small: finely sampled for its curvature; a sphere of radius r meshed "
+                   "with edges h gives about 2 h / r. Noise inflates it."),
+        FeatureRow("Border", f"{percent_text(f.border_share)} of the vertices",
+                   "Share of the vertices on a border. Border vertices are invalid for every estimator; the "
+                   "closed-ring estimators (meyer, csm, ru) also lose every vertex whose support reaches one."),
+        FeatureRow("Polygons", polygon_text(f.polygon_kinds),
+                   "Face sizes. On a mesh with other polygons than triangles the triangle-only estimators "
+                   "are left out of the ranking."),
+        FeatureRow("Vertices", f"{f.n_vertices} (mean edge {f.mean_edge:.3g})",
+                   "Vertex count, and the mean edge length in mesh units (the unit of the noise)."),
+    ]
+
+
+def ranking_rows(advice) -> list[RankingRow]:
+    """The ranking of a :class:`curv.Advice`, best first, the recommendation marked.
+
+    Parameters
+    ----------
+    advice : curv.Advice
+
+    Returns
+    -------
+    list of RankingRow
+        In the advisor's order (increasing predicted median e_rel); exactly the row of
+        ``advice.method`` / ``advice.range`` is ``recommended``.
+    """
+    return [RankingRow(method, int(k), ranges.range_label(k), float(erel), f"{erel:.3g}",
+                       method == advice.method and k == advice.range)
+            for method, k, erel in advice.ranking]

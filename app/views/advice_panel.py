@@ -1,0 +1,271 @@
+"""The advice panel: what the advisor measured on the mesh, its ranking of the estimators by predicted
+error (the recommendation first and highlighted), and Apply, which puts the selected row into the
+active pane. Advice computed for an earlier mesh is shown as stale and cannot be applied."""
+
+from __future__ import annotations
+
+from html import escape
+
+from curv.errors import EstimatorError
+from curv.estimators import ESTIMATORS
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QBrush, QColor, QFont
+from PySide6.QtWidgets import (
+    QAbstractItemView, QFormLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSizePolicy,
+    QTableWidget, QTableWidgetItem, QToolButton, QVBoxLayout, QWidget,
+)
+
+from app.model import Document, Pane, feature_rows, pane_letter, ranking_rows
+from app.model.advice import RankingRow
+
+from .inspect_panel import RANGE_TIP, estimator_tooltip
+
+__all__ = ["AdvicePanel", "RECOMMENDED_BACKGROUND"]
+
+RECOMMENDED_BACKGROUND = "#dcefd8"
+"""Background of the recommended row of the ranking."""
+
+STALE_COLOUR = "#a15c00"
+ERROR_COLOUR = "#b00020"
+
+INTRO = ("Advise measures the mesh (noise, irregularity, density, borders, polygons) and ranks every "
+         "estimator and range by the median relative error the paper's study predicts for such a mesh.")
+ERREL_TIP = ("Predicted median relative error e_rel (paper eq. 5.2) of this estimator and range on a mesh "
+             "with the measured features, from the study's results on its test surfaces. Lower is better.")
+COLUMNS = (("Estimator", "Registry name of the estimator (hover a row for its method)"),
+           ("Range", RANGE_TIP),
+           ("Median e_rel", ERREL_TIP))
+
+
+class AdvicePanel(QWidget):
+    """Shows :attr:`Document.advice` for the document's mesh; ``apply_requested`` asks for a row.
+
+    Parameters
+    ----------
+    doc : Document
+
+    Signals
+    -------
+    apply_requested(Pane)
+        Show this (validated) estimator and range in the active pane and compute it.
+    """
+
+    apply_requested = Signal(object)
+
+    def __init__(self, doc: Document, parent=None) -> None:
+        super().__init__(parent)
+        self.doc = doc
+        self._running = False
+        self._rows: list[RankingRow] = []
+        self._shown_record = None  # the record the table holds (refilled only when it changes)
+
+        self.status = QLabel()
+        self.status.setWordWrap(True)
+        self.status.setTextFormat(Qt.TextFormat.RichText)
+        self.advise_button = QToolButton()
+        self.advise_button.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextOnly)
+        self.why = QLabel()
+        self.why.setWordWrap(True)
+        self.why.setObjectName("advice_why")
+        self.why.setStyleSheet("#advice_why { background: palette(alternate-base); border: 1px solid palette(mid);"
+                               " border-radius: 3px; padding: 4px; }")
+        self.why.setToolTip("The advisor's summary: what it measured and what it recommends")
+        self.why.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+
+        self.features_box = QGroupBox("Measured on the mesh")
+        features_form = QFormLayout(self.features_box)
+        features_form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
+        self.feature_labels: dict[str, QLabel] = {}
+        self.feature_values: dict[str, QLabel] = {}
+        for name in ("Irregularity", "Noise", "Density", "Border", "Polygons", "Vertices"):
+            label, value = QLabel(name), QLabel()
+            value.setWordWrap(True)
+            value.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+            features_form.addRow(label, value)
+            self.feature_labels[name], self.feature_values[name] = label, value
+
+        self.ranking_box = QGroupBox("Ranking by predicted error, best first")
+        self.table = QTableWidget(0, len(COLUMNS))
+        for col, (title, tip) in enumerate(COLUMNS):
+            item = QTableWidgetItem(title)
+            item.setToolTip(tip)
+            self.table.setHorizontalHeaderItem(col, item)
+        self.table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
+        self.table.setSelectionMode(QAbstractItemView.SelectionMode.SingleSelection)
+        self.table.setEditTriggers(QAbstractItemView.EditTrigger.NoEditTriggers)
+        self.table.setWordWrap(False)
+        self.table.verticalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Fixed)
+        self.table.verticalHeader().setDefaultSectionSize(self.fontMetrics().height() + 6)
+        self.table.verticalHeader().setToolTip("Rank; ★ marks the recommendation")
+        header = self.table.horizontalHeader()
+        header.setSectionResizeMode(0, QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(1, QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(2, QHeaderView.ResizeMode.Stretch)
+        self.table.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.table.setMinimumHeight(5 * (self.fontMetrics().height() + 6))  # the header and four rows
+        # the table takes the height left over (its own scroll bar), never asks for more: the dock's
+        # scroll area would otherwise add a second scroll bar around the whole panel
+        self.table.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Ignored)
+        self.apply_button = QPushButton("Apply")
+        ranking_lay = QVBoxLayout(self.ranking_box)
+        ranking_lay.addWidget(self.table, 1)
+        ranking_lay.addWidget(self.apply_button)
+
+        top = QHBoxLayout()
+        top.addWidget(self.status, 1)
+        top.addWidget(self.advise_button, 0, Qt.AlignmentFlag.AlignTop)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(4, 4, 4, 4)
+        lay.addLayout(top)
+        lay.addWidget(self.why)
+        lay.addWidget(self.features_box)
+        lay.addWidget(self.ranking_box, 1)
+        lay.addStretch(0)  # takes the height only while the ranking is hidden: the text stays on top
+
+        self.table.itemSelectionChanged.connect(self._update_apply)
+        self.table.cellDoubleClicked.connect(lambda row, col: self.apply_row(row))
+        self.apply_button.clicked.connect(lambda: self.apply_row(self.selected_row()))
+        doc.advice_changed.connect(lambda record: self.refresh())
+        doc.mesh_changed.connect(lambda change: self.refresh())
+        doc.panes_changed.connect(self._update_apply)
+        doc.pane_changed.connect(lambda i: self._update_apply())
+        self.refresh()
+
+    # -- state ------------------------------------------------------------------------------------
+    @property
+    def rows(self) -> list[RankingRow]:
+        """The ranking the table shows, top to bottom."""
+        return list(self._rows)
+
+    @property
+    def is_stale(self) -> bool:
+        """The panel shows advice that was computed for an earlier mesh."""
+        record = self.doc.advice
+        return record is not None and record.advice is not None and not self.doc.advice_current
+
+    def selected_row(self) -> int:
+        """Index of the selected ranking row (the recommendation, 0, when nothing is selected)."""
+        rows = self.table.selectionModel().selectedRows()
+        return rows[0].row() if rows else 0
+
+    def select_row(self, row: int) -> None:
+        """Select ranking row ``row`` (what Apply then applies)."""
+        self.table.selectRow(row)
+
+    def set_running(self, running: bool) -> None:
+        """The advisor started or stopped: say so above the advice."""
+        self._running = bool(running)
+        self.refresh()
+
+    # -- user -> window ---------------------------------------------------------------------------
+    def apply_row(self, row: int) -> None:
+        """Ask for ranking row ``row`` in the active pane, if the advice is for the mesh shown now."""
+        if not self.doc.advice_current or not 0 <= row < len(self._rows):
+            return
+        chosen = self._rows[row]
+        try:
+            pane = Pane(chosen.method, chosen.range).validated()
+        except (EstimatorError, KeyError) as exc:  # an estimator of the study this curv does not register
+            self.status.setText(f"<span style='color:{ERROR_COLOUR}'>Cannot apply {escape(chosen.method)} "
+                                f"{chosen.range_label}: {escape(str(exc))}</span>")
+            return
+        self.apply_requested.emit(pane)
+
+    # -- model -> widgets -------------------------------------------------------------------------
+    def refresh(self) -> None:
+        """Show the document's advice: current, stale (greyed, not applicable), failed, or none yet."""
+        doc, record = self.doc, self.doc.advice
+        has_advice = record is not None and record.advice is not None
+        current_failure = record is not None and record.advice is None and record.mesh_serial == doc.mesh_serial
+        shown_label = escape(doc.source.label) if doc.source is not None else "no mesh"
+        lines = []
+        self.status.setToolTip("")
+        if has_advice and doc.advice_current:
+            lines.append(f"Advice for <b>{escape(record.source_label)}</b>")
+            self.status.setToolTip(f"The advisor took {record.seconds:.2f} s on this mesh")
+        elif has_advice:
+            lines.append(f"<span style='color:{STALE_COLOUR}'><b>Stale:</b> this advice is for "
+                         f"<b>{escape(record.source_label)}</b>, not for the mesh shown now "
+                         f"(<b>{shown_label}</b>). Advise again for this mesh.</span>")
+        elif current_failure:
+            lines.append(f"<span style='color:{ERROR_COLOUR}'><b>No advice:</b> {escape(record.error)}</span>")
+        elif doc.source is None:
+            lines.append(f"<i>No mesh yet.</i> {INTRO}")
+        else:
+            lines.append(f"<i>No advice for {shown_label} yet.</i> {INTRO}")
+        if self._running:
+            lines.append(f"<i>Advising on {shown_label}…</i>")
+        self.status.setText("<br>".join(lines))
+
+        self.why.setVisible(has_advice)
+        self.features_box.setVisible(has_advice)
+        self.ranking_box.setVisible(has_advice)
+        if not has_advice:
+            self._fill(None)
+            self._update_apply()
+            return
+        if record is not self._shown_record:
+            self._fill(record)
+        current = doc.advice_current
+        for w in (self.why, self.features_box, self.table):
+            w.setEnabled(current)
+        self.features_box.setTitle("Measured on the mesh" if current else "Measured on the earlier mesh (stale)")
+        self._update_apply()
+
+    def _fill(self, record) -> None:
+        """Fill the summary, features and table from ``record`` (None: empty); select the recommendation."""
+        self._shown_record = record
+        self.table.setRowCount(0)
+        self._rows = []
+        if record is None:
+            self.why.clear()
+            for value in self.feature_values.values():
+                value.clear()
+            return
+        advice = record.advice
+        self.why.setText(advice.why)
+        for row in feature_rows(advice.features):
+            self.feature_values[row.label].setText(row.text)
+            self.feature_values[row.label].setToolTip(row.tooltip)
+            self.feature_labels[row.label].setToolTip(row.tooltip)
+        self._rows = ranking_rows(advice)
+        self.table.setRowCount(len(self._rows))
+        bold = QFont(self.font())
+        bold.setBold(True)
+        tint = QBrush(QColor(RECOMMENDED_BACKGROUND))
+        for r, row in enumerate(self._rows):
+            spec = ESTIMATORS.get(row.method)
+            cells = (row.method, row.range_label, row.erel_text)
+            tips = (estimator_tooltip(spec) if spec is not None else row.method, RANGE_TIP, ERREL_TIP)
+            for c, (text, tip) in enumerate(zip(cells, tips)):
+                item = QTableWidgetItem(text)
+                item.setToolTip(("<b>Recommended</b><br>" if row.recommended else "") + tip)
+                if c == 2:
+                    item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+                if row.recommended:
+                    item.setFont(bold)
+                    item.setBackground(tint)
+                self.table.setItem(r, c, item)
+            rank = QTableWidgetItem(f"{r + 1} ★" if row.recommended else str(r + 1))
+            rank.setToolTip("Recommended" if row.recommended else f"Rank {r + 1}")
+            if row.recommended:
+                rank.setFont(bold)
+            self.table.setVerticalHeaderItem(r, rank)
+        self.table.selectRow(0)
+        self.table.scrollToTop()
+
+    def _update_apply(self) -> None:
+        """Apply names the selected row and the active pane; it works only on current advice."""
+        doc = self.doc
+        letter = pane_letter(doc.active)
+        usable = doc.advice_current and bool(self._rows)
+        if usable:
+            row = self._rows[self.selected_row()]
+            self.apply_button.setText(f"Apply {row.method} {row.range_label} to pane {letter}")
+        else:
+            self.apply_button.setText(f"Apply to pane {letter}")
+        self.apply_button.setEnabled(usable)
+        self.apply_button.setToolTip(
+            f"Set pane {letter}'s estimator and range to the selected row (the recommendation unless you "
+            "select another) and compute it; double-clicking a row does the same"
+            if usable else "Advise on the mesh shown now first: this advice is for another mesh")
