@@ -2,24 +2,33 @@
 
 Run by hand (not part of the test suite)::
 
-    .venv/bin/python benchmarks/bench_advisor.py --quick            # 48 meshes, about 1-2 minutes on 2 cores
-    .venv/bin/python benchmarks/bench_advisor.py --meshes 400 --out docs/advisor_validation.md
+    .venv/bin/python benchmarks/bench_advisor.py --quick            # 48 meshes of at most ~3700 vertices
+    .venv/bin/python benchmarks/bench_advisor.py --meshes 300 --runs runs.json   # docs/ADVISOR.md, 8 min
+    .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
 
-Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000) and at settings
-between and beyond the table's grid points: continuous noise level (0 to 1.3 of the paper's 100 %),
-continuous irregularity (0 to 30 degrees), hexagon densities 3 s (s + 1) + 1 for a random s (the
-table has 817 and 3169 only), three quarters Monge patches of eq. 5.1 (the study's meshes,
-:func:`curv.study.testmesh.build_test_mesh`, evaluated away from the border as in the study), one
-quarter closed analytic surfaces (sphere of random radius, ellipsoid, torus, every vertex evaluated;
-no irregularity option). Truth is exact (:mod:`curv.surfaces`). Per mesh every candidate of the
+Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000; the table's study
+uses seed 0) and at settings between and beyond the table's grid points: continuous noise level (0
+to 1.3 of the paper's 100 %), continuous irregularity (0 to 30 degrees), hexagon densities
+3 s (s + 1) + 1 for a random s in 15..64 (721 to 12481 vertices), three quarters Monge patches of
+eq. 5.1 (the study's meshes, :func:`curv.study.testmesh.build_test_mesh`, evaluated away from the
+border as in the study), one quarter closed analytic surfaces of random shape
+(:func:`curv.advisor_table.random_closed_params`: sphere radius, ellipsoid semi-axes, torus tube
+radius) at the same vertex counts (a geodesic sphere or ellipsoid snaps to the nearest
+10 f^2 + 2, so sizes between the table's 642, 2562 and 10242 too; every vertex evaluated; no
+irregularity option). Truth is exact (:mod:`curv.surfaces`). Per mesh every candidate of the
 table is run (Max normals) and scored by the median e_rel over the evaluated vertices it gives a
 value for (the study's ``median_erel``).
 
 Reported: regret = median e_rel of the advised variant / the best median e_rel over all candidates
-(median, 90th percentile); the advisor's mean error against that of every fixed choice (the best
-fixed choice named); the regret of a few fixed choices for scale; how close the noise estimate is to
-the true noise (share within +-25 % at and above a third of the paper's level) and the irregularity
-estimate to the planar irregularity the mesh was made with.
+(median, 90th percentile, share within 1.05), overall and for subsets (patches, closed surfaces,
+settings inside or beyond the table's grid, nearly noise-free); the advisor's mean error against
+that of every fixed choice (the best fixed choices named); the regret of a few fixed choices for
+scale; how close the noise estimate is to the true noise (share within +-25 % at and above a third
+of the paper's level) and the irregularity estimate to the 3D irregularity of the same mesh without
+noise (what the noise correction should recover) and to the planar irregularity the patch was made
+with. ``--rescore`` re-advises the meshes of a ``--runs`` file from their stored raw measures with
+another table (the estimators' errors do not depend on the table): it compares tables on the
+same held-out meshes in a second, and must not be used to tune a table on them.
 """
 
 from __future__ import annotations
@@ -29,7 +38,6 @@ import json
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -43,47 +51,50 @@ MONGE = ("quadratic", "ellipsoid_patch", "trigonometric")
 
 
 def draw_settings(n: int, seed: int, *, s_range=(15, 40)) -> list[dict]:
-    """``n`` held-out mesh settings from one random stream."""
+    """``n`` held-out mesh settings from one random stream (the shapes of closed surfaces too)."""
+    from curv.advisor_table import random_closed_params
+
     rng = np.random.default_rng([seed, 42])
     out = []
     for i in range(n):
         closed = rng.random() < 0.25
         s = int(rng.integers(s_range[0], s_range[1] + 1))
+        function = str(rng.choice(CLOSED if closed else MONGE))
         out.append({
-            "index": i, "seed": seed + i,
-            "function": str(rng.choice(CLOSED if closed else MONGE)), "closed": bool(closed),
+            "index": i, "seed": seed + i, "function": function, "closed": bool(closed),
             "n_vertices": 3 * s * (s + 1) + 1, "noise_level": float(rng.uniform(0.0, 1.3)),
             "irregularity": 0.0 if closed else float(rng.uniform(0.0, 30.0)),
-            "radius": float(rng.uniform(0.5, 3.0)),
+            "params": random_closed_params(function, rng) if closed else {},
         })
     return out
 
 
-def _mesh(setting: dict):
-    """(mesh, truth, evaluated, true planar irregularity)."""
+def _mesh(setting: dict, noise_level: float):
+    """(mesh, truth, evaluated, planar irregularity) of a setting at ``noise_level`` (the same mesh
+    and noise directions at every level)."""
     from curv.study.protocol import NOISE_FRACTION, Task
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import make_surface
 
     if setting["closed"]:
-        params = {"radius": setting["radius"]} if setting["function"] == "sphere" else {}
         s = make_surface(setting["function"], n_vertices=setting["n_vertices"],
-                         noise=setting["noise_level"] * NOISE_FRACTION, seed=setting["seed"], **params)
+                         noise=noise_level * NOISE_FRACTION, seed=setting["seed"], **setting["params"])
         return s.mesh, s.truth, np.ones(s.mesh.n_vertices, bool), float("nan")
     tm = build_test_mesh(Task(setting["seed"], setting["function"], setting["n_vertices"],
-                              setting["irregularity"], setting["noise_level"], 0))
+                              setting["irregularity"], noise_level, 0))
     return tm.mesh, tm.truth, tm.evaluated, tm.irregularity
 
 
 def evaluate(setting: dict) -> dict:
     """Every candidate's median e_rel on one held-out mesh, and the advisor's answer."""
     from curv import advise, estimate
-    from curv.advisor import load_table
+    from curv.advisor import angle_deviation_deg, fan_triangles, load_table
     from curv.normals import vertex_normals
     from curv.study.metrics import summarize
     from curv.study.protocol import Variant
 
-    mesh, truth, evaluated, irr_true = _mesh(setting)
+    mesh, truth, evaluated, irr_true = _mesh(setting, setting["noise_level"])
+    clean = _mesh(setting, 0.0)[0]
     table = load_table(setting.get("table"))
     variants = table["variants"]
     t0 = time.perf_counter()
@@ -98,15 +109,43 @@ def evaluate(setting: dict) -> dict:
             erel[vid] = summarize(truth, res, evaluated)["median_erel"]
         except Exception:  # a failing candidate cannot be the best one
             erel[vid] = float("nan")
-    return {**setting, "erel": erel, "advised": f"{adv.method}:R{adv.range}", "expected": adv.expected_erel,
+    raw = {k: getattr(adv.features, k) for k in ("noise_raw", "irregularity_raw_deg", "density", "border_share")}
+    return {**setting, "erel": erel, "advised": f"{adv.method}:R{adv.range}", "expected": adv.expected_erel, "raw": raw,
             "noise_est": adv.features.noise, "irr_est": adv.features.irregularity_deg,
-            "density_est": adv.features.density, "irr_true": irr_true, "advise_seconds": t_adv}
+            "density_est": adv.features.density, "irr_true": irr_true,
+            "irr_clean_3d": angle_deviation_deg(clean.vertices, fan_triangles(clean)), "advise_seconds": t_adv}
 
 
-def summarize_runs(runs: list[dict]) -> tuple[str, dict]:
-    """The markdown report and its numbers."""
+def _regret_row(label: str, regret: np.ndarray, erel: np.ndarray) -> str:
+    """One markdown row: median and p90 regret, share within 1.05, mean median e_rel."""
+    return (f"| {label} | {np.nanmedian(regret):.3f} | {np.nanpercentile(regret, 90):.3f} | "
+            f"{100 * np.mean(regret <= 1.05):.0f} % | {np.nanmean(erel):.4f} |")
+
+
+def beyond_grid(runs: list[dict], table: dict) -> np.ndarray:
+    """(m,) bool: meshes whose setting lies outside the table's grid (noise, irregularity or density)."""
+    grid = table["metadata"]["settings"]
+    noise = np.array([r["noise_level"] for r in runs])
+    irr = np.array([r["irregularity"] for r in runs])
+    n = np.array([r["n_vertices"] for r in runs])
+    return (noise > max(grid["noise"])) | (irr > max(grid["irregularity"])) | (n < min(grid["densities"])) | (
+        n > max(grid["densities"]))
+
+
+def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, dict]:
+    """The markdown report and its numbers.
+
+    Parameters
+    ----------
+    runs : list of dict
+        :func:`evaluate` of every held-out mesh.
+    table : dict, optional
+        The advisor table validated (for the grid's bounds); default the packaged one.
+    """
+    from curv.advisor import load_table
     from curv.study.protocol import NOISE_FRACTION
 
+    table = load_table() if table is None else table
     variants = list(runs[0]["erel"])
     E = np.array([[r["erel"][v] for v in variants] for r in runs], float)
     E = np.where(E > 0, E, np.nan)
@@ -114,56 +153,96 @@ def summarize_runs(runs: list[dict]) -> tuple[str, dict]:
     adv = np.array([r["erel"][r["advised"]] for r in runs], float)
     regret = adv / best
     fixed_mean = {v: float(np.nanmean(E[:, j])) for j, v in enumerate(variants) if np.isfinite(E[:, j]).all()}
-    best_fixed = min(fixed_mean, key=fixed_mean.get)
+    ranked_fixed = sorted(fixed_mean, key=fixed_mean.get)
+    best_fixed = ranked_fixed[0]
     adv_mean = float(np.nanmean(adv))
 
     noise_true = np.array([r["noise_level"] * NOISE_FRACTION for r in runs])
     noise_est = np.array([r["noise_est"] for r in runs])
     big = noise_true >= NOISE_FRACTION / 3
     rel = np.abs(noise_est[big] / noise_true[big] - 1)
-    irr = np.array([(r["irr_est"], r["irr_true"]) for r in runs if not r["closed"]], float)
+    closed = np.array([r["closed"] for r in runs])
+    irr_est = np.array([r["irr_est"] for r in runs])
+    irr_clean = np.array([r["irr_clean_3d"] for r in runs])
+    irr_planar = np.array([r["irr_true"] for r in runs])
+    d_clean = np.abs(irr_est - irr_clean)
+    d_planar = np.abs(irr_est - irr_planar)[~closed]
+    outside = beyond_grid(runs, table)
+    small_noise_error = (np.median(np.abs(noise_est[~big] - noise_true[~big])) / NOISE_FRACTION if (~big).any()
+                         else float("nan"))
     numbers = {
         "meshes": len(runs), "median_regret": float(np.nanmedian(regret)),
-        "p90_regret": float(np.nanpercentile(regret, 90)), "advisor_mean_erel": adv_mean,
+        "p90_regret": float(np.nanpercentile(regret, 90)), "max_regret": float(np.nanmax(regret)),
+        "advisor_failed": int(np.sum(~np.isfinite(adv))), "advisor_mean_erel": adv_mean,
         "best_fixed": best_fixed, "best_fixed_mean_erel": fixed_mean[best_fixed],
         "gain_vs_best_fixed": 1 - adv_mean / fixed_mean[best_fixed],
         "noise_within_25pct": float(np.mean(rel <= 0.25)), "noise_median_rel_error": float(np.median(rel)),
+        "noise_p90_rel_error": float(np.percentile(rel, 90)),
         "noise_clean_max": float(noise_est[noise_true == 0].max()) if (noise_true == 0).any() else float("nan"),
-        "irr_median_abs_diff": float(np.median(np.abs(irr[:, 0] - irr[:, 1]))) if len(irr) else float("nan"),
+        "irr_median_abs_diff_clean": float(np.median(d_clean)),
+        "irr_p90_abs_diff_clean": float(np.percentile(d_clean, 90)),
+        "irr_median_abs_diff": float(np.median(d_planar)) if d_planar.size else float("nan"),
     }
     lines = [
-        f"Held-out meshes: {len(runs)} ({sum(r['closed'] for r in runs)} closed), candidates: {len(variants)}.",
+        f"Held-out meshes: {len(runs)} ({int(closed.sum())} closed, {int(outside.sum())} with a setting beyond "
+        f"the table's grid), candidates: {len(variants)}.",
         "",
-        "| choice | median regret | p90 regret | mean median e_rel |",
-        "|---|---|---|---|",
-        f"| advisor | {numbers['median_regret']:.3f} | {numbers['p90_regret']:.3f} | {adv_mean:.4f} |",
+        "| choice | median regret | p90 regret | regret <= 1.05 | mean median e_rel |",
+        "|---|---|---|---|---|",
+        _regret_row("**advisor**", regret, adv),
     ]
-    shown = dict.fromkeys([best_fixed, *FIXED_SHOWN])
-    for v in shown:
+    for v in dict.fromkeys([*ranked_fixed[:3], *FIXED_SHOWN]):
         if v in variants:
             j = variants.index(v)
-            rg = E[:, j] / best
-            lines.append(f"| always {v}{' (best fixed)' if v == best_fixed else ''} | {np.nanmedian(rg):.3f} | "
-                         f"{np.nanpercentile(rg, 90):.3f} | {np.nanmean(E[:, j]):.4f} |")
-    for label, mask in (("Monge patches", [not r["closed"] for r in runs]), ("closed surfaces", [r["closed"] for r in runs])):
-        mask = np.array(mask)
+            tag = " (best fixed)" if v == best_fixed else (" (2nd best fixed)" if v == ranked_fixed[1] else "")
+            lines.append(_regret_row(f"always {v}{tag}", E[:, j] / best, E[:, j]))
+    subsets = (("Monge patches", ~closed), ("closed surfaces", closed), ("inside the grid", ~outside),
+               ("beyond the grid", outside), ("noise < 0.1 of the paper's", noise_true < 0.1 * NOISE_FRACTION))
+    for label, mask in subsets:
         if mask.any():
-            lines.append(f"| advisor, {label} only ({int(mask.sum())}) | {np.nanmedian(regret[mask]):.3f} | "
-                         f"{np.nanpercentile(regret[mask], 90):.3f} | {np.nanmean(adv[mask]):.4f} |")
+            lines.append(_regret_row(f"advisor, {label} ({int(mask.sum())})", regret[mask], adv[mask]))
     lines += [
         "",
-        f"Advisor mean error {100 * numbers['gain_vs_best_fixed']:.1f} % below the best fixed choice ({best_fixed}).",
+        f"Advisor mean error {100 * numbers['gain_vs_best_fixed']:.1f} % below the best fixed choice ({best_fixed}, "
+        f"best of {len(fixed_mean)} candidates as fixed choices); largest regret {numbers['max_regret']:.2f}; "
+        f"the advised variant gave no value on {numbers['advisor_failed']} meshes.",
         f"Noise estimate at and above a third of the paper's level ({int(big.sum())} meshes): "
-        f"{100 * numbers['noise_within_25pct']:.0f} % within +-25 %, median relative error "
-        f"{100 * numbers['noise_median_rel_error']:.1f} %; below a third: median |estimate - truth| "
-        f"{np.median(np.abs(noise_est[~big] - noise_true[~big])) if (~big).any() else float('nan'):.4f} mean edges.",
-        f"Irregularity (Monge patches): median |3D estimate - planar target| {numbers['irr_median_abs_diff']:.1f} "
-        "degrees (the 3D measure includes the lift's distortion, see curv.advisor.MeshFeatures).",
+        f"{100 * numbers['noise_within_25pct']:.1f} % within +-25 %, relative error median "
+        f"{100 * numbers['noise_median_rel_error']:.1f} %, p90 {100 * numbers['noise_p90_rel_error']:.1f} %; "
+        f"below a third ({int((~big).sum())}): median |estimate - truth| "
+        f"{small_noise_error:.3f} of the paper's level.",
+        "Irregularity: median |estimate - 3D irregularity of the noise-free mesh| "
+        f"{numbers['irr_median_abs_diff_clean']:.1f} degrees (p90 {numbers['irr_p90_abs_diff_clean']:.1f}); Monge patches against the planar target the mesh "
+        f"was made with: median {numbers['irr_median_abs_diff']:.1f} degrees (the 3D measure includes the lift's "
+        "distortion, see curv.advisor.MeshFeatures).",
     ]
     return "\n".join(lines), numbers
 
 
+def readvise(runs: list[dict], table: dict) -> list[dict]:
+    """The runs with the advice of another table, from their stored raw measures (no estimator runs
+    again): the same calibration, prediction and candidates as :func:`curv.advise`."""
+    from curv.advisor import MeshFeatures, calibrate_irregularity, calibrate_noise, candidates, predict
+
+    cal = table["calibration"]
+    out = []
+    for r in runs:  # one prediction per held-out mesh
+        noise = calibrate_noise(r["raw"]["noise_raw"], cal, r["raw"]["density"])
+        feats = MeshFeatures(irregularity_deg=calibrate_irregularity(r["raw"]["irregularity_raw_deg"], noise, cal),
+                             noise=noise, density=r["raw"]["density"], border_share=r["raw"]["border_share"],
+                             polygon_kinds={3: 1})
+        pred = predict(table, feats)
+        ok = [v for v in candidates(table, feats) if np.isfinite(pred[v])]
+        choice = min(ok, key=pred.get)
+        out.append({**r, "advised": choice, "expected": pred[choice], "noise_est": feats.noise,
+                    "irr_est": feats.irregularity_deg})
+    return out
+
+
 def main(argv=None) -> int:
+    from curv.advisor import load_table
+    from curv.study.executors import open_executor
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="48 meshes of at most ~3700 vertices")
     parser.add_argument("--meshes", type=int, default=200)
@@ -172,20 +251,23 @@ def main(argv=None) -> int:
     parser.add_argument("--out", help="also write the markdown report here")
     parser.add_argument("--table", help="advisor table JSON to validate; default the packaged one")
     parser.add_argument("--runs", help="also write every mesh's numbers here (JSON)")
+    parser.add_argument("--rescore", metavar="RUNS", help="re-advise the meshes of a --runs file with --table "
+                        "instead of running anything (triangle meshes; the estimators' errors are the file's)")
     args = parser.parse_args(argv)
-    n, s_range = (48, (15, 34)) if args.quick else (args.meshes, (15, 64))
-    settings = [{**s, "table": args.table} for s in draw_settings(n, args.seed, s_range=s_range)]
     t0 = time.perf_counter()
-    if args.workers > 1:
-        with ProcessPoolExecutor(args.workers) as pool:
-            runs = list(pool.map(evaluate, settings))
+    table = load_table(args.table)
+    if args.rescore:
+        runs = readvise(json.loads(Path(args.rescore).read_text()), table)
     else:
-        runs = [evaluate(s) for s in settings]
-    text, _ = summarize_runs(runs)
+        n, s_range = (48, (15, 34)) if args.quick else (args.meshes, (15, 64))
+        settings = [{**s, "table": args.table} for s in draw_settings(n, args.seed, s_range=s_range)]
+        with open_executor(workers=args.workers) as pool:  # one kernel thread per worker
+            runs = list(pool.map(evaluate, settings))
+    text, _ = summarize_runs(runs, table)
     if args.runs:
         Path(args.runs).write_text(json.dumps(runs, default=float))
     cmd = "benchmarks/bench_advisor.py " + " ".join(sys.argv[1:] if argv is None else argv)
-    text += f"\n\nCommand: `{cmd}`; {time.perf_counter() - t0:.0f} s with {args.workers} workers."
+    text += f"\n\nCommand: `{cmd}`; {time.perf_counter() - t0:.0f} s wall with {args.workers} workers."
     print(text)
     if args.out:
         Path(args.out).write_text(text + "\n")

@@ -1,30 +1,37 @@
 """Build the advisor's table (``curv/data/advisor_table.json``) from a study run.
 
 The table behind :func:`curv.advise`: a study over a grid of densities, noise levels and
-irregularities (the study's own tasks, meshes, runner and metrics), then, on every mesh of that
-grid, the advisor's own feature measures. It stores
+irregularities (the study's own tasks, meshes, runner and metrics), noisy closed analytic
+surfaces of random shape beside it, then, on every mesh, the advisor's own feature measures. It
+stores
 
 - ``calibration``: the noise measure's floor, density term and gain
-  (``raw² = a² + c density⁴ + (b noise)²``, least squares over all the table's meshes of known noise) and the angle jitter per noise level of the irregularity
-  measure (``raw² = clean² + (c level)²``, least squares over each mesh and its noise-free twin);
+  (``raw² = a² + c density⁴ + (b noise)²``, least squares over all the table's meshes of known
+  noise) and the angle jitter per noise level of the irregularity measure
+  (``raw² = clean² + (c level)²``, least squares over each mesh and its noise-free twin);
 - ``points``: per mesh, the measured ``(density, noise level, irregularity)``;
-- ``median_erel``: per mesh and variant, the median e_rel against the exact curvature;
+- ``median_erel``: per mesh and variant, the median e_rel against the exact curvature (3
+  significant digits);
 - ``kernel``: the noise axis transform (linear or square root), the axis scales (standard
   deviation of each coordinate over the points) and the bandwidth, the pair with the lowest
   leave-one-out mean regret (each mesh advised from all the others);
+- ``truth``: per mesh, its key, true noise, planar irregularity and density from the exact
+  curvature (for checks; the advisor does not read it);
 - ``metadata``: the exact command, the settings, the date, timings.
 
-Regenerate (this session's table: 270 study meshes and 90 closed ones, about 3.5 minutes on 2
-busy cores from scratch)::
+Regenerate the shipped table (1260 study meshes: hexagon densities 817, 1801, 3169, 7057 and
+12481 x noise levels 0, 0.05, 0.1, 0.2, 0.33, 0.6, 1 x irregularities 0, 8, 16, 25 x the three
+Monge patches x 3 samples; plus sphere, ellipsoid and torus at 642, 2562 and 10242 vertices x the
+same noise levels x 3 random shapes: 1449 meshes; 28.5 CPU-minutes, 32 minutes wall with 2 workers
+on 2 cores shared with another study run, from scratch)::
 
-    python -m curv.advisor_table --work /tmp/advisor-study --samples 3 --densities 817 3169 \\
-        --noise 0 0.1 0.25 0.5 1 --irregularity 0 12.5 25 --workers 2 \\
-        --closed sphere ellipsoid torus --closed-vertices 642 2562
+    python -m curv.advisor_table --work /tmp/advisor-study-3 --workers 2
 
-(these are the defaults, so ``python -m curv.advisor_table --work DIR`` is the same run.)
-(217 is left out: on its hexagon no vertex is farther than R4 from the border, so the study
-evaluates none.) A finer table later: more samples, ``--densities 817 3169 12481``, more noise
-and irregularity levels. The study directory resumes, so a long run may be split.
+Every grid setting is a default (``--samples``, ``--densities``, ``--noise``,
+``--irregularity``, ``--closed``, ``--closed-vertices`` change them). 217 vertices is left out: on
+its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
+directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
+and a rerun over a finished directory only refits the calibration and the kernel (seconds).
 """
 
 from __future__ import annotations
@@ -40,7 +47,8 @@ import numpy as np
 from .advisor import FIT_METHOD, FIT_RANGE, kernel_predict, raw_measures, table_coordinates
 from .study.protocol import NOISE_FRACTION, StudySettings, Task, study_variants
 
-__all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "fit_calibration", "choose_bandwidth",
+__all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "random_closed_params", "closed_mesh_point",
+           "measure_rows", "fit_calibration", "table_points", "choose_bandwidth", "fit_kernel", "make_table",
            "build_table", "main"]
 
 DEFAULT_OUT = Path(__file__).parent / "data" / "advisor_table.json"
@@ -49,9 +57,24 @@ BANDWIDTHS = (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
 NOISE_AXES = ("linear", "sqrt")
 """Candidate transforms of the noise axis, tried by leave-one-out with every bandwidth."""
 
+DEFAULT_SAMPLES = 3
+DEFAULT_DENSITIES = (817, 1801, 3169, 7057, 12481)
+"""Hexagon subdivisions s = 16, 24, 32, 48, 64: about even steps of log density (217 is left out:
+on its hexagon no vertex is farther than R4 from the border, so the study evaluates none)."""
+DEFAULT_NOISE = (0.0, 0.05, 0.1, 0.2, 0.33, 0.6, 1.0)
+"""Noise levels (fractions of the paper's 100 %): about even steps of their square root, the
+kernel's noise axis."""
+DEFAULT_IRREGULARITY = (0.0, 8.0, 16.0, 25.0)
+DEFAULT_CLOSED = ("sphere", "ellipsoid", "torus")
+DEFAULT_CLOSED_VERTICES = (642, 2562, 10242)
+EREL_DIGITS = 3
+"""Significant digits of the stored median e_rel (a relative rounding of at most 0.5 %)."""
+POINT_DIGITS = 4
+"""Significant digits of the stored point coordinates."""
 
-def table_settings(*, samples: int = 3, densities=(817, 3169), noise=(0.0, 0.1, 0.25, 0.5, 1.0),
-                   irregularity=(0.0, 12.5, 25.0), seed: int = 0) -> StudySettings:
+
+def table_settings(*, samples: int = DEFAULT_SAMPLES, densities=DEFAULT_DENSITIES, noise=DEFAULT_NOISE,
+                   irregularity=DEFAULT_IRREGULARITY, seed: int = 0) -> StudySettings:
     """The study grid of the table: every registry variant at its named ranges, no smoothing variants."""
     selectors = tuple(v.id for v in study_variants(smoothing=False))
     return StudySettings(samples=samples, densities=tuple(densities), noise=tuple(float(x) for x in noise),
@@ -73,11 +96,32 @@ def mesh_features(task: Task) -> dict:
     }
 
 
-def closed_mesh_point(args: tuple) -> tuple[dict, list[float]]:
+def random_closed_params(name: str, rng: np.random.Generator) -> dict:
+    """Random shape parameters of a closed surface: a sphere's radius in [0.5, 3] (the measures are
+    scale-free, so it only checks that), an ellipsoid's three semi-axes in [0.5, 1.5], a torus's
+    tube radius in [0.2, 0.6] of its centre radius 1; other surfaces keep their defaults."""
+    if name == "sphere":
+        return {"radius": float(rng.uniform(0.5, 3.0))}
+    if name == "ellipsoid":
+        return dict(zip("abc", rng.uniform(0.5, 1.5, 3).tolist()))
+    if name == "torus":
+        return {"major": 1.0, "minor": float(rng.uniform(0.2, 0.6))}
+    return {}
+
+
+def closed_mesh_point(args: tuple) -> tuple[dict, dict]:
     """Raw measures and every variant's median e_rel on one noisy closed analytic surface.
 
     ``args = (seed, name, n_vertices, noise_level, sample, variant_ids)``; every vertex is
-    evaluated (no border). The noise directions depend on (seed, name, n_vertices, sample) only.
+    evaluated (no border). The shape (:func:`random_closed_params`) depends on (seed, name, sample)
+    and the noise directions on (seed, name, n_vertices, sample) only, so the sizes and noise levels
+    of one sample are paired like the study's.
+
+    Returns
+    -------
+    (dict, dict)
+        The row of raw measures (``key`` = ``[seed, name, n_vertices, 0.0, noise_level, sample]``)
+        and ``{variant id: median e_rel}`` (NaN where the variant raised).
     """
     import zlib
 
@@ -88,39 +132,81 @@ def closed_mesh_point(args: tuple) -> tuple[dict, list[float]]:
     from .surfaces import make_surface
 
     seed, name, n, level, sample, variant_ids = args
+    params = random_closed_params(name, np.random.default_rng([seed, 8, zlib.crc32(name.encode()), sample]))
     rng = np.random.default_rng([seed, 7, zlib.crc32(name.encode()), n, sample])
-    s = make_surface(name, n_vertices=n, noise=level * NOISE_FRACTION, seed=rng)
+    s = make_surface(name, n_vertices=n, noise=level * NOISE_FRACTION, seed=rng, **params)
     raw = raw_measures(s.mesh)
     scale = np.abs(s.truth.k1) + np.abs(s.truth.k2)
     row = {"key": [seed, name, n, 0.0, float(level), sample], "noise_true": level * NOISE_FRACTION,
            "irregularity_planar": float("nan"), "density_true": raw["mean_edge"] * float(np.median(scale)),
-           "noise_raw": raw["noise_raw"], "irregularity_raw": raw["irregularity_raw_deg"], "density": raw["density"]}
+           "noise_raw": raw["noise_raw"], "irregularity_raw": raw["irregularity_raw_deg"], "density": raw["density"],
+           "params": params}
     normals, every = vertex_normals(s.mesh), np.ones(s.mesh.n_vertices, bool)
-    erel = []
+    erel = {}
     for vid in variant_ids:
         v = Variant.from_id(vid)
         try:
-            erel.append(summarize(s.truth, estimate(s.mesh, method=v.method, range=v.range, normals=normals),
-                                  every)["median_erel"])
+            erel[vid] = summarize(s.truth, estimate(s.mesh, method=v.method, range=v.range, normals=normals),
+                                  every)["median_erel"]
         except Exception:  # recorded as missing, like a failing variant of the study
-            erel.append(float("nan"))
+            erel[vid] = float("nan")
     return row, erel
 
 
-def closed_points(names, sizes, levels, samples: int, seed: int, variant_ids, workers: int | None):
-    """:func:`closed_mesh_point` over every (name, size, level, sample), in a process pool."""
-    from concurrent.futures import ProcessPoolExecutor
+ROWS_NAME = "advisor_rows.json"
+"""The cache of measured rows in the study directory: ``{"measures": MEASURES, "features": {key:
+row}, "closed": {key: [row, erel]}}`` (keys are the JSON of the row's key), so a rebuild only
+measures what is new."""
 
+MEASURES = f"{FIT_METHOD} R{FIT_RANGE}, closed shapes v1"
+"""What the cached rows were measured with; a cache of other measures is discarded. Change it
+with :func:`curv.advisor.raw_measures` or :func:`random_closed_params`."""
+
+
+def _key_text(key) -> str:
+    return json.dumps(list(key))
+
+
+def _load_rows(work_dir: Path) -> dict:
+    path = work_dir / ROWS_NAME
+    cache = json.loads(path.read_text()) if path.exists() else {}
+    if cache.get("measures") != MEASURES:
+        cache = {"measures": MEASURES, "features": {}, "closed": {}}
+    return cache
+
+
+def _save_rows(work_dir: Path, cache: dict) -> None:
+    path = work_dir / ROWS_NAME
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(cache))
+    tmp.replace(path)
+
+
+def study_feature_rows(tasks: list[Task], executor, cache: dict) -> list[dict]:
+    """:func:`mesh_features` of every task, from ``cache["features"]`` or computed on ``executor``."""
+    have = cache["features"]
+    todo = [t for t in tasks if _key_text(t.key) not in have]
+    for task, row in zip(todo, executor.map(mesh_features, todo)):
+        have[_key_text(task.key)] = row
+    return [have[_key_text(t.key)] for t in tasks]
+
+
+def closed_points(names, sizes, levels, samples: int, seed: int, variant_ids, executor, cache: dict):
+    """:func:`closed_mesh_point` over every (name, size, level, sample): rows and (p, v) median e_rel.
+
+    Points already in ``cache["closed"]`` with a value for every variant are not recomputed; the
+    largest meshes are submitted first (load balance).
+    """
     jobs = [(seed, nm, int(n), float(lv), s, tuple(variant_ids))
-            for s in range(samples) for nm in names for n in sizes for lv in levels]
-    if not jobs:
-        return [], []
-    if workers == 0:
-        out = [closed_mesh_point(j) for j in jobs]
-    else:
-        with ProcessPoolExecutor(workers or None) as pool:
-            out = list(pool.map(closed_mesh_point, jobs))
-    return [r for r, _ in out], [e for _, e in out]
+            for s in range(samples) for nm in names for n in sorted(sizes, reverse=True) for lv in levels]
+    have = cache["closed"]
+    key = lambda job: _key_text([job[0], job[1], job[2], 0.0, job[3], job[4]])  # noqa: E731
+    todo = [j for j in jobs if key(j) not in have or set(variant_ids) - set(have[key(j)][1])]
+    for job, (row, erel) in zip(todo, executor.map(closed_mesh_point, todo)):
+        have[key(job)] = [row, erel]
+    rows = [have[key(j)][0] for j in jobs]
+    erel = np.array([[have[key(j)][1][v] for v in variant_ids] for j in jobs], float)
+    return rows, erel.reshape(len(jobs), len(variant_ids))
 
 
 def fit_calibration(rows: list[dict]) -> dict:
@@ -167,49 +253,107 @@ def choose_bandwidth(coords: np.ndarray, log_values: np.ndarray) -> tuple[float,
     return min(scores, key=scores.get), scores
 
 
-def build_table(settings: StudySettings, work_dir, *, workers: int | None = None, command: str = "",
-                closed=(), closed_vertices=(642, 2562)) -> dict:
-    """Run (or resume) the study of ``settings`` in ``work_dir`` and turn it into the advisor's table.
+def measure_rows(settings: StudySettings, work_dir, *, workers: int | None = None, closed=(),
+                 closed_vertices=DEFAULT_CLOSED_VERTICES, progress=None) -> tuple[list[dict], np.ndarray, dict]:
+    """Run (or resume) the study of ``settings`` in ``work_dir`` and measure every mesh of the table.
 
-    ``closed`` adds closed analytic surfaces (registry names such as ``"sphere"``, ``"torus"``) at
-    each of ``closed_vertices`` and each noise level of ``settings``, ``settings.samples`` noise
-    draws each: the study's Monge patches cover only a narrow band of densities and none of the
-    regular closed tessellations real meshes resemble.
+    Parameters
+    ----------
+    settings : StudySettings
+    work_dir : path-like
+        The study directory; it also keeps the measured rows (:data:`ROWS_NAME`), so a rerun
+        measures only what is new.
+    workers : int, optional
+        Local processes (``0``: this process); default the study's.
+    closed : sequence of str
+        Closed analytic surfaces (``"sphere"``, ``"ellipsoid"``, ``"torus"``) added at each of
+        ``closed_vertices`` and each noise level of ``settings``, ``settings.samples`` random
+        shapes and noise draws each: the study's Monge patches cover a narrow band of densities and
+        none of the regular closed tessellations real meshes resemble.
+    closed_vertices : sequence of int
+    progress : callable, optional
+        Called with a short text after each phase.
+
+    Returns
+    -------
+    rows : list of dict
+        Per mesh: key, true noise, planar irregularity, raw measures (:func:`mesh_features`).
+    erel : (p, v) float64
+        Median e_rel of every variant on every mesh (NaN where missing or not positive).
+    seconds : dict
+        Wall seconds of the phases run now (``study``, ``features``, ``closed``).
     """
+    from .study.executors import open_executor
     from .study.runner import run
 
-    t0 = time.perf_counter()
-    results = run(settings, work_dir, workers=workers)
-    t_study = time.perf_counter() - t0
+    work_dir = Path(work_dir)
+    say = progress or (lambda text: None)
     variants = [v.id for v in settings.variants()]
     tasks = list(settings.tasks())
-    t1 = time.perf_counter()
-    rows = [mesh_features(t) for t in tasks]
-    t_features = time.perf_counter() - t1
+    seconds = {}
+    with open_executor(workers=workers) as ex:
+        t0 = time.perf_counter()
+        results = run(settings, work_dir, executor=ex)
+        seconds["study"] = time.perf_counter() - t0
+        say(f"study: {len(tasks)} meshes, {seconds['study']:.0f} s")
+        cache = _load_rows(work_dir)
+        t0 = time.perf_counter()
+        rows = study_feature_rows(tasks, ex, cache)
+        seconds["features"] = time.perf_counter() - t0
+        _save_rows(work_dir, cache)
+        say(f"features: {seconds['features']:.0f} s")
+        t0 = time.perf_counter()
+        c_rows, c_erel = closed_points(closed, closed_vertices, settings.noise, settings.samples, settings.seed,
+                                       variants, ex, cache)
+        seconds["closed"] = time.perf_counter() - t0
+        _save_rows(work_dir, cache)
+        say(f"closed surfaces: {len(c_rows)} meshes, {seconds['closed']:.0f} s")
+    erel = _study_erel(results, rows, variants)
+    if c_rows:
+        rows = rows + c_rows
+        erel = np.concatenate([erel, c_erel])
+    return rows, np.where(erel > 0, erel, np.nan), seconds
 
+
+def _study_erel(results, rows: list[dict], variants: list[str]) -> np.ndarray:
+    """(p, v) median e_rel of the study's results table, in the order of ``rows`` and ``variants``."""
     index = {tuple(r["key"]): i for i, r in enumerate(rows)}
-    erel = np.full((len(rows), len(variants)), np.nan)
     col = {v: j for j, v in enumerate(variants)}
+    erel = np.full((len(rows), len(variants)), np.nan)
     keys = zip(*(results[c] for c in ("seed", "function", "density", "irregularity", "noise", "sample")))
-    for key, vid, value in zip(keys, results["variant"], results["median_erel"]):
-        i, j = index.get((int(key[0]), str(key[1]), int(key[2]), float(key[3]), float(key[4]), int(key[5]))), col.get(vid)
+    for key, vid, value in zip(keys, results["variant"], results["median_erel"]):  # one row per (mesh, variant)
+        i = index.get((int(key[0]), str(key[1]), int(key[2]), float(key[3]), float(key[4]), int(key[5])))
+        j = col.get(vid)
         if i is not None and j is not None:
             erel[i, j] = value
-    t2 = time.perf_counter()
-    c_rows, c_erel = closed_points(closed, closed_vertices, settings.noise, settings.samples, settings.seed,
-                                   variants, workers)
-    t_closed = time.perf_counter() - t2
-    if c_rows:
-        rows += c_rows
-        erel = np.concatenate([erel, np.array(c_erel, float)])
-    erel = np.where(erel > 0, erel, np.nan)
-    cal = fit_calibration(rows)
+    return erel
 
+
+def table_points(rows: list[dict], cal: dict) -> np.ndarray:
+    """(p, 3) measured ``(density, noise level, irregularity)`` of the rows under calibration ``cal``."""
     from .advisor import calibrate_irregularity, calibrate_noise
 
     noise = np.array([calibrate_noise(r["noise_raw"], cal, r["density"]) for r in rows])
     irr = np.array([calibrate_irregularity(r["irregularity_raw"], n, cal) for r, n in zip(rows, noise)])
-    points = np.stack([[r["density"] for r in rows], noise / NOISE_FRACTION, irr], axis=1)
+    return np.stack([[r["density"] for r in rows], noise / NOISE_FRACTION, irr], axis=1)
+
+
+def fit_kernel(points: np.ndarray, erel: np.ndarray) -> dict:
+    """The kernel (noise axis, scales, bandwidth) with the lowest leave-one-out mean regret.
+
+    Parameters
+    ----------
+    points : (p, 3) float64
+        ``(density, noise level, irregularity)`` of the table's meshes.
+    erel : (p, v) float64
+        Median e_rel (NaN where missing).
+
+    Returns
+    -------
+    dict
+        ``noise_axis``, ``scales`` (standard deviation of each transformed coordinate),
+        ``bandwidth`` and ``loo_mean_regret`` (every bandwidth of the chosen axis).
+    """
     best = None
     for axis in NOISE_AXES:
         noise_coord = np.sqrt(points[:, 1]) if axis == "sqrt" else points[:, 1]
@@ -220,52 +364,87 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
         kernel.update(bandwidth=bandwidth, loo_mean_regret={str(h): round(s, 4) for h, s in scores.items()})
         if best is None or scores[bandwidth] < best["loo_mean_regret"][str(best["bandwidth"])]:
             best = kernel
-    table = {"kernel": best}
+    return best
 
+
+def _round(x: float, digits: int):
+    """``x`` to ``digits`` significant digits for the JSON (None for NaN)."""
+    return None if not np.isfinite(x) else float(f"{x:.{digits}g}")
+
+
+def _percentile(values: np.ndarray, q: float):
+    """The ``q`` th percentile to 4 significant digits, None for no values."""
+    return _round(float(np.percentile(values, q)), 4) if values.size else None
+
+
+def make_table(settings: StudySettings, rows: list[dict], erel: np.ndarray, *, command: str = "",
+               closed=(), closed_vertices=(), seconds: dict | None = None) -> dict:
+    """The advisor's table from measured ``rows`` and their ``erel`` (see :func:`measure_rows`)."""
+    variants = [v.id for v in settings.variants()]
+    cal = fit_calibration(rows)
+    points = table_points(rows, cal)
+    kernel = fit_kernel(points, erel)
     rel = lambda est, true: np.abs(est[true > 0] / true[true > 0] - 1)  # noqa: E731
     true_noise = np.array([r["noise_true"] for r in rows])
+    noise = points[:, 1] * NOISE_FRACTION
     big = true_noise >= NOISE_FRACTION / 3 - 1e-12
-    table.update({
+    seconds = seconds or {}
+    return {
+        "kernel": kernel,
         "metadata": {
             "command": command, "settings": settings.as_dict(), "variants_note": "named ranges, no smoothing",
             "created": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "n_meshes": len(rows),
-            "fit": f"{FIT_METHOD} R{FIT_RANGE}", "study_seconds": round(t_study, 1),
-            "features_seconds": round(t_features, 1), "closed_seconds": round(t_closed, 1),
+            "fit": f"{FIT_METHOD} R{FIT_RANGE}",
+            **{f"{k}_seconds": round(v, 1) for k, v in seconds.items()},
+            "seconds_note": "wall seconds of this run's phases; a resumed run counts only what it computed",
             "closed": {"surfaces": list(closed), "vertices": list(closed_vertices) if closed else []},
             "noise_relative_error_at_or_above_a_third": {
-                "median": float(np.median(rel(noise[big], true_noise[big]))),
-                "p90": float(np.percentile(rel(noise[big], true_noise[big]), 90))},
-            "noise_abs_error_clean_median": float(np.median(noise[~(true_noise > 0)])),
+                "median": _percentile(rel(noise[big], true_noise[big]), 50),
+                "p90": _percentile(rel(noise[big], true_noise[big]), 90)},
+            "noise_abs_error_clean_median": _percentile(noise[~(true_noise > 0)], 50),
         },
         "calibration": cal,
         "variants": variants,
         "columns": ["density", "noise_level", "irregularity_deg"],
-        "points": np.round(points, 5).tolist(),
-        "truth": [{"key": r["key"], "noise_true": r["noise_true"], "irregularity_planar": (round(r["irregularity_planar"], 3) if np.isfinite(r["irregularity_planar"]) else None),
-                   "density_true": round(r["density_true"], 5)} for r in rows],
-        "median_erel": [[None if not np.isfinite(x) else float(f"{x:.4g}") for x in row] for row in erel],
-    })
-    return table
+        "points": [[_round(x, POINT_DIGITS) for x in p] for p in points],
+        "truth": {"key": [r["key"] for r in rows],
+                  "noise_true": [_round(r["noise_true"], 4) for r in rows],
+                  "irregularity_planar": [_round(r["irregularity_planar"], 4) for r in rows],
+                  "density_true": [_round(r["density_true"], 4) for r in rows]},
+        "median_erel": [[_round(x, EREL_DIGITS) for x in row] for row in erel],
+    }
+
+
+def build_table(settings: StudySettings, work_dir, *, workers: int | None = None, command: str = "",
+                closed=(), closed_vertices=DEFAULT_CLOSED_VERTICES, progress=None) -> dict:
+    """Run (or resume) the study of ``settings`` in ``work_dir`` and turn it into the advisor's table
+    (:func:`measure_rows`, then :func:`make_table`)."""
+    rows, erel, seconds = measure_rows(settings, work_dir, workers=workers, closed=closed,
+                                       closed_vertices=closed_vertices, progress=progress)
+    return make_table(settings, rows, erel, command=command, closed=closed, closed_vertices=closed_vertices,
+                      seconds=seconds)
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m curv.advisor_table", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="table to write; default the packaged one")
     parser.add_argument("--work", default="advisor-study", help="study directory (resumes); default ./advisor-study")
-    parser.add_argument("--samples", type=int, default=3)
-    parser.add_argument("--densities", type=int, nargs="+", default=[817, 3169])
-    parser.add_argument("--noise", type=float, nargs="+", default=[0.0, 0.1, 0.25, 0.5, 1.0])
-    parser.add_argument("--irregularity", type=float, nargs="+", default=[0.0, 12.5, 25.0])
+    parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
+    parser.add_argument("--densities", type=int, nargs="+", default=list(DEFAULT_DENSITIES),
+                        help="hexagon vertex counts 3s(s+1)+1")
+    parser.add_argument("--noise", type=float, nargs="+", default=list(DEFAULT_NOISE))
+    parser.add_argument("--irregularity", type=float, nargs="+", default=list(DEFAULT_IRREGULARITY))
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=None, help="local processes; default the study's")
-    parser.add_argument("--closed", nargs="*", default=["sphere", "ellipsoid", "torus"], help="closed surfaces to add (sphere ellipsoid torus)")
-    parser.add_argument("--closed-vertices", type=int, nargs="+", default=[642, 2562])
+    parser.add_argument("--closed", nargs="*", default=list(DEFAULT_CLOSED), help="closed surfaces to add")
+    parser.add_argument("--closed-vertices", type=int, nargs="+", default=list(DEFAULT_CLOSED_VERTICES))
     args = parser.parse_args(argv)
     settings = table_settings(samples=args.samples, densities=args.densities, noise=args.noise,
                               irregularity=args.irregularity, seed=args.seed)
     command = "python -m curv.advisor_table " + " ".join(sys.argv[1:] if argv is None else argv)
     table = build_table(settings, args.work, workers=args.workers, command=command,
-                        closed=tuple(args.closed), closed_vertices=tuple(args.closed_vertices))
+                        closed=tuple(args.closed), closed_vertices=tuple(args.closed_vertices),
+                        progress=lambda text: print(text, flush=True))
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, "w") as fh:
         json.dump(table, fh, separators=(",", ":"))
@@ -273,7 +452,7 @@ def main(argv=None) -> int:
     print(f"wrote {args.out}: {meta['n_meshes']} meshes x {len(table['variants'])} variants; "
           f"calibration {table['calibration']}; bandwidth {table['kernel']['bandwidth']} "
           f"(LOO mean regret {table['kernel']['loo_mean_regret']}); study {meta['study_seconds']} s, "
-          f"features {meta['features_seconds']} s")
+          f"features {meta['features_seconds']} s, closed surfaces {meta['closed_seconds']} s")
     return 0
 
 

@@ -208,17 +208,100 @@ def test_calibration_fit_recovers_known_coefficients():
     assert cal["irregularity_noise_deg"] == pytest.approx(9.0, rel=1e-9)
 
 
-def test_a_tiny_table_builds_and_advises(tmp_path, noisy):
-    from curv.advisor_table import build_table, table_settings
+def test_a_tiny_table_builds_advises_and_rebuilds_from_its_measured_rows(tmp_path, noisy, monkeypatch):
+    import curv.advisor_table as at
 
-    settings = table_settings(samples=1, densities=(817,), noise=(0.0, 1.0), irregularity=(0.0,))
-    table = build_table(settings, tmp_path / "study", workers=0, command="test", closed=("sphere",),
-                        closed_vertices=(642,))
+    settings = at.table_settings(samples=1, densities=(817,), noise=(0.0, 1.0), irregularity=(0.0,))
+    build = lambda: at.build_table(settings, tmp_path / "study", workers=0, command="test",  # noqa: E731
+                                   closed=("sphere",), closed_vertices=(642,))
+    table = build()
     n_meshes = 3 * 2 + 2  # three functions x two noise levels, one sphere at two noise levels
-    assert len(table["points"]) == len(table["median_erel"]) == len(table["truth"]) == n_meshes
+    assert len(table["points"]) == len(table["median_erel"]) == len(table["truth"]["key"]) == n_meshes
     assert all(len(row) == len(table["variants"]) for row in table["median_erel"])
     assert table["metadata"]["command"] == "test" and table["metadata"]["settings"]["samples"] == 1
-    assert table["kernel"]["bandwidth"] in (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
+    assert table["kernel"]["bandwidth"] in at.BANDWIDTHS
     table = json.loads(json.dumps(table))  # what load_table reads back
     adv = advise(noisy.mesh, table=table)
     assert len(adv.ranking) == len(table["variants"])
+
+    # the study resumes and the measured rows are cached in the study directory: nothing is measured again
+    def boom(*args):
+        raise AssertionError("measured again")
+
+    monkeypatch.setattr(at, "mesh_features", boom)
+    monkeypatch.setattr(at, "closed_mesh_point", boom)
+    again = json.loads(json.dumps(build()))
+    assert again["points"] == table["points"] and again["median_erel"] == table["median_erel"]
+    assert (tmp_path / "study" / at.ROWS_NAME).exists()
+    monkeypatch.setattr(at, "MEASURES", "other measures")  # rows of other measures are not reused
+    with pytest.raises(AssertionError, match="measured again"):
+        build()
+
+
+def test_closed_shapes_are_random_per_sample_and_shared_across_sizes_and_noise():
+    from curv.advisor_table import closed_mesh_point, random_closed_params
+
+    draw = lambda name: random_closed_params(name, np.random.default_rng(3))  # noqa: E731
+    assert draw("torus") == draw("torus") and draw("cylinder") == {}
+    assert all(0.5 <= x <= 1.5 for x in draw("ellipsoid").values()) and set(draw("ellipsoid")) == {"a", "b", "c"}
+    assert 0.2 <= draw("torus")["minor"] <= 0.6 and draw("torus")["major"] == 1.0
+    assert 0.5 <= draw("sphere")["radius"] <= 3.0
+    point = lambda n, level, sample: closed_mesh_point((0, "ellipsoid", n, level, sample, ("qs:R1",)))  # noqa: E731
+    (a, ea), (b, _), (c, _) = point(642, 0.0, 0), point(162, 1.0, 0), point(642, 0.0, 1)
+    assert a["params"] == b["params"] != c["params"]
+    assert a["key"] == [0, "ellipsoid", 642, 0.0, 0.0, 0] and set(ea) == {"qs:R1"} and 0 < ea["qs:R1"] < 0.05
+    assert b["noise_raw"] > a["noise_raw"]
+
+
+def test_rounding_in_the_table_changes_predictions_by_less_than_a_percent():
+    from curv.advisor import MeshFeatures
+    from curv.advisor_table import EREL_DIGITS, make_table, table_points, table_settings
+
+    rng = np.random.default_rng(5)
+    settings = table_settings(samples=1, densities=(817,), noise=(0.0,), irregularity=(0.0,))
+    n, v = 60, len(settings.variants())
+    levels, densities, irregularities = rng.uniform(0, 1, n), rng.uniform(0.02, 0.3, n), rng.uniform(0, 30, n)
+    rows = [{"key": [0, "quadratic", 817, 0.0, lv, i], "noise_true": lv * NOISE_FRACTION, "density": d,
+             "noise_raw": np.hypot(0.002, 1.2 * lv * NOISE_FRACTION), "irregularity_raw": irr,
+             "irregularity_planar": irr, "density_true": d}
+            for i, (lv, d, irr) in enumerate(zip(levels, densities, irregularities))]
+    erel = np.exp(rng.normal(-3, 1, (n, v)))
+    table = json.loads(json.dumps(make_table(settings, rows, erel)))
+    stored = np.array(table["median_erel"], float)
+    assert np.all(np.abs(stored / erel - 1) <= 0.5 * 10.0 ** (1 - EREL_DIGITS))
+    exact = {**table, "median_erel": erel.tolist(), "points": table_points(rows, table["calibration"]).tolist()}
+    for lv, d, irr in ((0.0, 0.05, 3.0), (0.4, 0.1, 20.0), (1.0, 0.25, 12.0)):
+        f = MeshFeatures(irregularity_deg=irr, noise=lv * NOISE_FRACTION, density=d, border_share=0.0)
+        a, b = np.array(list(predict(table, f).values())), np.array(list(predict(exact, f).values()))
+        assert np.all(np.abs(a / b - 1) < 0.01)
+
+
+# ------------------------------------------------------------------ the packaged table
+def test_the_packaged_table_is_what_the_documented_command_writes():
+    import curv.advisor_table as at
+
+    table = load_table()
+    meta = table["metadata"]
+    doc = " ".join(at.__doc__.replace("\\\n", " ").split())
+    assert " ".join(meta["command"].split()) in doc
+    args = meta["command"].split()[3:]
+    assert set(args[::2]) <= {"--work", "--workers"}  # every grid setting is a default
+    assert meta["settings"] == at.table_settings().as_dict()
+    assert meta["closed"] == {"surfaces": list(at.DEFAULT_CLOSED), "vertices": list(at.DEFAULT_CLOSED_VERTICES)}
+    n_closed = len(at.DEFAULT_CLOSED) * len(at.DEFAULT_CLOSED_VERTICES) * len(at.DEFAULT_NOISE) * at.DEFAULT_SAMPLES
+    assert meta["n_meshes"] == len(table["points"]) == at.table_settings().n_tasks + n_closed
+
+
+def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
+    from importlib import resources
+
+    from curv.advisor import TABLE_RESOURCE
+
+    table = load_table()
+    hexagon = {k[2] for k in table["truth"]["key"] if k[1] in ("quadratic", "ellipsoid_patch", "trigonometric")}
+    assert {817, 3169, 12481} <= hexagon and len(hexagon) >= 5
+    assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 500_000
+    values = np.array(table["median_erel"], float)
+    assert np.isfinite(values).mean() > 0.99 and np.nanmin(values) > 0
+
+
