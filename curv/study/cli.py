@@ -28,12 +28,15 @@ def _function(text: str) -> str:
 
 
 def _density(text: str) -> int:
+    """A hexagon subdivision's vertex count (the rule is :func:`curv.surfaces.hexagon.hexagon_subdivisions`'s)."""
+    from ..surfaces.hexagon import hexagon_subdivisions
+
     try:
         d = int(text)
-    except ValueError:
-        d = -1
-    if d not in DENSITIES:
-        raise argparse.ArgumentTypeError(f"density must be one of {', '.join(map(str, DENSITIES))}, got {text!r}")
+        hexagon_subdivisions(d)
+    except ValueError as exc:
+        detail = str(exc) if text.strip().lstrip("-").isdigit() else f"not a whole number: {text!r}"
+        raise argparse.ArgumentTypeError(detail) from None
     return d
 
 
@@ -61,7 +64,8 @@ def add_study_parser(subparsers) -> argparse.ArgumentParser:
                         "paper (full grid, N=1000, for a cluster); default quick; the options below override it")
     p.add_argument("--samples", "-n", type=int, help="random surfaces per setting")
     p.add_argument("--densities", nargs="+", type=_density, metavar="V",
-                   help=f"vertex counts, from {' '.join(map(str, DENSITIES))}")
+                   help=f"vertex counts of the subdivided hexagon, 3s(s+1)+1: the paper's {' '.join(map(str, DENSITIES))} "
+                        "or any other, e.g. 1801")
     p.add_argument("--noise", nargs="+", type=_nonneg, metavar="PCT",
                    help="noise levels in percent of the full level (σ = 10%% of the mean edge), e.g. 0 33 66 100")
     p.add_argument("--irregularity", nargs="+", type=_nonneg, metavar="DEG",

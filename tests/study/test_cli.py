@@ -31,6 +31,16 @@ def test_options_override_the_preset():
         _parse(["--out", "x", "--densities", "300"])
 
 
+def test_densities_take_any_hexagon_subdivision_and_name_the_nearest(capsys):
+    s = settings_from_args(_parse(["--out", "x", "--densities", "817", "1801", "7057"]))
+    assert s.densities == (817, 1801, 7057)
+    for bad in ("1800", "abc"):
+        with pytest.raises(SystemExit):
+            _parse(["--out", "x", "--densities", bad])
+    err = capsys.readouterr().err
+    assert "1800 is not one (nearest: 1657, 1801" in err and "not a whole number: 'abc'" in err
+
+
 def test_study_writes_table_figures_and_report(tmp_path, capsys):
     args = _parse(["--out", str(tmp_path), *TINY])
     assert run_study(args) == 0
