@@ -137,7 +137,7 @@ def report_markdown(table: Table, settings: StudySettings, *, measure: str = "rm
         "## Setup",
         "",
         f"- samples per setting: **{settings.samples}** (the paper: 1000); seed {settings.seed}"
-        + (f"; complete random surface draws in the results: {n}" if n != settings.samples else ""),
+        + (f"; random surface draws with results: {n}" if n != settings.samples else ""),
         f"- densities: {', '.join(map(str, settings.densities))} vertices",
         f"- noise: {', '.join(f'{n:.0%}' for n in settings.noise)} of σ = {NOISE_FRACTION:.0%} of the mean edge length",
         f"- irregularity targets → achieved (mean, range): {'; '.join(_irregularity_lines(table)) if len(table) else 'n/a'}",
