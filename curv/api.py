@@ -9,7 +9,7 @@ from typing import Generator
 import numpy as np
 
 from .errors import EstimatorError, MeshError
-from .estimators import get_spec
+from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
 from .jit import COMPILE_MESSAGE, Progress, compile_pending
 from .mesh import Mesh
 from .ranges import ball_radii, parse_range, resolve
@@ -49,7 +49,7 @@ def _check_normals(normals, n: int) -> np.ndarray:
 
 def iter_estimate(
     mesh: Mesh,
-    method: str = "mru",
+    method: str = DEFAULT_ESTIMATOR,
     range=None,
     *,
     radius: float | None = None,
@@ -73,12 +73,9 @@ def iter_estimate(
     options = spec.check_options(options)
     if not isinstance(mesh, Mesh):
         raise MeshError(f"expected a curv.Mesh, got {type(mesh).__name__}")
-    if spec.triangles_only and not mesh.is_triangular:
-        kinds = sorted(set(mesh.face_sizes.tolist()) - {3})
-        raise MeshError(
-            f"estimator {spec.name!r} needs a triangle mesh, but the mesh has faces with {kinds} vertices; "
-            f"use one of: nc, qs, an, mru"
-        )
+    why_not = refusal(spec, mesh)
+    if why_not is not None:
+        raise MeshError(why_not)
     smooth = Smoothing(smooth or Smoothing.NONE)
     # before the connectivity and normals: on a first run their kernels compile too
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
@@ -175,7 +172,7 @@ def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
 
 def estimate(
     mesh: Mesh,
-    method: str = "mru",
+    method: str = DEFAULT_ESTIMATOR,
     range=None,
     *,
     radius: float | None = None,

@@ -21,7 +21,8 @@ import numpy as np
 from .errors import EstimatorError
 
 __all__ = ["Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
-           "TIE_TOLERANCE", "PAPER_RANGES", "FORMS"]
+           "default_range", "smallest_range", "takes_any_range", "canonical_k", "nearest_allowed",
+           "allowed_paper_ranges", "describe_ranges", "TIE_TOLERANCE", "PAPER_RANGES", "FORMS"]
 
 TIE_TOLERANCE = 1e-9
 """Relative tolerance on every ball radius, so that vertices exactly at k edge lengths (regular
@@ -61,13 +62,63 @@ class Range:
         """k as an int when it is whole (so ``R2`` compares equal to 2), else the float; None for a radius."""
         if self.k is None:
             return None
-        return int(self.k) if float(self.k).is_integer() else float(self.k)
+        return canonical_k(self.k)
 
 
 def range_label(k) -> str:
     """``'R2'`` for 2 or 2.0, ``'R2.5'`` for 2.5."""
     k = float(k)
     return f"R{int(k)}" if k.is_integer() else f"R{k:g}"
+
+
+def canonical_k(k):
+    """k as an int when it is whole (``2.0 -> 2``, so ``R2`` and 2 compare equal), else the float."""
+    k = float(k)
+    return int(k) if k.is_integer() else k
+
+
+def takes_any_range(spec) -> bool:
+    """Whether ``spec`` takes any real k from its smallest named range on and ``radius=r``.
+
+    False for the fixed 1-ring formulas (``meyer``, ``ru``), which take only their one named range.
+    """
+    return bool(spec.has_support)
+
+
+def smallest_range(spec):
+    """The smallest k ``spec`` accepts (its only one for a fixed 1-ring formula)."""
+    return canonical_k(min(spec.ranges))
+
+
+def default_range(spec):
+    """The range used when none is given: R2 where the estimator has it, else its first named range."""
+    return canonical_k(2 if 2 in spec.ranges else spec.ranges[0])
+
+
+def nearest_allowed(spec, k):
+    """The range ``spec`` takes that is closest to k, for a control switching estimators.
+
+    A support-based estimator keeps k if it is at least its smallest range, else takes that smallest
+    one; a fixed 1-ring formula always has its one range.
+    """
+    if not takes_any_range(spec):
+        return default_range(spec)
+    k = parse_range(k)
+    return canonical_k(max(k, min(spec.ranges)))
+
+
+def allowed_paper_ranges(spec) -> tuple:
+    """Which of the paper's R1..R4 ``spec`` accepts (for a list of choices)."""
+    if not takes_any_range(spec):
+        return tuple(k for k in PAPER_RANGES if k in spec.ranges)
+    return tuple(k for k in PAPER_RANGES if k >= min(spec.ranges))
+
+
+def describe_ranges(spec) -> str:
+    """What ranges ``spec`` takes, in words: ``'any k >= 2, or a radius'`` or ``'R2 only (fixed 1-ring)'``."""
+    if not takes_any_range(spec):
+        return f"{range_label(spec.ranges[0])} only (fixed 1-ring)"
+    return f"any k >= {min(spec.ranges):g}, or a radius"
 
 
 def parse_range(value) -> float:
@@ -136,7 +187,7 @@ def resolve(spec, range=None, radius=None) -> Range:
             raise EstimatorError(f"radius must be a positive length in mesh units; got {radius!r}")
         return Range(radius=r)
     if range is None:
-        range = 2 if 2 in spec.ranges else spec.ranges[0]
+        range = default_range(spec)
     k = parse_range(range)
     if not spec.has_support:
         if k not in spec.ranges:

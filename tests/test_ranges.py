@@ -114,3 +114,20 @@ def test_real_range_is_accepted_and_labelled(method):
     assert res.range == 2.5 and res.info["range_label"] == "R2.5"
     assert res.valid.mean() > 0.9
     np.testing.assert_allclose(res.k1[res.valid], 1.0, atol=0.1)
+
+
+def test_range_owner_helpers_follow_the_registry():
+    from curv.estimators import ESTIMATORS, refusal, polygon_estimators
+    from curv import Mesh
+
+    mru, meyer, an = ESTIMATORS["mru"], ESTIMATORS["meyer"], ESTIMATORS["an"]
+    assert ranges.default_range(mru) == 2 and ranges.default_range(meyer) == 1
+    assert ranges.nearest_allowed(an, 1) == 2 and ranges.nearest_allowed(an, 2.5) == 2.5
+    assert ranges.nearest_allowed(meyer, 3) == 1
+    assert ranges.allowed_paper_ranges(an) == (2, 3, 4) and ranges.allowed_paper_ranges(meyer) == (1,)
+    assert "fixed 1-ring" in ranges.describe_ranges(meyer) and "radius" in ranges.describe_ranges(mru)
+    assert isinstance(ranges.canonical_k(2.0), int) and ranges.canonical_k(2.5) == 2.5
+    quad = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]])
+    assert refusal(mru, quad) is None
+    msg = refusal(meyer, quad)
+    assert "triangle" in msg and "jet" in msg and all(n in msg for n in polygon_estimators())

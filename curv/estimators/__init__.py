@@ -3,6 +3,8 @@
 from . import meyer, csm, goldfeather, rusinkiewicz, mru  # noqa: F401  (registration side effects, paper order)
 from . import jet  # noqa: F401
 from . import icc  # noqa: F401
-from .registry import ESTIMATORS, EstimatorSpec, all_variants, get_spec, register
+from .registry import (DEFAULT_ESTIMATOR, ESTIMATORS, EstimatorSpec, all_variants, get_spec, polygon_estimators,
+                       refusal, register)
 
-__all__ = ["ESTIMATORS", "EstimatorSpec", "get_spec", "register", "all_variants"]
+__all__ = ["ESTIMATORS", "EstimatorSpec", "DEFAULT_ESTIMATOR", "get_spec", "register", "all_variants",
+           "polygon_estimators", "refusal"]

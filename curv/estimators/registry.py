@@ -14,7 +14,11 @@ import numpy as np
 from ..errors import EstimatorError
 from ..result import Principal
 
-__all__ = ["EstimatorSpec", "ESTIMATORS", "register", "get_spec", "EstimatorFunction"]
+__all__ = ["EstimatorSpec", "ESTIMATORS", "DEFAULT_ESTIMATOR", "register", "get_spec", "EstimatorFunction",
+           "polygon_estimators", "refusal"]
+
+DEFAULT_ESTIMATOR = "mru"
+"""The estimator used when none is named (the API, the CLI, the viewer): the paper's own method."""
 
 EstimatorFunction = Callable[..., Generator[float, None, Principal]]
 """``fn(mesh, normals, radii, *, chunk) -> Generator[fraction done, None, Principal]``.
@@ -117,6 +121,24 @@ def get_spec(name: str) -> EstimatorSpec:
         return ESTIMATORS[name]
     except (KeyError, TypeError):
         raise EstimatorError(f"unknown estimator {name!r}; choose one of {', '.join(ESTIMATORS)}") from None
+
+
+def polygon_estimators() -> list[str]:
+    """Names of the estimators that run on polygon (non-triangle) meshes, in registry order."""
+    return [name for name, spec in ESTIMATORS.items() if not spec.triangles_only]
+
+
+def refusal(spec: EstimatorSpec, mesh) -> str | None:
+    """Why ``spec`` cannot run on ``mesh``, in one sentence, or None if it can.
+
+    The one place that decides which estimators a mesh rules out: the API raises it, the viewer
+    greys the estimator out with it as the tooltip.
+    """
+    if spec.triangles_only and not mesh.is_triangular:
+        kinds = sorted(set(mesh.face_sizes.tolist()) - {3})
+        return (f"estimator {spec.name!r} needs a triangle mesh, but the mesh has faces with {kinds} vertices; "
+                f"use one of: {', '.join(polygon_estimators())}")
+    return None
 
 
 def all_variants() -> list[tuple[str, int]]:
