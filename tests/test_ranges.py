@@ -118,7 +118,7 @@ def test_real_range_is_accepted_and_labelled(method):
 
 def test_range_owner_helpers_follow_the_registry():
     from curv.estimators import ESTIMATORS, refusal, polygon_estimators
-    from curv import Mesh
+    from curv import Mesh, ranges
 
     mru, meyer, an = ESTIMATORS["mru"], ESTIMATORS["meyer"], ESTIMATORS["an"]
     assert ranges.default_range(mru) == 2 and ranges.default_range(meyer) == 1
