@@ -10,7 +10,8 @@ import importlib
 
 from .errors import CurvError, EstimatorError, LoadError, MeshError
 from .mesh import Mesh, MeshReport
-from .result import QUANTITIES, Curvature, Principal
+from .quantities import QUANTITIES
+from .result import Curvature, Principal
 from .validity import Reason
 
 __version__ = "0.1.0"
@@ -23,6 +24,9 @@ _LAZY = {
     "vertex_normals": ("curv.normals", "vertex_normals"),
     "load": ("curv.io", "load"),
     "save_ply": ("curv.io", "save_ply"),
+    "save_vtu": ("curv.io", "save_vtu"),
+    "save_result": ("curv.io", "save_result"),
+    "as_mesh": ("curv.convert", "as_mesh"),
     "surfaces": ("curv.surfaces", None),
     "advise": ("curv.advisor", "advise"),
     "Advice": ("curv.advisor", "Advice"),

@@ -11,6 +11,7 @@ import numpy as np
 from .errors import EstimatorError, MeshError
 from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
 from .jit import COMPILE_MESSAGE, Progress, compile_pending
+from .convert import as_mesh
 from .mesh import Mesh
 from .ranges import ball_radii, parse_range, resolve
 from .normals import NormalWeighting, normalize_rows, unusable_normal_vertices, vertex_normals
@@ -71,8 +72,7 @@ def iter_estimate(
     spec = get_spec(method)
     rng = resolve(spec, range, radius)
     options = spec.check_options(options)
-    if not isinstance(mesh, Mesh):
-        raise MeshError(f"expected a curv.Mesh, got {type(mesh).__name__}")
+    mesh = as_mesh(mesh)
     why_not = refusal(spec, mesh)
     if why_not is not None:
         raise MeshError(why_not)
@@ -189,7 +189,8 @@ def estimate(
 
     Parameters
     ----------
-    mesh : Mesh
+    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
+        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`.
     method : str
         Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
     range : int, float or str, optional

@@ -87,12 +87,25 @@ def _check_output(path: str) -> None:
         raise CurvOutputError(f"{out}: cannot write: no permission to write in {folder}")
 
 
+def _check_colours(args) -> None:
+    """Refuse an unknown colour map or reversed limits before any work (one line)."""
+    from .colors import check_cmap, check_limits
+
+    try:
+        if args.cmap is not None:
+            check_cmap(args.cmap)
+        if args.clim:
+            check_limits(*args.clim)
+    except ValueError as exc:
+        raise CurvUsageError(str(exc)) from None
+
+
 def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng) -> None:
     from .memory import check_memory
 
     if not args.memory_check:
         return
-    est = check_memory(n_vertices, n_faces, method, rng)
+    est = check_memory(n_vertices, n_faces, method)
     if not est.fits:
         raise CurvMemoryError(
             f"{args.input}: {method} {rng.label} on {n_vertices:,} vertices and {n_faces:,} faces "
@@ -104,6 +117,7 @@ def _cmd_estimate(args) -> int:
     from .api import iter_estimate
     from .estimators import get_spec
     from .io import check_output_suffix, load, peek_counts, save_result
+    from .quantities import EXPORTED
     from .ranges import resolve
     from .validity import describe_reasons
 
@@ -111,6 +125,7 @@ def _cmd_estimate(args) -> int:
         args.method, args.range = _advised_method(args)
     spec = get_spec(args.method)
     rng = resolve(spec, args.range, args.radius)
+    _check_colours(args)
     if args.output:
         try:
             check_output_suffix(args.output)
@@ -141,12 +156,15 @@ def _cmd_estimate(args) -> int:
     finally:
         progress.close()
     t_est = time.perf_counter() - t1
+    t_write = None
     if args.output:
+        t2 = time.perf_counter()
         try:
             save_result(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
                         clim=tuple(args.clim) if args.clim else None)
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
+        t_write = time.perf_counter() - t2
     rep = mesh.report()
     print(f"{args.input}: {rep.lines()[0]}")
     for line in rep.lines()[1:]:
@@ -163,9 +181,10 @@ def _cmd_estimate(args) -> int:
     invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
     print(f"{res.method} {res.info['range_label']}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
           f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
-    for name in ("k1", "k2", "mean", "gaussian"):
-        print(_stats_line(name, getattr(res, name)))
-    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s" + (f"; wrote {args.output}" if args.output else ""))
+    for name in EXPORTED:
+        print(_stats_line(name, res.quantity(name)))
+    written = f", write {t_write:.2f} s; wrote {args.output}" if args.output else ""
+    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s{written}")
     return 0
 
 
@@ -221,6 +240,10 @@ def _hints(args, rep) -> list[str]:
     if rep.inconsistent_edges and not args.orient:
         out.append("faces of opposite orientation meet (their vertices are invalid): try --orient")
     return out
+
+
+class CurvUsageError(CurvError, ValueError):
+    """A command-line value that is wrong in itself (a colour map, limits)."""
 
 
 class CurvOutputError(CurvError, OSError):

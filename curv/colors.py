@@ -13,8 +13,14 @@ import numpy as np
 
 from .quantities import QUANTITIES
 
-__all__ = ["INVALID_RGBA", "SIGNED", "CLIP_SHADE", "default_cmap", "auto_limits", "diverges", "widen",
-           "colour_table", "apply_table", "map_colors"]
+__all__ = ["INVALID_RGBA", "SIGNED", "CLIP_SHADE", "auto_limits", "diverges", "widen", "check_cmap",
+           "check_limits", "colour_choice", "colour_table", "apply_table", "map_colors", "DIVERGING", "SEQUENTIAL"]
+
+DIVERGING = "coolwarm"
+"""The default map of signed values that straddle zero."""
+
+SEQUENTIAL = "viridis"
+"""The default map of everything else."""
 
 INVALID_RGBA = (214, 0, 214, 255)
 """Magenta for vertices without a trustworthy value: no packaged map has it near its middle
@@ -27,9 +33,59 @@ SIGNED = {**{q.name: q.signed for q in QUANTITIES.values()}, "error_rel": False,
 """Whether a quantity has a meaningful zero (diverging map, symmetric limits when it straddles 0)."""
 
 
-def default_cmap(quantity: str) -> str:
-    """``"coolwarm"`` for signed quantities, ``"viridis"`` otherwise."""
-    return "coolwarm" if SIGNED.get(quantity, True) else "viridis"
+def check_cmap(name: str) -> str:
+    """``name`` if matplotlib knows the colour map; ``ValueError`` in one line naming a few otherwise."""
+    from matplotlib import colormaps
+
+    if name not in colormaps:
+        import difflib
+
+        close = difflib.get_close_matches(str(name), list(colormaps), n=3)
+        hint = f"did you mean {', '.join(close)}? " if close else ""
+        raise ValueError(f"unknown colour map {name!r}; {hint}any matplotlib map works, e.g. {DIVERGING}, "
+                         f"{SEQUENTIAL}, RdBu, plasma")
+    return name
+
+
+def check_limits(lo: float, hi: float) -> tuple[float, float]:
+    """``(lo, hi)`` if both are finite and ``lo < hi``; ``ValueError`` in one line otherwise."""
+    lo, hi = float(lo), float(hi)
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        raise ValueError(f"colour limits must be finite numbers; got {lo:g} .. {hi:g}")
+    if not lo < hi:
+        raise ValueError(f"colour limits must have LO < HI; got {lo:g} .. {hi:g}")
+    return lo, hi
+
+
+def colour_choice(values: np.ndarray, valid: np.ndarray, quantity: str, *, cmap: str | None = None,
+                  clim: tuple[float, float] | None = None) -> tuple[str, tuple[float, float]]:
+    """The colour map and limits an export draws ``values`` of ``quantity`` with: the one colouring rule.
+
+    Parameters
+    ----------
+    values : (n,) float
+    valid : (n,) bool
+        Vertices whose values count for the automatic limits.
+    quantity : str
+        A :data:`curv.quantities.QUANTITIES` name (or ``error_rel``...), for its sign and natural range.
+    cmap, clim : optional
+        The caller's choice; checked (:func:`check_cmap`, :func:`check_limits`) and kept.
+
+    Returns
+    -------
+    (cmap, (lo, hi))
+        Default limits: robust percentiles (:func:`auto_limits`); default map: :data:`DIVERGING`
+        for signed values straddling zero, else :data:`SEQUENTIAL`.
+    """
+    signed = SIGNED.get(quantity, True)
+    spec = QUANTITIES.get(quantity)
+    if clim is not None:
+        lim = check_limits(*clim)
+    else:
+        lim = auto_limits(values[valid], signed=signed, natural=spec.natural if spec else None)
+    if cmap is not None:
+        return check_cmap(cmap), lim
+    return (DIVERGING if diverges(lim, signed=signed) else SEQUENTIAL), lim
 
 
 def diverges(clim: tuple[float, float], *, signed: bool) -> bool:

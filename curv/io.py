@@ -13,12 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .colors import SIGNED, auto_limits, diverges, map_colors
+from .colors import colour_choice, map_colors
 from .errors import LoadError, MeshError
 from .mesh import Mesh
-from .quantities import QUANTITIES
+from .quantities import EXPORTED
 from .repair import repair
 from .result import Curvature
+from .validity import Reason, reason_legend
 
 __all__ = ["load", "save_ply", "save_vtu", "save_result", "check_output_suffix", "OUTPUT_FORMATS",
            "read_arrays", "peek_counts"]
@@ -267,7 +268,7 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
     return mesh
 
 
-_FLOAT_PROPS = ("k1", "k2", "mean", "gaussian")
+_FLOAT_PROPS = EXPORTED
 _DIR_PROPS = tuple(f"d{i}{c}" for i in (1, 2) for c in "xyz")
 
 
@@ -328,8 +329,9 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
     -------
     Path
         The written file, with the permissions a plain ``open(path, "w")`` would give. Properties: x, y, z, red, green, blue, alpha (uchar), k1, k2, mean,
-        gaussian, d1x..d1z, d2x..d2z (float), valid (uchar), plus ``extra``; faces as
-        ``vertex_indices`` lists.
+        gaussian, d1x..d1z, d2x..d2z (float), valid and reason (uchar; a second header comment
+        names the :class:`curv.Reason` codes), ``shown`` (the coloured values, when the colours
+        come from ``quantity``), plus ``extra``; faces as ``vertex_indices`` lists.
     """
     from plyfile import PlyData, PlyElement
 
@@ -339,14 +341,11 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
         raise MeshError(f"curvature has {curvature.k1.shape[0]} values but the mesh has {n} vertices")
     if colors is None:
         values = curvature.quantity(quantity)
-        signed = SIGNED.get(quantity, True)
-        spec = QUANTITIES.get(quantity)
-        lim = clim if clim is not None else auto_limits(values[curvature.valid], signed=signed,
-                                                        natural=spec.natural if spec else None)
-        cmap = cmap or ("coolwarm" if diverges(lim, signed=signed) else "viridis")
+        cmap, lim = colour_choice(values, curvature.valid, quantity, cmap=cmap, clim=clim)
         colors = map_colors(values, cmap=cmap, clim=lim, valid=curvature.valid)
+        extra = {"shown": values, **(extra or {})}
         if comment is None:
-            comment = describe_colours(curvature, quantity, cmap, lim)
+            comment = describe_colours(curvature, quantity, cmap, lim) + "; property 'shown' holds it"
     elif comment is None:
         comment = f"curvlab: {_result_label(curvature)}, colours given by the caller"
     colors = np.asarray(colors)
@@ -354,7 +353,7 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
         raise ValueError(f"colors must have shape ({n}, 4), got {colors.shape}")
     extra = dict(extra or {})
     fields = [(c, "f8") for c in "xyz"] + [(c, "u1") for c in ("red", "green", "blue", "alpha")]
-    fields += [(c, "f4") for c in _FLOAT_PROPS + _DIR_PROPS] + [("valid", "u1")]
+    fields += [(c, "f4") for c in _FLOAT_PROPS + _DIR_PROPS] + [("valid", "u1"), ("reason", "u1")]
     fields += [(name, "f4") for name in extra]
     vert = np.empty(n, dtype=fields)
     for i, c in enumerate("xyz"):
@@ -367,6 +366,7 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
         vert[f"d1{c}"] = curvature.d1[:, i]
         vert[f"d2{c}"] = curvature.d2[:, i]
     vert["valid"] = curvature.valid.astype(np.uint8)
+    vert["reason"] = np.asarray(curvature.reason, np.uint8)
     for name, values in extra.items():
         vert[name] = np.asarray(values, dtype=np.float64)
     # plyfile describes both elements (the header); an empty face element of the right kind
@@ -376,7 +376,7 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
     face_kind.data = np.empty(mesh.n_faces, dtype=[("vertex_indices", "i4", (3,))])
     vertex_element = PlyElement.describe(vert, "vertex")
     ply = PlyData([vertex_element, face_kind], text=False, byte_order="<",
-                  comments=[" ".join(comment.split())])
+                  comments=[" ".join(comment.split()), reason_legend()])
     header = ply.header.encode("ascii", errors="replace") + b"\n"
 
     def write(fh):
@@ -454,7 +454,8 @@ def save_vtu(path, mesh: Mesh, curvature: Curvature, *, colors: np.ndarray | Non
     -------
     Path
         Point data: ``k1``, ``k2``, ``mean``, ``gaussian`` (n,), ``d1``, ``d2`` (n, 3), ``valid``
-        and ``reason`` (n,) uint8, ``extra``, ``rgba``; written atomically like :func:`save_ply`.
+        and ``reason`` (n,) uint8, ``extra``, ``rgba``; field data ``reason_OK``, ``reason_BORDER``, ...
+        hold each :class:`curv.Reason` code; written atomically like :func:`save_ply`.
     """
     import meshio
 
@@ -479,8 +480,20 @@ def save_vtu(path, mesh: Mesh, curvature: Curvature, *, colors: np.ndarray | Non
     with tempfile.TemporaryDirectory(dir=path.parent if str(path.parent) else ".") as tmp_dir:
         staged = Path(tmp_dir) / "out.vtu"
         meshio.write(staged, grid, file_format="vtu")
-        payload = staged.read_bytes()
+        payload = _with_reason_field_data(staged.read_bytes())
     return _atomic_write(path, lambda fh: fh.write(payload))
+
+
+def _with_reason_field_data(vtu: bytes) -> bytes:
+    """The VTU document with a ``<FieldData>`` block naming the reason codes (``reason_BORDER`` = 1, ...).
+
+    meshio writes no field data to VTU, so the block goes in by hand, right after the grid's opening tag.
+    """
+    arrays = "".join(f'<DataArray type="Int32" Name="reason_{r.name}" NumberOfTuples="1" format="ascii">'
+                     f"{int(r)}</DataArray>" for r in Reason)
+    tag = b"<UnstructuredGrid>"
+    at = vtu.index(tag) + len(tag)
+    return vtu[:at] + f"\n<FieldData>{arrays}</FieldData>".encode("ascii") + vtu[at:]
 
 
 OUTPUT_FORMATS = {".ply": "binary PLY with colours and curvature properties",
@@ -505,14 +518,10 @@ def save_result(path, mesh: Mesh, curvature: Curvature, **kw) -> Path:
     if check_output_suffix(path) == ".vtu":
         kept = {k: v for k, v in kw.items() if k in ("colors", "extra")}
         if kept.get("colors") is None:
-            from .colors import map_colors as _map
-
             q = kw.get("quantity", "mean")
-            spec = QUANTITIES.get(q)
             values = curvature.quantity(q)
-            lim = kw.get("clim") or auto_limits(values[curvature.valid], signed=SIGNED.get(q, True),
-                                                natural=spec.natural if spec else None)
-            cmap = kw.get("cmap") or ("coolwarm" if diverges(lim, signed=SIGNED.get(q, True)) else "viridis")
-            kept["colors"] = _map(values, cmap=cmap, clim=lim, valid=curvature.valid)
+            cmap, lim = colour_choice(values, curvature.valid, q, cmap=kw.get("cmap"), clim=kw.get("clim"))
+            kept["colors"] = map_colors(values, cmap=cmap, clim=lim, valid=curvature.valid)
+            kept["extra"] = {"shown": values, **(kept.get("extra") or {})}
         return save_vtu(path, mesh, curvature, **kept)
     return save_ply(path, mesh, curvature, **kw)

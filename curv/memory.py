@@ -34,8 +34,11 @@ STAMP_BYTES_PER_THREAD = 8.0
 """Bytes per vertex and kernel thread of the support search's visited stamps (int64)."""
 
 
-def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range=None) -> int:
-    """Predicted peak resident memory of estimating ``method`` at ``range`` on a mesh of this size.
+def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str) -> int:
+    """Predicted peak resident memory of estimating ``method`` on a mesh of this size, at any range.
+
+    The kernels hold no per-range temporaries beyond each thread's small queue, so the peak does
+    not depend on the range.
 
     Parameters
     ----------
@@ -43,9 +46,6 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, range=None) 
         Mesh size (faces of any polygon kind).
     method : str
         Registry name.
-    range : Range, float or None
-        The range (kept for the interface: the kernels hold no per-range temporaries beyond
-        each thread's small queue, so the peak does not depend on it).
 
     Returns
     -------
@@ -129,10 +129,10 @@ class MemoryEstimate:
         return f"needs about {format_bytes(self.needed)}, {have} available"
 
 
-def check_memory(n_vertices: int, n_faces: int, method: str, range=None, *,
+def check_memory(n_vertices: int, n_faces: int, method: str, *,
                  available: int | None = None) -> MemoryEstimate:
     """Compare :func:`estimate_peak_bytes` with :func:`available_bytes` (or ``available`` if given)."""
     have = available_bytes() if available is None else available
-    return MemoryEstimate(estimate_peak_bytes(n_vertices, n_faces, method, range), have)
+    return MemoryEstimate(estimate_peak_bytes(n_vertices, n_faces, method), have)
 
 

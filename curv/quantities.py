@@ -12,7 +12,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["QuantitySpec", "QUANTITIES", "get_quantity", "compute", "describe"]
+__all__ = ["QuantitySpec", "QUANTITIES", "EXPORTED", "get_quantity", "compute", "describe"]
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,10 @@ _SPECS = (
 
 QUANTITIES: dict[str, QuantitySpec] = {q.name: q for q in _SPECS}
 """Registry: name -> :class:`QuantitySpec`, in display order."""
+
+
+EXPORTED = ("k1", "k2", "mean", "gaussian")
+"""The quantities every export writes as float fields and the CLI summarises (the rest derive from k1, k2)."""
 
 
 def get_quantity(name: str) -> QuantitySpec:

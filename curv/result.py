@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .quantities import QUANTITIES as _REGISTRY
 from .quantities import compute as _compute
 from .validity import Reason
 
@@ -85,23 +84,23 @@ class Curvature:
 
     @property
     def mean(self) -> np.ndarray:
-        """(n,) mean curvature H = (k1 + k2) / 2."""
-        return 0.5 * (self.k1 + self.k2)
+        """(n,) mean curvature H = (k1 + k2) / 2 (:mod:`curv.quantities`)."""
+        return self.quantity("mean")
 
     @property
     def gaussian(self) -> np.ndarray:
-        """(n,) Gaussian curvature K = k1 * k2."""
-        return self.k1 * self.k2
+        """(n,) Gaussian curvature K = k1 * k2 (:mod:`curv.quantities`)."""
+        return self.quantity("gaussian")
 
     @property
     def shape_index(self) -> np.ndarray:
-        """(n,) Koenderink shape index in [-1, 1]: 2/pi * arctan((k1 + k2) / (k1 - k2))."""
-        return (2.0 / np.pi) * np.arctan2(self.k1 + self.k2, self.k1 - self.k2)
+        """(n,) Koenderink shape index in [-1, 1]: 2/pi * arctan((k1 + k2) / (k1 - k2)) (:mod:`curv.quantities`)."""
+        return self.quantity("shape_index")
 
     @property
     def curvedness(self) -> np.ndarray:
-        """(n,) Koenderink curvedness sqrt((k1^2 + k2^2) / 2)."""
-        return np.sqrt(0.5 * (self.k1**2 + self.k2**2))
+        """(n,) Koenderink curvedness sqrt((k1^2 + k2^2) / 2) (:mod:`curv.quantities`)."""
+        return self.quantity("curvedness")
 
     @property
     def valid_fraction(self) -> float:
@@ -111,6 +110,3 @@ class Curvature:
         """A per-vertex scalar by name, one of :data:`curv.quantities.QUANTITIES` (``ValueError`` otherwise)."""
         return _compute(name, self.k1, self.k2)
 
-
-QUANTITIES = tuple(_REGISTRY)
-"""Names accepted by :meth:`Curvature.quantity`, in display order (from :mod:`curv.quantities`)."""

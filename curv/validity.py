@@ -6,7 +6,7 @@ import enum
 
 import numpy as np
 
-__all__ = ["Reason", "describe_reasons"]
+__all__ = ["Reason", "describe_reasons", "reason_legend"]
 
 
 class Reason(enum.IntEnum):
@@ -46,3 +46,8 @@ def describe_reasons(reason: np.ndarray) -> dict[str, int]:
     """
     codes, counts = np.unique(np.asarray(reason, dtype=np.uint8), return_counts=True)
     return {Reason(int(c)).name: int(k) for c, k in zip(codes, counts)}
+
+
+def reason_legend() -> str:
+    """``reason codes: 0 OK, 1 BORDER, ...``: what the uint8 ``reason`` field of an export means."""
+    return "reason codes: " + ", ".join(f"{int(r)} {r.name}" for r in Reason)

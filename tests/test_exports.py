@@ -68,7 +68,9 @@ def test_ply_comment_names_field_estimator_range_map_and_limits(tmp_path, sphere
 
     mesh, res = sphere_result
     out = curv.save_ply(tmp_path / "a.ply", mesh, res, quantity="gaussian", cmap="magma", clim=(0.1, 0.4))
-    assert PlyData.read(str(out)).comments == ["curvlab: mru R2, colours show gaussian (magma, limits 0.1 .. 0.4)"]
+    assert PlyData.read(str(out)).comments == [
+        "curvlab: mru R2, colours show gaussian (magma, limits 0.1 .. 0.4); property 'shown' holds it",
+        curv.validity.reason_legend()]
 
 
 def test_cli_refuses_an_output_suffix_it_cannot_write_before_any_work(tmp_path, sphere_result):

@@ -29,11 +29,6 @@ class Event:
             self._callbacks.append(callback)
         return callback
 
-    def disconnect(self, callback: Callable) -> None:
-        """Unsubscribe ``callback`` (no error if it was not connected)."""
-        if callback in self._callbacks:
-            self._callbacks.remove(callback)
-
     def emit(self, *args) -> None:
         """Call every subscriber with ``args``."""
         for cb in list(self._callbacks):

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..metrics import absolute_error, relative_error
+from ..quantities import compute
 
 __all__ = ["absolute_error", "relative_error", "summarize", "METRIC_COLUMNS"]
 
@@ -64,8 +65,8 @@ def summarize(truth, estimate, evaluated: np.ndarray) -> dict[str, float]:
     e_rel = relative_error(k1, k2, e1, e2)
     e_abs = absolute_error(k1, k2, e1, e2)
     kept = e_rel < 1.0
-    h, h_hat = 0.5 * (k1 + k2), 0.5 * (e1 + e2)
-    g, g_hat = k1 * k2, e1 * e2
+    h, h_hat = compute("mean", k1, k2), compute("mean", e1, e2)
+    g, g_hat = compute("gaussian", k1, k2), compute("gaussian", e1, e2)
     n_valid = int(use.sum())
     rms_h, rms_k = _rms(h_hat - h), _rms(g_hat - g)
     scale = 0.5 * (np.abs(k1) + np.abs(k2))
