@@ -17,7 +17,8 @@ from PySide6.QtWidgets import (
 
 from app.controller import Controller
 from app.model import (
-    Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, export_payload, map_colours, pane_letter,
+    Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, default_panes, export_payload, map_colours,
+    pane_letter,
 )
 from app.packaged import resource, sample_names
 
@@ -65,9 +66,7 @@ class MainWindow(QMainWindow):
         self.settings = settings if settings is not None else QSettings("curvlab", "curvlab")
         self.quiet = False
         self.pending_layer: Layer | None = None
-        names = [n for n in ("mru", "nc", "qs", "meyer", "ru", "an", "csm") if n in ESTIMATORS]
-        defaults = tuple(Pane(n, 2 if 2 in ESTIMATORS[n].ranges else ESTIMATORS[n].ranges[0]) for n in names)
-        self.doc = Document(default_panes=defaults)
+        self.doc = Document(default_panes=default_panes())
         self.controller = Controller(self.doc, self, prepare=prepare_geometry)
         self.grid = PaneGrid(self)
         self.setCentralWidget(self.grid)
@@ -187,6 +186,7 @@ class MainWindow(QMainWindow):
         self.source_panel.open_requested.connect(self.open_dialog)
         self.mesh_panel.reload_requested.connect(ctl.open_source)
         self.inspect.recompute_requested.connect(lambda: ctl.recompute(doc.panes[doc.active].key))
+        self.inspect.pane_requested.connect(lambda pane: ctl.compute_in_pane(doc.active, pane))
         self.inspect.message.connect(lambda text: self.show_status(text, error=True))
         self.compare.link_toggled.connect(self.grid.set_linked)
         self.grid.activated.connect(lambda i: doc.set_active(i) if i < len(doc.panes) else None)
