@@ -9,7 +9,7 @@ import contextlib
 from curv import ranges
 from curv.errors import EstimatorError
 from curv.estimators import ESTIMATORS, refusal
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import QEvent, QObject, Qt, Signal
 from PySide6.QtGui import QDoubleValidator
 from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
@@ -55,6 +55,18 @@ LIMITS_TIP = ("<b>Percentile</b>: robust limits from the 2–98 % percentiles (a
               "whole span; <b>Manual</b>: the values you type or drag on the histogram. Signed fields that "
               "straddle 0 get symmetric limits and a diverging map; fields of one sign a sequential map. "
               "Values beyond the limits are drawn in the map's end colours darkened.")
+
+
+class _LetsRThrough(QObject):
+    """Event filter for numeric fields: a plain R is not text there (a range is typed as 2.5; the R of
+    ``R2`` is optional), so the key goes to the window's shortcut (reset camera) instead."""
+
+    def eventFilter(self, obj, event) -> bool:  # noqa: N802 (Qt API)
+        if (event.type() == QEvent.Type.ShortcutOverride and event.key() == Qt.Key.Key_R
+                and not event.modifiers() & ~Qt.KeyboardModifier.KeypadModifier):
+            event.ignore()
+            return True
+        return False
 
 
 class InspectPanel(QWidget):
@@ -181,6 +193,9 @@ class InspectPanel(QWidget):
         lay.addWidget(self.pane_box)
         lay.addWidget(self.all_box)
         lay.addStretch(1)
+        self._numbers_only = _LetsRThrough(self)
+        for edit in [*self.findChildren(QLineEdit), self.range]:  # numeric fields: R stays the reset-camera key
+            edit.installEventFilter(self._numbers_only)  # (the combo too: it hands the key to its edit directly)
         for combo in self.findChildren(QComboBox):  # narrow docks: combos shrink and elide, never clip the panel
             combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
             combo.setMinimumContentsLength(6)

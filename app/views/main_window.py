@@ -100,7 +100,7 @@ class MainWindow(QMainWindow):
             self.docks[key] = dock
         self.tabifyDockWidget(self.docks["mesh"], self.docks["compare"])
         self.tabifyDockWidget(self.docks["compare"], self.docks["advice"])
-        self.docks["compare"].raise_()
+        self.docks["mesh"].raise_()  # first run: the mesh's report in front, Compare and Advice behind
 
         self.status_label = QLabel()
         self.status_label.setMinimumWidth(0)
