@@ -21,7 +21,9 @@ class Readout(QTextBrowser):
         super().__init__(parent)
         self.doc = doc
         self.setMinimumHeight(150)
-        self.setLineWrapMode(QTextEdit.LineWrapMode.NoWrap)  # a table of numbers scrolls sideways, never wraps
+        # text lines wrap; the table's cells are numbers without spaces and narrow columns (see COMPACT_AFTER)
+        self.setLineWrapMode(QTextEdit.LineWrapMode.WidgetWidth)
+        self.document().setDocumentMargin(2)
         doc.picked_changed.connect(lambda i: self.refresh())
         doc.mesh_changed.connect(lambda change: self.refresh())
         doc.result_changed.connect(lambda key: self.refresh())
@@ -40,7 +42,7 @@ class Readout(QTextBrowser):
         html = [f"<b>vertex {i}</b> at {fmt_vec(p)}"]
         if compact:
             html.append("<br>" + " · ".join(f"<b>{pane_letter(j)}:</b> {pane.title}" for j, pane in enumerate(doc.panes)))
-        html.append("<table cellspacing=4><tr><th></th>")
+        html.append(f"<table cellspacing={2 if compact else 4}><tr><th></th>")
         html += [f"<th>{h}</th>" for h in readout_columns(doc, short=compact)] + ["</tr>"]
         for label, vals in readout_rows(doc, i, stacked=compact):
             html.append(f"<tr><td><b>{label}</b></td>"
