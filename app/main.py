@@ -31,13 +31,15 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--noise", type=float, default=0.0, help="Gaussian noise in mean edge lengths")
     src.add_argument("--seed", type=int, default=0)
     est = p.add_argument_group("estimate and display")
-    est.add_argument("--method", help="estimator of pane A (default: the last session's panes, else mru)")
+    est.add_argument("--method", help="estimator of pane A (default: the last session's panes, else the "
+                                      "registry's default estimator)")
     est.add_argument("--range", help="range k of Rk for pane A (2, R2, 2.5 or R2.5)")
     est.add_argument("--radius", type=float, help="fixed support radius of pane A in mesh units (instead of --range)")
     est.add_argument("--compare", action="append", default=[], metavar="M:R", help="add a pane (up to 3)")
     est.add_argument("--difference", action="store_true", help="show the A - B difference pane")
-    est.add_argument("--quantity", default="mean", help=", ".join(_quantity_names()))
-    est.add_argument("--show", default="estimate", help="estimate, exact, error or e_rel (analytic sources)")
+    est.add_argument("--quantity", help=", ".join(_quantity_names()) + " (default: the last session's, else mean)")
+    est.add_argument("--show", help="estimate, exact, error or e_rel (analytic sources; default: the last "
+                                    "session's, else estimate)")
     est.add_argument("--directions", action="store_true", help="draw principal direction glyphs")
     est.add_argument("--cmap", help="colour map for the shown field")
     est.add_argument("--limits", help="colour limits LO,HI (default: symmetric 2-98 %% percentiles)")
@@ -64,26 +66,27 @@ def configure(window, args) -> object:
     ValueError
         An unknown estimator, range, quantity, surface or colour map (message names the allowed ones).
     """
-    from curv import ranges
     from curv.errors import EstimatorError
-    from curv.estimators import ESTIMATORS
+    from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
     from curv.surfaces import SURFACES
 
     from app.model import FileSource, Layer, LimitMode, Pane, Quantity, SurfaceSource, colormap_names
     from app.views.main_window import DEFAULT_SOURCE
 
     explicit = args.method is not None or args.range is not None or args.radius is not None or args.compare
-    panes = [(args.method or "mru", args.range or "2")] + [tuple(c.split(":", 1)) if ":" in c else (c, "2") for c in args.compare]
+    # a missing range is the estimator's default one (curv.ranges decides), a radius replaces it
+    panes = [(args.method or DEFAULT_ESTIMATOR, args.range)] + [
+        tuple(c.split(":", 1)) if ":" in c else (c, None) for c in args.compare]
     if len(panes) > 4:
         raise ValueError("at most 4 panes (--compare up to 3 times)")
     checked = []
     for i, (method, k) in enumerate(panes):
         if method not in ESTIMATORS:
             raise ValueError(f"unknown estimator {method!r}; choose one of {', '.join(ESTIMATORS)}")
+        radius = args.radius if i == 0 else None
         try:
-            value = ranges.parse_range(k)
-            radius = args.radius if i == 0 else None
-            checked.append(Pane(method, int(value) if float(value).is_integer() else value, radius).validated())
+            pane = Pane.default(method) if k is None else Pane(method, k).validated()
+            checked.append(Pane(method, pane.range, radius).validated())
         except EstimatorError as exc:
             raise ValueError(str(exc)) from None
     doc = window.doc
@@ -91,13 +94,16 @@ def configure(window, args) -> object:
         doc.set_pane_count(len(checked))
         for i, pane in enumerate(checked):
             doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
-    doc.set_difference(args.difference)
-    try:
-        quantity, layer = Quantity(args.quantity), Layer(args.show)
+    if args.difference or explicit or args.screenshot:
+        doc.set_difference(args.difference)
+    try:  # not given: the last session's (a snapshot starts from empty settings, so from the defaults)
+        quantity = None if args.quantity is None else Quantity(args.quantity)
+        layer = None if args.show is None else Layer(args.show)
     except ValueError:
         raise ValueError(f"unknown quantity {args.quantity!r} or --show {args.show!r}; quantities: "
                          f"{', '.join(q.value for q in Quantity)}; show: {', '.join(x.value for x in Layer)}") from None
-    changes = dict(quantity=quantity, show_directions=args.directions)
+    changes = dict(show_directions=args.directions) if quantity is None else dict(quantity=quantity,
+                                                                                  show_directions=args.directions)
     if args.cmap:
         if args.cmap not in colormap_names():
             raise ValueError(f"unknown colour map {args.cmap!r}; choose one of {', '.join(colormap_names())}")

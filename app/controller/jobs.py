@@ -15,7 +15,7 @@ from curv.api import iter_estimate
 from PySide6.QtCore import QObject, QThreadPool, Signal
 from superqt.utils import create_worker
 
-from app.model import AdviceRecord, Document
+from app.model import AdviceRecord, Document, count_text
 
 from .advice import advice_compile_note, advise_mesh
 from .sources import prepare_source
@@ -155,14 +155,14 @@ class Controller(QObject):
     def recompute(self, key) -> None:
         """Forget the result or failure of ``key`` and compute it again."""
         self.doc.results.pop(key, None)
-        self.doc.failures.pop(key, None)
+        self.doc.retry(key)
         self._stop(key)
         self.request_missing()
 
     def compute_in_pane(self, i: int, pane) -> None:
         """Show ``pane`` (a validated :class:`~app.model.Pane`) in pane ``i`` and compute it unless its
         result is known; an earlier failure or cancel of the same pair is retried, not shown again."""
-        self.doc.failures.pop(pane.key, None)
+        self.doc.retry(pane.key)
         self.doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
         self.request_missing()
 
@@ -202,7 +202,7 @@ class Controller(QObject):
         n_bad = int((~result.valid).sum())
         secs = result.info.get("seconds")
         took = f" in {secs:.2f} s" if secs is not None else ""
-        self.message.emit(f"{key[0]} {key[1]}{took}; {n_bad} invalid vertices")
+        self.message.emit(f"{key[0]} {key[1]}{took}; {count_text(n_bad, 'invalid vertex', 'invalid vertices')}")
         self._update_busy()
 
     def _estimate_failed(self, worker, gen, key, exc) -> None:
@@ -291,11 +291,12 @@ class Controller(QObject):
         self._advise_after_load = False
         self._stop_all()
         self._generation += 1 if was_source else 0
-        for key in keys:
-            self.doc.set_failure(key, f"{key[0]} {key[1]} cancelled")
+        names = [f"{m} {r}" for m, r in keys]
+        self.doc.set_failures({key: f"{name} cancelled" for key, name in zip(keys, names)})
         self._update_busy()
         if was_source or keys or was_advice:
-            self.message.emit("Cancelled")
+            self.message.emit("Cancelled" + (f" {', '.join(names)}" if names else "")
+                              + ("; choose it again to compute it" if names else ""))
 
     def _forget(self, key) -> None:
         self._estimates.pop(key, None)

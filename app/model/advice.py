@@ -87,9 +87,13 @@ def feature_rows(features) -> list[FeatureRow]:
     list of FeatureRow
         Irregularity, noise, density, border, polygons, vertices.
     """
+    from curv.advisor import FIT_METHOD, FIT_RANGE
+    from curv.estimators import ESTIMATORS
     from curv.study.protocol import NOISE_FRACTION
 
     f = features
+    fit = f"{FIT_METHOD} {ranges.range_label(FIT_RANGE)}"
+    closed = ", ".join(name for name, spec in ESTIMATORS.items() if spec.closed_ring)
     return [
         FeatureRow("Irregularity", f"{f.irregularity_deg:.1f}° RMS from 60°",
                    "The paper's irregularity (§5.1): RMS deviation of every triangle angle from 60°, measured in "
@@ -97,15 +101,15 @@ def feature_rows(features) -> list[FeatureRow]:
                    "0° is a regular tessellation; the study goes up to 25°."),
         FeatureRow("Noise", f"{f.noise:.2g} × mean edge ({percent_text(f.noise_level)} of the paper's level)",
                    "Estimated standard deviation of the vertex noise per coordinate, in mean edge lengths "
-                   "(the robust spread of the residuals of a local quadric fit, qs R3). In brackets as a share "
+                   f"(the robust spread of the residuals of a local quadric fit, {fit}). In brackets as a share "
                    f"of the paper's 100 % noise level, {NOISE_FRACTION:g} × the mean edge."),
         FeatureRow("Density", f"{f.density:.2g} (mean edge × |k1|+|k2|)",
                    "Dimensionless resolution: the mean edge length times the median of |k1| + |k2| of a local "
-                   "quadratic fit (qs R3). Small: finely sampled for its curvature; a sphere of radius r meshed "
+                   f"quadratic fit ({fit}). Small: finely sampled for its curvature; a sphere of radius r meshed "
                    "with edges h gives about 2 h / r. Noise inflates it."),
         FeatureRow("Border", f"{percent_text(f.border_share)} of the vertices",
                    "Share of the vertices on a border. Border vertices are invalid for every estimator; the "
-                   "closed-ring estimators (meyer, csm, ru) also lose every vertex whose support reaches one."),
+                   f"closed-ring estimators ({closed}) also lose every vertex whose support reaches one."),
         FeatureRow("Polygons", polygon_text(f.polygon_kinds),
                    "Face sizes. On a mesh with other polygons than triangles the triangle-only estimators "
                    "are left out of the ranking."),

@@ -7,8 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from curv import ranges
 from curv.colors import diverges
-from curv.errors import EstimatorError
-from curv.estimators import ESTIMATORS
+from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators
 
 from .advice import AdviceRecord
 from .colors import LimitMode, colormap, compute_limits, map_colours
@@ -16,16 +15,7 @@ from .display import Display, Layer
 from .events import Event
 from .scalars import field_values
 
-__all__ = ["Pane", "Document", "MeshChange", "MAX_PANES", "pane_letter", "takes_support"]
-
-
-def takes_support(spec) -> bool:
-    """Whether an estimator takes any real range and a radius (support-based), or only its fixed 1-ring.
-
-    ``EstimatorSpec.has_support`` says so; an estimator with a single named range (meyer, ru) is
-    treated as fixed until every spec sets that field.
-    """
-    return bool(getattr(spec, "has_support", True)) and len(spec.ranges) > 1
+__all__ = ["Pane", "Document", "MeshChange", "MAX_PANES", "pane_letter", "default_panes"]
 
 MAX_PANES = 4
 
@@ -53,6 +43,11 @@ class Pane:
     range: float = 2
     radius: float | None = None
 
+    @classmethod
+    def default(cls, method: str = DEFAULT_ESTIMATOR) -> "Pane":
+        """``method`` (default the registry's default estimator) at its default range."""
+        return cls(method, ranges.default_range(ESTIMATORS[method]))
+
     @property
     def label(self) -> str:
         """``R2``, ``R2.5`` or ``r=0.3``: the range as :mod:`curv.ranges` writes it."""
@@ -75,16 +70,16 @@ class Pane:
     def validated(self) -> "Pane":
         """This pane checked by :func:`curv.ranges.resolve` (``EstimatorError`` naming the allowed forms)."""
         spec = ESTIMATORS[self.method]
-        if not takes_support(spec):
-            if self.radius is not None or self.range not in spec.ranges:
-                raise EstimatorError(f"estimator {spec.name!r} uses its fixed 1-ring and has only range "
-                                     f"{ranges.range_label(spec.ranges[0])}")
-            return Pane(self.method, spec.ranges[0], None)
         if self.radius is not None:
-            rng = ranges.resolve(spec, radius=self.radius)
-            return Pane(self.method, self.range, rng.radius)
-        rng = ranges.resolve(spec, range=self.range)
-        return Pane(self.method, rng.value, None)
+            return Pane(self.method, self.range, ranges.resolve(spec, radius=self.radius).radius)
+        return Pane(self.method, ranges.resolve(spec, range=self.range).value, None)
+
+
+def default_panes() -> tuple[Pane, ...]:
+    """The panes compare mode adds, in order: the default estimator, then those that run on any mesh
+    (polygons too), then the rest, each in registry order and at its default range."""
+    names = list(dict.fromkeys([DEFAULT_ESTIMATOR, *polygon_estimators(), *ESTIMATORS]))
+    return tuple(Pane.default(n) for n in names)
 
 
 @dataclass(frozen=True)
@@ -136,7 +131,8 @@ class Document:
         :attr:`advice_current` (a new mesh makes the advice stale without this event).
     """
 
-    def __init__(self, *, default_panes: tuple[Pane, ...] = (Pane("mru", 2),)) -> None:
+    def __init__(self, *, default_panes: tuple[Pane, ...] | None = None) -> None:
+        default_panes = default_panes or (Pane.default(),)
         self.source = None
         self.mesh = None
         self.truth = None
@@ -272,14 +268,30 @@ class Document:
 
     def set_failure(self, key, message: str) -> None:
         """Record that ``key`` failed; panes showing it go back to their last good estimator."""
-        self.results.pop(key, None)
-        self.failures[key] = message
+        self.set_failures({key: message})
+
+    def set_failures(self, messages: dict) -> None:
+        """Record that every key of ``messages`` failed or was cancelled (``key -> one-line message``).
+
+        Every pane showing one of them goes back to its last good estimator and range when that
+        result is still there, so that its header, the selector and its colours describe the same
+        estimate; a pane with nothing to go back to keeps the key and shows no colours. All keys
+        are recorded before any pane moves, so that no listener restarts a key cancelled with it.
+        """
+        for key, message in messages.items():
+            self.results.pop(key, None)
+            self.failures[key] = message
         for i, p in enumerate(self.panes):
             good = self._last_good.get(i)
-            if p.key == key and good is not None and good.key in self.results:
+            if p.key in messages and good is not None and good.key in self.results:
                 self.panes[i] = good
                 self.pane_changed.emit(i)
-        self.result_changed.emit(key)
+        for key in messages:
+            self.result_changed.emit(key)
+
+    def retry(self, key) -> None:
+        """Forget a failure or cancel of ``key``, so that the next request computes it again."""
+        self.failures.pop(key, None)
 
     def result(self, i: int):
         """Result of estimate pane ``i``, or None."""

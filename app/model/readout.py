@@ -18,8 +18,12 @@ def fmt(x) -> str:
     return "—" if x is None or not np.isfinite(x) else f"{x:.5g}"
 
 
-def fmt_vec(v) -> str:
-    return "—" if not np.all(np.isfinite(v)) else "(" + ", ".join(f"{c:+.3f}" for c in v) + ")"
+def fmt_vec(v, *, stacked: bool = False) -> str:
+    """``(+0.100, -0.200, +0.975)``, or its three components one per line when ``stacked``."""
+    if not np.all(np.isfinite(v)):
+        return "—"
+    parts = [f"{c:+.3f}" for c in v]
+    return "\n".join(parts) if stacked else "(" + ", ".join(parts) + ")"
 
 
 def _reason(r, index) -> str:
@@ -32,9 +36,10 @@ def _reason(r, index) -> str:
         return f"invalid ({code})"
 
 
-def readout_columns(doc: Document) -> list[str]:
-    """Column headings: ``A: mru R2``, ..., ``A − B`` when the difference pane is on, ``exact``."""
-    heads = [f"{pane_letter(j)}: {pane.title}" for j, pane in enumerate(doc.panes)]
+def readout_columns(doc: Document, *, short: bool = False) -> list[str]:
+    """Column headings: ``A: mru R2`` (``A`` when ``short``), ..., ``A − B`` when the difference pane
+    is on, ``exact``."""
+    heads = [pane_letter(j) if short else f"{pane_letter(j)}: {pane.title}" for j, pane in enumerate(doc.panes)]
     if doc.view_count > len(doc.panes):
         heads.append("A − B")
     if doc.truth is not None:
@@ -42,11 +47,11 @@ def readout_columns(doc: Document) -> list[str]:
     return heads
 
 
-def readout_rows(doc: Document, index: int) -> list[tuple[str, list[str]]]:
+def readout_rows(doc: Document, index: int, *, stacked: bool = False) -> list[tuple[str, list[str]]]:
     """Rows ``(label, [value per column])`` for vertex ``index``, columns as :func:`readout_columns`.
 
-    Rows: k1, k2, H, K, d1, d2, the status (``valid`` or the :class:`curv.Reason`), the shown field
-    and, for an analytic source, e_rel.
+    Rows: k1, k2, H, K, d1, d2 (components one per line when ``stacked``), the status (``valid`` or
+    the :class:`curv.Reason`), the shown field and, for an analytic source, e_rel.
     """
     cols = [doc.result(i) for i in range(len(doc.panes))]
     diff = doc.view_count > len(doc.panes)
@@ -63,8 +68,8 @@ def readout_rows(doc: Document, index: int) -> list[tuple[str, list[str]]]:
         return (label, row)
 
     def vector_row(label, get):
-        row = [fmt_vec(get(r)) if r is not None else "…" for r in cols]
-        row += [""] * diff + ([fmt_vec(get(truth))] if truth is not None else [])
+        row = [fmt_vec(get(r), stacked=stacked) if r is not None else "…" for r in cols]
+        row += [""] * diff + ([fmt_vec(get(truth), stacked=stacked)] if truth is not None else [])
         return (label, row)
 
     rows = [scalar_row("k1", lambda r: r.k1[index]), scalar_row("k2", lambda r: r.k2[index]),

@@ -34,15 +34,17 @@ def guide_text() -> str:
     """A short guide: ranges, then one line per estimator and per quantity, from the registries."""
     rows = []
     for name, spec in ESTIMATORS.items():
-        named = ", ".join(ranges.range_label(k) for k in spec.ranges)
+        named = escape(ranges.describe_ranges(spec))
         rows.append(f"<tr><td><b>{name}</b></td><td>{escape(spec.title)}</td><td>{named}</td>"
                     f"<td>{'triangles' if spec.triangles_only else 'polygons'}</td><td>{escape(spec.reference)}</td></tr>")
+    with_normals = ", ".join(n for n, spec in ESTIMATORS.items() if spec.uses_normals and ranges.takes_any_range(spec))
+    fixed = " and ".join(n for n, spec in ESTIMATORS.items() if not ranges.takes_any_range(spec))
     quantities = "".join(f"<li><b>{escape(q.title)}</b>: {escape(q.formula)}</li>" for q in QUANTITIES.values())
     return ("<h3>Ranges</h3><p>Range <b>Rk</b> (paper §4.1): the support of vertex p is every vertex connected "
             "to p within k × the longest edge of p's 1-ring. Estimators that also use their neighbours' normals "
-            "(an, mru) collect within (k − 1) × that length. Support-based estimators take any real k from their "
-            "smallest range (e.g. R2.5), or a fixed <b>radius</b> in mesh units; meyer and ru use their fixed "
-            "1-ring.</p><h3>Estimators</h3><table cellspacing=4><tr><th>name</th><th>method</th><th>ranges</th>"
+            f"({with_normals}) collect within (k − 1) × that length. Support-based estimators take any real k "
+            f"from their smallest range (e.g. R2.5), or a fixed <b>radius</b> in mesh units; {fixed} use their "
+            "fixed 1-ring.</p><h3>Estimators</h3><table cellspacing=4><tr><th>name</th><th>method</th><th>ranges</th>"
             "<th>faces</th><th>reference</th></tr>" + "".join(rows) + "</table>"
             "<h3>Advice</h3><p><b>Estimate › Advise</b> (Ctrl+Shift+A) measures the mesh's noise, irregularity "
             "and density and ranks every estimator and range by the median relative error the paper's study "

@@ -8,18 +8,17 @@ import contextlib
 
 from curv import ranges
 from curv.errors import EstimatorError
-from curv.estimators import ESTIMATORS
-from PySide6.QtCore import Qt, Signal
+from curv.estimators import ESTIMATORS, refusal
+from PySide6.QtCore import QEvent, QObject, Qt, Signal
 from PySide6.QtGui import QDoubleValidator
 from PySide6.QtWidgets import (
-    QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
+    QCheckBox, QComboBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
     QPushButton, QToolButton, QVBoxLayout, QWidget,
 )
 from superqt import QEnumComboBox, QLabeledDoubleRangeSlider
 from superqt.utils import qdebounced
 
 from app.model import Document, Layer, LimitMode, Pane, Quantity, colormap_names, format_limit, pane_letter
-from app.model.document import takes_support
 
 from .histogram import Histogram
 from .style import PANE_COLOURS
@@ -38,13 +37,14 @@ def blocked(*widgets):
             w.blockSignals(o)
 
 
-def estimator_tooltip(spec) -> str:
-    """Rich-text tooltip of an estimator from its registry entry."""
+def estimator_tooltip(spec, refused: str | None = None) -> str:
+    """Rich-text tooltip of an estimator from its registry entry; ``refused`` (why it cannot run on
+    the mesh shown, :func:`curv.estimators.refusal`) comes first when given."""
     named = ", ".join(ranges.range_label(k) for k in spec.ranges)
-    extra = ("any real range from " + ranges.range_label(min(spec.ranges)) + " up, or a fixed radius"
-             if takes_support(spec) else "its fixed 1-ring only")
     polys = "triangles only" if spec.triangles_only else "triangles and polygons"
-    return (f"<b>{spec.name}</b>: {spec.title}<br>{spec.reference}<br>ranges {named}; {extra}<br>{polys}; "
+    why = f"<b style='color:#b00020'>Not available: {refused}</b><br>" if refused else ""
+    return (f"{why}<b>{spec.name}</b>: {spec.title}<br>{spec.reference}<br>ranges {named}: "
+            f"{ranges.describe_ranges(spec)}<br>{polys}; "
             f"{'border vertices and those whose support reaches a border are invalid' if spec.closed_ring else 'fits near borders too'}")
 
 
@@ -57,6 +57,18 @@ LIMITS_TIP = ("<b>Percentile</b>: robust limits from the 2–98 % percentiles (a
               "Values beyond the limits are drawn in the map's end colours darkened.")
 
 
+class _LetsRThrough(QObject):
+    """Event filter for numeric fields: a plain R is not text there (a range is typed as 2.5; the R of
+    ``R2`` is optional), so the key goes to the window's shortcut (reset camera) instead."""
+
+    def eventFilter(self, obj, event) -> bool:  # noqa: N802 (Qt API)
+        if (event.type() == QEvent.Type.ShortcutOverride and event.key() == Qt.Key.Key_R
+                and not event.modifiers() & ~Qt.KeyboardModifier.KeypadModifier):
+            event.ignore()
+            return True
+        return False
+
+
 class InspectPanel(QWidget):
     """Estimator, quantity and colour controls.
 
@@ -64,16 +76,22 @@ class InspectPanel(QWidget):
     -------
     recompute_requested()
         Redo the active pane.
+    pane_requested(Pane)
+        The user chose this (validated) estimator and range for the active pane: show it and
+        compute it unless its result is there (a cancelled or failed one is tried again).
     message(str)
         A one-line note for the status bar (e.g. a range the estimator does not take).
     """
 
     recompute_requested = Signal()
+    pane_requested = Signal(object)
     message = Signal(str)
 
     def __init__(self, doc: Document, parent=None) -> None:
         super().__init__(parent)
         self.doc = doc
+        self.shown_limits: tuple[float, float] | None = None
+        """The colour limits of the active view as last drawn (where Manual starts from)."""
         self.method = QComboBox()
         for i, (name, spec) in enumerate(ESTIMATORS.items()):
             self.method.addItem(f"{name} — {spec.title}", name)
@@ -87,13 +105,9 @@ class InspectPanel(QWidget):
         self.range.setToolTip(RANGE_TIP)
         self.use_radius = QCheckBox("Radius")
         self.use_radius.setToolTip(RANGE_TIP)
-        self.radius = QDoubleSpinBox()
-        self.radius.setDecimals(6)
-        self.radius.setStepType(QDoubleSpinBox.StepType.AdaptiveDecimalStepType)
-        self.radius.setRange(1e-6, 1e9)
-        self.radius.setKeyboardTracking(False)
-        self.radius.setSpecialValueText("—")  # shown while no radius is set
-        self.radius.setToolTip("Ball radius in mesh units (the same at every vertex)")
+        self.radius = QLineEdit()  # read by curv.ranges, which refuses bad input with a message
+        self.radius.setPlaceholderText("—")
+        self.radius.setToolTip("Ball radius in mesh units (the same at every vertex), a positive number")
         self.recompute = QPushButton("Recompute")
         self.recompute.setToolTip("Compute the active pane again (F5)")
         self.advise_button = QToolButton()  # the window binds it to its Advise action
@@ -101,7 +115,9 @@ class InspectPanel(QWidget):
         self.quantity = QEnumComboBox(enum_class=Quantity)
         self.quantity.setToolTip("<br>".join(f"<b>{q.title}</b>: {q.spec.formula}" for q in Quantity))
         self.layer = QEnumComboBox(enum_class=Layer)
-        self.directions = QCheckBox("Principal directions")
+        self.directions = QCheckBox("Directions")
+        self.directions.setToolTip("Principal directions: d1 (of k1) and d2 (of k2) as crosses; the pane header "
+                                   "gives their colours")
         self.edges = QCheckBox("Edges")
         self.borders = QCheckBox("Borders")
         self.points = QCheckBox("Points")
@@ -130,6 +146,11 @@ class InspectPanel(QWidget):
         self.histogram.setToolTip("Drag a limit line to set manual limits")
         self.invalid = QLabel()
         self.invalid.setWordWrap(True)
+        self.centre_note = QLabel()
+        self.centre_note.setWordWrap(True)
+        self.centre_note.setObjectName("centre_note")
+        self.centre_note.setStyleSheet("color: #8a5a00;")
+        self.centre_note.setVisible(False)
 
         self.pane_box = QGroupBox()
         self.pane_box.setObjectName("pane_box")
@@ -145,43 +166,48 @@ class InspectPanel(QWidget):
         pane_form.addRow("", radius_row)
         pane_form.addRow("", self.advise_button)
         self.all_box = QGroupBox("All panes")
-        form = QFormLayout(self.all_box)
+        form = QFormLayout(self.all_box)  # the histogram high up: it must show without scrolling
         form.addRow("Quantity", self.quantity)
         form.addRow("Show", self.layer)
-        overlays = QHBoxLayout()
-        for w in (self.directions, self.edges):
-            overlays.addWidget(w)
-        form.addRow(overlays)
-        overlays2 = QHBoxLayout()
-        for w in (self.borders, self.points):
-            overlays2.addWidget(w)
-        form.addRow(overlays2)
-        form.addRow("Diverging map", self.cmap_div)
-        form.addRow("Sequential map", self.cmap_seq)
         form.addRow("Limits", self.limit_mode)
         form.addRow("Percentiles", self.percentiles)
         lim = QHBoxLayout()
         lim.addWidget(self.lo_edit)
         lim.addWidget(self.hi_edit)
         form.addRow("Min / max", lim)
-        form.addRow("", self.lock)
-        form.addRow(self.shared)
         form.addRow(self.histogram)
+        form.addRow(self.centre_note)
         form.addRow(self.invalid)
+        form.addRow("", self.lock)
+        maps = QHBoxLayout()
+        maps.addWidget(self.cmap_div)
+        maps.addWidget(self.cmap_seq)
+        form.addRow("Maps", maps)
+        self.cmap_div.setToolTip("Diverging map: " + self.cmap_div.toolTip())
+        self.cmap_seq.setToolTip("Sequential map: " + self.cmap_seq.toolTip())
+        overlays = QHBoxLayout()
+        for w in (self.directions, self.edges, self.borders, self.points):
+            overlays.addWidget(w)
+        form.addRow(overlays)
+        form.addRow(self.shared)
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
         lay.addWidget(self.pane_box)
         lay.addWidget(self.all_box)
         lay.addStretch(1)
+        self._numbers_only = _LetsRThrough(self)
+        for edit in [*self.findChildren(QLineEdit), self.range]:  # numeric fields: R stays the reset-camera key
+            edit.installEventFilter(self._numbers_only)  # (the combo too: it hands the key to its edit directly)
         for combo in self.findChildren(QComboBox):  # narrow docks: combos shrink and elide, never clip the panel
             combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
             combo.setMinimumContentsLength(6)
 
         self.method.currentIndexChanged.connect(self._method_edited)
+        self.method.activated.connect(lambda _i: self._method_edited())  # the same entry again: compute it
         self.range.activated.connect(lambda _i: self._range_edited())
         self.range.lineEdit().editingFinished.connect(self._range_edited)
         self.use_radius.toggled.connect(self._radius_toggled)
-        self.radius.valueChanged.connect(self._radius_edited)
+        self.radius.editingFinished.connect(self._radius_edited)
         self.recompute.clicked.connect(self.recompute_requested)
         self.quantity.currentEnumChanged.connect(lambda q: doc.display.update(quantity=q))
         self.layer.currentEnumChanged.connect(self._layer_edited)
@@ -191,7 +217,7 @@ class InspectPanel(QWidget):
         self.points.toggled.connect(lambda on: doc.display.update(show_points=on))
         self.cmap_div.currentTextChanged.connect(lambda n: doc.display.update(diverging_cmap=n))
         self.cmap_seq.currentTextChanged.connect(lambda n: doc.display.update(sequential_cmap=n))
-        self.limit_mode.currentEnumChanged.connect(lambda m: doc.display.update(limit_mode=m))
+        self.limit_mode.currentEnumChanged.connect(self._limit_mode_edited)
         self._percentiles_edited = qdebounced(self._percentiles_edited, timeout=120)  # big meshes: not every tick
         self.percentiles.valueChanged.connect(self._percentiles_edited)
         self.lo_edit.editingFinished.connect(self._manual_edited)
@@ -209,51 +235,57 @@ class InspectPanel(QWidget):
 
     # -- widget -> model ------------------------------------------------------------------------
     def _set_pane(self, **changes) -> bool:
-        """Apply ``changes`` to the active pane if :mod:`curv.ranges` accepts them; else say why."""
+        """Ask for ``changes`` in the active pane if the estimator can run on the mesh and
+        :mod:`curv.ranges` accepts them; else say why in red and start nothing."""
         doc = self.doc
         try:
             pane = Pane(**{**doc.panes[doc.active].__dict__, **changes}).validated()
         except EstimatorError as exc:
-            self.message.emit(str(exc))
-            self.sync()
+            self._refuse(str(exc))
             return False
-        doc.set_pane(doc.active, method=pane.method, range=pane.range, radius=pane.radius)
+        refused = None if doc.mesh is None else refusal(ESTIMATORS[pane.method], doc.mesh)
+        if refused:
+            self._refuse(refused)
+            return False
+        self.pane_requested.emit(pane)
         return True
 
+    def _refuse(self, text: str) -> None:
+        self.message.emit(text)
+        self.sync()
+
     def _method_edited(self) -> None:
-        method = self.method.currentData()
-        spec = ESTIMATORS[method]
+        spec = ESTIMATORS[self.method.currentData()]
         pane = self.doc.panes[self.doc.active]
-        k, radius = pane.range, pane.radius
-        if not takes_support(spec):
-            k, radius = spec.ranges[0], None
-        elif k < min(spec.ranges):  # keep the range if the estimator takes it, else its smallest
-            k = min(spec.ranges)
-        self._set_pane(method=method, range=k, radius=radius)
+        radius = pane.radius if ranges.takes_any_range(spec) else None
+        self._set_pane(method=spec.name, range=ranges.nearest_allowed(spec, pane.range), radius=radius)
 
     def _range_edited(self) -> None:
-        text = self.range.currentText().strip()
         try:
-            k = ranges.parse_range(text)
+            k = ranges.canonical_k(ranges.parse_range(self.range.currentText()))
         except EstimatorError as exc:
-            self.message.emit(str(exc))
-            self.sync()
+            self._refuse(str(exc))
             return
-        k = int(k) if float(k).is_integer() else k
         self._set_pane(range=k, radius=None)
 
     def _radius_toggled(self, on: bool) -> None:
         doc = self.doc
         if on:
-            if doc.mesh is not None and self.radius.value() <= 1e-6 * 1.0001:
-                self.radius.setValue(2.0 * float(doc.mesh.mean_edge_length))
-            self._set_pane(radius=float(self.radius.value()))
+            if doc.mesh is not None and not self.radius.text().strip():
+                self.radius.setText(f"{2.0 * float(doc.mesh.mean_edge_length):.6g}")
+            self._radius_edited()
         else:
             self._set_pane(radius=None)
 
-    def _radius_edited(self, value: float) -> None:
+    def _radius_edited(self) -> None:
         if self.use_radius.isChecked():
-            self._set_pane(radius=float(value))
+            spec = ESTIMATORS[self.doc.panes[self.doc.active].method]
+            try:  # curv.ranges owns what a radius may be: anything else is refused with its message
+                radius = ranges.resolve(spec, radius=self.radius.text().strip()).radius
+            except EstimatorError as exc:
+                self._refuse(str(exc))
+                return
+            self._set_pane(radius=radius)
 
     def _layer_edited(self, layer: Layer) -> None:
         if layer.needs_truth and not self.doc.has_truth:
@@ -264,13 +296,23 @@ class InspectPanel(QWidget):
     def _percentiles_edited(self, value) -> None:
         self.doc.display.update(percentiles=(float(value[0]), float(value[1])), limit_mode=LimitMode.PERCENTILE)
 
+    def _limit_mode_edited(self, mode: LimitMode) -> None:
+        """Manual limits start from the limits on screen, not from the last manual ones."""
+        if mode is LimitMode.MANUAL and self.shown_limits is not None:
+            self.doc.display.update(manual=self.shown_limits, limit_mode=mode)
+        else:
+            self.doc.display.update(limit_mode=mode)
+
     def _manual_edited(self) -> None:
         try:
             lo, hi = float(self.lo_edit.text()), float(self.hi_edit.text())
         except ValueError:
             return
-        if lo < hi:
-            self.doc.display.update(manual=(lo, hi), limit_mode=LimitMode.MANUAL)
+        if not lo < hi:
+            self.message.emit(f"Colour limits need min < max; got min {format_limit(lo)}, max {format_limit(hi)}")
+            self._show_limits(self.shown_limits)
+            return
+        self.doc.display.update(manual=(lo, hi), limit_mode=LimitMode.MANUAL)
 
     # -- model -> widget ------------------------------------------------------------------------
     def sync(self) -> None:
@@ -288,19 +330,19 @@ class InspectPanel(QWidget):
                    self.directions, self.edges, self.borders, self.points, self.cmap_div, self.cmap_seq,
                    self.limit_mode, self.percentiles, self.shared, self.lock)
         with blocked(*widgets, self.range.lineEdit()):
+            self._sync_estimators()
             self.method.setCurrentIndex(self.method.findData(pane.method))
-            spec = ESTIMATORS.get(pane.method)
-            support = spec is not None and takes_support(spec)
+            spec = ESTIMATORS[pane.method]
+            allowed = ranges.allowed_paper_ranges(spec)
             for i, k in enumerate(ranges.PAPER_RANGES):
-                allowed = spec is not None and (k in spec.ranges or (support and k >= min(spec.ranges)))
-                self.range.model().item(i).setEnabled(allowed)
+                self.range.model().item(i).setEnabled(k in allowed)
             self.range.setEditText(ranges.range_label(pane.range))
             self.range.setEnabled(pane.radius is None)
-            self.use_radius.setEnabled(support)
+            self.use_radius.setEnabled(ranges.takes_any_range(spec))
             self.use_radius.setChecked(pane.radius is not None)
             self.radius.setEnabled(pane.radius is not None)
             if pane.radius is not None:
-                self.radius.setValue(pane.radius)
+                self.radius.setText(f"{pane.radius:g}")
             self.quantity.setCurrentEnum(st.quantity)
             for i, layer in enumerate(Layer):
                 self.layer.model().item(i).setEnabled(doc.has_truth or not layer.needs_truth)
@@ -318,6 +360,33 @@ class InspectPanel(QWidget):
             self.shared.setChecked(st.shared_scale)
             self.shared.setEnabled(several)
 
+    def _sync_estimators(self) -> None:
+        """Grey out the estimators that cannot run on the mesh shown, with the reason as tooltip."""
+        mesh = self.doc.mesh
+        for i, spec in enumerate(ESTIMATORS.values()):
+            refused = None if mesh is None else refusal(spec, mesh)
+            self.method.model().item(i).setEnabled(refused is None)
+            self.method.setItemData(i, estimator_tooltip(spec, refused), Qt.ItemDataRole.ToolTipRole)
+
+    def _show_limits(self, clim) -> None:
+        """The limits on screen in the min / max fields (a field being typed in is left alone)."""
+        if clim is None:
+            return
+        for edit, v in zip((self.lo_edit, self.hi_edit), clim):
+            if not edit.hasFocus():
+                edit.setText(format_limit(v))
+
+    def _show_centre_note(self, clim, cmap_kind: str) -> None:
+        """Say where the diverging map's middle colour sits when manual limits are not centred on 0."""
+        lo, hi = clim
+        middle = 0.5 * (lo + hi)
+        off = (self.doc.display.limit_mode is LimitMode.MANUAL and cmap_kind == "diverging"
+               and abs(middle) > 1e-3 * (hi - lo))
+        self.centre_note.setText(
+            f"Manual limits not centred on 0: the diverging map's middle colour is at {format_limit(middle)}, "
+            f"not 0 (type -x and x to centre it)." if off else "")
+        self.centre_note.setVisible(off)
+
     def show_values(self, drawn, *, table, n_invalid: int | None, n_vertices: int) -> None:
         """Show the active view's field: histogram, limit fields, invalid count.
 
@@ -331,12 +400,13 @@ class InspectPanel(QWidget):
         if drawn is None:
             self.histogram.set_data(None, (0.0, 1.0), table)
             self.invalid.setText("")
+            self.centre_note.setVisible(False)
             return
-        values, clim, _ = drawn
+        values, clim, cmap = drawn
+        self.shown_limits = (float(clim[0]), float(clim[1]))
         self.histogram.set_data(values, clim, table)
-        for edit, v in zip((self.lo_edit, self.hi_edit), clim):
-            if not edit.hasFocus():
-                edit.setText(format_limit(v))
+        self._show_limits(clim)
+        self._show_centre_note(clim, cmap.kind)
         if n_invalid is not None:
             self.invalid.setText(f"Invalid vertices (magenta): {n_invalid} of {n_vertices} "
                                  f"({100.0 * n_invalid / max(n_vertices, 1):.1f} %)")

@@ -12,12 +12,14 @@ from curv.io import save_ply, save_vtu
 from PySide6.QtCore import QSettings, Qt, Signal
 from PySide6.QtGui import QAction, QGuiApplication, QIcon, QKeySequence
 from PySide6.QtWidgets import (
-    QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QScrollArea,
+    QDialog, QDialogButtonBox, QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton,
+    QScrollArea, QTextBrowser, QVBoxLayout,
 )
 
 from app.controller import Controller
 from app.model import (
-    Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, export_payload, map_colours, pane_letter,
+    Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, default_panes, export_payload, map_colours,
+    pane_letter,
 )
 from app.packaged import resource, sample_names
 
@@ -65,9 +67,7 @@ class MainWindow(QMainWindow):
         self.settings = settings if settings is not None else QSettings("curvlab", "curvlab")
         self.quiet = False
         self.pending_layer: Layer | None = None
-        names = [n for n in ("mru", "nc", "qs", "meyer", "ru", "an", "csm") if n in ESTIMATORS]
-        defaults = tuple(Pane(n, 2 if 2 in ESTIMATORS[n].ranges else ESTIMATORS[n].ranges[0]) for n in names)
-        self.doc = Document(default_panes=defaults)
+        self.doc = Document(default_panes=default_panes())
         self.controller = Controller(self.doc, self, prepare=prepare_geometry)
         self.grid = PaneGrid(self)
         self.setCentralWidget(self.grid)
@@ -101,7 +101,7 @@ class MainWindow(QMainWindow):
             self.docks[key] = dock
         self.tabifyDockWidget(self.docks["mesh"], self.docks["compare"])
         self.tabifyDockWidget(self.docks["compare"], self.docks["advice"])
-        self.docks["compare"].raise_()
+        self.docks["mesh"].raise_()  # first run: the mesh's report in front, Compare and Advice behind
 
         self.status_label = QLabel()
         self.status_label.setMinimumWidth(0)
@@ -187,6 +187,7 @@ class MainWindow(QMainWindow):
         self.source_panel.open_requested.connect(self.open_dialog)
         self.mesh_panel.reload_requested.connect(ctl.open_source)
         self.inspect.recompute_requested.connect(lambda: ctl.recompute(doc.panes[doc.active].key))
+        self.inspect.pane_requested.connect(lambda pane: ctl.compute_in_pane(doc.active, pane))
         self.inspect.message.connect(lambda text: self.show_status(text, error=True))
         self.compare.link_toggled.connect(self.grid.set_linked)
         self.grid.activated.connect(lambda i: doc.set_active(i) if i < len(doc.panes) else None)
@@ -425,11 +426,22 @@ class MainWindow(QMainWindow):
     def show_about(self) -> None:
         QMessageBox.about(self, "About curvlab", about_text())
 
-    def show_guide(self) -> None:
-        box = QMessageBox(QMessageBox.Icon.NoIcon, "Estimators and ranges", guide_text(), parent=self)
-        box.setTextFormat(Qt.TextFormat.RichText)
+    def show_guide(self) -> QDialog:
+        """The guide in a scrolling dialog no taller than 80 % of the screen (non-blocking)."""
+        box = QDialog(self)
+        box.setWindowTitle("Estimators and ranges")
         box.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        text = QTextBrowser(box)
+        text.setHtml(guide_text())
+        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Close, box)
+        buttons.rejected.connect(box.close)
+        lay = QVBoxLayout(box)
+        lay.addWidget(text)
+        lay.addWidget(buttons)
+        screen = (self.screen() or QGuiApplication.primaryScreen()).availableGeometry()
+        box.resize(min(820, int(0.9 * screen.width())), min(680, int(0.8 * screen.height())))
         box.open()
+        return box
 
     # -- export ---------------------------------------------------------------------------------
     def export_ply(self, path) -> Path:
@@ -486,11 +498,15 @@ class MainWindow(QMainWindow):
             return
         avail = screen.availableGeometry()
         w, h = int(min(avail.width() * 0.94, 1680)), int(min(avail.height() * 0.92, 1050))
-        self.resize(w, h)
+        self.fit_to(w, h)
         self.move(avail.x() + (avail.width() - w) // 2, avail.y() + (avail.height() - h) // 2)
+
+    def fit_to(self, w: int, h: int) -> None:
+        """Resize the window to ``w`` x ``h`` and share it among the docks as on a first launch."""
+        self.resize(w, h)
         self.resizeDocks([self.docks["source"], self.docks["inspect"]], [int(w * 0.18), int(w * 0.23)],
                          Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["inspect"], self.docks["readout"]], [int(h * 0.66), int(h * 0.26)],
+        self.resizeDocks([self.docks["inspect"], self.docks["readout"]], [int(h * 0.72), int(h * 0.2)],
                          Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["source"], self.docks["mesh"]], [int(h * 0.5), int(h * 0.4)],
                          Qt.Orientation.Vertical)

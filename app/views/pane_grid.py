@@ -53,6 +53,7 @@ class PaneGrid(QWidget):
             vp.deleteLater()
         while len(self.viewports) < n:
             vp = Viewport(len(self.viewports), self)
+            vp.fresh = True  # its own default camera: set_linked gives it the view of the others
             vp.activated.connect(self.activated)
             vp.vertex_picked.connect(self.vertex_picked)
             vp.plotter.ren_win.AddObserver("EndEvent", self._after_render)
@@ -60,8 +61,7 @@ class PaneGrid(QWidget):
                 vp.set_geometry(self._base, edge_length=self._edge)
             self.viewports.append(vp)
         self._arrange()
-        self.set_linked(self.linked)
-        self._refit_later()  # the panes changed shape: refit once Qt has laid them out
+        self.set_linked(self.linked)  # new viewports look through the shared camera (or a copy): the view stays
 
     def rows(self) -> list[int]:
         """Viewports per row: 1, 2, 3 side by side when the grid is wide (else 2 + 1), 2 x 2, 3 + 2."""
@@ -102,6 +102,7 @@ class PaneGrid(QWidget):
         for vp in self.viewports:
             vp.set_geometry(base, edge_length=edge_length)
         self.reset_camera(render=False)
+        self._refit_later()  # again once Qt has laid the panes out (VTK fits their sizes then)
 
     def reset_camera(self, *, render: bool = True) -> None:
         """Frame the mesh from above at an angle."""
@@ -127,8 +128,9 @@ class PaneGrid(QWidget):
             ren = vp.plotter.renderer
             if linked and ren.camera is not master:
                 ren.camera = master
-            elif not linked and ren.camera is master:
+            elif not linked and (ren.camera is master or getattr(vp, "fresh", False)):
                 ren.camera = master.copy()
+            vp.fresh = False
             ren.ResetCameraClippingRange()
         self.render_all()
 

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 from PySide6.QtWidgets import QTextBrowser, QTextEdit
 
-from app.model import Document, readout_columns, readout_rows
+from app.model import Document, pane_letter, readout_columns, readout_rows
 from app.model.readout import fmt_vec
+
+COMPACT_AFTER = 2
+"""With more columns than this the headers are pane letters and vectors stack their components."""
 
 __all__ = ["Readout"]
 
@@ -18,7 +21,9 @@ class Readout(QTextBrowser):
         super().__init__(parent)
         self.doc = doc
         self.setMinimumHeight(150)
-        self.setLineWrapMode(QTextEdit.LineWrapMode.NoWrap)  # a table of numbers scrolls sideways, never wraps
+        # text lines wrap; the table's cells are numbers without spaces and narrow columns (see COMPACT_AFTER)
+        self.setLineWrapMode(QTextEdit.LineWrapMode.WidgetWidth)
+        self.document().setDocumentMargin(2)
         doc.picked_changed.connect(lambda i: self.refresh())
         doc.mesh_changed.connect(lambda change: self.refresh())
         doc.result_changed.connect(lambda key: self.refresh())
@@ -33,9 +38,14 @@ class Readout(QTextBrowser):
             self.setHtml("<i>Click on the mesh to pick a vertex.</i>")
             return
         p = doc.mesh.vertices[i]
-        html = [f"<b>vertex {i}</b> at {fmt_vec(p)}<table cellspacing=4><tr><th></th>"]
-        html += [f"<th>{h}</th>" for h in readout_columns(doc)] + ["</tr>"]
-        for label, vals in readout_rows(doc, i):
-            html.append(f"<tr><td><b>{label}</b></td>" + "".join(f"<td>{v}</td>" for v in vals) + "</tr>")
+        compact = len(readout_columns(doc)) > COMPACT_AFTER  # narrow columns: no sideways scrolling
+        html = [f"<b>vertex {i}</b> at {fmt_vec(p)}"]
+        if compact:
+            html.append("<br>" + " · ".join(f"<b>{pane_letter(j)}:</b> {pane.title}" for j, pane in enumerate(doc.panes)))
+        html.append(f"<table cellspacing={2 if compact else 4}><tr><th></th>")
+        html += [f"<th>{h}</th>" for h in readout_columns(doc, short=compact)] + ["</tr>"]
+        for label, vals in readout_rows(doc, i, stacked=compact):
+            html.append(f"<tr><td><b>{label}</b></td>"
+                        + "".join(f"<td>{v.replace(chr(10), '<br>')}</td>" for v in vals) + "</tr>")
         html.append("</table>")
         self.setHtml("".join(html))

@@ -1,4 +1,5 @@
-"""What persists between sessions besides the window layout: colour maps, limits, panes."""
+"""What persists between sessions besides the window layout: quantity, field shown, colour maps,
+limits, panes and the difference pane."""
 
 from __future__ import annotations
 
@@ -6,17 +7,24 @@ import json
 
 from PySide6.QtCore import QSettings
 
-from app.model import Document, LimitMode, Pane, colormap_names
+from app.model import Document, Layer, LimitMode, Pane, Quantity, colormap_names
 
 __all__ = ["restore_session", "save_session"]
 
 
 def restore_session(settings: QSettings, doc: Document) -> None:
-    """Apply the saved colour maps, limits (mode, percentiles, manual, lock) and panes to ``doc``.
+    """Apply the saved quantity, field shown (Show), colour maps, limits (mode, percentiles, manual,
+    lock), panes and difference pane to ``doc``.
 
-    Unreadable or stale entries (an estimator that no longer exists, ...) are ignored.
+    Unreadable or stale entries (an estimator that no longer exists, ...) are ignored. A field that
+    needs an analytic truth goes back to the estimate when the mesh that opens has none.
     """
     changes = {}
+    for key, kind in (("quantity", Quantity), ("layer", Layer)):
+        try:
+            changes[key] = kind(str(settings.value(f"display/{key}")))
+        except ValueError:
+            pass
     for key, kind in (("diverging_cmap", "diverging"), ("sequential_cmap", "sequential")):
         value = settings.value(f"cmap/{key}")
         if value and str(value) in colormap_names(kind):
@@ -43,11 +51,15 @@ def restore_session(settings: QSettings, doc: Document) -> None:
         doc.set_pane_count(len(panes))
         for i, pane in enumerate(panes):
             doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
+    doc.set_difference(str(settings.value("panes/difference", "false")).lower() == "true")
 
 
 def save_session(settings: QSettings, doc: Document) -> None:
-    """Store the colour maps, limits and panes of ``doc``."""
+    """Store the quantity, field shown, colour maps, limits, panes and difference pane of ``doc``."""
     st = doc.display.state
+    settings.setValue("display/quantity", st.quantity.value)
+    settings.setValue("display/layer", st.layer.value)
+    settings.setValue("panes/difference", "true" if doc.difference else "false")
     settings.setValue("cmap/diverging_cmap", st.diverging_cmap)
     settings.setValue("cmap/sequential_cmap", st.sequential_cmap)
     settings.setValue("panes", json.dumps([{"method": p.method, "range": p.range, "radius": p.radius}

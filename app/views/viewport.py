@@ -11,7 +11,7 @@ from PySide6.QtWidgets import QFrame, QLabel, QSizePolicy, QVBoxLayout
 from pyvistaqt import QtInteractor
 from vtkmodules.vtkCommonCore import vtkLookupTable
 from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
-from vtkmodules.vtkRenderingCore import vtkCellPicker
+from vtkmodules.vtkRenderingCore import vtkCellPicker, vtkRenderer
 
 from app.model.colors import LABEL_FORMAT, contrasting_colours
 
@@ -21,6 +21,8 @@ __all__ = ["Viewport"]
 
 _BAR_WIDTH_PX = 420
 _BAR_FRACTION = 0.8
+_BAR_STRIP_PX = 70
+"""Height of the colour bar's strip under the mesh, in pixels (less in very small panes)."""
 
 _GREY = np.array([200, 200, 200, 255], dtype=np.uint8)
 
@@ -70,7 +72,12 @@ class Viewport(QFrame):
         self._edge = 1.0
         self._lut = vtkLookupTable()
         self._bar = _scalar_bar(self._lut)
-        self.plotter.renderer.AddViewProp(self._bar)
+        # the colour bar has its own strip under the mesh's renderer: the mesh never covers it
+        self._bar_renderer = vtkRenderer()
+        self._bar_renderer.SetBackground(1.0, 1.0, 1.0)
+        self._bar_renderer.SetInteractive(False)
+        self._bar_renderer.AddViewProp(self._bar)
+        self.plotter.ren_win.AddRenderer(self._bar_renderer)
         self._bar.SetVisibility(False)
         self._press = None
         self._picker = vtkCellPicker()
@@ -132,8 +139,16 @@ class Viewport(QFrame):
         """The pane's header: estimator, the field the colours show, and its status (computing, failed) in red."""
         extra = f" &nbsp;<span style='color:#b00020'>{status}</span>" if status else ""
         field = f" &nbsp;·&nbsp; <b>{self.field_title}</b>" if self.field_title and self._bar.GetVisibility() else ""
-        self.title.setText(f"{text}{field}{extra}")
+        self.title.setText(f"{text}{field}{self.glyph_legend()}{extra}")
         self.title.setToolTip(f"{text} {status}".strip())
+
+    def glyph_legend(self) -> str:
+        """What the direction crosses mean, in their colours (empty while none are drawn)."""
+        if not self._glyph_actors:
+            return ""
+        (r1, g1, b1), (r2, g2, b2) = self.glyph_colours
+        return (f" &nbsp;·&nbsp; <b style='color:rgb({r1},{g1},{b1})'>━ d1</b> (k1) "
+                f"<b style='color:rgb({r2},{g2},{b2})'>━ d2</b> (k2)")
 
     # -- overlays -------------------------------------------------------------------------------
     def clear_glyphs(self) -> None:
@@ -193,11 +208,16 @@ class Viewport(QFrame):
         self.plotter.render()
 
     def _centre_bar(self) -> None:
-        """Keep the colour bar centred: its width is capped in pixels, so its left edge depends on the pane."""
-        w = max(self.plotter.width(), 1)
+        """Size the colour bar's strip under the mesh and centre the bar in it (its width is capped in
+        pixels, so its left edge depends on the pane)."""
+        w, h = max(self.plotter.width(), 1), max(self.plotter.height(), 1)
+        strip = min(_BAR_STRIP_PX, 0.22 * h) / h
+        self._bar_renderer.SetViewport(0.0, 0.0, 1.0, strip)
+        self.plotter.renderer.SetViewport(0.0, strip, 1.0, 1.0)
         frac = min(_BAR_FRACTION, _BAR_WIDTH_PX / w)
         self._bar.SetWidth(frac)
-        self._bar.SetPosition(0.5 * (1.0 - frac), 0.01)
+        self._bar.SetHeight(0.96)
+        self._bar.SetPosition(0.5 * (1.0 - frac), 0.02)
 
     # -- picking --------------------------------------------------------------------------------
     def pick_display(self, x: float, y: float) -> int | None:
@@ -251,7 +271,7 @@ def _scalar_bar(lut: vtkLookupTable) -> vtkScalarBarActor:
     bar.SetPosition(0.1, 0.01)
     bar.SetWidth(_BAR_FRACTION)
     bar.SetHeight(0.16)
-    bar.SetMaximumHeightInPixels(78)
+    bar.SetMaximumHeightInPixels(_BAR_STRIP_PX)
     bar.SetMaximumWidthInPixels(_BAR_WIDTH_PX)
     bar.SetNumberOfLabels(3)
     bar.SetBarRatio(0.28)

@@ -116,10 +116,11 @@ def test_estimator_that_cannot_handle_quads_reports_and_reverts(qtbot, window, u
     assert not window.doc.mesh.is_triangular and window.doc.result(0) is not None
     shown = _shown(window).copy()
     triangles_only = next(name for name, spec in curv.ESTIMATORS.items() if spec.triangles_only)
-    with qtbot.waitSignal(window.error_shown, timeout=TIMEOUT_MS) as blocker:
-        window.inspect.method.setCurrentIndex(window.inspect.method.findData(triangles_only))
-    assert "triangle" in blocker.args[0]
-    assert window.doc.panes[0].method == "mru"                 # back to the estimate that worked
+    index = window.inspect.method.findData(triangles_only)
+    assert not window.inspect.method.model().item(index).isEnabled()   # greyed out, the reason as tooltip
+    window.inspect.method.setCurrentIndex(index)                        # chosen anyway: refused, said why
+    assert "triangle" in window.status_label.text() and not window.controller.busy
+    assert window.doc.panes[0].method == "mru"                 # the estimate that works stays
     np.testing.assert_array_equal(_shown(window), shown)       # scene intact
 
 
