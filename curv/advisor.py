@@ -64,7 +64,7 @@ class MeshFeatures:
     noise : float
         Estimated standard deviation per coordinate of Gaussian vertex noise, as a fraction of the
         mean edge length (the study's unit: its 100 % level is
-        :data:`curv.study.protocol.NOISE_FRACTION` = 0.1). Measured as the robust spread of the
+        :data:`curv.variants.NOISE_FRACTION` = 0.1). Measured as the robust spread of the
         1-ring residuals of a local quadric: at every validly fitted vertex p the ``qs`` fit at R3
         gives k1, k2, d1, d2 in the frame of p's normal n; each 1-ring neighbour j gives the residual
         ``n·(x_j - x_p) + (k1 u² + k2 v²) / 2`` with ``u = d1·(x_j - x_p)``, ``v = d2·(x_j - x_p)``;
@@ -106,7 +106,7 @@ class MeshFeatures:
     @property
     def noise_level(self) -> float:
         """:attr:`noise` as a fraction of the paper's 100 % level."""
-        from .study.protocol import NOISE_FRACTION
+        from .variants import NOISE_FRACTION
 
         return self.noise / NOISE_FRACTION
 
@@ -248,7 +248,7 @@ def calibrate_noise(noise_raw: float, calibration: dict, density: float = 0.0) -
 
 def calibrate_irregularity(raw_deg: float, noise: float, calibration: dict) -> float:
     """``sqrt(max(raw² - (c noise_level)², 0))`` (see :attr:`MeshFeatures.irregularity_deg`)."""
-    from .study.protocol import NOISE_FRACTION
+    from .variants import NOISE_FRACTION
 
     c = calibration["irregularity_noise_deg"]
     return float(np.sqrt(max(raw_deg**2 - (c * noise / NOISE_FRACTION) ** 2, 0.0)))
@@ -376,7 +376,7 @@ def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
     MeshError
         When the features cannot be measured (no valid fit anywhere).
     """
-    from .study.protocol import Variant
+    from .variants import Variant
 
     table = load_table() if table is None else table
     features = measure_features(mesh, normals=normals, table=table)

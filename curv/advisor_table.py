@@ -45,7 +45,8 @@ from pathlib import Path
 import numpy as np
 
 from .advisor import FIT_METHOD, FIT_RANGE, kernel_predict, raw_measures, table_coordinates
-from .study.protocol import NOISE_FRACTION, StudySettings, Task, study_variants
+from .study.protocol import StudySettings, Task, study_variants
+from .variants import NOISE_FRACTION
 
 __all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "random_closed_params", "closed_mesh_point",
            "measure_rows", "fit_calibration", "table_points", "choose_bandwidth", "fit_kernel", "make_table",
@@ -128,7 +129,7 @@ def closed_mesh_point(args: tuple) -> tuple[dict, dict]:
     from .api import estimate
     from .normals import vertex_normals
     from .study.metrics import summarize
-    from .study.protocol import Variant
+    from .variants import Variant
     from .surfaces import make_surface
 
     seed, name, n, level, sample, variant_ids = args

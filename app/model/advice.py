@@ -89,7 +89,7 @@ def feature_rows(features) -> list[FeatureRow]:
     """
     from curv.advisor import FIT_METHOD, FIT_RANGE
     from curv.estimators import ESTIMATORS
-    from curv.study.protocol import NOISE_FRACTION
+    from curv.variants import NOISE_FRACTION
 
     f = features
     fit = f"{FIT_METHOD} {ranges.range_label(FIT_RANGE)}"

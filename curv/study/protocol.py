@@ -27,6 +27,7 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from ..api import Smoothing
+from ..variants import NOISE_FRACTION, SMOOTHING_SUFFIX, Variant, short_name
 from ..surfaces import PAPER_SURFACES
 from ..surfaces.hexagon import PAPER_VERTEX_COUNTS, hexagon_subdivisions
 
@@ -42,9 +43,6 @@ DENSITIES: tuple[int, ...] = PAPER_VERTEX_COUNTS
 NOISE_LEVELS: tuple[float, ...] = (0.0, 0.33, 0.66, 1.0)
 """Noise levels as fractions of :data:`NOISE_FRACTION` of the mean edge length."""
 
-NOISE_FRACTION = 0.1
-"""The 100 % noise level: standard deviation per coordinate = 10 % of the mean edge length."""
-
 IRREGULARITIES: tuple[float, ...] = (0.0, 14.0, 25.0)
 """Targets of the RMS deviation of all triangle angles from 60 degrees."""
 
@@ -59,55 +57,6 @@ SMOOTH_RANGE = 2
 
 FIG10_DENSITY = 3169
 """The density of Fig. 10 (the paper's text; its caption says 'highest sampling density')."""
-
-
-SMOOTHING_SUFFIX = {Smoothing.NONE: "", Smoothing.MESH: "SM", Smoothing.VALUES: "SV"}
-"""The paper's variant suffix of each smoothing (R2SM, R2SV); :class:`curv.api.Smoothing` is the one enum."""
-
-
-_SHORT = {"meyer": "My"}
-"""Display names that are not simply the upper-cased registry name (the paper's abbreviations)."""
-
-
-def short_name(method: str) -> str:
-    """The paper's abbreviation of an estimator: ``"mru" -> "MRU"``, ``"meyer" -> "My"``."""
-    return _SHORT.get(method, method.upper())
-
-
-@dataclass(frozen=True, order=True)
-class Variant:
-    """One evaluated estimator configuration: a registry name, a range and a smoothing mode.
-
-    ``id`` (``"mru:R2"``, ``"mru:R2SM"``) is the key stored in the results; ``label``
-    (``"MRU (R2SM)"``) is for tables and figures.
-    """
-
-    method: str
-    range: int
-    smooth: Smoothing = Smoothing.NONE
-
-    @property
-    def range_label(self) -> str:
-        return f"R{self.range}{SMOOTHING_SUFFIX[self.smooth]}"
-
-    @property
-    def id(self) -> str:
-        return f"{self.method}:{self.range_label}"
-
-    @property
-    def label(self) -> str:
-        return f"{short_name(self.method)} ({self.range_label})"
-
-    @classmethod
-    def from_id(cls, text: str) -> "Variant":
-        """Inverse of :attr:`id`."""
-        method, _, rest = text.partition(":")
-        rest = rest.upper().lstrip("R")
-        smooth = Smoothing.NONE
-        for s in (Smoothing.MESH, Smoothing.VALUES):
-            if rest.endswith(SMOOTHING_SUFFIX[s]):
-                smooth, rest = s, rest[: -len(SMOOTHING_SUFFIX[s])]
-        return cls(method, int(rest), smooth)
 
 
 def _registry():
