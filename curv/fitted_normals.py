@@ -19,7 +19,8 @@ import numpy as np
 from .estimators.jet import jet_normals
 from .mesh import Mesh
 from .normals import unusable_normal_vertices, vertex_normals
-from .ranges import Range, ball_radii, parse_range
+from .estimators import get_spec
+from .ranges import ball_radii, resolve
 
 __all__ = ["fitted_normals", "DEFAULT_FIT_RANGE", "DEFAULT_FIT_DEGREE"]
 
@@ -30,7 +31,7 @@ DEFAULT_FIT_DEGREE = 2
 """Jet degree of the fit unless told otherwise."""
 
 
-def fitted_normals(mesh: Mesh, *, range=DEFAULT_FIT_RANGE, degree: int = DEFAULT_FIT_DEGREE,
+def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
                    radius: float | None = None) -> np.ndarray:
     """Unit vertex normals of local jet fits.
 
@@ -40,7 +41,7 @@ def fitted_normals(mesh: Mesh, *, range=DEFAULT_FIT_RANGE, degree: int = DEFAULT
         Any polygon mesh.
     range : int, float or str
         k of the range Rk of the support (a ball of ``k`` times the vertex's longest 1-ring edge,
-        :mod:`curv.ranges`); ``2``, ``2.5`` or ``"R2"``.
+        :mod:`curv.ranges`); ``2``, ``2.5`` or ``"R2"``; default :data:`DEFAULT_FIT_RANGE`.
     degree : {2, 3, 4}
         Degree of the fitted jet.
     radius : float, optional
@@ -56,17 +57,10 @@ def fitted_normals(mesh: Mesh, *, range=DEFAULT_FIT_RANGE, degree: int = DEFAULT
     EstimatorError
         A range below 1, or a degree other than 2, 3, 4.
     """
-    from .errors import EstimatorError
-
-    if radius is not None:
-        rng = Range(radius=float(radius))
-        if not rng.radius > 0:
-            raise EstimatorError(f"radius must be a positive length in mesh units; got {radius!r}")
-    else:
-        k = parse_range(range)
-        if k < 1:
-            raise EstimatorError(f"fit range must be at least R1; got {range!r}")
-        rng = Range(k=k)
+    # the normals come from the jet's own fit, so the jet's range rule applies (curv.ranges owns it)
+    if range is None and radius is None:
+        range = DEFAULT_FIT_RANGE
+    rng = resolve(get_spec("jet"), range, radius)
     reference = vertex_normals(mesh)
     bad = unusable_normal_vertices(mesh)
     if bad.any():
