@@ -56,11 +56,13 @@ class Progress:
 
 def _cmd_list(args) -> int:
     from .estimators import ESTIMATORS
+    from .ranges import range_label, takes_any_range
 
     print(f"{'name':<6} {'ranges':<12} {'polygons':<9} {'borders':<8} title / reference")
     print(f"{'':<6} (k>=1, r: any real range Rk from that k on, or a fixed radius r)")
     for spec in ESTIMATORS.values():
-        ranges = f"k>={min(spec.ranges):g}, r" if spec.has_support else ",".join(f"R{k}" for k in spec.ranges)
+        ranges = (f"k>={min(spec.ranges):g}, r" if takes_any_range(spec)
+                  else ",".join(range_label(k) for k in spec.ranges))
         print(f"{spec.name:<6} {ranges:<12} {'no' if spec.triangles_only else 'yes':<9} "
               f"{'invalid' if spec.closed_ring else 'fitted':<8} {spec.title}")
         print(f"{'':<37} {spec.reference}")
@@ -192,13 +194,14 @@ def _advised_method(args) -> tuple[str, str]:
     """``--method auto``: the advisor's (method, range) for the input, announced on stdout."""
     from .advisor import advise
     from .io import load
+    from .ranges import range_label
 
     if args.range is not None or args.radius is not None:
         raise CurvError("--method auto chooses the range too; drop --range/--radius")
     mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
                 orient=args.orient, remove_unreferenced=args.remove_unreferenced)
     adv = advise(mesh)
-    print(f"auto: {adv.method} R{adv.range} ({adv.why})", flush=True)
+    print(f"auto: {adv.method} {range_label(adv.range)} ({adv.why})", flush=True)
     return adv.method, str(adv.range)
 
 
@@ -255,6 +258,7 @@ class CurvMemoryError(CurvError, MemoryError):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .estimators.registry import DEFAULT_ESTIMATOR
     from .io import OUTPUT_FORMATS
     from .quantities import QUANTITIES
     from .quantities import describe as describe_quantities
@@ -267,7 +271,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p_est = sub.add_parser("estimate", help="estimate curvature on a mesh file")
     p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
-    p_est.add_argument("--method", "-m", default="mru", help="estimator name (see `curv list`), or auto (ask `curv advise`); default mru")
+    p_est.add_argument("--method", "-m", default=DEFAULT_ESTIMATOR,
+                       help=f"estimator name (see `curv list`), or auto (ask `curv advise`); default {DEFAULT_ESTIMATOR}")
     p_est.add_argument("--range", "-r", help="range k of Rk: 2, R2 or any real k such as 2.5 (at least the "
                        "estimator's smallest); default R2, or the estimator's one range (meyer R1)")
     p_est.add_argument("--radius", type=float, help="instead of --range: the same ball radius in mesh units at "
@@ -322,6 +327,9 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         print("curv: error: out of memory (try a smaller range or a smaller mesh)", file=sys.stderr)
         return EXIT_INPUT
+    except BrokenPipeError:  # `curv list | head`: the reader has what it wanted
+        sys.stderr.close()
+        return 0
     except OSError as exc:
         print(f"curv: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return EXIT_INPUT
