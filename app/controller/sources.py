@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from curv.io import load
 from curv.surfaces import make_surface
@@ -71,5 +71,7 @@ def load_source(source):
         sampled = make_surface(
             source.name, n_vertices=source.n_vertices, irregularity=source.irregularity,
             noise=source.noise, seed=source.seed, random_params=source.random_params, **source.params)
-        return source, sampled.mesh, sampled.truth
+        # a closed surface's tessellation has its own nearest count (a torus grid: 10240 for 10242):
+        # the source then names the count the mesh really has
+        return replace(source, n_vertices=sampled.mesh.n_vertices), sampled.mesh, sampled.truth
     raise TypeError(f"unknown source {source!r}")

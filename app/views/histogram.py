@@ -97,12 +97,12 @@ class Histogram(QWidget):
         lo, hi = self.clim
         n_col = self.table.shape[0]
         p.setPen(Qt.PenStyle.NoPen)
-        from curv.colors import CLIP_SHADE
+        from curv.colors import CLIP_MARGIN, CLIP_SHADE
 
         for c, a, b in zip(self.counts, self.edges[:-1], self.edges[1:]):
             t = ((a + b) / 2 - lo) / (hi - lo)
             rgb = self.table[int(round(np.clip(t, 0, 1) * (n_col - 1)))]
-            if t < 0 or t > 1:  # clipped on the mesh: drawn darkened there too
+            if t < -CLIP_MARGIN or t > 1 + CLIP_MARGIN:  # clipped on the mesh: drawn darkened there too
                 rgb = (rgb * CLIP_SHADE).astype(np.uint8)
             p.setBrush(QColor(int(rgb[0]), int(rgb[1]), int(rgb[2])))
             x0, x1 = self.x_of(a), self.x_of(b)
