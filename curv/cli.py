@@ -327,10 +327,10 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         print("curv: error: out of memory (try a smaller range or a smaller mesh)", file=sys.stderr)
         return EXIT_INPUT
-    except BrokenPipeError:  # `curv list | head`: the reader has what it wanted
-        sys.stderr.close()
-        return 0
     except OSError as exc:
+        if isinstance(exc, BrokenPipeError):  # `curv list | head`: the reader has what it wanted
+            sys.stderr.close()
+            return 0
         print(f"curv: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:

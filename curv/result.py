@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .quantities import QUANTITIES
 from .quantities import compute as _compute
 from .validity import Reason
 
@@ -35,6 +36,12 @@ class Principal:
     d2: np.ndarray
     reason: np.ndarray
     normals: np.ndarray | None = None
+
+
+def _quantity_property(name: str) -> property:
+    """A read-only ``Curvature`` attribute computing quantity ``name`` by :mod:`curv.quantities`."""
+    spec = QUANTITIES[name]
+    return property(lambda self: self.quantity(name), doc=f"(n,) {spec.title}: {spec.formula}.")
 
 
 @dataclass
@@ -82,25 +89,10 @@ class Curvature:
     def n(self) -> int:
         return self.k1.shape[0]
 
-    @property
-    def mean(self) -> np.ndarray:
-        """(n,) mean curvature H = (k1 + k2) / 2 (:mod:`curv.quantities`)."""
-        return self.quantity("mean")
-
-    @property
-    def gaussian(self) -> np.ndarray:
-        """(n,) Gaussian curvature K = k1 * k2 (:mod:`curv.quantities`)."""
-        return self.quantity("gaussian")
-
-    @property
-    def shape_index(self) -> np.ndarray:
-        """(n,) Koenderink shape index in [-1, 1]: 2/pi * arctan((k1 + k2) / (k1 - k2)) (:mod:`curv.quantities`)."""
-        return self.quantity("shape_index")
-
-    @property
-    def curvedness(self) -> np.ndarray:
-        """(n,) Koenderink curvedness sqrt((k1^2 + k2^2) / 2) (:mod:`curv.quantities`)."""
-        return self.quantity("curvedness")
+    mean = _quantity_property("mean")
+    gaussian = _quantity_property("gaussian")
+    shape_index = _quantity_property("shape_index")
+    curvedness = _quantity_property("curvedness")
 
     @property
     def valid_fraction(self) -> float:
