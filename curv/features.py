@@ -31,13 +31,16 @@ from .errors import EstimatorError
 from .mesh import Mesh
 
 __all__ = ["FeatureSet", "feature_set", "feature_edges", "feature_vertices", "feature_corners", "dihedral_angles",
-           "suggest_threshold", "sharp_edge_count", "sector_corner_normals", "SHARP_DEGREES", "MIN_GAP_DEGREES"]
+           "suggest_threshold", "sharp_edge_count", "has_many_sharp_edges", "check_angle", "sector_corner_normals", "SHARP_DEGREES", "MIN_GAP_DEGREES"]
 
 SHARP_DEGREES = 30.0
 """Dihedral angle above which the mesh report counts an edge as sharp."""
 
 MIN_GAP_DEGREES = 10.0
 """A threshold is suggested only where the sorted dihedral angles have a gap at least this wide."""
+
+MIN_CREASE_EDGES = 3
+"""Fewer edges than this (or than :data:`SHARP_SHARE` of them) above a gap are outliers, not creases."""
 
 SHARP_SHARE = 0.001
 """Share of sharp edges above which the report and the advisor speak of "many sharp edges"."""
@@ -60,7 +63,8 @@ def dihedral_angles(mesh: Mesh) -> np.ndarray:
     return out
 
 
-def _check_angle(angle) -> float:
+def check_angle(angle) -> float:
+    """A feature angle in degrees (0-180) as a float; :class:`EstimatorError` otherwise (one line)."""
     try:
         value = float(angle)
     except (TypeError, ValueError):
@@ -91,7 +95,7 @@ def feature_edges(mesh: Mesh, angle_or_mask) -> np.ndarray:
             raise EstimatorError(f"a features mask must be a bool array of shape ({mesh.edges.shape[0]},) "
                                  f"aligned with mesh.edges; got {mask.dtype} {mask.shape}")
         return mask & (mesh.edge_face_count >= 2)
-    threshold = _check_angle(angle_or_mask)
+    threshold = check_angle(angle_or_mask)
     with np.errstate(invalid="ignore"):
         return dihedral_angles(mesh) > threshold
 
@@ -114,7 +118,8 @@ def sharp_edge_count(mesh: Mesh, angle: float = SHARP_DEGREES) -> int:
 
 
 def has_many_sharp_edges(mesh: Mesh) -> bool:
-    """Whether more than :data:`SHARP_SHARE` of the edges are sharp (the report's and advisor's remark)."""
+    """Whether more than :data:`SHARP_SHARE` of the edges are sharp (then the report and the advisor
+    suggest a threshold, if :func:`suggest_threshold` finds one)."""
     edges = mesh.edges.shape[0]
     return edges > 0 and sharp_edge_count(mesh) > SHARP_SHARE * edges
 
@@ -123,8 +128,9 @@ def suggest_threshold(mesh: Mesh) -> float | None:
     """A feature angle in degrees that separates the mesh's creases from its smooth edges, or None.
 
     The middle of the widest gap in the sorted dihedral angles whose upper side is sharp (above
-    :data:`SHARP_DEGREES`), if that gap is at least :data:`MIN_GAP_DEGREES` wide; None for a mesh
-    without sharp edges or whose angles spread without a clear gap (noise).
+    :data:`SHARP_DEGREES`) and holds enough edges (:data:`MIN_CREASE_EDGES`, :data:`SHARP_SHARE`),
+    if that gap is at least :data:`MIN_GAP_DEGREES` wide; None for a mesh without sharp edges or
+    whose angles spread without a clear gap (noise).
     """
     angles = dihedral_angles(mesh)
     angles = np.sort(angles[np.isfinite(angles)])
@@ -133,6 +139,9 @@ def suggest_threshold(mesh: Mesh) -> float | None:
     values = np.concatenate([[0.0], angles])
     gaps = np.diff(values)
     gaps[values[1:] <= SHARP_DEGREES] = 0.0  # only gaps below a sharp angle
+    # a few outliers at the top of a noisy mesh's angles are not creases
+    above = angles.size - np.arange(angles.size)
+    gaps[above < max(MIN_CREASE_EDGES, SHARP_SHARE * angles.size)] = 0.0
     i = int(np.argmax(gaps))
     if gaps[i] < MIN_GAP_DEGREES:
         return None
@@ -169,7 +178,7 @@ class FeatureSet:
 def feature_set(mesh: Mesh, angle_or_mask) -> FeatureSet:
     """The :class:`FeatureSet` of ``mesh`` for a threshold in degrees or a per-edge mask."""
     edges = feature_edges(mesh, angle_or_mask)
-    label = "mask" if np.ndim(angle_or_mask) != 0 else _check_angle(angle_or_mask)
+    label = "mask" if np.ndim(angle_or_mask) != 0 else check_angle(angle_or_mask)
     return FeatureSet(label=label, edges=edges, vertices=feature_vertices(mesh, edges),
                       corners=feature_corners(mesh, edges))
 
