@@ -132,6 +132,11 @@ class Advice:
         Predicted median e_rel of the recommendation.
     why : str
         One line for a person.
+    suggested_features : float or None
+        When the mesh has many sharp edges (:func:`curv.features.has_many_sharp_edges`), a
+        ``features`` angle that separates its creases from its smooth edges
+        (:func:`curv.features.suggest_threshold`); the study's meshes are smooth, so the ranking
+        assumes the creases are handled that way.
     """
 
     features: MeshFeatures
@@ -140,6 +145,7 @@ class Advice:
     range: int
     expected_erel: float
     why: str
+    suggested_features: float | None = None
 
     def as_dict(self) -> dict:
         """A JSON-ready dict (``features``, ``ranking`` as a list of dicts, the recommendation)."""
@@ -148,6 +154,7 @@ class Advice:
         f["noise_level"] = self.features.noise_level
         return {
             "method": self.method, "range": self.range, "expected_erel": self.expected_erel, "why": self.why,
+            "suggested_features": self.suggested_features,
             "features": f,
             "ranking": [{"method": m, "range": r, "expected_erel": e} for m, r, e in self.ranking],
         }
@@ -390,5 +397,16 @@ def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
         raise MeshError("cannot advise: no estimator of the table applies to this mesh")
     ranking.sort(key=lambda t: t[2])
     method, k, erel = ranking[0]
+    angle = _sharp_edge_angle(mesh)
+    why = _why(features, method, k, erel)
+    if angle is not None:
+        why += f"; many sharp edges: estimate with features={angle:g} so the creases are not smoothed over"
     return Advice(features=features, ranking=ranking, method=method, range=k, expected_erel=erel,
-                  why=_why(features, method, k, erel))
+                  why=why, suggested_features=angle)
+
+
+def _sharp_edge_angle(mesh: Mesh) -> float | None:
+    """The features angle to suggest when the mesh has many sharp edges, else None."""
+    from .features import has_many_sharp_edges, suggest_threshold
+
+    return suggest_threshold(mesh) if has_many_sharp_edges(mesh) else None

@@ -145,7 +145,13 @@ def _cmd_estimate(args) -> int:
         _check_memory(args, mesh.n_vertices, mesh.n_faces, spec.name, rng)
     progress = Progress(f"{spec.name} {rng.label}", enabled=None if not args.quiet else False)
     normals = {"normals": "fit"} if args.normals == "fit" else {"normal_weighting": args.normals}
-    gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, smooth=args.smooth, **normals)
+    region = _region_vertices(args, mesh)
+    if args.features is not None:
+        from .features import check_angle
+
+        args.features = check_angle(args.features)
+    gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, smooth=args.smooth, features=args.features,
+                        vertices=region, **normals)
     t1 = time.perf_counter()
     try:
         while True:
@@ -181,6 +187,8 @@ def _cmd_estimate(args) -> int:
         reasons["DEGENERATE"] -= n_isolated
         reasons = {**{k: v for k, v in reasons.items() if v}, "ISOLATED (no face)": n_isolated}
     invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
+    if region is not None:
+        print(f"region: {region.size} vertices estimated, the other {mesh.n_vertices - region.size} not computed")
     print(f"{res.method} {res.info['range_label']}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
           f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
     for name in EXPORTED:
@@ -188,6 +196,20 @@ def _cmd_estimate(args) -> int:
     written = f", write {t_write:.2f} s; wrote {args.output}" if args.output else ""
     print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s{written}")
     return 0
+
+
+def _region_vertices(args, mesh):
+    """``--vertices FILE`` or ``--region X Y Z R`` as vertex indices, or None for the whole mesh."""
+    from .region import read_vertex_file, vertices_in_ball
+
+    if args.vertices is not None and args.region is not None:
+        raise CurvError("give either --vertices or --region, not both")
+    if args.vertices is not None:
+        return read_vertex_file(args.vertices, mesh.n_vertices)
+    if args.region is not None:
+        *centre, radius = args.region
+        return vertices_in_ball(mesh, centre, radius)
+    return None
 
 
 def _advised_method(args) -> tuple[str, str]:
@@ -224,6 +246,8 @@ def _cmd_advise(args) -> int:
     print(f"  irregularity {f.irregularity_deg:.1f} degrees RMS from 60")
     print(f"  density      {f.density:.4f} (mean edge x median |k1|+|k2|)")
     print(f"advice: {adv.why}")
+    if adv.suggested_features is not None:
+        print(f"  sharp edges: try curv estimate {args.input} --features {adv.suggested_features:g}")
     print(f"{'rank':>4}  {'variant':<9} predicted median e_rel")
     shown = adv.ranking[: args.top]
     for i, (method, k, erel) in enumerate(shown, 1):
@@ -242,6 +266,8 @@ def _hints(args, rep) -> list[str]:
         out.append("degenerate faces found: try --remove-degenerate")
     if rep.inconsistent_edges and not args.orient:
         out.append("faces of opposite orientation meet (their vertices are invalid): try --orient")
+    if rep.suggested_features is not None and args.features is None:
+        out.append(f"many sharp edges: if they are creases, try --features {rep.suggested_features:g}")
     return out
 
 
@@ -291,6 +317,12 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("--remove-degenerate", action="store_true", help="drop zero-area / repeated-index faces")
     p_est.add_argument("--orient", action="store_true", help="make face orientation consistent")
     p_est.add_argument("--remove-unreferenced", action="store_true", help="drop vertices no face uses")
+    p_est.add_argument("--features", metavar="DEGREES",
+                       help="edges whose dihedral angle exceeds this are creases: supports stop there and "
+                            "crease vertices are marked FEATURE")
+    p_est.add_argument("--vertices", metavar="FILE", help="estimate only at these vertices (one index a line)")
+    p_est.add_argument("--region", nargs=4, type=float, metavar=("X", "Y", "Z", "R"),
+                       help="estimate only at the vertices within R of the point (X, Y, Z)")
     p_est.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     p_est.add_argument("--no-memory-check", dest="memory_check", action="store_false",
                        help="estimate even when the predicted peak memory exceeds the available memory")
