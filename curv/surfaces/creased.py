@@ -172,6 +172,33 @@ class CreasedSurface(Surface):
     def area(self) -> float:
         """Surface area (to turn a vertex count into an edge length)."""
 
+    def part_membership(self, points) -> np.ndarray:
+        """Which smooth parts each point lies on (two or more on a crease, three at a box corner).
+
+        Parameters
+        ----------
+        points : (n, 3) array_like
+            Points on the surface.
+
+        Returns
+        -------
+        (n, len(parts)) bool
+
+        Raises
+        ------
+        ValueError
+            A point is not on the surface.
+        """
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        tol = ON_SURFACE_TOLERANCE * self.size
+        distance = np.stack([part.signed_distance(p) for part in self.parts], axis=1)
+        outside = np.abs(distance.max(axis=1, initial=-np.inf))
+        if np.any(outside > tol):
+            raise ValueError(
+                f"points must lie on the {self.title.lower()}; {int((outside > tol).sum())} are off it "
+                f"(farthest {outside.max():.3g} away)")
+        return np.abs(distance) <= tol
+
     def part_of(self, points) -> np.ndarray:
         """The smooth part each point lies on.
 
@@ -191,19 +218,18 @@ class CreasedSurface(Surface):
             A point is not on the surface.
         """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        tol = ON_SURFACE_TOLERANCE * self.size
-        distance = np.stack([part.signed_distance(p) for part in self.parts], axis=1)
-        outside = np.abs(distance.max(axis=1, initial=-np.inf))
-        if np.any(outside > tol):
-            raise ValueError(
-                f"points must lie on the {self.title.lower()}; {int((outside > tol).sum())} are off it "
-                f"(farthest {outside.max():.3g} away)")
-        on = np.abs(distance) <= tol
+        on = self.part_membership(p)
         part = np.argmax(on, axis=1)
         singular = np.zeros(p.shape[0], bool)
+        tol = ON_SURFACE_TOLERANCE * self.size
         for index, smooth in enumerate(self.parts):
             singular |= (part == index) & smooth.singular(p, tol)
         return np.where((on.sum(axis=1) > 1) | singular, -1, part)
+
+    def crease_edges(self, mesh: Mesh) -> np.ndarray:
+        """(e,) bool: edges of a mesh of this surface that run along a crease (both ends on the same two parts)."""
+        on = self.part_membership(mesh.vertices)
+        return (on[mesh.edges[:, 0]] & on[mesh.edges[:, 1]]).sum(axis=1) >= 2
 
     def exact_at(self, points) -> Curvature:
         """Exact curvature at points of the surface; NaN and ``Reason.FEATURE`` on creases, corners, apex.

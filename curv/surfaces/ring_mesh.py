@@ -54,23 +54,26 @@ def revolution_mesh(rho, z, counts) -> tuple[np.ndarray, np.ndarray]:
 def _ring_strip(a, a_angle, b, b_angle) -> np.ndarray:
     """Triangles between ring ``a`` and the next ring ``b`` (indices and ascending angles).
 
-    A sweep around the axis from the rung ``(a[0], first b at or after it)``: each step moves the
-    rung's end whose next vertex comes first in angle, and the triangle it sweeps is
-    ``(a_i, a_i+1, b_j)`` or ``(a_i, b_j+1, b_j)``; both are outward when ``b`` follows ``a`` on
-    the profile. At a pole one of the two kinds collapses and is dropped.
+    A sweep once around the axis over the edges of both rings, in the order of their midpoints'
+    angles: an edge ``a_i -> a_i+1`` gives ``(a_i, a_i+1, b_j)`` and an edge ``b_j -> b_j+1`` gives
+    ``(a_i, b_j+1, b_j)``, with ``a_i, b_j`` the current vertices of the sweep; so each triangle's
+    apex is the vertex of the other ring about over its base's middle. Both kinds are outward when
+    ``b`` follows ``a`` on the profile; at a pole one kind collapses and is dropped.
     """
     two_pi = 2.0 * np.pi
-    a_rel = a_angle - a_angle[0]
+    a_rel = a_angle - a_angle[0]                        # the sweep starts at a[0]
+    a_mid = a_rel + 0.5 * np.diff(np.concatenate([a_rel, [two_pi]]))
     b_rel = np.mod(b_angle - a_angle[0], two_pi)
     b_order = np.argsort(b_rel, kind="stable")
     b, b_rel = b[b_order], b_rel[b_order]
-    # the next vertex of each end, one full turn: the last step of each returns to its start
-    a_next = np.concatenate([a_rel[1:], [two_pi]])
-    b_next = np.concatenate([b_rel[1:], [b_rel[0] + two_pi]])
+    b_mid = np.mod(b_rel + 0.5 * np.mod(np.roll(b_rel, -1) - b_rel, two_pi), two_pi)
+    # start ring b at the edge whose midpoint comes first after a[0]
+    first = np.argmin(b_mid)
+    b, b_mid = np.roll(b, -first), np.roll(b_mid, -first)
     moves_a = np.concatenate([np.ones(a.size, bool), np.zeros(b.size, bool)])
-    order = np.lexsort((~moves_a, np.concatenate([a_next, b_next])))  # ties: move a first
+    order = np.lexsort((~moves_a, np.concatenate([a_mid, b_mid])))  # ties: move a first
     moves_a = moves_a[order]
-    i = np.cumsum(moves_a) - moves_a                   # a-steps before this one
+    i = np.cumsum(moves_a) - moves_a                   # a-edges before this one
     j = np.cumsum(~moves_a) - ~moves_a
     ai, ai1 = a[i % a.size], a[(i + 1) % a.size]
     bj, bj1 = b[j % b.size], b[(j + 1) % b.size]
