@@ -26,6 +26,12 @@ _LAZY = {
     "surfaces": ("curv.surfaces", None),
     "advise": ("curv.advisor", "advise"),
     "Advice": ("curv.advisor", "Advice"),
+    "features": ("curv.features", None),
+    "feature_edges": ("curv.features", "feature_edges"),
+    "feature_vertices": ("curv.features", "feature_vertices"),
+    "feature_corners": ("curv.features", "feature_corners"),
+    "dihedral_angles": ("curv.features", "dihedral_angles"),
+    "suggest_threshold": ("curv.features", "suggest_threshold"),
 }
 
 __all__ = [

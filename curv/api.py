@@ -13,7 +13,8 @@ from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
 from .jit import COMPILE_MESSAGE, Progress, compile_pending
 from .mesh import Mesh
 from .ranges import ball_radii, parse_range, resolve
-from .normals import NormalWeighting, normalize_rows, unusable_normal_vertices, vertex_normals
+from .features import feature_set
+from .normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
 from .result import Curvature
 from .smoothing import smooth_positions, smooth_values
 from .validity import Reason
@@ -60,6 +61,8 @@ def iter_estimate(
     smooth_strength: float = 0.5,
     fit_range=2,
     block_size: int | None = None,
+    features=None,
+    vertices=None,
     **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
@@ -77,6 +80,10 @@ def iter_estimate(
     if why_not is not None:
         raise MeshError(why_not)
     smooth = Smoothing(smooth or Smoothing.NONE)
+    centres = _check_vertices(vertices, mesh.n_vertices)
+    if centres is not None and smooth is Smoothing.VALUES:
+        raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
+    feats = None if features is None else feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
     t0 = time.perf_counter()
@@ -94,32 +101,47 @@ def iter_estimate(
         used_normals = None
     else:
         if normals is None:
-            used_normals = vertex_normals(work_mesh, weighting=normal_weighting)
+            used_normals = _default_normals(work_mesh, normal_weighting, smoothed=work_mesh is not mesh)
         elif _asks_for_fit(normals):
             from .fitted_normals import fitted_normals
 
-            used_normals = fitted_normals(work_mesh, range=fit_range)
+            used_normals = fitted_normals(work_mesh, range=fit_range, features=feats)
         else:
             used_normals = _check_normals(normals, mesh.n_vertices)
         if meaningless.any():
             used_normals = used_normals.copy()
             used_normals[meaningless] = np.nan
     radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
-    raw = yield from spec.function(work_mesh, used_normals, radii, chunk=block_size, **options)
+    on_crease = feats is not None and feats.any
+    kernel_normals = used_normals
+    if on_crease and used_normals is not None:
+        # a crease vertex's normal blends both sides: no neighbour-normal term may use it (ru and
+        # icc take their sector's normal instead, curv.features.sector_corner_normals)
+        kernel_normals = used_normals.copy()
+        kernel_normals[feats.vertices] = np.nan
+    raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=centres,
+                                   features=feats if on_crease else None, **options)
     if fused:
         used_normals = raw.normals
 
-    k1, k2, d1, d2, reason = raw.k1, raw.k2, raw.d1, raw.d2, raw.reason.copy()
-    isolated = mesh.isolated_vertices
+    def at(flags: np.ndarray) -> np.ndarray:
+        """The rows of a per-vertex array that this call estimates."""
+        return flags if centres is None else flags[centres]
+
+    k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
+    isolated = at(mesh.isolated_vertices)
     # no face at all is the root cause, whatever the estimator saw (no support, no normal)
     reason[isolated] = Reason.DEGENERATE
+    if on_crease:
+        # the smooth curvature is undefined on a crease; a large value there is the error to avoid
+        reason[at(feats.vertices) & ~isolated] = Reason.FEATURE
     # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
-    reason[(reason == Reason.OK) & mesh.nonmanifold_vertices] = Reason.NONMANIFOLD
+    reason[(reason == Reason.OK) & at(mesh.nonmanifold_vertices)] = Reason.NONMANIFOLD
     # faces of opposite orientation meet here: the vertex normal is meaningless
-    reason[(reason == Reason.OK) & meaningless] = Reason.DEGENERATE
+    reason[(reason == Reason.OK) & at(meaningless)] = Reason.DEGENERATE
     # on a border the normal and every fit see one side only: the values there are not estimates
     # of the surface's curvature, whatever the estimator
-    reason[(reason == Reason.OK) & mesh.border_vertices] = Reason.BORDER
+    reason[(reason == Reason.OK) & at(mesh.border_vertices)] = Reason.BORDER
     reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
     # the estimators order k1 >= k2 already; repair in place (the arrays are this call's own) the
     # rare rows they did not
@@ -127,7 +149,7 @@ def iter_estimate(
     k1[swap], k2[swap] = k2[swap], k1[swap]
     d1[swap], d2[swap] = d2[swap], d1[swap]
     # keep (d1, d2, N) right-handed so results are reproducible
-    d2[_triple_product(d1, d2, used_normals) < 0] *= -1.0
+    d2[_triple_product(d1, d2, at(used_normals)) < 0] *= -1.0
     if smooth is Smoothing.VALUES:
         ok = reason == Reason.OK
         k1, k2 = smooth_values(mesh, np.stack([k1, k2], axis=1), ok,
@@ -140,6 +162,8 @@ def iter_estimate(
         arr[~valid] = np.nan
     d1[~valid] = np.nan
     d2[~valid] = np.nan
+    if centres is not None:
+        k1, k2, d1, d2, reason, valid = _full_length(mesh.n_vertices, centres, k1, k2, d1, d2, reason, valid)
     yield 1.0
     return Curvature(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
@@ -147,8 +171,46 @@ def iter_estimate(
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
               "normals": _normals_label(normals, normal_weighting, fit_range), **options,
               "radius": rng.radius,
-              "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0},
+              "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
+              "features": None if feats is None else feats.label,
+              "feature_edges": 0 if feats is None else int(feats.edges.sum()),
+              "region": mesh.n_vertices if centres is None else int(centres.size)},
     )
+
+
+def _check_vertices(vertices, n: int) -> np.ndarray | None:
+    """``vertices=`` as an (c,) int64 index array, or None for all; a one-line error when invalid."""
+    if vertices is None:
+        return None
+    arr = np.asarray(vertices)
+    if arr.dtype == bool:
+        raise EstimatorError("vertices must be an array of vertex indices, not a mask (use np.flatnonzero(mask))")
+    if arr.ndim != 1 or (arr.size and not np.issubdtype(arr.dtype, np.integer)):
+        raise EstimatorError(f"vertices must be a 1-D array of vertex indices; got shape {arr.shape}, {arr.dtype}")
+    arr = np.ascontiguousarray(arr, dtype=np.int64)
+    if arr.size and (arr.min() < 0 or arr.max() >= n):
+        bad = int(arr[(arr < 0) | (arr >= n)][0])
+        raise EstimatorError(f"vertex index {bad} is out of range for a mesh of {n} vertices")
+    return arr
+
+
+def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
+    """Scatter a region's rows into full-length outputs: NaN and ``NOT_COMPUTED`` elsewhere."""
+    out_k1, out_k2 = np.full(n, np.nan), np.full(n, np.nan)
+    out_d1, out_d2 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+    out_reason = np.full(n, Reason.NOT_COMPUTED, np.uint8)
+    out_valid = np.zeros(n, bool)
+    out_k1[centres], out_k2[centres], out_d1[centres], out_d2[centres] = k1, k2, d1, d2
+    out_reason[centres], out_valid[centres] = reason, valid
+    return out_k1, out_k2, out_d1, out_d2, out_reason, out_valid
+
+
+def _default_normals(mesh: Mesh, weighting, *, smoothed: bool) -> np.ndarray:
+    """The mesh's vertex normals; Max's weights on the mesh itself are cached with it (read-only),
+    so that an estimate over a small region does not recompute them."""
+    if smoothed or NormalWeighting(weighting) is not NormalWeighting.MAX:
+        return vertex_normals(mesh, weighting=weighting)
+    return cached_max_normals(mesh)
 
 
 def _normals_label(normals, weighting, fit_range) -> str:
@@ -183,6 +245,8 @@ def estimate(
     smooth_strength: float = 0.5,
     fit_range=2,
     block_size: int | None = None,
+    features=None,
+    vertices=None,
     **options,
 ) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
@@ -213,6 +277,15 @@ def estimate(
     block_size : int, optional
         Vertices per kernel call (the granularity of progress and cancel); default adaptive, about
         every 0.05 s. Results do not depend on it.
+    features : float or (e,) bool array_like, optional
+        Sharp features (:mod:`curv.features`): edges whose dihedral angle exceeds this many degrees,
+        or a per-edge mask aligned with ``mesh.edges``, are creases. Supports never cross them,
+        neighbour-normal terms take each side's own normal, and vertices on a crease get
+        ``Reason.FEATURE`` (NaN). Default none. A smooth mesh gives the same result as without.
+    vertices : (c,) int array_like, optional
+        Estimate only at these vertices (reading whatever their supports need): the arrays keep
+        full length, the other vertices are NaN with ``Reason.NOT_COMPUTED``. The values equal the
+        full run's at these vertices.
     **options
         Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for
         ``jet``.
@@ -233,7 +306,7 @@ def estimate(
     gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
                         smooth=smooth, smooth_iterations=smooth_iterations,
                         smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size,
-                        **options)
+                        features=features, vertices=vertices, **options)
     while True:
         try:
             next(gen)

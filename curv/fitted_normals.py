@@ -31,7 +31,7 @@ DEFAULT_FIT_DEGREE = 2
 
 
 def fitted_normals(mesh: Mesh, *, range=DEFAULT_FIT_RANGE, degree: int = DEFAULT_FIT_DEGREE,
-                   radius: float | None = None) -> np.ndarray:
+                   radius: float | None = None, features=None) -> np.ndarray:
     """Unit vertex normals of local jet fits.
 
     Parameters
@@ -45,6 +45,9 @@ def fitted_normals(mesh: Mesh, *, range=DEFAULT_FIT_RANGE, degree: int = DEFAULT
         Degree of the fitted jet.
     radius : float, optional
         Instead of ``range``: the same ball radius in mesh units at every vertex.
+    features : curv.features.FeatureSet, optional
+        The fits do not reach across a crease; a vertex on one keeps its Max normal (its curvature
+        is ``FEATURE`` anyway, and neighbours never use it).
 
     Returns
     -------
@@ -73,7 +76,8 @@ def fitted_normals(mesh: Mesh, *, range=DEFAULT_FIT_RANGE, degree: int = DEFAULT
         reference = reference.copy()
         reference[bad] = np.nan
     radii = ball_radii(mesh, rng, uses_normals=False)
-    gen = jet_normals(mesh, reference, radii, degree=degree)
+    on_crease = features is not None and features.any
+    gen = jet_normals(mesh, reference, radii, degree=degree, features=features if on_crease else None)
     while True:
         try:
             next(gen)
@@ -83,4 +87,6 @@ def fitted_normals(mesh: Mesh, *, range=DEFAULT_FIT_RANGE, degree: int = DEFAULT
     # the jet normal lies within 90 degrees of the PCA axis, which was turned towards the Max
     # normal; a strongly tilted fit may still end up on the other side
     normals[np.einsum("ij,ij->i", normals, reference) < 0] *= -1.0
+    if on_crease:
+        normals[features.vertices] = reference[features.vertices]
     return normals

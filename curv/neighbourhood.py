@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Iterator
 
+import weakref
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -24,7 +26,7 @@ from .jit import jit, jit_parallel, launch, prange, thread_slices, threads
 from .mesh import Mesh
 from .ranges import Range, ball_radii
 
-__all__ = ["ball_support", "new_scratch", "new_queues", "expansion_adjacency", "supports", "Neighbourhood",
+__all__ = ["ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
 QUEUE_START = 0
@@ -46,8 +48,9 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     x, y, z : (n,) float64
         Vertex coordinates.
     stamp : (n,) int64
-        The calling thread's visited marks: ``stamp[q] == p`` once q was seen from p. Never reset:
-        a new centre has a new mark. Take the thread's row of the stamps once, outside the loop
+        The calling thread's visited marks: ``stamp[q] == p + 1`` once q was seen from p (0: never
+        seen, so that zeroed scratch costs no work, :func:`new_scratch`). Never reset: a new centre
+        has a new mark. Take the thread's row of the stamps once, outside the loop
         over vertices: slicing ``stamps[t]`` anew for every vertex made a fit kernel 8x slower.
     queue : (n,) int64
         The calling thread's queue, a slot per vertex (its row of :func:`new_queues`): a support
@@ -70,8 +73,9 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     if queue.size < stamp.size:
         queue = np.empty(stamp.size, np.int64)
     px, py, pz = x[p], y[p], z[p]
+    mark = p + 1
     queue[0] = p
-    stamp[p] = p
+    stamp[p] = mark
     head = 0
     count = 1
     while head < count:
@@ -79,10 +83,10 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
         head += 1
         for j in range(indptr[v], indptr[v + 1]):
             q = indices[j]
-            if stamp[q] == p:
+            if stamp[q] == mark:
                 continue
             # a vertex outside the ball stays outside: mark it seen either way
-            stamp[q] = p
+            stamp[q] = mark
             dx = x[q] - px
             dy = y[q] - py
             dz = z[q] - pz
@@ -93,8 +97,12 @@ def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
 
 
 def new_scratch(n_vertices: int, parts: int) -> np.ndarray:
-    """(parts, n) int64 visited stamps for :func:`ball_support`, one row per thread slice."""
-    return np.full((parts, n_vertices), -1, np.int64)
+    """(parts, n) int64 visited stamps for :func:`ball_support`, one row per thread slice.
+
+    Zeroed (no vertex seen): the pages come zeroed from the system, so a search over a small region
+    touches only the pages it reaches.
+    """
+    return np.zeros((parts, n_vertices), np.int64)
 
 
 def new_queues(n_vertices: int, parts: int) -> np.ndarray:
@@ -105,23 +113,76 @@ def new_queues(n_vertices: int, parts: int) -> np.ndarray:
     return np.empty((parts, n_vertices), np.int64)
 
 
-def expansion_adjacency(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The edges a support search expands along, as CSR ``(indptr (n+1,), indices (a,))`` int64.
 
-    The mesh adjacency with the rows of non-manifold vertices emptied: a support may reach such a
-    vertex but must not continue through it onto the other sheet.
+    The mesh adjacency with the rows of non-manifold vertices (and of ``blocked`` ones) emptied: a
+    support may reach such a vertex but must not continue through it onto another sheet, or across
+    a crease (:mod:`curv.features` passes the feature vertices as ``blocked``).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    blocked : (n,) bool, optional
+        More vertices not to expand through.
+
+    Notes
+    -----
+    The plain form (no ``blocked``) is cached with the mesh, so that an estimate over a small
+    region does no O(n) work to build it again.
     """
+    if blocked is None or not blocked.any():
+        return cached_with_mesh(mesh, "expansion", lambda: _expansion(mesh, mesh.nonmanifold_vertices))
+    return _expansion(mesh, mesh.nonmanifold_vertices | blocked)
+
+
+def _expansion(mesh: Mesh, bad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     adjacency = mesh.adjacency
     indptr = adjacency.indptr.astype(np.int64)
     indices = adjacency.indices.astype(np.int64)
-    bad = mesh.nonmanifold_vertices
     if bad.any():
         keep = np.repeat(~bad, np.diff(indptr))
         counts = np.where(bad, 0, np.diff(indptr))
         indptr = np.zeros(mesh.n_vertices + 1, np.int64)
         np.cumsum(counts, out=indptr[1:])
         indices = indices[keep]
+    for arr in (indptr, indices):
+        arr.setflags(write=False)
     return indptr, indices
+
+
+def all_centres(n_vertices: int, centres: np.ndarray | None) -> np.ndarray:
+    """(c,) int64 centre vertices of a kernel run: ``centres``, or every vertex when None."""
+    if centres is None:
+        return np.arange(n_vertices, dtype=np.int64)
+    return np.ascontiguousarray(centres, dtype=np.int64)
+
+
+def blocked_vertices(features) -> np.ndarray | None:
+    """(n,) bool vertices a support search must not expand through for a :class:`curv.features.FeatureSet`."""
+    return None if features is None or not features.any else features.vertices
+
+
+def coordinate_columns(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The vertex coordinates as three contiguous (n,) float64 columns (cached with the mesh, read-only)."""
+    def build():
+        columns = tuple(np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+        for arr in columns:
+            arr.setflags(write=False)
+        return columns
+
+    return cached_with_mesh(mesh, "columns", build)
+
+
+_CACHE: "weakref.WeakKeyDictionary[Mesh, dict]" = weakref.WeakKeyDictionary()
+
+
+def cached_with_mesh(mesh: Mesh, key: str, build):
+    """``build()`` once per mesh and ``key`` (the mesh is immutable; the entry goes with it)."""
+    entry = _CACHE.setdefault(mesh, {})
+    if key not in entry:
+        entry[key] = build()
+    return entry[key]
 
 
 @jit_parallel
@@ -180,7 +241,7 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None
     out_ptr = np.zeros(centres.size + 1, np.int64)
     np.cumsum(counts, out=out_ptr[1:])
     out = np.empty(out_ptr[-1], np.int64)
-    stamps.fill(-1)
+    stamps.fill(0)
     launch(_support_fill, centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, out_ptr, out)
     return out_ptr, out
 

@@ -16,7 +16,7 @@ from .jit import jit, jit_parallel, launch, prange
 from .mesh import Mesh
 
 __all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "unusable_normal_vertices", "max_normal",
-           "max_weight", "unit", "KERNELS"]
+           "max_weight", "unit", "KERNELS", "cached_max_normals"]
 
 
 class NormalWeighting(str, enum.Enum):
@@ -154,3 +154,15 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
     launch(_vertex_normals, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev,
            mesh.corner_face, mesh.vertices, code, face_weight, out)
     return out
+
+
+def cached_max_normals(mesh: Mesh) -> np.ndarray:
+    """(n, 3) Max-weighted :func:`vertex_normals` of ``mesh``, computed once per mesh (read-only)."""
+    from .neighbourhood import cached_with_mesh
+
+    def build():
+        out = vertex_normals(mesh)
+        out.setflags(write=False)
+        return out
+
+    return cached_with_mesh(mesh, "max_normals", build)

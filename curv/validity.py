@@ -28,7 +28,11 @@ class Reason(enum.IntEnum):
     NONMANIFOLD = 5
     """On a non-manifold edge or vertex, for an estimator that needs a disc-like 1-ring."""
     NOT_COMPUTED = 6
-    """The estimate was not computed here (e.g. the values were smoothed from invalid neighbours)."""
+    """The estimate was not computed here (e.g. the values were smoothed from invalid neighbours,
+    or the vertex lies outside the region asked for with ``vertices=``)."""
+    FEATURE = 7
+    """On a feature edge (a crease sharper than the ``features`` angle) or a corner of them: the
+    smooth curvature is undefined there (:mod:`curv.features`)."""
 
 
 def describe_reasons(reason: np.ndarray) -> dict[str, int]:

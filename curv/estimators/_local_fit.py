@@ -19,7 +19,7 @@ import numpy as np
 
 from ..jit import iter_chunks, jit, launch, threads
 from ..mesh import Mesh
-from ..neighbourhood import expansion_adjacency, new_queues, new_scratch
+from ..neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
 from ..result import Principal
 from ..validity import Reason
 
@@ -228,9 +228,9 @@ def mark_degenerate(p, k1, k2, d1, d2, reason):
     reason[p] = DEGENERATE
 
 
-def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None
-            ) -> Generator[float, None, Principal]:
-    """Run a fit kernel over all vertices, a chunk of vertices per call, and assemble the result.
+def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None,
+            centres: np.ndarray | None = None, features=None) -> Generator[float, None, Principal]:
+    """Run a fit kernel over all (or some) vertices, a chunk of them per call, and assemble the result.
 
     Parameters
     ----------
@@ -240,11 +240,15 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     radii : (n,) float64
         Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
     kernel : numba dispatcher
-        ``kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2,
-        reason)`` estimates the vertices ``lo .. hi-1``, splitting them into ``stamps.shape[0]``
-        slices, each with its own row of the stamps and queues.
+        ``kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2,
+        d1, d2, reason)`` estimates the vertices ``centres[lo:hi]``, splitting them into
+        ``stamps.shape[0]`` slices, each with its own row of the stamps and queues.
     chunk : int, optional
         Vertices per call (default adaptive).
+    centres : (c,) int64, optional
+        The vertices to estimate (default all); the other rows of the outputs are left unset.
+    features : curv.features.FeatureSet, optional
+        The search does not expand through feature vertices.
 
     Yields
     ------
@@ -256,18 +260,20 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     Principal
     """
     n = mesh.n_vertices
-    adj_ptr, adj = expansion_adjacency(mesh)
-    x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+    centres = all_centres(n, centres)
+    adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features))
+    x, y, z = coordinate_columns(mesh)
     nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
     radius = np.ascontiguousarray(radii, dtype=np.float64)
-    stamps = new_scratch(n, threads())
+    stamps = new_scratch(n, max(1, min(threads(), centres.size)))
     queues = new_queues(n, stamps.shape[0])
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
 
     def run(lo: int, hi: int) -> None:
-        launch(kernel, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason)
+        launch(kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
+               k1, k2, d1, d2, reason)
 
-    yield from iter_chunks(n, run, chunk=chunk)
+    yield from iter_chunks(centres.size, run, chunk=chunk)
     return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason)

@@ -37,7 +37,8 @@ import numpy as np
 
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
-from ..neighbourhood import QUEUE_START, ball_support, expansion_adjacency, new_scratch
+from ..neighbourhood import (QUEUE_START, all_centres, ball_support, blocked_vertices, coordinate_columns,
+                             expansion_adjacency, new_scratch)
 from ..validity import Reason
 from ._small_linalg import sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
@@ -366,8 +367,8 @@ def _csr(matrix) -> tuple[np.ndarray, np.ndarray]:
 
 # ---------------------------------------------------------------------------- the kernel
 @jit_parallel
-def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
-               vf_ptr, vf_idx, tri, frames, face_area, flags, normals,
+def _csm_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
+               vf_ptr, vf_idx, tri, frames, face_area, flags, other_side, normals,
                vstamps, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
@@ -376,7 +377,9 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
         tensor = np.empty((3, 3))
         res = np.empty(8)
         vstamp, estamp, fstamp = vstamps[t], estamps[t], fstamps[t]
-        for p in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
+        for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
+            p = centres[k]
+            mark = p + 1  # the stamps start zeroed
             r2 = radius2[p]
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
@@ -387,11 +390,15 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
             for i in range(count):
                 v = queue[i]
                 hit |= flags[v]
+                if other_side[v]:
+                    # a crease vertex: its edges and faces are reached from the centre's side, if
+                    # they are on it; the crease's own edges are left out
+                    continue
                 for j in range(ve_ptr[v], ve_ptr[v + 1]):
                     e = ve_idx[j]
-                    if estamp[e] == p:
+                    if estamp[e] == mark:
                         continue
-                    estamp[e] = p
+                    estamp[e] = mark
                     s = beta_scale[e]
                     if s == 0.0:
                         continue
@@ -411,9 +418,9 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
                     t22 += w * dz * dz
                 for j in range(vf_ptr[v], vf_ptr[v + 1]):
                     f = vf_idx[j]
-                    if fstamp[f] == p:
+                    if fstamp[f] == mark:
                         continue
-                    fstamp[f] = p
+                    fstamp[f] = mark
                     if face_area[f] == 0.0:
                         continue  # degenerate: flagged at its vertices
                     c0 = tri[f, 0]
@@ -437,7 +444,8 @@ def _csm_chunk(lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges,
             reason[p] = support_reason(singular, hit, normal_ok)
 
 
-def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):
+def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
+             centres: np.ndarray | None = None, features=None):
     """Normal-cycle tensor over the ball of radius ``radii[p]`` around every vertex p.
 
     Parameters
@@ -451,6 +459,11 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         Ball radius of every vertex (:func:`curv.ranges.ball_radii` with ``uses_normals=False``).
     chunk : int, optional
         Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
+    centres : (c,) int64, optional
+        The vertices to estimate (default all).
+    features : curv.features.FeatureSet, optional
+        The ball stops at creases: edges and faces come from the centre's side only, and the
+        feature edges' dihedral terms are left out.
 
     Yields
     ------
@@ -465,7 +478,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     """
     tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)  # MeshError on polygons
     n = mesh.n_vertices
-    x, y, z = _columns(mesh)
+    centres = all_centres(n, centres)
+    x, y, z = coordinate_columns(mesh)
     # the mesh's connectivity may not be built yet: one piece per step, so that cancel stays prompt
     for name in ("degenerate_faces", "face_normals", "edges", "edge_faces", "adjacency", "vertex_edges", "vertex_faces",
                  "border_vertices", "nonmanifold_vertices"):
@@ -477,24 +491,26 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     del face_normal
     flags = support_flags(mesh)
     yield 0.0
-    indptr, indices = expansion_adjacency(mesh)
+    blocked = blocked_vertices(features)
+    indptr, indices = expansion_adjacency(mesh, blocked)
+    other_side = np.zeros(n, np.bool_) if blocked is None else blocked
     ve_ptr, ve_idx = _csr(mesh.vertex_edges)
     vf_ptr, vf_idx = _csr(mesh.vertex_faces)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
     normals = np.ascontiguousarray(normals, dtype=np.float64)
     edges = np.ascontiguousarray(mesh.edges, dtype=np.int64)
-    parts = threads()
+    parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
-    estamps = np.full((parts, edges.shape[0]), -1, np.int32)  # vertex ids fit; half the cache lines
-    fstamps = np.full((parts, tri.shape[0]), -1, np.int32)
+    estamps = np.zeros((parts, edges.shape[0]), np.int32)  # vertex ids fit; half the cache lines
+    fstamps = np.zeros((parts, tri.shape[0]), np.int32)
     out = empty_principal(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_csm_chunk, lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
-               vf_ptr, vf_idx, tri, frames, face_area, flags, normals, vstamps, estamps, fstamps,
+        launch(_csm_chunk, centres, lo, hi, radius2, indptr, indices, x, y, z, ve_ptr, ve_idx, edges, beta_scale,
+               vf_ptr, vf_idx, tri, frames, face_area, flags, other_side, normals, vstamps, estamps, fstamps,
                out.k1, out.k2, out.d1, out.d2, out.reason)
 
-    yield from iter_chunks(n, run, chunk=chunk)
+    yield from iter_chunks(centres.size, run, chunk=chunk)
     return out
 
 

@@ -158,31 +158,33 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, ata,
 
 
 @jit_parallel
-def _nc_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
-        for p in range(start, stop):
+        for i in range(start, stop):
+            p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
 
 
 @jit_parallel
-def _qs_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
-        for p in range(start, stop):
+        for i in range(start, stop):
+            p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
 
 
 @jit_parallel
-def _an_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -190,25 +192,32 @@ def _an_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)
         start, stop = slice_bounds(lo, hi, t, parts)
-        for p in range(start, stop):
+        for i in range(start, stop):
+            p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
                    ata, atb, row, sol)
 
 
-def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):
+def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
+            centres: np.ndarray | None = None, features=None):
     """Normal-curvature least squares over each vertex's support (3 unknowns, 1 equation per neighbour)."""
-    return (yield from run_fit(mesh, normals, radii, _nc_kernel, chunk=chunk))
+    return (yield from run_fit(mesh, normals, radii, _nc_kernel, chunk=chunk, centres=centres,
+                                 features=features))
 
 
-def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):
+def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
+            centres: np.ndarray | None = None, features=None):
     """Quadratic height fit over each vertex's support (3 unknowns, 1 equation per neighbour)."""
-    return (yield from run_fit(mesh, normals, radii, _qs_kernel, chunk=chunk))
+    return (yield from run_fit(mesh, normals, radii, _qs_kernel, chunk=chunk, centres=centres,
+                                 features=features))
 
 
-def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):
+def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
+            centres: np.ndarray | None = None, features=None):
     """Adjacent-normal cubic fit over each vertex's support (7 unknowns, 3 equations per neighbour)."""
-    return (yield from run_fit(mesh, normals, radii, _an_kernel, chunk=chunk))
+    return (yield from run_fit(mesh, normals, radii, _an_kernel, chunk=chunk, centres=centres,
+                                 features=features))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"

@@ -48,7 +48,9 @@ import numpy as np
 
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
-from ..neighbourhood import QUEUE_START, ball_support, expansion_adjacency, new_scratch
+from ..features import sector_corner_normals
+from ..neighbourhood import (QUEUE_START, all_centres, ball_support, blocked_vertices, coordinate_columns,
+                             expansion_adjacency, new_scratch)
 from ..validity import Reason
 from ._local_fit import store_principal, tangent_frame
 from .csm import DEGENERATE_BIT, face_frames, face_geometry, face_in_ball_area, support_flags, support_reason
@@ -64,15 +66,16 @@ MEASURES = 9
 
 
 @jit_parallel
-def _face_measures(tri, x, y, z, normals, degenerate, out):
+def _face_measures(tri, x, y, z, corner_normals, degenerate, out):
     for f in prange(tri.shape[0]):
         i, j, k = tri[f, 0], tri[f, 1], tri[f, 2]
+        ci, cj, ck = 3 * f, 3 * f + 1, 3 * f + 2  # the corners of triangle f
         # edges e = x_j - x_i, g = x_k - x_i and the normal differences du = u_j - u_i, dv = u_k - u_i
         ex, ey, ez = x[j] - x[i], y[j] - y[i], z[j] - z[i]
         gx, gy, gz = x[k] - x[i], y[k] - y[i], z[k] - z[i]
-        uix, uiy, uiz = normals[i, 0], normals[i, 1], normals[i, 2]
-        ujx, ujy, ujz = normals[j, 0], normals[j, 1], normals[j, 2]
-        ukx, uky, ukz = normals[k, 0], normals[k, 1], normals[k, 2]
+        uix, uiy, uiz = corner_normals[ci, 0], corner_normals[ci, 1], corner_normals[ci, 2]
+        ujx, ujy, ujz = corner_normals[cj, 0], corner_normals[cj, 1], corner_normals[cj, 2]
+        ukx, uky, ukz = corner_normals[ck, 0], corner_normals[ck, 1], corner_normals[ck, 2]
         dux, duy, duz = ujx - uix, ujy - uiy, ujz - uiz
         dvx, dvy, dvz = ukx - uix, uky - uiy, ukz - uiz
         bx = (uix + ujx + ukx) / 3.0  # ū
@@ -104,7 +107,7 @@ def _face_measures(tri, x, y, z, normals, degenerate, out):
             out[f, 0] = math.nan  # a degenerate face makes every centre touching it DEGENERATE
 
 
-def face_measures(mesh: Mesh, normals: np.ndarray) -> np.ndarray:
+def face_measures(mesh: Mesh, normals: np.ndarray, features=None) -> np.ndarray:
     """The corrected curvature measures of every triangle with the vertex normals interpolated.
 
     Parameters
@@ -113,6 +116,9 @@ def face_measures(mesh: Mesh, normals: np.ndarray) -> np.ndarray:
         Triangle mesh.
     normals : (n, 3) float64
         Unit vertex normals (NaN rows allowed: their triangles get NaN measures).
+    features : curv.features.FeatureSet, optional
+        At a crease each corner interpolates the normal of its own sector
+        (:func:`curv.features.sector_corner_normals`).
 
     Returns
     -------
@@ -124,8 +130,8 @@ def face_measures(mesh: Mesh, normals: np.ndarray) -> np.ndarray:
     tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
     x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
     out = np.empty((tri.shape[0], MEASURES))
-    launch(_face_measures, tri, x, y, z, np.ascontiguousarray(normals, dtype=np.float64),
-           mesh.degenerate_faces, out)
+    corner_normals = sector_corner_normals(mesh, np.ascontiguousarray(normals, dtype=np.float64), features)
+    launch(_face_measures, tri, x, y, z, corner_normals, mesh.degenerate_faces, out)
     return out
 
 
@@ -138,15 +144,17 @@ def _row_is_finite(a, r):
 
 
 @jit_parallel
-def _icc_chunk(lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames, face_area,
-               measures, flags, normals, from_measures, vstamps, fstamps, k1, k2, d1, d2, mean, gaussian,
-               reason):
+def _icc_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames, face_area,
+               measures, flags, other_side, normals, from_measures, vstamps, fstamps, k1, k2, d1, d2, mean,
+               gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
         queue = np.empty(QUEUE_START, np.int64)
         vstamp, fstamp = vstamps[t], fstamps[t]
         total = np.empty((1, MEASURES))
-        for p in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
+        for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
+            p = centres[k]
+            mark = p + 1  # the stamps start zeroed
             r2 = radius2[p]
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
@@ -155,11 +163,13 @@ def _icc_chunk(lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, f
             for i in range(count):
                 v = queue[i]
                 hit |= flags[v]
+                if other_side[v]:
+                    continue  # a crease vertex: its faces on the centre's side are reached from that side
                 for j in range(vf_ptr[v], vf_ptr[v + 1]):
                     f = vf_idx[j]
-                    if fstamp[f] == p:
+                    if fstamp[f] == mark:
                         continue
-                    fstamp[f] = p
+                    fstamp[f] = mark
                     if not _row_is_finite(measures, f):
                         hit |= DEGENERATE_BIT
                         continue
@@ -207,45 +217,48 @@ def _icc_chunk(lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, f
 
 
 def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: int | None,
-                   from_measures: bool = True):
+                   from_measures: bool = True, centres: np.ndarray | None = None, features=None):
     """Run the kernel over chunks of vertices; returns ``(Principal, mean (n,), gaussian (n,))``."""
     tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)  # MeshError on polygons
     n = mesh.n_vertices
+    centres = all_centres(n, centres)
     # the mesh's connectivity may not be built yet: one piece per step, so that cancel stays prompt
     for name in ("degenerate_faces", "face_normals", "adjacency", "vertex_faces", "border_vertices",
                  "nonmanifold_vertices"):
         getattr(mesh, name)
         yield 0.0
     normals = np.ascontiguousarray(normals, dtype=np.float64)
-    measures = face_measures(mesh, normals)
+    measures = face_measures(mesh, normals, features)
     face_normal, face_area = face_geometry(mesh)
     frames = face_frames(mesh, face_normal)
     del face_normal
     flags = support_flags(mesh)
     yield 0.0
-    x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
-    indptr, indices = expansion_adjacency(mesh)
+    x, y, z = coordinate_columns(mesh)
+    blocked = blocked_vertices(features)
+    indptr, indices = expansion_adjacency(mesh, blocked)
+    other_side = np.zeros(n, np.bool_) if blocked is None else blocked
     vf = mesh.vertex_faces
     vf_ptr, vf_idx = vf.indptr.astype(np.int64), vf.indices.astype(np.int64)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    parts = threads()
+    parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
-    fstamps = np.full((parts, tri.shape[0]), -1, np.int32)
+    fstamps = np.zeros((parts, tri.shape[0]), np.int32)
     out = empty_principal(n)
     mean = np.full(n, np.nan)
     gaussian = np.full(n, np.nan)
 
     def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames,
-               face_area, measures, flags, normals, from_measures, vstamps, fstamps,
+        launch(_icc_chunk, centres, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames,
+               face_area, measures, flags, other_side, normals, from_measures, vstamps, fstamps,
                out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
-    yield from iter_chunks(n, run, chunk=chunk)
+    yield from iter_chunks(centres.size, run, chunk=chunk)
     return out, mean, gaussian
 
 
 def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-             from_measures: bool = True):
+             from_measures: bool = True, centres: np.ndarray | None = None, features=None):
     """Principal curvatures from the interpolated corrected curvature measures in a ball per vertex.
 
     Parameters
@@ -260,6 +273,11 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
     from_measures : bool
         k1, k2 from H and K (mu1, mu2; default) or from the eigenvalues of M (as CGAL).
+    centres : (c,) int64, optional
+        The vertices to estimate (default all).
+    features : curv.features.FeatureSet, optional
+        The ball stops at creases (faces from the centre's side only, each corner at a crease with
+        its sector's normal).
 
     Yields
     ------
@@ -271,7 +289,7 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     Principal
         ``k1 >= k2``; reasons as in the module notes.
     """
-    principal, _, _ = yield from _iter_measures(mesh, normals, radii, chunk, from_measures)
+    principal, _, _ = yield from _iter_measures(mesh, normals, radii, chunk, from_measures, centres, features)
     return principal
 
 

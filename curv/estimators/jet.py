@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import EstimatorError
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
-from ..neighbourhood import ball_support, expansion_adjacency, new_scratch
+from ..neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch
 from ..validity import Reason
 from ._local_fit import slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
@@ -281,14 +281,15 @@ def _rotate(out, row, ax0, ax1, ax2, cosine):
 
 
 @jit_parallel
-def _jet_kernel(lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason):
+def _jet_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         stamp = stamps[t]
         queue = queues[t]
         m, vec, cov, frame, evec = _scratch()
         start, stop = slice_bounds(lo, hi, t, parts)
-        for p in range(start, stop):
+        for i in range(start, stop):
+            p = centres[i]
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
             code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
@@ -297,14 +298,15 @@ def _jet_kernel(lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stam
 
 
 @jit_parallel
-def _jet_normal_kernel(lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, out, reason):
+def _jet_normal_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, out, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         stamp = stamps[t]
         queue = queues[t]
         m, vec, cov, frame, evec = _scratch()
         start, stop = slice_bounds(lo, hi, t, parts)
-        for p in range(start, stop):
+        for i in range(start, stop):
+            p = centres[i]
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
             code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
@@ -319,12 +321,12 @@ def check_degree(degree) -> int:
     return int(degree)
 
 
-def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray):
-    indptr, indices = expansion_adjacency(mesh)
-    x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, features):
+    indptr, indices = expansion_adjacency(mesh, blocked_vertices(features))
+    x, y, z = coordinate_columns(mesh)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
     ref = np.ascontiguousarray(normals, dtype=np.float64)
-    parts = max(1, min(threads(), mesh.n_vertices))
+    parts = max(1, min(threads(), centres.size))
     # A queue as long as the mesh per thread: ball_support never has to grow it. Growing it inside
     # the prange body (reassigning the array there) returned garbage supports on large balls.
     queues = np.empty((parts, mesh.n_vertices), np.int64)
@@ -332,7 +334,7 @@ def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray):
 
 
 def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-             degree: int = DEFAULT_DEGREE):
+             degree: int = DEFAULT_DEGREE, centres: np.ndarray | None = None, features=None):
     """Osculating jet of degree ``degree`` over each vertex's ball support.
 
     Parameters
@@ -347,6 +349,10 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         Vertices per kernel call (default adaptive).
     degree : {2, 3, 4}
         Jet degree; the support must hold at least ``(d+1)(d+2)/2`` points, the centre included.
+    centres : (c,) int64, optional
+        The vertices to estimate (default all); other rows are left unset.
+    features : curv.features.FeatureSet, optional
+        The supports do not expand through feature vertices.
 
     Yields
     ------
@@ -361,17 +367,18 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     """
     degree = check_degree(degree)
     n = mesh.n_vertices
+    centres = all_centres(n, centres)
     out = empty_principal(n)
-    k = np.full((2, n), np.nan)
-    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii)
+    k = np.full((2, n), np.nan) if centres.size == n else np.empty((2, n))
+    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii, centres, features)
 
     def run(lo, hi):
-        launch(_jet_kernel, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues,
+        launch(_jet_kernel, centres, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues,
                k, out.d1, out.d2, out.reason)
 
-    yield from iter_chunks(n, run, chunk=chunk)
+    yield from iter_chunks(centres.size, run, chunk=chunk)
     out.k1, out.k2 = k[0], k[1]
-    bad = out.reason != _OK
+    bad = centres[out.reason[centres] != _OK]
     out.d1[bad] = np.nan
     out.d2[bad] = np.nan
     out.k1[bad] = np.nan
@@ -380,10 +387,11 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 
 def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree: int = DEFAULT_DEGREE,
-                chunk: int | None = None):
+                chunk: int | None = None, features=None):
     """Unit normals of the jets fitted over each vertex's ball support, a generator.
 
-    Parameters as in :func:`iter_jet` (``reference`` orients each fit).
+    Parameters as in :func:`iter_jet` (``reference`` orients each fit; with ``features`` the fits
+    do not reach across a crease).
 
     Returns
     -------
@@ -395,10 +403,11 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
     n = mesh.n_vertices
     out = np.full((n, 3), np.nan)
     reason = np.zeros(n, np.uint8)
-    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, reference, radii)
+    centres = all_centres(n, None)
+    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, reference, radii, centres, features)
 
     def run(lo, hi):
-        launch(_jet_normal_kernel, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
+        launch(_jet_normal_kernel, centres, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
 
     yield from iter_chunks(n, run, chunk=chunk)
     out[reason != _OK] = np.nan

@@ -27,6 +27,7 @@ import numpy as np
 from .. import connectivity
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
+from ..neighbourhood import all_centres
 from ..normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
 from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
 from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, turn_by_corner
@@ -42,13 +43,14 @@ TINY2 = MIN_TANGENT_LENGTH**2
 
 
 @jit_parallel
-def _meyer(lo, hi, parts, width, indptr, corners, indices, corner_next, corner_prev, corner_face, x,
+def _meyer(centres, lo, hi, parts, width, indptr, corners, indices, corner_next, corner_prev, corner_face, x,
            degenerate_faces, border, nonmanifold, unusable, own_normals, normals, k1, k2, d1, d2, reason):
     for t in prange(parts):
         # the leaving edges ab of the current vertex's corners, for the direction fit
         edge_x, edge_y, edge_z = np.empty(width), np.empty(width), np.empty(width)
         start, stop = lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
-        for p in range(start, stop):
+        for j in range(start, stop):
+            p = centres[j]
             c_lo, c_hi = indptr[p], indptr[p + 1]
             a_mixed = 0.0
             turn_re, turn_im, turns = 1.0, 0.0, 0  # sum of the corner angles theta (turn_by_corner)
@@ -132,7 +134,8 @@ def _meyer(lo, hi, parts, width, indptr, corners, indices, corner_next, corner_p
                                     touches_degenerate or not finite, nonmanifold[p])
 
 
-def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, chunk: int | None = None):
+def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, chunk: int | None = None,
+               centres: np.ndarray | None = None, features=None):
     """Meyer et al. operators on the closed 1-ring of every vertex (a fixed range: ``radii`` is None).
 
     One kernel call per chunk of vertices: every vertex sums, over its corners, the cotangent terms,
@@ -164,13 +167,14 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
     Principal
     """
     n = mesh.n_vertices
+    centres = all_centres(n, centres)
     out = empty_principal(n)
     if not mesh.is_triangular:
         mesh.triangles  # raises the MeshError that names the polygon sizes
     indptr, corners = mesh.vertex_corners
     own_normals = normals is None
     if own_normals:
-        normals = np.empty((n, 3))
+        normals = np.empty((n, 3)) if centres.size == n else np.full((n, 3), np.nan)
         unusable = unusable_normal_vertices(mesh)
     else:
         normals = np.ascontiguousarray(normals, dtype=np.float64)
@@ -181,9 +185,9 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
             own_normals, normals, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
-        launch(_meyer, lo, hi, max(1, min(threads(), hi - lo)), *args)
+        launch(_meyer, centres, lo, hi, max(1, min(threads(), hi - lo)), *args)
 
-    yield from iter_chunks(n, run, chunk=chunk)
+    yield from iter_chunks(centres.size, run, chunk=chunk)
     if own_normals:
         out.normals = normals
     return out

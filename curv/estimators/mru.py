@@ -55,20 +55,23 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
 
 
 @jit_parallel
-def _mru_kernel(lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
-        for p in range(start, stop):
+        for i in range(start, stop):
+            p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
 
 
-def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None):
+def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
+            centres: np.ndarray | None = None, features=None):
     """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk)."""
-    return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk))
+    return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk, centres=centres,
+                                 features=features))
 
 
 register(EstimatorSpec(

@@ -19,7 +19,9 @@ import numpy as np
 
 from .. import connectivity
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange
+from ..features import sector_corner_normals
 from ..mesh import Mesh
+from ..neighbourhood import all_centres
 from ._local_fit import solve_sym3, store_principal, tangent_frame
 from ._triangle_corners import corner_triangle, ring_flag, ring_reason
 from .registry import EstimatorSpec, empty_principal, register
@@ -31,9 +33,10 @@ MIN_ROTATION_COS = -1.0 + 1e-9
 
 
 @jit_parallel
-def _ru(lo, hi, indptr, corners, indices, corner_next, corner_prev, corner_face, x, degenerate_faces, border,
-        nonmanifold, normals, k1, k2, d1, d2, reason):
-    for p in prange(lo, hi):
+def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, corner_face, x, degenerate_faces,
+        border, nonmanifold, normals, corner_normals, k1, k2, d1, d2, reason):
+    for j in prange(lo, hi):
+        p = centres[j]
         c_lo, c_hi = indptr[p], indptr[p + 1]
         nax, nay, naz = normals[p, 0], normals[p, 1], normals[p, 2]  # N_p
         ux, uy, uz, vx, vy, vz = tangent_frame(nax, nay, naz)  # (U_p, V_p)
@@ -44,8 +47,10 @@ def _ru(lo, hi, indptr, corners, indices, corner_next, corner_prev, corner_face,
             b, q = indices[corner_next[c]], indices[corner_prev[c]]
             degenerate = degenerate_faces[corner_face[c]]
             touches_degenerate |= degenerate
-            nbx, nby, nbz = normals[b, 0], normals[b, 1], normals[b, 2]
-            ncx, ncy, ncz = normals[q, 0], normals[q, 1], normals[q, 2]
+            # the neighbours' normals as this face sees them (their sector's at a crease)
+            cb, cq = corner_next[c], corner_prev[c]
+            nbx, nby, nbz = corner_normals[cb, 0], corner_normals[cb, 1], corner_normals[cb, 2]
+            ncx, ncy, ncz = corner_normals[cq, 0], corner_normals[cq, 1], corner_normals[cq, 2]
             (abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, _, twice_area, _, _, _,
              area) = corner_triangle(x, p, b, q, degenerate)
             if (degenerate or twice_area == 0.0 or ab2 == 0.0
@@ -141,7 +146,8 @@ def _rotated_coords(bx, by, bz, ax, ay, az, cos, inv, ufx, ufy, ufz, vfx, vfy, v
     return rx * ufx + ry * ufy + rz * ufz, rx * vfx + ry * vfy + rz * vfz
 
 
-def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int | None = None):
+def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int | None = None,
+            centres: np.ndarray | None = None, features=None):
     """Rusinkiewicz's estimator on the 1-ring with its normals (range R2; ``radii`` is None).
 
     One kernel call per chunk of vertices: every corner solves its face's tensor in a frame of its
@@ -159,6 +165,11 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
         Unused (the estimator has no range support).
     chunk : int, optional
         Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
+    centres : (c,) int64, optional
+        The vertices to estimate (default all).
+    features : curv.features.FeatureSet, optional
+        A neighbour on a crease enters with the normal of the centre's side of it
+        (:func:`curv.features.sector_corner_normals`).
 
     Yields
     ------
@@ -170,18 +181,20 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
     Principal
     """
     n = mesh.n_vertices
+    centres = all_centres(n, centres)
     out = empty_principal(n)
     if not mesh.is_triangular:
         mesh.triangles  # raises the MeshError that names the polygon sizes
     indptr, corners = mesh.vertex_corners
     args = (indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
             mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
-            np.ascontiguousarray(normals, dtype=np.float64), out.k1, out.k2, out.d1, out.d2, out.reason)
+            np.ascontiguousarray(normals, dtype=np.float64), sector_corner_normals(mesh, normals, features),
+            out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
-        launch(_ru, lo, hi, *args)
+        launch(_ru, centres, lo, hi, *args)
 
-    yield from iter_chunks(n, run, chunk=chunk)
+    yield from iter_chunks(centres.size, run, chunk=chunk)
     return out
 
 
