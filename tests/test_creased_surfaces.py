@@ -7,6 +7,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import curv
+from curv.features import dihedral_angles
 from curv.surfaces import (
     SURFACES, Box, CappedCylinder, Cone, CreasedSurface, HemisphereOnDisc, Sphere, crease_distance_rings,
     make_surface,
@@ -29,13 +30,6 @@ def rowdot(a, b):
 def enclosed_volume(mesh):
     p = mesh.vertices[mesh.triangles]
     return rowdot(p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0
-
-
-def crease_dihedral_degrees(mesh):
-    """Angle between the normals of the two faces of each edge, in degrees."""
-    f = mesh.edge_faces
-    cos = rowdot(mesh.face_normals[f[:, 0]], mesh.face_normals[f[:, 1]])
-    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def crease_edges(sampled):
@@ -106,12 +100,12 @@ def test_crease_vertices_are_shared_by_both_sides():
 @pytest.mark.parametrize("n", DENSITIES)
 def test_box_and_capped_cylinder_creases_are_right_angles(n):
     box = Box().mesh(n)
-    angle = crease_dihedral_degrees(box.mesh)
+    angle = dihedral_angles(box.mesh)
     crease = crease_edges(box)
     np.testing.assert_allclose(angle[crease], 90.0, atol=1e-9)
     np.testing.assert_allclose(angle[~crease], 0.0, atol=1e-6)
     cyl = CappedCylinder().mesh(n)
-    angle = crease_dihedral_degrees(cyl.mesh)
+    angle = dihedral_angles(cyl.mesh)
     crease = crease_edges(cyl)
     assert crease.sum() == 2 * cyl.info["rim_vertices"]            # the two rim loops, nothing else
     np.testing.assert_allclose(angle[crease], 90.0, atol=3.0)
@@ -120,13 +114,13 @@ def test_box_and_capped_cylinder_creases_are_right_angles(n):
 
 def test_hemisphere_and_cone_rims():
     dome = HemisphereOnDisc().mesh(2562)
-    angle = crease_dihedral_degrees(dome.mesh)
+    angle = dihedral_angles(dome.mesh)
     crease = crease_edges(dome)
     np.testing.assert_allclose(angle[crease], 90.0, atol=6.0)
     assert angle[~crease].max() < 30.0
     cone = Cone(radius=1.0, height=1.5)
     s = cone.mesh(2562)
-    angle = crease_dihedral_degrees(s.mesh)
+    angle = dihedral_angles(s.mesh)
     rim = crease_edges(s) & (s.mesh.vertices[s.mesh.edges, 2] == 0).all(axis=1)
     np.testing.assert_allclose(angle[rim], 90.0 + np.degrees(cone.half_angle), atol=3.0)
 

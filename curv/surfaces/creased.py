@@ -39,7 +39,6 @@ ON_SURFACE_TOLERANCE = 1e-9
 """A point is on a part when its distance to it is below this fraction of the solid's size."""
 
 _EQUILATERAL_HEIGHT = np.sqrt(3.0) / 2.0
-_FEATURE = getattr(Reason, "FEATURE", Reason.NOT_COMPUTED)  # until Reason.FEATURE is merged
 
 
 # ---------------------------------------------------------------------------------- smooth parts
@@ -256,7 +255,7 @@ class CreasedSurface(Surface):
         valid = part >= 0
         return Curvature(
             k1=k1, k2=k2, d1=d1, d2=d2, normals=normals, valid=valid,
-            reason=np.where(valid, Reason.OK, _FEATURE).astype(np.uint8),
+            reason=np.where(valid, Reason.OK, Reason.FEATURE).astype(np.uint8),
             method="exact", range=None, info={"surface": self.describe()},
         )
 
