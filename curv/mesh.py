@@ -39,6 +39,10 @@ class MeshReport:
     isolated_vertices: int
     inconsistent_edges: int = 0
     duplicate_vertices: int = 0
+    sharp_edges: int = 0
+    """Interior edges with a dihedral angle above :data:`curv.features.SHARP_DEGREES`."""
+    suggested_features: float | None = None
+    """A ``features`` angle that separates the creases from the smooth edges, when many are sharp."""
 
     def lines(self) -> list[str]:
         """Human-readable lines, one fact each."""
@@ -59,6 +63,13 @@ class MeshReport:
         ]:
             if count:
                 out.append(f"{count} {what}")
+        if self.sharp_edges:
+            from .features import SHARP_DEGREES
+
+            line = f"{self.sharp_edges} sharp edges (dihedral angle above {SHARP_DEGREES:g} degrees)"
+            if self.suggested_features is not None:
+                line += f": creases? try features={self.suggested_features:g}"
+            out.append(line)
         return out
 
 
@@ -523,6 +534,7 @@ class Mesh:
             isolated_vertices=int(iso.sum()),
             inconsistent_edges=int(self.inconsistent_edges.sum()),
             duplicate_vertices=int(self.duplicate_vertices.sum()),
+            **_sharp_edge_facts(self),
         )
 
     # ------------------------------------------------------------------ derived meshes
@@ -552,6 +564,14 @@ class Mesh:
     def __repr__(self) -> str:
         kinds = "triangles" if self.is_triangular else "polygons"
         return f"Mesh({self.n_vertices} vertices, {self.n_faces} {kinds})"
+
+
+def _sharp_edge_facts(mesh: Mesh) -> dict:
+    """The report's sharp-edge count and, when there are many, the features angle to suggest."""
+    from .features import has_many_sharp_edges, sharp_edge_count, suggest_threshold
+
+    count = sharp_edge_count(mesh)
+    return {"sharp_edges": count, "suggested_features": suggest_threshold(mesh) if has_many_sharp_edges(mesh) else None}
 
 
 def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple[int, int]) -> sp.csr_matrix:

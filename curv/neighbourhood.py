@@ -209,8 +209,8 @@ def _support_fill(centres, radius2, indptr, indices, x, y, z, stamps, queues, st
                 out[start + j - 1] = queue[j]
 
 
-def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None
-             ) -> tuple[np.ndarray, np.ndarray]:
+def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, *,
+             blocked: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The supports of some vertices as CSR rows (for tests, the study's exclusion zone, small jobs).
 
     Parameters
@@ -220,6 +220,9 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None
         Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
     vertices : (c,) int, optional
         Centres; default all.
+    blocked : (n,) bool, optional
+        Vertices the search reaches but does not expand through (the feature vertices of
+        :mod:`curv.features`), as in :func:`expansion_adjacency`.
 
     Returns
     -------
@@ -230,8 +233,8 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None
     centres = np.arange(mesh.n_vertices, dtype=np.int64) if vertices is None else \
         np.ascontiguousarray(vertices, dtype=np.int64)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    indptr, indices = expansion_adjacency(mesh)
-    x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+    indptr, indices = expansion_adjacency(mesh, blocked)
+    x, y, z = coordinate_columns(mesh)
     parts = max(1, min(threads(), centres.size))
     stamps = new_scratch(mesh.n_vertices, parts)
     queues = new_queues(mesh.n_vertices, parts)
