@@ -11,10 +11,11 @@ each smooth part, against the mean over that part's interior (4 or more rings aw
 default support). With features the ring means must stay within ``2 x interior + FLOOR``; without,
 the mean over rings 1 and 2 must be at least ``10 x (interior + FLOOR)``.
 
-``FLOOR = 0.01``: flat parts are fitted exactly (interior error ~1e-15), and several estimators are
-exact on a cylinder or a sphere too, so a bare 2x would ask for bit-exact results next to the crease;
-1 % of the curvature scale is the accuracy the library's sphere and cylinder tests ask for. It does
-not decide the features-off side: there the ring errors are 1 to 15 times kappa, 100-1000 x the floor.
+``FLOOR = 0.01`` (1 % of kappa): flat parts are fitted exactly (interior error ~1e-15) and several
+estimators are exact on these cylinders and spheres too, so a bare 2x would demand bit-exact values
+next to a crease. 1 % of the curvature scale lies within the spread of the interior errors on the
+round parts at these densities (1e-15 to 0.05 of kappa), so it excuses no real loss of accuracy; and
+it does not decide the features-off side, where the ring errors are 1 to 15 kappa (100-1000 x it).
 
 Where an estimator truly misses a requirement it stays here as ``xfail(strict=True)`` with the
 measured numbers.
