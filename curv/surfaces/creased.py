@@ -156,6 +156,19 @@ class CreasedSurface(Surface):
     closed: ClassVar[bool] = True
     default_vertices: ClassVar[int] = 2562
 
+    def __init__(self, *values, **named):
+        """Parameters in the order of :attr:`params` (or by name), each a finite value > 0; defaults otherwise."""
+        names = [p.name for p in self.params]
+        if len(values) > len(names):
+            raise TypeError(f"{type(self).__name__} takes at most {len(names)} parameters ({', '.join(names)})")
+        unknown = sorted(set(named) - set(names))
+        if unknown:
+            raise TypeError(f"{type(self).__name__} has no parameter {', '.join(unknown)}")
+        given = {**dict(zip(names, values)), **named}
+        for p in self.params:
+            setattr(self, p.name, float(given.get(p.name, p.default)))
+        _positive(**self.parameters)
+
     @property
     @abstractmethod
     def parts(self) -> tuple[_Part, ...]:
@@ -177,7 +190,7 @@ class CreasedSurface(Surface):
         Parameters
         ----------
         points : (n, 3) array_like
-            Points on the surface.
+            Points of the solid's boundary.
 
         Returns
         -------
@@ -199,22 +212,9 @@ class CreasedSurface(Surface):
         return np.abs(distance) <= tol
 
     def part_of(self, points) -> np.ndarray:
-        """The smooth part each point lies on.
+        """(n,) int64: the index into :attr:`parts` of each point's part; -1 on a crease, a corner or an apex.
 
-        Parameters
-        ----------
-        points : (n, 3) array_like
-            Points on the surface.
-
-        Returns
-        -------
-        (n,) int64
-            Index into :attr:`parts`; -1 on a crease, a corner or an apex.
-
-        Raises
-        ------
-        ValueError
-            A point is not on the surface.
+        ``points`` and the ``ValueError`` as in :meth:`part_membership`.
         """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         on = self.part_membership(p)
@@ -317,10 +317,6 @@ class CappedCylinder(_RevolutionSolid):
         Param("height", 2.0, 0.1, 20.0, "length along z"),
     )
 
-    def __init__(self, radius=1.0, height=2.0):
-        self.radius, self.height = float(radius), float(height)
-        _positive(radius=self.radius, height=self.height)
-
     @property
     def parts(self):
         half = 0.5 * self.height
@@ -357,9 +353,6 @@ class HemisphereOnDisc(_RevolutionSolid):
     title = "Hemisphere on a disc"
     params = (Param("radius", 1.0, 0.1, 10.0, "radius"),)
 
-    def __init__(self, radius=1.0):
-        self.radius = float(radius)
-        _positive(radius=self.radius)
 
     @property
     def parts(self):
@@ -399,10 +392,6 @@ class Cone(_RevolutionSolid):
         Param("radius", 1.0, 0.1, 10.0, "radius of the base"),
         Param("height", 1.5, 0.1, 20.0, "height of the apex over the base"),
     )
-
-    def __init__(self, radius=1.0, height=1.5):
-        self.radius, self.height = float(radius), float(height)
-        _positive(radius=self.radius, height=self.height)
 
     @property
     def half_angle(self) -> float:
@@ -445,10 +434,6 @@ class Box(CreasedSurface):
         Param("size_y", 1.5, 0.1, 10.0, "length along y"),
         Param("size_z", 1.0, 0.1, 10.0, "length along z"),
     )
-
-    def __init__(self, size_x=2.0, size_y=1.5, size_z=1.0):
-        self.size_x, self.size_y, self.size_z = float(size_x), float(size_y), float(size_z)
-        _positive(size_x=self.size_x, size_y=self.size_y, size_z=self.size_z)
 
     @property
     def sizes(self) -> np.ndarray:
