@@ -10,7 +10,9 @@
 
 Monge patches (``quadratic``, ``ellipsoid_patch``, ``trigonometric``, ``saddle``) are sampled on the
 paper's hexagon (§5.1, :func:`hexagon_mesh`), normals up. ``sphere``, ``ellipsoid`` and ``torus`` are
-closed meshes with outward normals; ``cylinder`` is an open tube.
+closed meshes with outward normals; ``cylinder`` is an open tube. ``capped_cylinder``, ``box``,
+``hemisphere`` (on a disc) and ``cone`` are closed solids with sharp creases: exact curvature on their
+smooth parts, NaN with ``Reason.FEATURE`` on creases, corners and the apex (:mod:`.creased`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import numpy as np
 
 from .base import Param, SampledSurface, Surface, add_noise
 from .closed import Cylinder, Ellipsoid, ImplicitSurface, Sphere, Torus
+from .creased import Box, CappedCylinder, Cone, CreasedSurface, HemisphereOnDisc, crease_distance_rings
 from .hexagon import (
     PAPER_VERTEX_COUNTS, PlanarMesh, angle_irregularity, hexagon_grid, hexagon_mesh, hexagon_subdivisions,
     triangle_angles,
@@ -30,6 +33,7 @@ from .monge import EllipsoidPatch, MongePatch, QuadraticPatch, Saddle, Trigonome
 __all__ = [
     "Surface", "Param", "SampledSurface", "ImplicitSurface", "MongePatch",
     "Sphere", "Cylinder", "Torus", "Ellipsoid", "Saddle", "QuadraticPatch", "EllipsoidPatch", "TrigonometricPatch",
+    "CreasedSurface", "CappedCylinder", "Box", "HemisphereOnDisc", "Cone", "crease_distance_rings",
     "SURFACES", "PAPER_SURFACES", "make_surface", "add_noise",
     "PlanarMesh", "PAPER_VERTEX_COUNTS", "hexagon_grid", "hexagon_mesh", "hexagon_subdivisions",
     "angle_irregularity", "triangle_angles",
@@ -37,7 +41,10 @@ __all__ = [
 
 SURFACES = MappingProxyType({
     cls.name: cls
-    for cls in (Sphere, Cylinder, Torus, Ellipsoid, Saddle, QuadraticPatch, EllipsoidPatch, TrigonometricPatch)
+    for cls in (
+        Sphere, Cylinder, Torus, Ellipsoid, Saddle, QuadraticPatch, EllipsoidPatch, TrigonometricPatch,
+        CappedCylinder, Box, HemisphereOnDisc, Cone,
+    )
 })
 """Registry name -> surface class. Each class has ``params`` (:class:`Param` with defaults and ranges),
 ``title``, ``closed`` and ``default_vertices``; calling it with no arguments gives the defaults."""
