@@ -199,10 +199,12 @@ class Controller(QObject):
             return
         self._forget(key)
         self.doc.set_result(key, result)
-        n_bad = int((~result.valid).sum())
+        computed = result.info.get("region", result.n)  # a region's result: the rest is NOT_COMPUTED, not invalid
+        n_bad = int((~result.valid).sum()) - (result.n - computed)
         secs = result.info.get("seconds")
         took = f" in {secs:.2f} s" if secs is not None else ""
-        self.message.emit(f"{key[0]} {key[1]}{took}; {count_text(n_bad, 'invalid vertex', 'invalid vertices')}")
+        of = "" if computed == result.n else f" of {computed} computed"
+        self.message.emit(f"{key[0]} {key[1]}{took}; {count_text(n_bad, 'invalid vertex', 'invalid vertices')}{of}")
         self._update_busy()
 
     def _estimate_failed(self, worker, gen, key, exc) -> None:

@@ -22,10 +22,11 @@ __all__ = ["Region", "ball_region", "index_region", "show_region", "shown_region
            "RestComposer", "REST_NOTE", "REST_COLOUR"]
 
 REST_NOTE = ("Outside the region the pane keeps the whole-mesh result of the same estimator, range and "
-             "feature angle when it has been computed; otherwise the rest is grey.")
+             "feature angle when it has been computed; otherwise the rest is mid grey.")
 
-REST_COLOUR = np.array([200, 200, 200, 255], dtype=np.uint8)
-"""RGBA of the vertices outside a region that have no whole-mesh result to show."""
+REST_COLOUR = np.array([150, 150, 150, 255], dtype=np.uint8)
+"""RGBA of the vertices outside a region that have no whole-mesh result to show: a mid grey, darker than
+the centre colour of the diverging maps and than the grey of a pane without results."""
 
 _serials = itertools.count(1)
 
