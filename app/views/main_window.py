@@ -21,7 +21,6 @@ from app.model import (
     Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, default_panes, export_payload, map_colours,
     pane_letter,
 )
-from app.model.features import feature_edge_pairs
 from app.model.region import REST_COLOUR, outside_region
 from app.packaged import resource, sample_names
 
@@ -391,7 +390,7 @@ class MainWindow(QMainWindow):
         if angle is None or doc.mesh is None:
             return None
         if angle not in self._feature_lines:
-            self._feature_lines[angle] = edge_lines(doc.mesh, feature_edge_pairs(doc.mesh, angle))
+            self._feature_lines[angle] = edge_lines(doc.mesh, doc.feature_masks.edge_pairs(doc.mesh, angle))
         return self._feature_lines[angle]
 
     def update_titles(self) -> None:
