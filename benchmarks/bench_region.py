@@ -23,7 +23,7 @@ from app.model.region import REST_COLOUR, ball_region, outside_region
 
 
 def _run(masks, mesh, **kwargs):
-    steps = estimate_with_masks(masks, mesh, "mru", range=2, **kwargs)
+    steps = estimate_with_masks(curv.iter_estimate, masks, mesh, "mru", range=2, **kwargs)
     while True:
         try:
             next(steps)

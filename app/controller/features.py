@@ -3,16 +3,16 @@ document's remembered feature-edge mask (computed in the worker the first time).
 
 from __future__ import annotations
 
-from curv.api import iter_estimate
-
 __all__ = ["estimate_with_masks"]
 
 
-def estimate_with_masks(masks, mesh, method: str, *, features=None, **kwargs):
-    """``yield from curv.iter_estimate(mesh, method, features=mask, **kwargs)``; returns its Curvature.
+def estimate_with_masks(iterate, masks, mesh, method: str, *, features=None, **kwargs):
+    """``yield from iterate(mesh, method, features=mask, **kwargs)``; returns its Curvature.
 
     Parameters
     ----------
+    iterate : callable
+        ``curv.iter_estimate`` (the controller passes the one it holds).
     masks : app.model.features.FeatureMasks
         Where the mask of ``features`` degrees is remembered (the same mask
         :func:`curv.features.feature_edges` gives, so the result equals ``features=angle``'s).
@@ -20,7 +20,7 @@ def estimate_with_masks(masks, mesh, method: str, *, features=None, **kwargs):
         The feature angle in degrees; ``info["features"]`` of the result names it.
     """
     if features is None:
-        return (yield from iter_estimate(mesh, method, **kwargs))
-    result = yield from iter_estimate(mesh, method, features=masks.mask(mesh, features), **kwargs)
+        return (yield from iterate(mesh, method, **kwargs))
+    result = yield from iterate(mesh, method, features=masks.mask(mesh, features), **kwargs)
     result.info["features"] = float(features)
     return result

@@ -176,7 +176,8 @@ class Controller(QObject):
             self.failed.emit(self.doc.failures[key])
             return
         box = []  # the worker, for the callbacks (they must exist before it does)
-        worker = create_worker(estimate_with_masks, self.doc.feature_masks, self.doc.mesh, pane.method, **kwargs,
+        worker = create_worker(estimate_with_masks, iter_estimate, self.doc.feature_masks, self.doc.mesh, pane.method,
+                               **kwargs,
                                _start_thread=False, _connect={
             "yielded": lambda f: self._estimate_progress(box[0], key, f),
             "returned": lambda res: self._estimate_done(box[0], gen, key, res),

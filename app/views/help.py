@@ -8,6 +8,8 @@ from curv import __version__, ranges
 from curv.estimators import ESTIMATORS
 from curv.quantities import QUANTITIES
 
+from app.model.region import REST_NOTE
+
 __all__ = ["about_text", "guide_text"]
 
 PAPER = "Multivariate analysis of curvature estimators"
@@ -52,5 +54,9 @@ def guide_text() -> str:
             "unless you pick another) into the active pane and computes it. Advice belongs to the mesh it was "
             "computed for: on another mesh it is marked stale until you advise again.</p>"
             "<h3>Quantities</h3><ul>" + quantities + "</ul>"
-            "<p>Magenta vertices are invalid (border-affected, degenerate, singular fit): their reason shows "
-            "in the picked-vertex readout.</p>")
+            "<p>Magenta vertices are invalid (border-affected, degenerate, singular fit, on a crease): their "
+            "reason shows in the picked-vertex readout.</p>"
+            "<h3>Creases and regions</h3><p><b>Feature angle</b> (under the range) makes edges sharper than "
+            "the angle creases for the active pane: supports stop there and vertices on them read 'on a crease "
+            "(feature edge)'. <b>Borders and features</b> draws them. The <b>Region</b> dock computes every "
+            "pane only around the picked vertex or in view; " + REST_NOTE[0].lower() + REST_NOTE[1:] + "</p>")

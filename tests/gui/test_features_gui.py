@@ -237,7 +237,7 @@ def test_the_remembered_feature_mask_gives_the_angle_s_result_and_is_computed_on
 
     mesh = curv.surfaces.SURFACES["box"]().mesh(n_vertices=1500).mesh
     masks = FeatureMasks()
-    steps = estimate_with_masks(masks, mesh, "qs", range=2, features=30.0)
+    steps = estimate_with_masks(curv.iter_estimate, masks, mesh, "qs", range=2, features=30.0)
     while True:
         try:
             next(steps)
