@@ -5,6 +5,7 @@ Examples
 curvlab part.ply
 curvlab --surface torus --method mru --range 3 --quantity gaussian
 curvlab --surface ellipsoid_patch --method mru --range 2 --compare qs:2 --difference --screenshot out.png
+curvlab --surface box --method mru --range 2 --compare mru:2:30 --screenshot features.png
 curvlab scan.ply --advise
 """
 
@@ -35,12 +36,16 @@ def build_parser() -> argparse.ArgumentParser:
                                       "registry's default estimator)")
     est.add_argument("--range", help="range k of Rk for pane A (2, R2, 2.5 or R2.5)")
     est.add_argument("--radius", type=float, help="fixed support radius of pane A in mesh units (instead of --range)")
-    est.add_argument("--compare", action="append", default=[], metavar="M:R", help="add a pane (up to 3)")
+    est.add_argument("--features", type=float, metavar="DEG",
+                     help="feature angle of pane A in degrees: edges sharper than this are creases (default off)")
+    est.add_argument("--compare", action="append", default=[], metavar="M:R[:DEG]",
+                     help="add a pane (up to 3), optionally with a feature angle, e.g. mru:2:30")
     est.add_argument("--difference", action="store_true", help="show the A - B difference pane")
     est.add_argument("--quantity", help=", ".join(_quantity_names()) + " (default: the last session's, else mean)")
     est.add_argument("--show", help="estimate, exact, error or e_rel (analytic sources; default: the last "
                                     "session's, else estimate)")
     est.add_argument("--directions", action="store_true", help="draw principal direction glyphs")
+    est.add_argument("--borders", action="store_true", help="draw border edges and the panes' feature edges")
     est.add_argument("--cmap", help="colour map for the shown field")
     est.add_argument("--limits", help="colour limits LO,HI (default: symmetric 2-98 %% percentiles)")
     est.add_argument("--advise", action="store_true",
@@ -73,27 +78,28 @@ def configure(window, args) -> object:
     from app.model import FileSource, Layer, LimitMode, Pane, Quantity, SurfaceSource, colormap_names
     from app.views.main_window import DEFAULT_SOURCE
 
-    explicit = args.method is not None or args.range is not None or args.radius is not None or args.compare
+    explicit = (args.method is not None or args.range is not None or args.radius is not None or args.compare
+                or args.features is not None)
     # a missing range is the estimator's default one (curv.ranges decides), a radius replaces it
-    panes = [(args.method or DEFAULT_ESTIMATOR, args.range)] + [
-        tuple(c.split(":", 1)) if ":" in c else (c, None) for c in args.compare]
+    panes = [(args.method or DEFAULT_ESTIMATOR, args.range, args.features)] + [
+        tuple((c.split(":", 2) + [None, None])[:3]) for c in args.compare]
     if len(panes) > 4:
         raise ValueError("at most 4 panes (--compare up to 3 times)")
     checked = []
-    for i, (method, k) in enumerate(panes):
+    for i, (method, k, features) in enumerate(panes):
         if method not in ESTIMATORS:
             raise ValueError(f"unknown estimator {method!r}; choose one of {', '.join(ESTIMATORS)}")
         radius = args.radius if i == 0 else None
         try:
-            pane = Pane.default(method) if k is None else Pane(method, k).validated()
-            checked.append(Pane(method, pane.range, radius).validated())
+            pane = Pane.default(method) if not k else Pane(method, k).validated()
+            checked.append(Pane(method, pane.range, radius, features if features not in (None, "") else None).validated())
         except EstimatorError as exc:
             raise ValueError(str(exc)) from None
     doc = window.doc
     if explicit or args.screenshot:  # otherwise the panes remembered from the last session stay
         doc.set_pane_count(len(checked))
         for i, pane in enumerate(checked):
-            doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
+            doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, features=pane.features)
     if args.difference or explicit or args.screenshot:
         doc.set_difference(args.difference)
     try:  # not given: the last session's (a snapshot starts from empty settings, so from the defaults)
@@ -102,8 +108,9 @@ def configure(window, args) -> object:
     except ValueError:
         raise ValueError(f"unknown quantity {args.quantity!r} or --show {args.show!r}; quantities: "
                          f"{', '.join(q.value for q in Quantity)}; show: {', '.join(x.value for x in Layer)}") from None
-    changes = dict(show_directions=args.directions) if quantity is None else dict(quantity=quantity,
-                                                                                  show_directions=args.directions)
+    changes = dict(show_directions=args.directions, show_borders=args.borders)
+    if quantity is not None:
+        changes["quantity"] = quantity
     if args.cmap:
         if args.cmap not in colormap_names():
             raise ValueError(f"unknown colour map {args.cmap!r}; choose one of {', '.join(colormap_names())}")

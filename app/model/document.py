@@ -8,11 +8,13 @@ import numpy as np
 from curv import ranges
 from curv.colors import diverges
 from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators
+from curv.features import check_angle
 
 from .advice import AdviceRecord
 from .colors import LimitMode, colormap, compute_limits, map_colours
 from .display import Display, Layer
 from .events import Event
+from .region import Region, RestComposer
 from .scalars import field_values
 
 __all__ = ["Pane", "Document", "MeshChange", "MAX_PANES", "pane_letter", "default_panes"]
@@ -37,11 +39,17 @@ class Pane:
         k of Rk (an int when whole, so ``Pane("mru", 2)`` and the label ``R2`` agree).
     radius : float or None
         Ball radius in mesh units; replaces Rk when given.
+    features : float or None
+        Feature angle in degrees (``curv.estimate(..., features=)``), None for no features.
+    region : Region or None
+        Estimate only at these vertices (``vertices=``), None for the whole mesh.
     """
 
     method: str
     range: float = 2
     radius: float | None = None
+    features: float | None = None
+    region: Region | None = None
 
     @classmethod
     def default(cls, method: str = DEFAULT_ESTIMATOR) -> "Pane":
@@ -54,25 +62,45 @@ class Pane:
         return ranges.Range(radius=self.radius).label if self.radius is not None else ranges.range_label(self.range)
 
     @property
+    def setting(self) -> str:
+        """``R2``, ``R2 features 30°``, ``R2 features 30° region 0.5 around vertex 12 (...)``: the
+        range and whatever else changes the result."""
+        text = self.label + ("" if self.features is None else f" features {self.features:g}°")
+        return text + ("" if self.region is None else f" {self.region.title}")
+
+    @property
     def key(self) -> tuple[str, str]:
-        """``(method, label)``: what results are cached by."""
-        return (self.method, self.label)
+        """``(method, setting)``: what results are cached by (the feature angle and region included)."""
+        return (self.method, self.setting)
+
+    @property
+    def whole(self) -> "Pane":
+        """This pane on the whole mesh (its region dropped)."""
+        return replace(self, region=None)
 
     @property
     def title(self) -> str:
-        """``mru R2``."""
-        return f"{self.method} {self.label}"
+        """``mru R2`` (``mru R2 features 30°`` ...)."""
+        return f"{self.method} {self.setting}"
 
     def estimate_kwargs(self) -> dict:
-        """Keyword arguments for ``curv.iter_estimate``: ``range=k`` or ``radius=r``."""
-        return {"radius": self.radius} if self.radius is not None else {"range": self.range}
+        """Keyword arguments for ``curv.iter_estimate``: ``range=k`` or ``radius=r``, and ``features=``,
+        ``vertices=`` when set."""
+        kwargs = {"radius": self.radius} if self.radius is not None else {"range": self.range}
+        if self.features is not None:
+            kwargs["features"] = self.features
+        if self.region is not None:
+            kwargs["vertices"] = self.region.vertices
+        return kwargs
 
     def validated(self) -> "Pane":
-        """This pane checked by :func:`curv.ranges.resolve` (``EstimatorError`` naming the allowed forms)."""
+        """This pane checked by :func:`curv.ranges.resolve` and :func:`curv.features.check_angle`
+        (``EstimatorError`` naming the allowed forms)."""
         spec = ESTIMATORS[self.method]
+        features = None if self.features is None else check_angle(self.features)
         if self.radius is not None:
-            return Pane(self.method, self.range, ranges.resolve(spec, radius=self.radius).radius)
-        return Pane(self.method, ranges.resolve(spec, range=self.range).value, None)
+            return replace(self, radius=ranges.resolve(spec, radius=self.radius).radius, features=features)
+        return replace(self, range=ranges.resolve(spec, range=self.range).value, radius=None, features=features)
 
 
 def default_panes() -> tuple[Pane, ...]:
@@ -148,6 +176,7 @@ class Document:
         self.mesh_serial = 0
         """Counts the meshes set so far: what an :class:`AdviceRecord` names its mesh by."""
         self.advice: AdviceRecord | None = None
+        self._rest = RestComposer()
         self._last_good: dict[int, Pane] = {}
         self.display = Display()
         self.mesh_changed = Event()
@@ -169,6 +198,8 @@ class Document:
         self.results.clear()
         self.failures.clear()
         self._last_good.clear()
+        self._rest.clear()
+        self.panes = [p.whole for p in self.panes]  # a region names the old mesh's vertices
         self.picked = None
         changes = {}
         if truth is None and self.display.layer is not Layer.ESTIMATE:
@@ -294,8 +325,13 @@ class Document:
         self.failures.pop(key, None)
 
     def result(self, i: int):
-        """Result of estimate pane ``i``, or None."""
-        return self.results.get(self.panes[i].key)
+        """Result of estimate pane ``i``, or None; a region's result lies over the whole-mesh one
+        (:func:`~app.model.region.over_rest`)."""
+        pane = self.panes[i]
+        res = self.results.get(pane.key)
+        if res is None or pane.region is None:
+            return res
+        return self._rest.get(pane.key, res, self.results.get(pane.whole.key), pane.region)
 
     def set_picked(self, index: int | None) -> None:
         if index is not None:

@@ -10,7 +10,7 @@ from curv.validity import Reason
 from .document import Document, pane_letter
 from .scalars import relative_error
 
-__all__ = ["readout_columns", "readout_rows", "fmt", "fmt_vec"]
+__all__ = ["readout_columns", "readout_rows", "fmt", "fmt_vec", "REASON_WORDS"]
 
 
 def fmt(x) -> str:
@@ -26,13 +26,27 @@ def fmt_vec(v, *, stacked: bool = False) -> str:
     return "\n".join(parts) if stacked else "(" + ", ".join(parts) + ")"
 
 
+REASON_WORDS = {
+    Reason.BORDER: "on or near a border",
+    Reason.TOO_FEW_NEIGHBOURS: "too few neighbours in range",
+    Reason.SINGULAR: "singular fit",
+    Reason.DEGENERATE: "degenerate surroundings",
+    Reason.NONMANIFOLD: "non-manifold",
+    Reason.NOT_COMPUTED: "not computed",
+    Reason.FEATURE: "on a crease (feature edge)",
+}
+"""What the readout says for each :class:`curv.Reason` of an invalid vertex."""
+
+
 def _reason(r, index) -> str:
     if r.valid[index]:
         return "valid"
     code = int(r.reason[index]) if r.reason is not None else 0
+    if code == Reason.NOT_COMPUTED and r.info.get("region", r.n) < r.n:
+        return "outside the region"
     try:
-        return Reason(code).name.lower().replace("_", " ")
-    except ValueError:
+        return REASON_WORDS[Reason(code)]
+    except (ValueError, KeyError):
         return f"invalid ({code})"
 
 

@@ -9,7 +9,7 @@ import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray
 
-__all__ = ["mesh_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample", "border_lines",
+__all__ = ["mesh_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample", "border_lines", "edge_lines",
            "Geometry"]
 
 
@@ -54,7 +54,11 @@ class Geometry(tuple):
 
 def border_lines(mesh) -> pv.PolyData:
     """The border edges of ``mesh`` (edges with one face) as line cells."""
-    edges = np.asarray(mesh.edges)[np.asarray(mesh.border_edges, bool)]
+    return edge_lines(mesh, np.asarray(mesh.edges)[np.asarray(mesh.border_edges, bool)])
+
+
+def edge_lines(mesh, edges: np.ndarray) -> pv.PolyData:
+    """``edges`` (k, 2) vertex pairs of ``mesh`` as line cells (an empty PolyData for none)."""
     if edges.size == 0:
         return pv.PolyData()
     lines = np.column_stack([np.full(len(edges), 2), edges]).ravel()

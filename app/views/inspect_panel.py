@@ -12,7 +12,7 @@ from curv.estimators import ESTIMATORS, refusal
 from PySide6.QtCore import QEvent, QObject, Qt, Signal
 from PySide6.QtGui import QDoubleValidator
 from PySide6.QtWidgets import (
-    QCheckBox, QComboBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
+    QCheckBox, QComboBox, QFormLayout, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
     QPushButton, QToolButton, QVBoxLayout, QWidget,
 )
 from superqt import QEnumComboBox, QLabeledDoubleRangeSlider
@@ -119,10 +119,11 @@ class InspectPanel(QWidget):
         self.directions.setToolTip("Principal directions: d1 (of k1) and d2 (of k2) as crosses; the pane header "
                                    "gives their colours")
         self.edges = QCheckBox("Edges")
-        self.borders = QCheckBox("Borders")
+        self.borders = QCheckBox("Borders and features")
         self.points = QCheckBox("Points")
         self.edges.setToolTip("Wireframe overlay of the mesh edges")
-        self.borders.setToolTip("Border edges (one face) highlighted")
+        self.borders.setToolTip("Border edges (one face) in red; feature edges (sharper than a pane's "
+                                "feature angle) in black")
         self.points.setToolTip("Draw the vertices as points")
         self.cmap_div = QComboBox()
         self.cmap_div.addItems(colormap_names("diverging"))
@@ -164,6 +165,7 @@ class InspectPanel(QWidget):
         radius_row.addWidget(self.use_radius)
         radius_row.addWidget(self.radius, 1)
         pane_form.addRow("", radius_row)
+        self.pane_form = pane_form  # the window adds the Feature angle row under the range
         pane_form.addRow("", self.advise_button)
         self.all_box = QGroupBox("All panes")
         form = QFormLayout(self.all_box)  # the histogram high up: it must show without scrolling
@@ -185,9 +187,9 @@ class InspectPanel(QWidget):
         form.addRow("Maps", maps)
         self.cmap_div.setToolTip("Diverging map: " + self.cmap_div.toolTip())
         self.cmap_seq.setToolTip("Sequential map: " + self.cmap_seq.toolTip())
-        overlays = QHBoxLayout()
-        for w in (self.directions, self.edges, self.borders, self.points):
-            overlays.addWidget(w)
+        overlays = QGridLayout()  # two rows: "Borders and features" is long for a narrow dock
+        for i, w in enumerate((self.directions, self.edges, self.borders, self.points)):
+            overlays.addWidget(w, i // 2, i % 2)
         form.addRow(overlays)
         form.addRow(self.shared)
         lay = QVBoxLayout(self)

@@ -21,16 +21,20 @@ from app.model import (
     Document, FileSource, Layer, MeshChange, Pane, SurfaceSource, default_panes, export_payload, map_colours,
     pane_letter,
 )
+from app.model.features import feature_edge_pairs
+from app.model.region import REST_COLOUR, outside_region
 from app.packaged import resource, sample_names
 
 from .advice_panel import AdvicePanel
 from .compare_panel import ComparePanel
-from .geometry import direction_glyphs, glyph_subsample, prepare_geometry
+from .feature_controls import FeatureControl
+from .geometry import direction_glyphs, edge_lines, glyph_subsample, prepare_geometry
 from .help import about_text, guide_text
 from .inspect_panel import InspectPanel
 from .mesh_panel import MeshPanel
 from .pane_grid import PaneGrid
 from .readout import Readout
+from .region_panel import RegionPanel
 from .session import restore_session, save_session
 from .source_panel import SourcePanel
 
@@ -80,12 +84,17 @@ class MainWindow(QMainWindow):
         self.mesh_panel = MeshPanel(self.doc)
         self.readout = Readout(self.doc)
         self.advice_panel = AdvicePanel(self.doc)
+        self.feature_control = FeatureControl(self.doc)
+        self.inspect.pane_form.insertRow(3, "", self.feature_control)  # under the range and radius
+        self.region_panel = RegionPanel(self.doc, self.grid)
+        self._feature_lines: dict = {}  # feature angle -> lines of the shown mesh
         self.docks = {}
         for key, title, widget, area in [
             ("source", "Source", self.source_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("mesh", "Mesh report", self.mesh_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("compare", "Compare", self.compare, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("advice", "Advice", self.advice_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
+            ("region", "Region", self.region_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             ("inspect", "Inspect", self.inspect, Qt.DockWidgetArea.RightDockWidgetArea),
             ("readout", "Picked vertex", self.readout, Qt.DockWidgetArea.RightDockWidgetArea),
         ]:
@@ -101,6 +110,7 @@ class MainWindow(QMainWindow):
             self.docks[key] = dock
         self.tabifyDockWidget(self.docks["mesh"], self.docks["compare"])
         self.tabifyDockWidget(self.docks["compare"], self.docks["advice"])
+        self.tabifyDockWidget(self.docks["advice"], self.docks["region"])
         self.docks["mesh"].raise_()  # first run: the mesh's report in front, Compare and Advice behind
 
         self.status_label = QLabel()
@@ -189,6 +199,7 @@ class MainWindow(QMainWindow):
         self.inspect.recompute_requested.connect(lambda: ctl.recompute(doc.panes[doc.active].key))
         self.inspect.pane_requested.connect(lambda pane: ctl.compute_in_pane(doc.active, pane))
         self.inspect.message.connect(lambda text: self.show_status(text, error=True))
+        self.region_panel.message.connect(lambda text, error: self.show_status(text, error=error))
         self.compare.link_toggled.connect(self.grid.set_linked)
         self.grid.activated.connect(lambda i: doc.set_active(i) if i < len(doc.panes) else None)
         self.grid.vertex_picked.connect(doc.set_picked)
@@ -279,6 +290,7 @@ class MainWindow(QMainWindow):
         self._geometry = change.geometry if change.geometry is not None else prepare_geometry(change.mesh)
         self.grid.set_geometry(self._geometry.base, edge_length=self._geometry.edge_length)
         self._drawn = None
+        self._feature_lines = {}
         self.setWindowTitle(f"curvlab — {change.source.label}")
         if isinstance(change.source, SurfaceSource):
             self.source_panel.set_source(change.source)
@@ -346,6 +358,9 @@ class MainWindow(QMainWindow):
             else:
                 values, clim, cmap = field
                 map_colours(values, clim, cmap, out=vp.colours)
+                outside = outside_region(doc.result(i), doc.panes[i].region) if i < len(doc.panes) else None
+                if outside is not None:
+                    vp.colours[outside] = REST_COLOUR
                 vp.set_colours(vp.colours, clim=clim, cmap=cmap, title=title)
             res = doc.result(i) if i < len(doc.panes) else None
             if state.show_directions and res is not None:
@@ -356,15 +371,28 @@ class MainWindow(QMainWindow):
             else:
                 vp.set_glyphs(None)
             vp.set_overlays(edges=state.show_edges, points=state.show_points,
-                            borders=self._geometry.borders if state.show_borders and self._geometry else None)
+                            borders=self._geometry.borders if state.show_borders and self._geometry else None,
+                            features=self.feature_lines(i) if state.show_borders else None)
             vp.set_marker(None if doc.picked is None else doc.mesh.vertices[doc.picked])
         self.update_titles()
         self.grid.render_all()
         res = doc.result(doc.active)
         active = fields[doc.active] if fields else None
+        outside = outside_region(res, doc.panes[doc.active].region)
+        invalid = None if res is None else ~res.valid if outside is None else ~res.valid & ~outside
         self.inspect.show_values(active, table=(active[2] if active else doc.cmap(doc.active)).table,
-                                 n_invalid=None if res is None else int((~res.valid).sum()),
+                                 n_invalid=None if invalid is None else int(invalid.sum()),
                                  n_vertices=doc.mesh.n_vertices)
+
+    def feature_lines(self, i: int):
+        """The feature edges of view ``i``'s feature angle as lines, or None (no angle, difference pane)."""
+        doc = self.doc
+        angle = None if doc.is_difference(i) else doc.panes[i].features
+        if angle is None or doc.mesh is None:
+            return None
+        if angle not in self._feature_lines:
+            self._feature_lines[angle] = edge_lines(doc.mesh, feature_edge_pairs(doc.mesh, angle))
+        return self._feature_lines[angle]
 
     def update_titles(self) -> None:
         """Pane headers: estimator and status; no re-render needed."""

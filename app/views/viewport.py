@@ -167,8 +167,10 @@ class Viewport(QFrame):
                     poly, color=tuple(c / 255 for c in colour), line_width=1.5, render=False,
                     reset_camera=False, pickable=False, lighting=False))
 
-    def set_overlays(self, *, edges: bool, borders: pv.PolyData | None, points: bool) -> None:
-        """Wireframe edges on the mesh, border edges (``borders`` lines) highlighted, vertices as points."""
+    def set_overlays(self, *, edges: bool, borders: pv.PolyData | None, points: bool,
+                     features: pv.PolyData | None = None) -> None:
+        """Wireframe edges on the mesh, border edges (``borders`` lines) and feature edges (``features``
+        lines) highlighted, vertices as points."""
         if self._mesh_actor is not None:
             self._mesh_actor.prop.show_edges = bool(edges)
             self._mesh_actor.prop.edge_color = (0.25, 0.25, 0.25)
@@ -178,6 +180,10 @@ class Viewport(QFrame):
         if borders is not None and borders.n_points:
             self._overlay_actors["borders"] = self.plotter.add_mesh(
                 borders, color=(0.9, 0.1, 0.1), line_width=3, render=False, reset_camera=False,
+                pickable=False, lighting=False)
+        if features is not None and features.n_points:
+            self._overlay_actors["features"] = self.plotter.add_mesh(
+                features, color=(0.05, 0.05, 0.05), line_width=3, render=False, reset_camera=False,
                 pickable=False, lighting=False)
         if points and self.poly is not None:
             self._overlay_actors["points"] = self.plotter.add_mesh(
