@@ -1,6 +1,6 @@
 """Predict the peak memory of ``curv estimate`` before running it, and what the machine has free.
 
-The model is ``BASE_BYTES + (PER_UNIT_BYTES + FACE_PASS_BYTES[method]) * units
+The model is ``BASE_BYTES + (PER_UNIT_BYTES + spec.extra_bytes_per_unit) * units
 + STAMP_BYTES_PER_THREAD * threads * n_vertices`` with ``units = n_vertices + n_faces / 2`` (twice
 the vertex count on a closed triangle mesh). The kernels hold no per-range temporaries (each
 thread's queue has a slot per vertex but touches only its largest support), so the range does not
@@ -24,11 +24,6 @@ PER_UNIT_BYTES = 580.0
 Measured with ``/usr/bin/time -v curv estimate`` on a 10M-vertex torus (20M faces, 20M units) with
 the numba kernels: mru R2 peaked at 9.2 GB resident (about 450 B per unit above the base), meyer
 at 8.7 GB; rounded up by about 25 %."""
-
-FACE_PASS_BYTES: dict[str, float] = {"csm": 500.0, "icc": 400.0}
-"""Extra bytes per unit of the estimators with whole-mesh per-edge and per-face arrays (dihedral
-terms, face frames, per-thread edge and face stamps): at 1M vertices csm peaked 0.96 GB and icc
-0.62 GB above the fits (benchmarks/bench_estimators.py)."""
 
 STAMP_BYTES_PER_THREAD = 8.0
 """Bytes per vertex and kernel thread of the support search's visited stamps (int64)."""
@@ -55,7 +50,9 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str) -> int:
     units = float(n_vertices) + 0.5 * float(n_faces)
     from .jit import threads
 
-    linear = BASE_BYTES + (PER_UNIT_BYTES + FACE_PASS_BYTES.get(method, 0.0)) * units
+    from .estimators import get_spec
+
+    linear = BASE_BYTES + (PER_UNIT_BYTES + get_spec(method).extra_bytes_per_unit) * units
     return int(linear + STAMP_BYTES_PER_THREAD * threads() * float(n_vertices))
 
 

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 from . import connectivity as _kernels
 from .errors import MeshError
 from .jit import launch
+from .wording import count_text
 
 __all__ = ["Mesh", "MeshReport"]
 
@@ -46,27 +47,32 @@ class MeshReport:
 
     def lines(self) -> list[str]:
         """Human-readable lines, one fact each."""
-        kinds = ", ".join(f"{n} {_POLY_NAMES.get(k, f'{k}-gons')}" for k, n in sorted(self.polygon_kinds.items()))
+        names = {k: _POLY_NAMES.get(k, f"{k}-gons") for k in self.polygon_kinds}
+        kinds = ", ".join(count_text(n, names[k][:-1], names[k]) for k, n in sorted(self.polygon_kinds.items()))
         out = [
-            f"{self.vertices} vertices, {self.faces} faces ({kinds or 'none'}), {self.edges} edges",
-            f"{self.components} connected component{'s' if self.components != 1 else ''}",
-            f"{self.border_edges} border edges in {self.border_loops} loop{'s' if self.border_loops != 1 else ''}"
-            if self.border_edges else "closed (no border)",
+            f"{count_text(self.vertices, 'vertex', 'vertices')}, {count_text(self.faces, 'face', 'faces')} "
+            f"({kinds or 'none'}), {count_text(self.edges, 'edge', 'edges')}",
+            f"{count_text(self.components, 'connected component', 'connected components')}",
+            f"{count_text(self.border_edges, 'border edge', 'border edges')} in "
+            f"{count_text(self.border_loops, 'loop', 'loops')}" if self.border_edges else "closed (no border)",
         ]
-        for count, what in [
-            (self.nonmanifold_edges, "non-manifold edges"),
-            (self.nonmanifold_vertices, "non-manifold vertices"),
-            (self.degenerate_faces, "degenerate faces"),
-            (self.isolated_vertices, "isolated vertices"),
-            (self.inconsistent_edges, "edges between faces of opposite orientation"),
-            (self.duplicate_vertices, "vertices at the same position as another"),
+        for count, one, many in [
+            (self.nonmanifold_edges, "non-manifold edge", "non-manifold edges"),
+            (self.nonmanifold_vertices, "non-manifold vertex", "non-manifold vertices"),
+            (self.degenerate_faces, "degenerate face", "degenerate faces"),
+            (self.isolated_vertices, "isolated vertex", "isolated vertices"),
+            (self.inconsistent_edges, "edge between faces of opposite orientation",
+             "edges between faces of opposite orientation"),
+            (self.duplicate_vertices, "vertex at the same position as another",
+             "vertices at the same position as another"),
         ]:
             if count:
-                out.append(f"{count} {what}")
+                out.append(count_text(count, one, many))
         if self.sharp_edges:
             from .features import SHARP_DEGREES
 
-            line = f"{self.sharp_edges} sharp edges (dihedral angle above {SHARP_DEGREES:g} degrees)"
+            line = (f"{count_text(self.sharp_edges, 'sharp edge', 'sharp edges')} "
+                    f"(dihedral angle above {SHARP_DEGREES:g} degrees)")
             if self.suggested_features is not None:
                 line += f": creases? try features={self.suggested_features:g}"
             out.append(line)

@@ -12,7 +12,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["QuantitySpec", "QUANTITIES", "EXPORTED", "get_quantity", "compute", "describe"]
+__all__ = ["QuantitySpec", "QUANTITIES", "EXPORTED", "get_quantity", "compute", "describe", "anisotropy"]
 
 
 @dataclass(frozen=True)
@@ -68,6 +68,15 @@ QUANTITIES: dict[str, QuantitySpec] = {q.name: q for q in _SPECS}
 
 EXPORTED = ("k1", "k2", "mean", "gaussian")
 """The quantities every export writes as float fields and the CLI summarises (the rest derive from k1, k2)."""
+
+
+def anisotropy(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
+    """(n,) ``|k1 - k2| / (|k1| + |k2|)`` in [0, 1]: 0 at an umbilic (no principal direction), 1 where one
+    curvature vanishes or they have opposite signs; NaN where both are 0 or a value is NaN."""
+    k1 = np.asarray(k1, dtype=np.float64)
+    k2 = np.asarray(k2, dtype=np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.abs(k1 - k2) / (np.abs(k1) + np.abs(k2))
 
 
 def get_quantity(name: str) -> QuantitySpec:

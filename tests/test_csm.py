@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 
 import curv
-from curv.estimators.csm import disc_triangle_area, iter_csm, segment_in_ball, triangle_in_ball_area
+from curv.estimators._ball_clipping import disc_triangle_area
+from curv.estimators.csm import iter_csm, segment_in_ball
 from curv.normals import vertex_normals
 from curv.ranges import Range, ball_radii
 from curv.validity import Reason
+from tests.clipping import triangle_in_ball_area
 from tests.meshes import icosphere
 
 
@@ -68,11 +70,11 @@ def test_triangle_in_ball_area_matches_sampling():
     for centre, radius in [((0.5, 0.4, 0.3), 0.45), ((0.0, 0.0, 0.0), 0.7), ((1.2, 0.0, 0.0), 0.6)]:
         centre = np.asarray(centre)
         inside = (np.linalg.norm(pts - centre, axis=1) <= radius).mean() * area
-        got = triangle_in_ball_area(*(centre - a), radius ** 2, *(b - a), *(c - a), *n)
+        got = triangle_in_ball_area(a, b, c, centre, radius)
         assert got == pytest.approx(inside, abs=3e-3 * area)
     # a ball that holds the whole triangle, and one that misses its plane
-    assert triangle_in_ball_area(*(-a), 100.0, *(b - a), *(c - a), *n) == pytest.approx(area, rel=1e-13)
-    assert triangle_in_ball_area(*(n * 2.0), 1.0, *(b - a), *(c - a), *n) == 0.0
+    assert triangle_in_ball_area(a, b, c, np.zeros(3), 10.0) == pytest.approx(area, rel=1e-13)
+    assert triangle_in_ball_area(a, b, c, a + n * 2.0, 1.0) == 0.0
 
 
 # ---------------------------------------------------------------------------- the estimator

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 import curv
-from curv.estimators.csm import triangle_in_ball_area
 from curv.estimators.icc import face_measures, icc_mean_gaussian, iter_icc
 from curv.normals import vertex_normals
 from curv.ranges import Range, ball_radii
 from curv.surfaces import make_surface
 from curv.validity import Reason
+from tests.clipping import triangle_in_ball_area
 from tests.meshes import icosphere, torus_exact, torus_grid, tube
 
 
@@ -159,7 +159,7 @@ def _reference_mean_gaussian(mesh, normals, k, p):
         a, b, c = v[tri[f]]
         n = np.cross(b - a, c - a)
         area = 0.5 * np.linalg.norm(n)
-        inside = triangle_in_ball_area(*(v[p] - a), r * r, *(b - a), *(c - a), *(n / (2 * area)))
+        inside = triangle_in_ball_area(a, b, c, v[p], r)
         total += min(inside / area, 1.0) * meas[f, :3]
     return 0.5 * total[1] / total[0], total[2] / total[0]
 

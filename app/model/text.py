@@ -1,10 +1,7 @@
-"""Small text helpers shared by the views' messages."""
+"""Small text helpers shared by the views' messages (the library owns the counting rule)."""
 
 from __future__ import annotations
 
+from curv.wording import count_text
+
 __all__ = ["count_text"]
-
-
-def count_text(n: int, singular: str, plural: str) -> str:
-    """``1 vertex``, ``0 vertices``, ``2 vertices``: a count with the noun in the right number."""
-    return f"{n} {singular if n == 1 else plural}"

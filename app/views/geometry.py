@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 from curv.normals import vertex_normals
+from curv.quantities import anisotropy
 import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray
@@ -96,8 +97,7 @@ def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.nda
     (d1_lines, d2_lines) : pyvista.PolyData
     """
     k1, k2 = result.k1[index], result.k2[index]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        aniso = np.abs(k1 - k2) / (np.abs(k1) + np.abs(k2))
+    aniso = anisotropy(k1, k2)
     keep = index[np.isfinite(aniso) & (aniso >= min_anisotropy)]
     out = []
     lift = 0.02 * length * result.normals[keep]

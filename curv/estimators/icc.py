@@ -53,7 +53,8 @@ from ..neighbourhood import (QUEUE_START, all_centres, ball_support, blocked_ver
                              expansion_adjacency, new_scratch)
 from ..validity import Reason
 from ._local_fit import store_principal, tangent_frame
-from .csm import DEGENERATE_BIT, face_frames, face_geometry, face_in_ball_area, support_flags, support_reason
+from ._ball_clipping import (DEGENERATE_BIT, face_frames, face_frames_kernel, face_geometry, face_in_ball_area,
+                             support_flags, support_reason)
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures"]
@@ -319,12 +320,13 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
 
 register(EstimatorSpec(
     name="icc", in_paper=False, title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4),
-    function=iter_icc, triangles_only=True, uses_normals=False, closed_ring=True,
+    function=iter_icc, extra_bytes_per_unit=400.0,  # at 1M vertices icc peaked 0.62 GB above the fits (benchmarks/bench_estimators.py)
+    triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Lachaud, Romon, Thibert & Coeurjolly 2020, Interpolated corrected curvature measures for "
               "polygonal surfaces (SGP)",
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
-    kernels=(_face_measures, _icc_chunk),
+    kernels=(_face_measures, face_frames_kernel, _icc_chunk),
     options={"from_measures": (True, False)},
 ))

@@ -70,6 +70,10 @@ class EstimatorSpec:
         Can compute the default (Max-weighted) vertex normals in its own pass over the mesh: called
         with ``normals=None`` it returns them in :attr:`Principal.normals`, already NaN at
         :func:`curv.normals.unusable_normal_vertices`, saving a separate pass.
+    extra_bytes_per_unit : float
+        Peak memory beyond the common per-vertex arrays, in bytes per size unit (vertices + faces / 2):
+        whole-mesh per-edge and per-face arrays and stamps (``csm``, ``icc``); :mod:`curv.memory`
+        adds it to its model.
     """
 
     name: str
@@ -86,6 +90,7 @@ class EstimatorSpec:
     in_paper: bool = True
     options: dict = field(default_factory=dict, compare=False)
     kernels: tuple = field(default=(), repr=False, compare=False)
+    extra_bytes_per_unit: float = 0.0
 
     def check_options(self, options: dict) -> dict:
         """Validate estimator options; :class:`EstimatorError` names the allowed ones."""

@@ -388,10 +388,8 @@ class Cone(_RevolutionSolid):
 
     name = "cone"
     title = "Cone"
-    params = (
-        Param("radius", 1.0, 0.1, 10.0, "radius of the base"),
-        Param("height", 1.5, 0.1, 20.0, "height of the apex over the base"),
-    )
+    params = (Param("radius", 1.0, 0.1, 10.0, "radius of the base"),
+              Param("height", 1.5, 0.1, 20.0, "height of the apex over the base"))
 
     @property
     def half_angle(self) -> float:
@@ -429,11 +427,8 @@ class Box(CreasedSurface):
 
     name = "box"
     title = "Box"
-    params = (
-        Param("size_x", 2.0, 0.1, 10.0, "length along x"),
-        Param("size_y", 1.5, 0.1, 10.0, "length along y"),
-        Param("size_z", 1.0, 0.1, 10.0, "length along z"),
-    )
+    params = tuple(Param(f"size_{axis}", side, 0.1, 10.0, f"length along {axis}")
+                   for axis, side in zip("xyz", (2.0, 1.5, 1.0)))
 
     @property
     def sizes(self) -> np.ndarray:
