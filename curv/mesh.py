@@ -411,6 +411,25 @@ class Mesh:
         return out
 
     @cached_property
+    def dihedral_angles(self) -> np.ndarray:
+        """(e,) float64 degrees between the normals of each edge's two faces, read-only.
+
+        0 on a flat sheet, 90 on a box's edge, up to 180 on a fold flat onto itself; NaN on border
+        and non-manifold edges and next to a degenerate face. Which of them are creases is
+        :mod:`curv.features`' rule.
+        """
+        faces = self.edge_faces
+        interior = (self.edge_face_count == 2) & (faces[:, 0] >= 0) & (faces[:, 1] >= 0)
+        out = np.full(faces.shape[0], np.nan)
+        idx = np.flatnonzero(interior)
+        n0 = self.face_normals[faces[idx, 0]]
+        n1 = self.face_normals[faces[idx, 1]]
+        # atan2 of |cross| and dot: accurate at small and large angles alike
+        out[idx] = np.degrees(np.arctan2(np.linalg.norm(np.cross(n0, n1), axis=1), np.einsum("ij,ij->i", n0, n1)))
+        out.setflags(write=False)
+        return out
+
+    @cached_property
     def degenerate_faces(self) -> np.ndarray:
         """(m,) bool: faces with a repeated vertex index or (numerically) zero area.
 

@@ -189,3 +189,16 @@ def test_fit_normals_honour_features():
     near = res.valid & ~fold
     assert np.abs(res.mean[near]).max() < 1e-9
     assert np.all(res.reason[fold] == curv.Reason.FEATURE)
+
+
+def test_dihedral_angles_are_computed_once_per_mesh_and_read_only():
+    mesh = curv.surfaces.SURFACES["box"]().mesh(n_vertices=1500).mesh
+    first = curv.dihedral_angles(mesh)
+    assert curv.dihedral_angles(mesh) is first and not first.flags.writeable
+    # any threshold reads the same angles: an angle and its mask give the same estimate
+    mask = curv.feature_edges(mesh, 30.0)
+    by_angle = curv.estimate(mesh, "qs", 2, features=30.0)
+    by_mask = curv.estimate(mesh, "qs", 2, features=mask)
+    np.testing.assert_array_equal(by_angle.k1, by_mask.k1)
+    np.testing.assert_array_equal(by_angle.reason, by_mask.reason)
+    assert mask.sum() > 0

@@ -18,7 +18,6 @@ from superqt.utils import create_worker
 from app.model import AdviceRecord, Document, count_text
 
 from .advice import advice_compile_note, advise_mesh
-from .features import estimate_with_masks
 from .sources import prepare_source
 
 __all__ = ["Controller"]
@@ -176,7 +175,7 @@ class Controller(QObject):
             self.failed.emit(self.doc.failures[key])
             return
         box = []  # the worker, for the callbacks (they must exist before it does)
-        worker = create_worker(estimate_with_masks, iter_estimate, self.doc.feature_masks, self.doc.mesh, pane.method,
+        worker = create_worker(iter_estimate, self.doc.mesh, pane.method,
                                **kwargs,
                                _start_thread=False, _connect={
             "yielded": lambda f: self._estimate_progress(box[0], key, f),

@@ -14,7 +14,6 @@ from .advice import AdviceRecord
 from .colors import LimitMode, colormap, compute_limits, map_colours
 from .display import Display, Layer
 from .events import Event
-from .features import FeatureMasks
 from .region import Region, RestComposer
 from .scalars import field_values
 
@@ -178,8 +177,6 @@ class Document:
         """Counts the meshes set so far: what an :class:`AdviceRecord` names its mesh by."""
         self.advice: AdviceRecord | None = None
         self._rest = RestComposer()
-        self.feature_masks = FeatureMasks()
-        """Feature-edge masks of the mesh per angle, shared by the estimates and the drawing."""
         self._last_good: dict[int, Pane] = {}
         self.display = Display()
         self.mesh_changed = Event()

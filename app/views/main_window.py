@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 from curv.estimators import ESTIMATORS
+from curv.features import feature_edges
 from curv.io import save_ply, save_vtu
 from PySide6.QtCore import QSettings, Qt, Signal
 from PySide6.QtGui import QAction, QGuiApplication, QIcon, QKeySequence
@@ -390,7 +391,7 @@ class MainWindow(QMainWindow):
         if angle is None or doc.mesh is None:
             return None
         if angle not in self._feature_lines:
-            self._feature_lines[angle] = edge_lines(doc.mesh, doc.feature_masks.edge_pairs(doc.mesh, angle))
+            self._feature_lines[angle] = edge_lines(doc.mesh, np.asarray(doc.mesh.edges)[feature_edges(doc.mesh, angle)])
         return self._feature_lines[angle]
 
     def update_titles(self) -> None:

@@ -229,23 +229,3 @@ def test_screenshot_features_off_and_on_side_by_side(qtbot, window, ui, tmp_path
     window.grid.render_all()
     path = tmp_path / f"features-{surface}.png"
     assert window.grab().save(str(path), "PNG") and path.stat().st_size > 10_000
-
-
-def test_the_remembered_feature_mask_gives_the_angle_s_result_and_is_computed_once():
-    from app.controller.features import estimate_with_masks
-    from app.model.features import FeatureMasks
-
-    mesh = curv.surfaces.SURFACES["box"]().mesh(n_vertices=1500).mesh
-    masks = FeatureMasks()
-    steps = estimate_with_masks(curv.iter_estimate, masks, mesh, "qs", range=2, features=30.0)
-    while True:
-        try:
-            next(steps)
-        except StopIteration as stop:
-            got = stop.value
-            break
-    want = curv.estimate(mesh, method="qs", range=2, features=30.0)
-    np.testing.assert_array_equal(got.k1, want.k1)
-    np.testing.assert_array_equal(got.reason, want.reason)
-    assert got.info["features"] == 30.0
-    assert masks.mask(mesh, 30.0) is masks.mask(mesh, 30) and masks.mask(mesh, 30.0).sum() > 0
