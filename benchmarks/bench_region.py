@@ -3,9 +3,9 @@
     .venv/bin/python benchmarks/bench_region.py 10000000
 
 For balls of 10 and 30 mean edges around one vertex of a torus: finding the region, the estimate
-(mru R2, without and with a 30 degree feature angle, twice: the first estimate at an angle finds the
-creases, later ones reuse the remembered mask as the viewer does), and recolouring the whole mesh
-with the rest grey.
+(mru R2, without and with a 30 degree feature angle, twice: the first estimate with features computes
+the mesh's dihedral angles, later ones reuse them from the mesh), and recolouring the whole mesh with
+the rest grey.
 """
 
 from __future__ import annotations
@@ -16,19 +16,8 @@ import time
 import curv
 from curv.surfaces import SURFACES
 
-from app.controller.features import estimate_with_masks
 from app.model.colors import colormap, map_colours
-from app.model.features import FeatureMasks
 from app.model.region import REST_COLOUR, ball_region, outside_region
-
-
-def _run(masks, mesh, **kwargs):
-    steps = estimate_with_masks(curv.iter_estimate, masks, mesh, "mru", range=2, **kwargs)
-    while True:
-        try:
-            next(steps)
-        except StopIteration as stop:
-            return stop.value
 
 
 def main(n_vertices: int) -> None:
@@ -38,14 +27,13 @@ def main(n_vertices: int) -> None:
     t = time.perf_counter()
     curv.estimate(mesh, method="mru", range=2, vertices=[0])
     print(f"connectivity, normals and kernels (once per mesh) {time.perf_counter() - t:.1f} s")
-    masks = FeatureMasks()
     for edges in (10, 30):
         t = time.perf_counter()
         region = ball_region(mesh, 12345, edges * float(mesh.mean_edge_length))
         found = time.perf_counter() - t
         for features in (None, 30.0, 30.0):
             t = time.perf_counter()
-            part = _run(masks, mesh, vertices=region.vertices, features=features)
+            part = curv.estimate(mesh, method="mru", range=2, vertices=region.vertices, features=features)
             took = time.perf_counter() - t
             t = time.perf_counter()
             rgba = map_colours(part.mean, (-1.0, 1.0), colormap("coolwarm"))
