@@ -10,6 +10,7 @@ import importlib
 
 from .errors import CurvError, EstimatorError, LoadError, MeshError
 from .mesh import Mesh, MeshReport
+from .pointcloud import PointCloud
 from .quantities import QUANTITIES
 from .result import Curvature, Principal
 from .validity import Reason
@@ -39,7 +40,7 @@ _LAZY = {
 }
 
 __all__ = [
-    "Mesh", "MeshReport", "Curvature", "Principal", "Reason", "QUANTITIES",
+    "Mesh", "MeshReport", "PointCloud", "Curvature", "Principal", "Reason", "QUANTITIES",
     "CurvError", "MeshError", "LoadError", "EstimatorError", *_LAZY,
 ]
 
