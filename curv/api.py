@@ -227,8 +227,8 @@ def _mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_iter
 def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
     """A point cloud's normals (given, the cloud's own, or estimated and oriented) and flags.
 
-    ``normals``: None (the cloud's if it has them, else PCA), ``"pca"``, ``"fit"`` (jet), or an
-    (n, 3) array.
+    ``normals``: None (the cloud's if it has them, else jet fits), ``"fit"`` (jet), ``"pca"``, or
+    an (n, 3) array.
     """
     from .point_normals import border_points, point_normals
 
@@ -237,7 +237,7 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
     if normals is None and cloud.normals is not None:
         used, label = normalize_rows(np.asarray(cloud.normals)), "file"
     elif normals is None or (isinstance(normals, str) and normals in ("pca", "fit")):
-        method = "jet" if isinstance(normals, str) and normals == "fit" else "pca"
+        method = "pca" if isinstance(normals, str) and normals == "pca" else "jet"
         est = point_normals(cloud, method=method, range=fit_range, orient=orient)
         used, ambiguous, label = est.normals, est.ambiguous, f"{method} {est.label}"
     elif isinstance(normals, str):
@@ -325,14 +325,19 @@ def estimate(
     block_size: int | None = None,
     features=None,
     vertices=None,
+    knn: int | None = None,
+    orient="up",
     **options,
 ) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
-        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`.
+    mesh : Mesh, PointCloud, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
+        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`. On a
+        :class:`curv.PointCloud` the estimators with ``takes_points`` run (``nc``, ``qs``, ``an``,
+        ``mru``, ``jet``); the range unit is each point's spacing (:mod:`curv.ranges`), points on
+        the rim of an open scan are ``BORDER``, repeats of a point ``DEGENERATE``.
     method : str
         Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
     range : int, float or str, optional
@@ -344,7 +349,10 @@ def estimate(
     normals : (n, 3) array_like or "fit", optional
         Vertex normals to use (normalised here); ``"fit"``: each normal from a local jet fit at
         range ``fit_range`` (:func:`curv.fitted_normals.fitted_normals`); default Max-weighted
-        normals of the mesh (the paper's protocol).
+        normals of the mesh (the paper's protocol). On a point cloud the default is the cloud's
+        own normals (from the file), else ``"fit"``: jet fits oriented as ``orient`` says
+        (:mod:`curv.point_normals`; ``"pca"`` for plain PCA normals); points whose orientation
+        stays ambiguous are ``Reason.ORIENTATION``.
     normal_weighting : {"max", "area", "angle"}
         Weights of the default normals.
     smooth : {None, "mesh", "values"}
@@ -365,6 +373,12 @@ def estimate(
         Estimate only at these vertices (reading whatever their supports need): the arrays keep
         full length, the other vertices are NaN with ``Reason.NOT_COMPUTED``. The values equal the
         full run's at these vertices.
+    knn : int, optional
+        Point clouds only, instead of ``range``: each point's support is its ``knn`` nearest points.
+    orient : {"up", "outward"} or (3,) array_like
+        Point clouds whose normals are estimated: turn each connected part up (+z at its highest
+        point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
+        viewpoint (a scanner's position).
     **options
         Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for
         ``jet``.
@@ -385,7 +399,7 @@ def estimate(
     gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
                         smooth=smooth, smooth_iterations=smooth_iterations,
                         smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size,
-                        features=features, vertices=vertices, **options)
+                        features=features, vertices=vertices, knn=knn, orient=orient, **options)
     while True:
         try:
             next(gen)
