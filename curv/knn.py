@@ -147,7 +147,7 @@ def _knn_kernel(cell_keys, cell_start, dims, lo, h, xs, ys, zs, k, out_d, out_i)
                 ring += 1
 
 
-def build_grid(points: np.ndarray, k: int = 10):
+def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
     """The uniform grid of :func:`nearest_neighbours` and of point-cloud ball supports.
 
     Parameters
@@ -155,6 +155,9 @@ def build_grid(points: np.ndarray, k: int = 10):
     points : (n, 3) float64
     k : int
         Neighbours the cell size is tuned for (about ``k / 2`` points per occupied cell).
+    cell : float, optional
+        The cell edge instead (ball queries: about the balls' radius, so that a ball spans one
+        ring of cells around its centre's cell).
 
     Returns
     -------
@@ -168,7 +171,7 @@ def build_grid(points: np.ndarray, k: int = 10):
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     n = points.shape[0]
-    h = _cell_size(points, k)
+    h = _cell_size(points, k) if cell is None else float(cell)
     lo = points.min(axis=0)
     cells3 = np.floor((points - lo) / h).astype(np.int64)
     dims = cells3.max(axis=0) + 1

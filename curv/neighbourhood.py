@@ -151,7 +151,8 @@ def new_queues(n_vertices: int, parts: int) -> np.ndarray:
     return np.empty((parts, n_vertices), np.int64)
 
 
-def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np.ndarray | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """The edges a support search expands along, as CSR ``(indptr (n+1,), indices (a,))`` int64.
 
     The mesh adjacency with the rows of non-manifold vertices (and of ``blocked`` ones) emptied: a
@@ -167,11 +168,12 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None) -> tuple[
     Notes
     -----
     The plain form (no ``blocked``) is cached with the mesh, so that an estimate over a small
-    region does no O(n) work to build it again. On a point cloud: its grid, ``(cells, coords)``
-    (:func:`curv.knn.build_grid`), which :func:`ball_support` searches instead of edges.
+    region does no O(n) work to build it again. On a point cloud: a grid, ``(cells, coords)``
+    (:func:`curv.knn.build_grid`), which :func:`ball_support` searches instead of edges; its
+    cells suit the balls of ``radii`` (:meth:`curv.PointCloud.ball_grid`) when they are given.
     """
     if isinstance(mesh, PointCloud):
-        return mesh.grid
+        return mesh.grid if radii is None else mesh.ball_grid(radii)
     if blocked is None or not blocked.any():
         return cached_with_mesh(mesh, "expansion", lambda: _expansion(mesh, mesh.nonmanifold_vertices))
     return _expansion(mesh, mesh.nonmanifold_vertices | blocked)
@@ -274,7 +276,7 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, 
     centres = np.arange(mesh.n_vertices, dtype=np.int64) if vertices is None else \
         np.ascontiguousarray(vertices, dtype=np.int64)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    indptr, indices = expansion_adjacency(mesh, blocked)
+    indptr, indices = expansion_adjacency(mesh, blocked, radii)
     x, y, z = coordinate_columns(mesh)
     parts = max(1, min(threads(), centres.size))
     stamps = new_scratch(mesh.n_vertices, parts)

@@ -180,7 +180,7 @@ def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | N
     """
     n = cloud.n_points
     centres = all_centres(n, centres)
-    adj_ptr, adj = expansion_adjacency(cloud)
+    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
     x, y, z = coordinate_columns(cloud)
     radius = np.ascontiguousarray(radii, dtype=np.float64)
     parts = max(1, min(threads(), centres.size))
@@ -222,7 +222,7 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
     """
     n = cloud.n_points
     centres = all_centres(n, None)
-    adj_ptr, adj = expansion_adjacency(cloud)
+    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
     x, y, z = coordinate_columns(cloud)
     radius = np.ascontiguousarray(radii, dtype=np.float64)
     parts = max(1, min(threads(), n))

@@ -95,6 +95,24 @@ class PointCloud:
         nearest-neighbour queries and every ball support of an estimate."""
         return build_grid(self._points, GRAPH_NEIGHBOURS)
 
+    def ball_grid(self, radii: np.ndarray):
+        """A grid whose cells suit balls of these radii (cell edge ~1.25 x their median), cached.
+
+        A ball then spans one ring of cells around its centre's cell for most points, so a
+        support is searched among about four times its own size. Cell edges are rounded to
+        steps of 2^(1/4), so that nearby radii share a grid.
+        """
+        r = float(np.median(radii))
+        if not (np.isfinite(r) and r > 0):
+            return self.grid
+        step = round(4.0 * np.log2(1.25 * r))
+        cache = self.__dict__.setdefault("_ball_grids", {})
+        if step not in cache:
+            if len(cache) >= 4:
+                cache.pop(next(iter(cache)))
+            cache[step] = build_grid(self._points, cell=2.0 ** (step / 4.0))
+        return cache[step]
+
     @cached_property
     def nearest(self) -> tuple[np.ndarray, np.ndarray]:
         """The :data:`~curv.knn.GRAPH_NEIGHBOURS` nearest other points of every point (computed once).
