@@ -441,6 +441,12 @@ COARSE_DENSITIES = (217, 331, 469)
 """Hexagon subdivisions s = 8, 10, 12 below the study's grid: the paper's coarsest mesh and between."""
 COARSE_CLOSED_VERTICES = (162, 252, 362)
 """Closed surfaces below the grid's 642 (geodesic sizes 10 f² + 2)."""
+OPTION_DENSITIES = (817, 1801, 3169, 12481)
+"""The base table's patch densities the option candidates run on (sample 0, every noise level,
+irregularity and function). 7057 is left out for CPU: its neighbours in measured density carry it."""
+OPTION_CLOSED_VERTICES = (642, 2562)
+"""The base table's closed-surface sizes the option candidates run on (sample 0); 10242 is left out
+for CPU."""
 MIN_EVALUATED = 30
 """A patch evaluates its vertices away from the border at the largest of R4..R1 that leaves at least
 this many (the study's R4 leaves none on a 217-vertex hexagon)."""
@@ -538,16 +544,18 @@ def candidate_point(args: tuple) -> tuple[dict, dict]:
     return row, variant_errors(mesh, truth, evaluated, variant_ids)
 
 
-def extension_jobs(base: dict, *, samples: int = 2, option_samples: int = 1, seed: int = 0) -> list[tuple]:
+def extension_jobs(base: dict, *, samples: int = 1, option_samples: int = 1, seed: int = 0) -> list[tuple]:
     """The jobs that extend ``base`` (a table): every variant on the coarse patches and closed
     surfaces (``samples`` each), the option variants on the base table's meshes of sample below
-    ``option_samples``. Largest meshes first (load balance)."""
+    ``option_samples`` at :data:`OPTION_DENSITIES` and :data:`OPTION_CLOSED_VERTICES`. Largest
+    meshes first (load balance)."""
     settings = base["metadata"]["settings"]
     every = list(base["variants"]) + [v for v in option_variants() if v not in base["variants"]]
     options = [v for v in every if v not in base["variants"]]
     jobs = []
     for key in base["truth"]["key"]:
-        if key[5] < option_samples:
+        sizes = OPTION_CLOSED_VERTICES if key[1] in DEFAULT_CLOSED else OPTION_DENSITIES
+        if key[5] < option_samples and key[2] in sizes:
             jobs.append((list(key), tuple(options)))
     for s in range(samples):
         for fn in settings["functions"]:
@@ -590,7 +598,7 @@ def run_extension(jobs: list[tuple], work_dir, *, workers: int | None = None, pr
     return done
 
 
-def extend_table(base: dict, done: dict, *, command: str = "") -> dict:
+def extend_table(base: dict, done: dict, *, command: str = "", jobs=None) -> dict:
     """``base`` with the option variants as new columns and the coarse meshes as new rows (their
     points measured with the base table's calibration), the kernel refitted by leave-one-out.
     Option columns are NaN on the base meshes they were not run on (the prediction leaves NaN
@@ -607,6 +615,9 @@ def extend_table(base: dict, done: dict, *, command: str = "") -> dict:
     truth = {k: list(v) for k, v in base["truth"].items()}
     truth.setdefault("n_evaluated", [None] * len(keys))
     index = {_key_text(k): i for i, k in enumerate(keys)}
+    if jobs is not None:  # exactly the planned meshes (a work directory may hold more)
+        planned = {_key_text(j[0]) for j in jobs}
+        done = {k: v for k, v in done.items() if k in planned}
     new_rows = []
     for ktext, (row, values) in done.items():
         i = index.get(ktext)
@@ -653,7 +664,7 @@ def extend_main(argv) -> int:
     parser.add_argument("--out", default=str(DEFAULT_OUT))
     parser.add_argument("--work", default="advisor-extension", help="keeps the computed meshes (resumes)")
     parser.add_argument("--workers", type=int, default=None)
-    parser.add_argument("--samples", type=int, default=2, help="samples of each coarse setting")
+    parser.add_argument("--samples", type=int, default=1, help="samples of each coarse setting")
     parser.add_argument("--option-samples", type=int, default=1, help="base samples the options run on")
     parser.add_argument("--dry-run", action="store_true", help="count the jobs and stop")
     args = parser.parse_args(argv)
@@ -665,7 +676,7 @@ def extend_main(argv) -> int:
     t0 = time.process_time()
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
     command = "python -m curv.advisor_table extend " + " ".join(argv)
-    table = extend_table(base, done, command=command)
+    table = extend_table(base, done, command=command, jobs=jobs)
     table["metadata"]["extension_cpu_seconds_main_process"] = round(time.process_time() - t0, 1)
     with open(args.out, "w") as fh:
         json.dump(table, fh, separators=(",", ":"))

@@ -11,7 +11,7 @@ import curv
 from curv.advisor import (
     Advice, advise, angle_deviation_deg, kernel_predict, load_table, measure_features, predict,
 )
-from curv.cli import main
+from curv.cli import _stats_line, main
 from curv.study.protocol import NOISE_FRACTION, Task
 from curv.study.testmesh import build_test_mesh
 from curv.surfaces import angle_irregularity, hexagon_mesh, make_surface
@@ -87,7 +87,7 @@ def test_polygon_mesh_gets_no_triangle_only_estimator():
     assert adv.features.polygon_kinds == {4: len(quads)}
     assert 0 < adv.features.border_share < 0.2
     assert "polygons" in adv.why
-    names = {m for m, _, _ in adv.ranking}
+    names = {c.method for c in adv.ranking}
     assert names and not names & {n for n, s in curv.ESTIMATORS.items() if s.triangles_only}
 
 
@@ -106,12 +106,15 @@ def test_ranking_covers_every_candidate_best_first(noisy):
     adv = curv.advise(noisy.mesh)
     assert isinstance(adv, Advice)
     assert len(adv.ranking) == len(table["variants"])  # a triangle mesh admits every registered variant
-    errs = [e for _, _, e in adv.ranking]
+    errs = [c.expected_erel for c in adv.ranking]
     assert errs == sorted(errs) and all(np.isfinite(errs)) and errs[0] > 0
-    assert (adv.method, adv.range, adv.expected_erel) == adv.ranking[0]
-    assert {f"{m}:R{k}" for m, k, _ in adv.ranking} == set(table["variants"])
+    best = adv.ranking[0]
+    assert (adv.method, adv.range, adv.expected_erel, adv.options) == (best.method, best.range, best.expected_erel,
+                                                                       best.options)
+    assert {c.variant.id for c in adv.ranking} == set(table["variants"])
+    assert all(c.valid_share == 1.0 for c in adv.ranking[:5])   # interior of a big patch: the border is 5 %
     pred = predict(table, adv.features)
-    assert pred[f"{adv.method}:R{adv.range}"] == pytest.approx(adv.expected_erel)
+    assert pred[best.variant.id] == pytest.approx(adv.expected_erel)
 
 
 def test_why_line_names_the_noise_the_irregularity_and_the_choice(noisy):
@@ -119,7 +122,7 @@ def test_why_line_names_the_noise_the_irregularity_and_the_choice(noisy):
     assert "\n" not in adv.why
     assert f"noise about {adv.features.noise_level:.2g} of the paper's level" in adv.why
     assert f"({adv.features.irregularity_deg:.0f} degrees)" in adv.why
-    assert adv.why.endswith(f"{adv.method} R{adv.range}, expected median e_rel {adv.expected_erel:.2g}")
+    assert f"{adv.label}, expected median e_rel {adv.expected_erel:.2g}" in adv.why
 
 
 def test_noise_raises_the_expected_error():
@@ -141,9 +144,12 @@ def test_cli_text(tmp_path, capsys, noisy):
     assert out[0].startswith(f"{path}: 3169 vertices; ")
     adv = advise(noisy.mesh)
     assert f"advice: {adv.why}" in out
-    rows = [line.split() for line in out if line[:4].strip().isdigit()]
-    assert [r[0] for r in rows] == ["1", "2", "3", "4", "5"]
-    assert rows[0][1:3] == [adv.method, f"R{adv.range}"]
+    assert f"  call: {adv.call}" in out
+    rows = [line for line in out if line[:4].strip().isdigit()]
+    assert [r.split()[0] for r in rows] == ["1", "2", "3", "4", "5"]
+    for row, c in zip(rows, adv.ranking):
+        assert row.split(maxsplit=1)[1].startswith(c.label + " ")
+        assert row.split()[-2:] == [f"{100 * c.valid_share:.0f}%", f"{c.expected_erel:.3g}"]
     assert out[-1].strip().startswith(f"... {len(adv.ranking) - 5} more")
 
 
@@ -153,9 +159,15 @@ def test_cli_json(tmp_path, capsys, noisy):
     data = json.loads(capsys.readouterr().out)
     assert data["input"] == path
     ranking = data["ranking"]
-    assert (data["method"], data["range"]) == (ranking[0]["method"], ranking[0]["range"])
-    errs = [r["expected_erel"] for r in ranking]
-    assert errs == sorted(errs)
+    assert (data["method"], data["range"], data["options"]) == tuple(ranking[0][k] for k in ("method", "range", "options"))
+    assert data["kwargs"] == {"method": data["method"], "range": data["range"], **data["options"]}
+    assert data["call"] == "curv.estimate(mesh, " + ", ".join(f"{k}={v!r}" for k, v in data["kwargs"].items()) + ")"
+    top = max(r["valid_share"] for r in ranking)
+    errs = [r["expected_erel"] for r in ranking if r["valid_share"] >= top - 0.02]
+    assert errs == sorted(errs) and [r["expected_erel"] for r in ranking[: len(errs)]] == errs
+    assert any(r["options"] for r in ranking) and all(r["kwargs"]["method"] == r["method"] for r in ranking)
+    res = curv.estimate(noisy.mesh, **data["kwargs"])        # the JSON's call runs as it stands
+    assert res.valid_fraction == pytest.approx(data["valid_share"], abs=1e-12)
     assert data["features"]["noise"] == pytest.approx(data["features"]["noise_level"] * NOISE_FRACTION)
     assert data["features"]["polygon_kinds"] == {"3": noisy.mesh.n_faces}
 
@@ -177,7 +189,7 @@ def test_estimate_method_auto_uses_and_announces_the_advice(tmp_path, capsys, no
     adv = advise(noisy.mesh)
     assert main(["estimate", path, "--method", "auto", "-q"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0] == f"auto: {adv.method} R{adv.range} ({adv.why})"
+    assert out[0].startswith(f"auto: {adv.label} ({adv.why}); the same as --method {adv.method} --range {adv.range}")
     assert any(line.startswith(f"{adv.method} R{adv.range}: ") for line in out)
 
 
@@ -185,7 +197,34 @@ def test_estimate_method_auto_refuses_a_range(tmp_path, capsys, noisy):
     path = _write_off(tmp_path / "m.off", noisy.mesh)
     assert main(["estimate", path, "--method", "auto", "--range", "3"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["curv: error: --method auto chooses the range too; drop --range/--radius"]
+    assert err == ["curv: error: --method auto chooses the range and the options too; drop --range"]
+    assert main(["estimate", path, "--method", "auto", "--normals", "fit"]) == 2
+    assert capsys.readouterr().err.strip().endswith("drop --normals")
+
+
+def test_estimate_method_auto_applies_the_options(tmp_path, capsys, monkeypatch, noisy):
+    import curv.advisor
+
+    path = _write_off(tmp_path / "m.off", noisy.mesh)
+    for options in ({"degree": 4}, {"normals": "fit", "fit_range": 4}):
+        real = curv.advisor.advise
+
+        def fake(mesh, **kw):  # the advisor's answer with the first candidate carrying these options
+            adv = real(mesh, **kw)
+            best = curv.advisor.Candidate("jet" if "degree" in options else "mru", 3, options, 0.01)
+            return Advice(features=adv.features, ranking=[best], method=best.method, range=3, expected_erel=0.01,
+                          why="test", options=options)
+
+        monkeypatch.setattr(curv.advisor, "advise", fake)
+        assert main(["estimate", path, "--method", "auto", "-q"]) == 0
+        out = capsys.readouterr().out.splitlines()
+        method = "jet" if "degree" in options else "mru"
+        flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in options.items())
+        assert out[0].endswith(f"the same as --method {method} --range 3 {flags}")
+        expected = curv.estimate(noisy.mesh, method=method, range=3, **options)
+        plain = curv.estimate(noisy.mesh, method=method, range=3)
+        assert _stats_line("k1", expected.quantity("k1")) in out            # the options were applied
+        assert _stats_line("k1", plain.quantity("k1")) not in out
 
 
 # ------------------------------------------------------------------ the table builder
