@@ -344,3 +344,138 @@ def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
     assert np.isfinite(values).mean() > 0.99 and np.nanmin(values) > 0
 
 
+
+
+# ------------------------------------------------------------------ valid share, options, the whole call
+def _mixed_mesh(m=30, tri_cells=121, seed=0):
+    """The issue's repro: a 30 x 30 grid (900 vertices) on a unit sphere cap, 720 quads and 121 cells
+    split into two triangles each."""
+    u, v = np.meshgrid(np.linspace(-0.6, 0.6, m), np.linspace(-0.6, 0.6, m), indexing="ij")
+    verts = np.stack([u.ravel(), v.ravel(), np.sqrt(1 - u.ravel() ** 2 - v.ravel() ** 2)], 1)
+    idx = np.arange(m * m).reshape(m, m)
+    a, b, c, d = (x.ravel() for x in (idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]))
+    cells = np.random.default_rng(seed).permutation(a.size)
+    tri, quad = cells[:tri_cells], cells[tri_cells:]
+    faces = np.full((quad.size + 2 * tri.size, 4), -1)
+    faces[: quad.size] = np.stack([a[quad], b[quad], c[quad], d[quad]], 1)
+    faces[quad.size:, :3] = np.concatenate([np.stack([a[tri], b[tri], c[tri]], 1), np.stack([a[tri], c[tri], d[tri]], 1)])
+    return curv.Mesh(verts, faces)
+
+
+def _every_candidate():
+    from curv.advisor_table import option_variants
+
+    return list(dict.fromkeys([*load_table()["variants"], *option_variants()]))
+
+
+@pytest.mark.parametrize("which", ["mixed", "patch217"])
+def test_valid_shares_are_what_the_estimators_leave_valid(which):
+    from curv.advisor import valid_shares
+    from curv.variants import Variant
+
+    mesh = _mixed_mesh() if which == "mixed" else build_test_mesh(Task(0, "quadratic", 217, 25.0, 0.33, 0)).mesh
+    ids = _every_candidate()
+    shares = valid_shares(mesh, ids)
+    for vid in ids:
+        try:
+            real = curv.estimate(mesh, **Variant.from_id(vid).kwargs).valid_fraction
+        except curv.MeshError:  # refused: a triangle-only estimator on polygons
+            real = 0.0
+        assert shares[vid] == pytest.approx(real, abs=1e-12), vid
+    assert len({round(x, 6) for x in shares.values()}) >= 3       # the rule does separate candidates here
+
+
+def test_valid_shares_on_a_sample_of_a_larger_mesh():
+    from curv.advisor import valid_shares
+
+    mesh = _study_mesh(0.0).mesh
+    full = valid_shares(mesh, ["csm:R4", "jet:R1;degree=2", "qs:R2"], sample=10**9)
+    part = valid_shares(mesh, ["csm:R4", "jet:R1;degree=2", "qs:R2"], sample=1000)
+    assert full["csm:R4"] < full["qs:R2"] - 0.1                      # R4 balls reach the border from far in
+    for vid in full:
+        assert part[vid] == pytest.approx(full[vid], abs=0.05)
+
+
+def test_the_mixed_quad_mesh_is_not_advised_a_call_that_leaves_it_invalid():
+    mesh = _mixed_mesh()
+    assert mesh.n_vertices == 900 and curv.advisor.polygon_kinds(mesh) == {3: 242, 4: 720}
+    jet1 = curv.estimate(mesh, method="jet", range=1)
+    assert np.sum(jet1.reason == curv.Reason.TOO_FEW_NEIGHBOURS) > 600           # the issue's 676 of 900
+    adv = advise(mesh)
+    shares = {c.variant.id: c.valid_share for c in adv.ranking}
+    assert shares["jet:R1"] == pytest.approx(jet1.valid_fraction)
+    assert adv.valid_share >= max(shares.values()) - curv.advisor.VALID_SHARE_SLACK
+    full = [c for c in adv.ranking if c.valid_share >= max(shares.values()) - curv.advisor.VALID_SHARE_SLACK]
+    assert adv.ranking[: len(full)] == full                                    # every full call before jet R1
+    assert [c.expected_erel for c in full] == sorted(c.expected_erel for c in full)
+    res = curv.estimate(mesh, **adv.kwargs)
+    assert res.valid_fraction == pytest.approx(adv.valid_share) and res.valid_fraction > 0.8
+    assert not any(curv.ESTIMATORS[c.method].triangles_only for c in adv.ranking)
+
+
+def test_rank_puts_calls_that_lose_vertices_after_the_rest():
+    from curv.advisor import rank
+
+    pred = {"a": 0.1, "b": 0.2, "c": 0.05, "d": 0.01, "e": np.nan}
+    assert rank(pred, {"a": 0.9, "b": 0.9, "c": 0.5, "d": 0.0, "e": 0.9}) == ["a", "b", "c"]
+    assert rank(pred, {"a": 0.9, "b": 0.9, "c": 0.885, "d": 0.0}) == ["c", "a", "b"]   # within the slack
+    assert rank(pred, {}) == ["d", "c", "a", "b"]
+
+
+def test_support_sizes_match_the_stored_supports():
+    from curv.neighbourhood import support_sizes, supports
+    from curv.ranges import ball_radii, resolve
+
+    mesh = build_test_mesh(Task(0, "trigonometric", 331, 16.0, 0.5, 0)).mesh
+    radii = ball_radii(mesh, resolve(curv.ESTIMATORS["qs"], 1.5), uses_normals=False)
+    centres = np.arange(0, mesh.n_vertices, 3)
+    counts, flagged = support_sizes(mesh, radii, centres, mesh.border_vertices)
+    indptr, indices = supports(mesh, radii, centres)
+    np.testing.assert_array_equal(counts, np.diff(indptr))
+    border = mesh.border_vertices
+    expected = [border[c] or border[indices[indptr[i]:indptr[i + 1]]].any() for i, c in enumerate(centres)]
+    np.testing.assert_array_equal(flagged, expected)
+    assert flagged.any() and not flagged.all()
+
+
+def test_variants_and_candidates_carry_the_whole_call():
+    from curv.advisor import Candidate
+    from curv.variants import Variant
+
+    v = Variant.from_id("mru:R3;normals=fit;fit_range=4")
+    assert v.id == "mru:R3;fit_range=4;normals=fit" and Variant.from_id(v.id) == v
+    assert v.kwargs == {"method": "mru", "range": 3, "normals": "fit", "fit_range": 4}
+    assert v.label == "MRU (R3, normals fit R4)" and Variant.from_id("mru:R2SM").options == ()
+    c = Candidate("jet", 4, {"degree": 4}, 0.01, 0.97)
+    assert c.kwargs == {"method": "jet", "range": 4, "degree": 4} and c.label == "jet R4 degree 4"
+    assert c.call == "curv.estimate(mesh, method='jet', range=4, degree=4)"
+    mesh = make_surface("sphere", n_vertices=642).mesh
+    np.testing.assert_allclose(np.nanmedian(curv.estimate(mesh, **c.kwargs).mean), 1.0, rtol=0.02)
+
+
+def test_the_ranking_holds_the_option_candidates_and_the_advice_runs(noisy):
+    adv = advise(noisy.mesh)
+    options = {tuple(sorted(c.options.items())) for c in adv.ranking}
+    assert (("degree", 4),) in options and (("fit_range", 4), ("normals", "fit")) in options
+    res = curv.estimate(noisy.mesh, **adv.kwargs)
+    assert res.valid_fraction == pytest.approx(adv.valid_share, abs=1e-12)
+    assert adv.as_dict()["kwargs"] == adv.kwargs
+
+
+def test_at_full_noise_the_advice_is_a_wide_call():
+    """At the paper's full noise on a dense patch the small ranges are hopeless: every study says so."""
+    adv = advise(_study_mesh(1.0, 0.0, "trigonometric").mesh)
+    assert adv.range >= 3 or adv.options.get("fit_range", 0) >= 4
+
+
+def test_coarse_meshes_measure_their_density():
+    coarse = make_surface("sphere", n_vertices=162, radius=1.5)
+    fine = make_surface("sphere", n_vertices=2562, radius=1.5)
+    fc, ff = measure_features(coarse.mesh), measure_features(fine.mesh)
+    for s, f in ((coarse, fc), (fine, ff)):
+        assert f.density == pytest.approx(2 * s.mesh.mean_edge_length / 1.5, rel=0.1)
+    assert fc.density > 3 * ff.density
+    patch = build_test_mesh(Task(0, "quadratic", 217, 0.0, 0.0, 0))
+    truth = patch.truth
+    exact = patch.mesh.mean_edge_length * np.median(np.abs(truth.k1) + np.abs(truth.k2))
+    assert measure_features(patch.mesh).density == pytest.approx(exact, rel=0.25)
