@@ -28,7 +28,20 @@ on 2 cores shared with another study run, from scratch)::
     python -m curv.advisor_table --work /tmp/advisor-study-3 --workers 2
 
 Every grid setting is a default (``--samples``, ``--densities``, ``--noise``,
-``--irregularity``, ``--closed``, ``--closed-vertices`` change them). 217 vertices is left out: on
+``--irregularity``, ``--closed``, ``--closed-vertices`` change them).
+
+The shipped table is that base table extended (``extend``) with the option candidates (jet degree
+3 and 4 at R2-R4; ``normals="fit"`` at ``fit_range`` 2 and 4 for nc, qs, an, mru, ru, icc) as new
+columns, run on every sample-0 mesh of the base table (patches and closed surfaces), and with
+coarse meshes as new rows (every candidate): patches
+of 217, 331 and 469 vertices, evaluated away from the border at the largest of R4..R1 that leaves
+at least 30 vertices, and sphere, ellipsoid and torus at 162, 252 and 362 vertices, one sample
+each::
+
+    python -m curv.advisor_table extend --base base.json --work /tmp/advisor-ext --workers 2
+
+(``base.json``: the base table the first command writes, ``--out base.json``). The coarse rows are
+measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
 and a rerun over a finished directory only refits the calibration and the kernel (seconds).
@@ -441,12 +454,11 @@ COARSE_DENSITIES = (217, 331, 469)
 """Hexagon subdivisions s = 8, 10, 12 below the study's grid: the paper's coarsest mesh and between."""
 COARSE_CLOSED_VERTICES = (162, 252, 362)
 """Closed surfaces below the grid's 642 (geodesic sizes 10 f² + 2)."""
-OPTION_DENSITIES = (817, 1801, 3169, 12481)
+OPTION_DENSITIES = DEFAULT_DENSITIES
 """The base table's patch densities the option candidates run on (sample 0, every noise level,
-irregularity and function). 7057 is left out for CPU: its neighbours in measured density carry it."""
-OPTION_CLOSED_VERTICES = (642, 2562)
-"""The base table's closed-surface sizes the option candidates run on (sample 0); 10242 is left out
-for CPU."""
+irregularity and function)."""
+OPTION_CLOSED_VERTICES = DEFAULT_CLOSED_VERTICES
+"""The base table's closed-surface sizes the option candidates run on (sample 0)."""
 MIN_EVALUATED = 30
 """A patch evaluates its vertices away from the border at the largest of R4..R1 that leaves at least
 this many (the study's R4 leaves none on a 217-vertex hexagon)."""

@@ -221,7 +221,8 @@ def cli_arguments(kwargs: dict) -> str:
     """The ``curv estimate`` flags of a call's keyword arguments: ``--method jet --range 4 --degree 4``."""
     flags = {"method": "--method", "range": "--range", "degree": "--degree", "normals": "--normals",
              "fit_range": "--fit-range", "features": "--features"}
-    return " ".join(f"{flags[k]} {v:g}" if isinstance(v, float) else f"{flags[k]} {v}" for k, v in kwargs.items())
+    return " ".join(f"{flag} {kwargs[k]:g}" if isinstance(kwargs[k], float) else f"{flag} {kwargs[k]}"
+                    for k, flag in flags.items() if k in kwargs)
 
 
 def _apply_advice(args) -> None:

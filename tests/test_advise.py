@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import curv
+import curv.advisor_table
 from curv.advisor import (
     Advice, advise, angle_deviation_deg, kernel_predict, load_table, measure_features, predict,
 )
@@ -107,12 +108,18 @@ def test_ranking_covers_every_candidate_best_first(noisy):
     assert isinstance(adv, Advice)
     assert len(adv.ranking) == len(table["variants"])  # a triangle mesh admits every registered variant
     errs = [c.expected_erel for c in adv.ranking]
-    assert errs == sorted(errs) and all(np.isfinite(errs)) and errs[0] > 0
+    assert all(np.isfinite(errs)) and min(errs) > 0
+    top = max(c.valid_share for c in adv.ranking)
+    full = [c.valid_share >= top - curv.advisor.VALID_SHARE_SLACK for c in adv.ranking]
+    n_full = sum(full)
+    assert full == [True] * n_full + [False] * (len(full) - n_full)     # the calls that cover the mesh first
+    assert errs[:n_full] == sorted(errs[:n_full]) and errs[n_full:] == sorted(errs[n_full:])
+    assert 0 < n_full < len(errs)          # a 3169-vertex patch: R3-R4 balls of csm, icc reach the border
     best = adv.ranking[0]
     assert (adv.method, adv.range, adv.expected_erel, adv.options) == (best.method, best.range, best.expected_erel,
                                                                        best.options)
     assert {c.variant.id for c in adv.ranking} == set(table["variants"])
-    assert all(c.valid_share == 1.0 for c in adv.ranking[:5])   # interior of a big patch: the border is 5 %
+    assert best.valid_share == pytest.approx(1 - adv.features.border_share, abs=0.01)   # only the border lost
     pred = predict(table, adv.features)
     assert pred[best.variant.id] == pytest.approx(adv.expected_erel)
 
@@ -167,7 +174,7 @@ def test_cli_json(tmp_path, capsys, noisy):
     assert errs == sorted(errs) and [r["expected_erel"] for r in ranking[: len(errs)]] == errs
     assert any(r["options"] for r in ranking) and all(r["kwargs"]["method"] == r["method"] for r in ranking)
     res = curv.estimate(noisy.mesh, **data["kwargs"])        # the JSON's call runs as it stands
-    assert res.valid_fraction == pytest.approx(data["valid_share"], abs=1e-12)
+    assert res.valid_fraction == pytest.approx(data["valid_share"], abs=0.02)   # a 2000-vertex sample
     assert data["features"]["noise"] == pytest.approx(data["features"]["noise_level"] * NOISE_FRACTION)
     assert data["features"]["polygon_kinds"] == {"3": noisy.mesh.n_faces}
 
@@ -206,8 +213,8 @@ def test_estimate_method_auto_applies_the_options(tmp_path, capsys, monkeypatch,
     import curv.advisor
 
     path = _write_off(tmp_path / "m.off", noisy.mesh)
+    real = curv.advisor.advise
     for options in ({"degree": 4}, {"normals": "fit", "fit_range": 4}):
-        real = curv.advisor.advise
 
         def fake(mesh, **kw):  # the advisor's answer with the first candidate carrying these options
             adv = real(mesh, **kw)
@@ -316,7 +323,7 @@ def test_rounding_in_the_table_changes_predictions_by_less_than_a_percent():
 
 
 # ------------------------------------------------------------------ the packaged table
-def test_the_packaged_table_is_what_the_documented_command_writes():
+def test_the_packaged_table_is_what_the_documented_commands_write():
     import curv.advisor_table as at
 
     table = load_table()
@@ -327,8 +334,16 @@ def test_the_packaged_table_is_what_the_documented_command_writes():
     assert set(args[::2]) <= {"--work", "--workers"}  # every grid setting is a default
     assert meta["settings"] == at.table_settings().as_dict()
     assert meta["closed"] == {"surfaces": list(at.DEFAULT_CLOSED), "vertices": list(at.DEFAULT_CLOSED_VERTICES)}
-    n_closed = len(at.DEFAULT_CLOSED) * len(at.DEFAULT_CLOSED_VERTICES) * len(at.DEFAULT_NOISE) * at.DEFAULT_SAMPLES
-    assert meta["n_meshes"] == len(table["points"]) == at.table_settings().n_tasks + n_closed
+    ext = meta["extension_command"].split()
+    assert ext[:4] == ["python", "-m", "curv.advisor_table", "extend"] and set(ext[4::2]) <= {"--base", "--work",
+                                                                                             "--workers", "--out"}
+    assert "python -m curv.advisor_table extend --base base.json" in doc
+    jobs = at.extension_jobs(table)
+    n_base = at.table_settings().n_tasks + len(at.DEFAULT_CLOSED) * len(at.DEFAULT_CLOSED_VERTICES) * len(
+        at.DEFAULT_NOISE) * at.DEFAULT_SAMPLES
+    n_new = sum(1 for key, _ in jobs if key[2] in at.COARSE_DENSITIES + at.COARSE_CLOSED_VERTICES)
+    assert meta["n_meshes"] == len(table["points"]) == n_base + n_new
+    assert table["variants"] == [v.id for v in at.table_settings().variants()] + at.option_variants()
 
 
 def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
@@ -338,10 +353,13 @@ def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
 
     table = load_table()
     hexagon = {k[2] for k in table["truth"]["key"] if k[1] in ("quadratic", "ellipsoid_patch", "trigonometric")}
-    assert {817, 3169, 12481} <= hexagon and len(hexagon) >= 5
-    assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 500_000
+    assert {217, 331, 469, 817, 3169, 12481} <= hexagon and len(hexagon) >= 8
+    assert min(k[2] for k in table["truth"]["key"]) == 162
+    assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 1_200_000
     values = np.array(table["median_erel"], float)
-    assert np.isfinite(values).mean() > 0.99 and np.nanmin(values) > 0
+    n_options = len(curv.advisor_table.option_variants())
+    assert np.isfinite(values[:, :-n_options]).mean() > 0.99 and np.nanmin(values) > 0
+    assert np.all(np.isfinite(values[:, -n_options:]).sum(axis=0) > 0.3 * len(values))   # every option column
 
 
 
@@ -458,7 +476,7 @@ def test_the_ranking_holds_the_option_candidates_and_the_advice_runs(noisy):
     options = {tuple(sorted(c.options.items())) for c in adv.ranking}
     assert (("degree", 4),) in options and (("fit_range", 4), ("normals", "fit")) in options
     res = curv.estimate(noisy.mesh, **adv.kwargs)
-    assert res.valid_fraction == pytest.approx(adv.valid_share, abs=1e-12)
+    assert res.valid_fraction == pytest.approx(adv.valid_share, abs=0.02)   # counted on 2000 of 3169 vertices
     assert adv.as_dict()["kwargs"] == adv.kwargs
 
 
