@@ -67,6 +67,16 @@ class RankingRow:
     valid_text: str = "100 %"
 
     @property
+    def options_short(self) -> str:
+        """The options for a narrow table cell: ``deg 4``, ``fit R4`` (normals fitted at R4)."""
+        opts = dict(self.options)
+        parts = [f"deg {v}" if k == "degree" else f"{k} {v}" for k, v in opts.items()
+                 if k not in ("normals", "fit_range")]
+        if opts.get("normals") == "fit":
+            parts.append(f"fit {ranges.range_label(opts.get('fit_range', 2))}")
+        return ", ".join(parts)
+
+    @property
     def label(self) -> str:
         """``jet R4 degree 4``: the whole call for a person."""
         return f"{self.method} {self.range_label}" + (f" {self.options_text}" if self.options_text else "")

@@ -32,8 +32,8 @@ INTRO = ("Advise measures the mesh (noise, irregularity, density, borders, polyg
          "estimator and range by the median relative error the paper's study predicts for such a mesh.")
 ERREL_TIP = ("Predicted median relative error e_rel (paper eq. 5.2) of this estimator and range on a mesh "
              "with the measured features, from the study's results on its test surfaces. Lower is better.")
-OPTIONS_TIP = ("Options of the call besides estimator and range: the jet's degree, or normals from a local "
-               "jet fit at a range (normals fit R4). Apply sets them in the pane too.")
+OPTIONS_TIP = ("Options of the call besides estimator and range: the jet's degree (deg 4), or normals from a "
+               "local jet fit at a range (fit R4: normals=\"fit\", fit_range=4). Apply sets them in the pane too.")
 VALID_TIP = ("Share of this mesh's vertices the call gives a value at: border vertices, supports with fewer "
              "vertices than the fit's unknowns and, for the closed-ring estimators, supports that reach a border "
              "are lost. Calls that lose more than 2 % more of the mesh than the best one rank after the rest.")
@@ -41,7 +41,7 @@ COLUMNS = (("Estimator", "Registry name of the estimator (hover a row for its me
            ("Range", RANGE_TIP),
            ("Options", OPTIONS_TIP),
            ("Valid", VALID_TIP),
-           ("Median e_rel", ERREL_TIP))
+           ("e_rel", ERREL_TIP))
 
 
 class AdvicePanel(QWidget):
@@ -107,9 +107,9 @@ class AdvicePanel(QWidget):
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(0, QHeaderView.ResizeMode.ResizeToContents)
         header.setSectionResizeMode(1, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(2, QHeaderView.ResizeMode.Stretch)
+        header.setSectionResizeMode(2, QHeaderView.ResizeMode.ResizeToContents)
         header.setSectionResizeMode(3, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(4, QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(4, QHeaderView.ResizeMode.Stretch)
         self.table.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.table.setMinimumHeight(5 * (self.fontMetrics().height() + 6))  # the header and four rows
         # the table takes the height left over (its own scroll bar), never asks for more: the dock's
@@ -244,12 +244,13 @@ class AdvicePanel(QWidget):
         tint = QBrush(QColor(RECOMMENDED_BACKGROUND))
         for r, row in enumerate(self._rows):
             spec = ESTIMATORS.get(row.method)
-            cells = (row.method, row.range_label, row.options_text, row.valid_text, row.erel_text)
+            cells = (row.method, row.range_label, row.options_short, row.valid_text, row.erel_text)
             tips = (estimator_tooltip(spec) if spec is not None else row.method, RANGE_TIP, OPTIONS_TIP, VALID_TIP,
                     ERREL_TIP)
             for c, (text, tip) in enumerate(zip(cells, tips)):
                 item = QTableWidgetItem(text)
-                item.setToolTip(("<b>Recommended</b><br>" if row.recommended else "") + tip)
+                item.setToolTip(("<b>Recommended</b><br>" if row.recommended else "") + f"<b>{escape(row.label)}</b><br>"
+                                + tip)
                 if c >= 3:
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 if row.recommended:

@@ -76,7 +76,10 @@ def test_advise_runs_in_the_background_and_fills_the_panel(qtbot, window, ui):
     table = panel.table
     assert table.rowCount() == len(expected.ranking) > 5
     shown = [tuple(table.item(r, c).text() for c in range(5)) for r in range(table.rowCount())]
-    assert [(c.method, f"R{c.range}", c.variant.options_label) for c in expected.ranking] == [s[:3] for s in shown]
+    assert [(c.method, f"R{c.range}") for c in expected.ranking] == [s[:2] for s in shown]
+    assert [row.options_short for row in panel.rows] == [s[2] for s in shown]
+    assert [dict(row.options) for row in panel.rows] == [c.options for c in expected.ranking]
+    assert {"deg 4", "fit R4", ""} <= {s[2] for s in shown}
     errors = [float(s[4]) for s in shown]
     shares = [float(s[3].rstrip(" %")) / 100 for s in shown]
     np.testing.assert_allclose(shares, [c.valid_share for c in expected.ranking], atol=0.006)
