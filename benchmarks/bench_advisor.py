@@ -275,8 +275,12 @@ def main(argv=None) -> int:
     else:
         n, s_range = (48, (8, 34)) if args.quick else (args.meshes, (8, 81))
         settings = [{**s, "table": args.table} for s in draw_settings(n, args.seed, s_range=s_range)]
+        runs = []
         with open_executor(workers=args.workers) as pool:  # one kernel thread per worker
-            runs = list(pool.map(evaluate, settings))
+            for run in pool.map(evaluate, settings):
+                runs.append(run)
+                if args.runs:  # as they come, so that a long run can be read (--rescore) before it ends
+                    Path(args.runs).write_text(json.dumps(runs, default=float))
     text, _ = summarize_runs(runs, table)
     if args.runs:
         Path(args.runs).write_text(json.dumps(runs, default=float))
