@@ -45,7 +45,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-FIXED_SHOWN = ("mru:R2", "mru:R3", "mru:R4", "csm:R3", "qs:R3", "jet:R3")
+FIXED_SHOWN = ("jet:R4", "jet:R4;degree=4", "icc:R4;fit_range=4;normals=fit", "mru:R2", "mru:R4", "qs:R3")
 CLOSED = ("sphere", "ellipsoid", "torus")
 NOISE_FREE_SHARE = 0.15
 """Share of the held-out meshes drawn without noise (the advisor's weak spot gets its own sample)."""
