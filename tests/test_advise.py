@@ -499,3 +499,17 @@ def test_coarse_meshes_measure_their_density():
     truth = patch.truth
     exact = patch.mesh.mean_edge_length * np.median(np.abs(truth.k1) + np.abs(truth.k2))
     assert measure_features(patch.mesh).density == pytest.approx(exact, rel=0.25)
+
+
+def test_estimate_takes_the_options_as_flags(tmp_path, capsys, noisy):
+    path = _write_off(tmp_path / "m.off", noisy.mesh)
+    assert main(["estimate", path, "-m", "jet", "-r", "3", "--degree", "4", "-q"]) == 0
+    assert _stats_line("k1", curv.estimate(noisy.mesh, method="jet", range=3, degree=4).quantity("k1")) in \
+        capsys.readouterr().out.splitlines()
+    assert main(["estimate", path, "-m", "mru", "-r", "3", "--normals", "fit", "--fit-range", "4", "-q"]) == 0
+    fitted = curv.estimate(noisy.mesh, method="mru", range=3, normals="fit", fit_range=4)
+    assert _stats_line("k1", fitted.quantity("k1")) in capsys.readouterr().out.splitlines()
+    assert main(["estimate", path, "-m", "mru", "--fit-range", "4"]) == 2
+    assert "--normals fit" in capsys.readouterr().err
+    assert main(["estimate", path, "-m", "mru", "--degree", "4"]) == 2
+    assert "degree" in capsys.readouterr().err
