@@ -3,23 +3,28 @@
 Run by hand (not part of the test suite)::
 
     .venv/bin/python benchmarks/bench_advisor.py --quick            # 48 meshes of at most ~3700 vertices
-    .venv/bin/python benchmarks/bench_advisor.py --meshes 300 --runs runs.json   # docs/ADVISOR.md, 8 min
+    .venv/bin/python benchmarks/bench_advisor.py --meshes 80 --workers 1 --runs runs1000.json     # docs/ADVISOR.md
+    .venv/bin/python benchmarks/bench_advisor.py --meshes 60 --seed 2000 --workers 2 --runs runs2000.json
     .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
 
 Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000; the table's study
-uses seed 0) and at settings between and beyond the table's grid points: continuous noise level (0
-to 1.3 of the paper's 100 %), continuous irregularity (0 to 30 degrees), hexagon densities
-3 s (s + 1) + 1 for a random s in 15..64 (721 to 12481 vertices), three quarters Monge patches of
-eq. 5.1 (the study's meshes, :func:`curv.study.testmesh.build_test_mesh`, evaluated away from the
-border as in the study), one quarter closed analytic surfaces of random shape
+uses seed 0) and at settings between and beyond the table's grid points: noise level 0 for
+:data:`NOISE_FREE_SHARE` of the meshes, else uniform in 0 to 1.3 of the paper's 100 %, continuous
+irregularity (0 to 30 degrees), hexagon densities 3 s (s + 1) + 1 with the vertex count
+log-uniform over s = 8..81 (217 to 19,927 vertices), three quarters Monge patches of eq. 5.1 (the
+study's meshes, :func:`curv.study.testmesh.build_test_mesh`, evaluated away from the border by
+:func:`curv.advisor_table.evaluated_for_table`, the study's R4 rule where it leaves 30 vertices),
+one quarter closed analytic surfaces of random shape
 (:func:`curv.advisor_table.random_closed_params`: sphere radius, ellipsoid semi-axes, torus tube
 radius) at the same vertex counts (a geodesic sphere or ellipsoid snaps to the nearest
 10 f^2 + 2, so sizes between the table's 642, 2562 and 10242 too; every vertex evaluated; no
-irregularity option). Truth is exact (:mod:`curv.surfaces`). Per mesh every candidate of the
-table is run (Max normals) and scored by the median e_rel over the evaluated vertices it gives a
-value for (the study's ``median_erel``).
+irregularity option). Truth is exact (:mod:`curv.surfaces`). Per mesh every candidate call (the
+table's and :func:`curv.advisor_table.option_variants`) is run and scored by the median e_rel over
+the evaluated vertices it gives a value for (the study's ``median_erel``), and each call's valid
+share on the mesh is stored (:func:`curv.advisor.valid_shares`).
 
-Reported: regret = median e_rel of the advised variant / the best median e_rel over all candidates
+Reported: regret = median e_rel of the advised call / the best median e_rel over the calls the
+ranking admits first (within :data:`curv.advisor.VALID_SHARE_SLACK` of the best valid share)
 (median, 90th percentile, share within 1.05), overall and for subsets (patches, closed surfaces,
 settings inside or beyond the table's grid, nearly noise-free); the advisor's mean error against
 that of every fixed choice (the best fixed choices named); the regret of a few fixed choices for
