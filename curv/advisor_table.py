@@ -698,12 +698,13 @@ def extend_main(argv) -> int:
 
 
 def load_base(path) -> dict:
-    """The table to extend, reduced to its base columns if it was extended before (reruns start from
-    the same base)."""
+    """The base table to extend (what ``python -m curv.advisor_table --out base.json`` writes); an
+    already extended table is refused (its option columns would be taken for base ones)."""
     with open(path) as fh:
         table = json.load(fh)
-    base = table.get("base")
-    return base if base is not None else table
+    if set(option_variants()) & set(table["variants"]):
+        raise SystemExit(f"{path}: already extended; give the base table (python -m curv.advisor_table --out base.json)")
+    return table
 
 
 def main(argv=None) -> int:
