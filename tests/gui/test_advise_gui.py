@@ -289,6 +289,19 @@ def test_apply_with_options_sets_them_in_the_pane_and_computes_that_call(qtbot, 
         np.testing.assert_allclose(res.k1[res.valid], expected.k1[expected.valid], rtol=1e-12)
         default = curv.estimate(doc.mesh, method=candidate.method, range=candidate.range)
         assert not np.allclose(res.k1[res.valid], default.k1[res.valid])       # the options changed the result
+    # the pane's options outlive the session
+    from PySide6.QtCore import QSettings
+
+    from app.views.main_window import MainWindow
+    from app.views.session import save_session
+
+    applied = doc.panes[0]
+    save_session(window.settings, doc)                                  # what closing the window does
+    window.settings.sync()
+    again = MainWindow(settings=QSettings(window.settings.fileName(), QSettings.Format.IniFormat))
+    qtbot.addWidget(again)
+    assert again.doc.panes[0] == applied and applied.options
+    again.close()
     # another estimator from the inspector starts from its defaults
     window.inspect.method.setCurrentIndex(window.inspect.method.findData("mru"))
     window.inspect.method.activated.emit(window.inspect.method.currentIndex())
