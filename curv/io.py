@@ -16,6 +16,7 @@ import numpy as np
 from .colors import colour_choice, map_colors
 from .errors import LoadError, MeshError
 from .mesh import Mesh
+from .pointcloud import PointCloud
 from .quantities import EXPORTED
 from .repair import repair
 from .result import Curvature
@@ -228,13 +229,14 @@ def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:
 
 
 def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False, orient: bool = False,
-         remove_unreferenced: bool = False) -> Mesh:
-    """Load a mesh file.
+         remove_unreferenced: bool = False) -> Mesh | PointCloud:
+    """Load a mesh or a point-cloud file.
 
     Parameters
     ----------
     path : str or Path
-        PLY, OBJ, OFF (polygons kept) or anything trimesh reads (STL, glTF/GLB, ...).
+        PLY, OBJ, OFF (polygons kept) or anything trimesh reads (STL, glTF/GLB, ...); point clouds:
+        a PLY without faces, ``.xyz`` / ``.txt`` / ``.csv``, PCD, LAS/LAZ (:func:`curv.pointio.read_points`).
     merge_vertices : bool
         Merge vertices at identical positions.
     remove_degenerate : bool
@@ -246,17 +248,27 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
 
     Returns
     -------
-    Mesh
-        ``mesh.info`` holds ``{"path": ..., "repairs": [human-readable lines]}``.
+    Mesh or PointCloud
+        ``mesh.info`` holds ``{"path": ..., "repairs": [human-readable lines]}``; a point cloud
+        when the file has no faces.
 
     Raises
     ------
     LoadError
-        The file cannot be read as a mesh.
+        The file cannot be read as a mesh or point cloud.
     MeshError
-        The file was read but its data are malformed (message names the file and the problem).
+        The file was read but its data are malformed (message names the file and the problem), or
+        a repair was asked of a point cloud.
     """
+    from .pointio import is_point_file, read_points
+
     path = Path(path)
+    if is_point_file(path):
+        asked = [name for name, on in (("merge_vertices", merge_vertices), ("remove_degenerate", remove_degenerate),
+                                       ("orient", orient), ("remove_unreferenced", remove_unreferenced)) if on]
+        if asked:
+            raise MeshError(f"{path}: is a point cloud; {', '.join(asked)} repair(s) meshes only")
+        return read_points(path)
     vertices, faces = read_arrays(path)
     try:
         mesh = Mesh(vertices, faces)
