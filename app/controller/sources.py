@@ -5,8 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from curv.io import load
-from curv.surfaces import make_surface
+from curv.surfaces import make_surface, sample_surface
 
+from app.model.inputs import unit_length
 from app.model.sources import FileSource, SurfaceSource
 
 __all__ = ["load_source", "prepare_source", "Loaded"]
@@ -38,9 +39,11 @@ class Loaded:
 
 
 def prepare_source(source, prepare=None) -> Loaded:
-    """:func:`load_source`, the mesh report, and ``prepare(mesh)`` if given; runs in a worker thread."""
+    """:func:`load_source`, the mesh (or point-cloud) report, the input's length unit and ``prepare(mesh)``
+    if given; runs in a worker thread."""
     source, mesh, truth = load_source(source)
     report = mesh.report().lines()
+    unit_length(mesh)  # a point cloud's spacing is a neighbour search: here, not on the GUI thread
     repairs = list(mesh.info.get("repairs", [])) if isinstance(getattr(mesh, "info", None), dict) else []
     return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh), repairs)
 
@@ -67,6 +70,11 @@ def load_source(source):
         flags = {name: True for name in source.repairs}
         flags.setdefault("merge_vertices", source.path.lower().endswith(".stl"))
         return source, load(source.path, **flags), None
+    if isinstance(source, SurfaceSource) and source.sampling is not None:
+        sampled = sample_surface(
+            source.name, n_points=source.n_vertices, sampling=source.sampling, noise=source.noise,
+            seed=source.seed, random_params=source.random_params, **source.params)
+        return replace(source, n_vertices=sampled.cloud.n_points), sampled.cloud, sampled.truth
     if isinstance(source, SurfaceSource):
         sampled = make_surface(
             source.name, n_vertices=source.n_vertices, irregularity=source.irregularity,

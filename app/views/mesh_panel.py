@@ -49,12 +49,12 @@ class MeshPanel(QWidget):
     def refresh(self) -> None:
         doc = self.doc
         if doc.mesh is None:
-            self.text.setText("<i>No mesh yet.</i>")
+            self.text.setText("<i>No mesh or point cloud yet.</i>")
         else:
             lines = [f"<b>{doc.source.label}</b>"] + list(doc.report)
             lines += [f"repair: {r}" for r in doc.repairs]
             self.text.setText("<br>".join(lines))
-        is_file = isinstance(doc.source, FileSource)
+        is_file = isinstance(doc.source, FileSource) and not doc.is_points  # the repairs mend faces
         for key, box in self.repairs.items():
             box.setEnabled(is_file)
             box.setChecked(is_file and key in doc.source.repairs)

@@ -8,6 +8,7 @@ from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QCheckBox, QFormLayout, QHBoxLayout, QLabel, QLineEdit, QPushButton, QWidget
 
 from app.model import Document, pane_letter
+from app.model.inputs import unit_length
 from app.model.region import REST_NOTE, ball_region, index_region, show_region, shown_region
 
 __all__ = ["RegionPanel", "vertices_in_view"]
@@ -121,7 +122,7 @@ class RegionPanel(QWidget):
 
     # -- model -> widgets ----------------------------------------------------------------------
     def _on_mesh(self, change) -> None:
-        self.radius.setText(f"{DEFAULT_RADIUS_EDGES * float(change.mesh.mean_edge_length):.3g}")
+        self.radius.setText(f"{DEFAULT_RADIUS_EDGES * unit_length(change.mesh):.3g}")
         self.sync()
 
     def _on_picked(self, index) -> None:
