@@ -393,7 +393,7 @@ def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: s
     # stands in, because plyfile writes list properties one face at a time (20 s at 1M faces)
     face_kind = PlyElement.describe(np.empty(0, dtype=[("vertex_indices", "i4", (3,))]), "face",
                                     len_types={"vertex_indices": "u1"}, val_types={"vertex_indices": "i4"})
-    face_kind.data = np.empty(mesh.n_faces, dtype=[("vertex_indices", "i4", (3,))])
+    face_kind.data = np.empty(0 if points_only else mesh.n_faces, dtype=[("vertex_indices", "i4", (3,))])
     vertex_element = PlyElement.describe(vert, "vertex")
     ply = PlyData([vertex_element] if points_only else [vertex_element, face_kind], text=False, byte_order="<",
                   comments=[" ".join(comment.split()), reason_legend()])
