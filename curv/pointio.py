@@ -87,14 +87,7 @@ def _named_normals(path: Path, names, kind: str) -> tuple[str, str, str] | None:
 
 
 def _cloud(path: Path, points: np.ndarray, normals: np.ndarray | None) -> PointCloud:
-    """The :class:`PointCloud`, after the checks that name the file: no points, NaN or infinite rows."""
-    if points.shape[0] == 0:
-        raise LoadError(f"{path}: has no points")
-    bad = ~np.isfinite(points).all(axis=1)
-    if bad.any():
-        first, more = int(np.flatnonzero(bad)[0]), int(bad.sum()) - 1
-        raise LoadError(f"{path}: point {first} has a NaN or infinite coordinate"
-                        + (f" (and {more} more points)" if more else ""))
+    """The :class:`PointCloud`; its own checks (no points, a NaN or infinite row) name the file."""
     try:
         return PointCloud(points, normals)
     except MeshError as exc:
