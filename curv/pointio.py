@@ -87,14 +87,7 @@ def _named_normals(path: Path, names, kind: str) -> tuple[str, str, str] | None:
 
 
 def _cloud(path: Path, points: np.ndarray, normals: np.ndarray | None) -> PointCloud:
-    """The :class:`PointCloud`, after the checks that name the file: no points, NaN or infinite rows."""
-    if points.shape[0] == 0:
-        raise LoadError(f"{path}: has no points")
-    bad = ~np.isfinite(points).all(axis=1)
-    if bad.any():
-        first, more = int(np.flatnonzero(bad)[0]), int(bad.sum()) - 1
-        raise LoadError(f"{path}: point {first} has a NaN or infinite coordinate"
-                        + (f" (and {more} more points)" if more else ""))
+    """The :class:`PointCloud`; its own checks (no points, a NaN or infinite row) name the file."""
     try:
         return PointCloud(points, normals)
     except MeshError as exc:
@@ -102,8 +95,8 @@ def _cloud(path: Path, points: np.ndarray, normals: np.ndarray | None) -> PointC
 
 
 def _columns(table, names) -> np.ndarray:
-    """(n, len(names)) float64 from the named columns of a structured array."""
-    out = np.empty((len(table), len(names)), dtype=np.float64)
+    """(n, len(names)) float64 from the named columns of a structured array (or dict of columns)."""
+    out = np.empty((len(table[names[0]]), len(names)), dtype=np.float64)
     for i, name in enumerate(names):
         out[:, i] = table[name]
     return out
@@ -181,6 +174,8 @@ def _read_text(path: Path) -> PointCloud:
         table = np.loadtxt(path, dtype=np.float64, delimiter=delimiter, comments="#", skiprows=skip, ndmin=2)
     except ValueError as exc:
         raise LoadError(f"{path}: not a readable point file ({_one_line(exc)})") from None
+    if table.size == 0:
+        raise LoadError(f"{path}: has no points")
     n_cols = table.shape[1]
     if header is not None:
         if len(header) != n_cols:

@@ -416,7 +416,7 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
 
 register(EstimatorSpec(
     name="jet", in_paper=False, title="Osculating jet fitting", ranges=(1, 2, 3, 4), function=iter_jet,
-    triangles_only=False, uses_normals=False, closed_ring=False,
+    triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True,
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     options={"degree": DEGREES},
