@@ -4,7 +4,7 @@ Examples
 --------
 curvlab part.ply
 curvlab scan.las --method jet --knn 20 --point-size 4
-curvlab --surface torus --sample blue_noise --vertices 20000 --method qs --compare jet:2 --screenshot out.png
+curvlab --surface torus --sample blue --vertices 20000 --method qs --compare jet:2 --screenshot out.png
 curvlab --surface torus --method mru --range 3 --quantity gaussian
 curvlab --surface ellipsoid_patch --method mru --range 2 --compare qs:2 --difference --screenshot out.png
 curvlab --surface box --method mru --range 2 --compare mru:2:30 --screenshot features.png

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+import numpy as np
 from curv.io import load
-from curv.surfaces import make_surface, sample_surface
+from curv.surfaces import SURFACES, make_surface, sample_points
 
-from app.model.inputs import unit_length
+from app.model.inputs import cloud_report, is_points
 from app.model.sources import FileSource, SurfaceSource
 
 __all__ = ["load_source", "prepare_source", "Loaded"]
@@ -42,8 +43,8 @@ def prepare_source(source, prepare=None) -> Loaded:
     """:func:`load_source`, the mesh (or point-cloud) report, the input's length unit and ``prepare(mesh)``
     if given; runs in a worker thread."""
     source, mesh, truth = load_source(source)
-    report = mesh.report().lines()
-    unit_length(mesh)  # a point cloud's spacing is a neighbour search: here, not on the GUI thread
+    # a cloud's facts need its neighbour search: done here, the cloud keeps it for the GUI thread
+    report = cloud_report(mesh) if is_points(mesh) else mesh.report().lines()
     repairs = list(mesh.info.get("repairs", [])) if isinstance(getattr(mesh, "info", None), dict) else []
     return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh), repairs)
 
@@ -71,9 +72,12 @@ def load_source(source):
         flags.setdefault("merge_vertices", source.path.lower().endswith(".stl"))
         return source, load(source.path, **flags), None
     if isinstance(source, SurfaceSource) and source.sampling is not None:
-        sampled = sample_surface(
-            source.name, n_points=source.n_vertices, sampling=source.sampling, noise=source.noise,
-            seed=source.seed, random_params=source.random_params, **source.params)
+        cls = SURFACES[source.name]
+        rng = np.random.default_rng(source.seed)  # one stream, as make_surface: parameters, then points
+        params = {**cls.random(rng).parameters, **source.params} if source.random_params else source.params
+        sampled = sample_points(cls(**params), source.n_vertices, sampling=source.sampling, noise=source.noise,
+                                rng=rng)
+        # blue noise and rows give about the count asked for: the source names the count the cloud has
         return replace(source, n_vertices=sampled.cloud.n_points), sampled.cloud, sampled.truth
     if isinstance(source, SurfaceSource):
         sampled = make_surface(

@@ -3,12 +3,12 @@ differ between them (every fact comes from the library)."""
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 from curv import PointCloud
+from curv.ranges import point_spacing
+from curv.surfaces import SAMPLINGS
 
-__all__ = ["is_points", "unit_length", "item_word", "items_word", "samplings", "POINT_SIZES", "DEFAULT_POINT_SIZE", "DEFAULT_KNN"]
+__all__ = ["is_points", "unit_length", "item_word", "items_word", "samplings", "can_sample_points", "cloud_report", "result_report", "SAMPLING_WORDS", "POINT_SIZES", "DEFAULT_POINT_SIZE", "DEFAULT_KNN"]
 
 POINT_SIZES = (1, 40)
 """The point-size control's range, in pixels."""
@@ -25,31 +25,59 @@ def is_points(obj) -> bool:
     return isinstance(obj, PointCloud)
 
 
-_UNITS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-
-
 def unit_length(obj) -> float:
     """The input's own length unit, for default radii and glyph lengths: a mesh's mean edge length, a
-    point cloud's median spacing (the unit of its range, :func:`curv.ranges.point_spacing`).
-
-    Remembered per input (a cloud's spacing is a neighbour search): the source worker asks first, so
-    the GUI thread's later questions cost nothing.
-    """
+    point cloud's median spacing (the unit of its range, :func:`curv.ranges.point_spacing`; the cloud
+    keeps its neighbour search, so the source worker's first question makes later ones cheap)."""
     if not is_points(obj):
         return float(obj.mean_edge_length)
-    unit = _UNITS.get(obj)
-    if unit is None:
-        from curv.ranges import point_spacing
+    spacing = point_spacing(obj)
+    finite = spacing[np.isfinite(spacing)]
+    return float(np.median(finite)) if finite.size else 1.0
 
-        unit = _UNITS[obj] = float(np.median(point_spacing(obj)))
-    return unit
+
+SAMPLING_WORDS = {"uniform": "uniform random", "blue": "blue noise", "rows": "scan rows"}
+"""How the Source panel names the library's samplings (a new one shows under its own name)."""
 
 
 def samplings() -> dict[str, str]:
-    """How the library samples a surface as points: ``{name: words}`` (``curv.surfaces.SAMPLINGS``)."""
-    from curv.surfaces import SAMPLINGS
+    """How the library samples a surface as points (``curv.surfaces.SAMPLINGS``): ``{name: words}``."""
+    return {name: SAMPLING_WORDS.get(name, name) for name in SAMPLINGS}
 
-    return dict(SAMPLINGS)
+
+def can_sample_points(surface_class) -> bool:
+    """Whether :func:`curv.surfaces.sample_points` takes this surface (it needs a smooth projection;
+    the creased solids have none)."""
+    return hasattr(surface_class, "project")
+
+
+def cloud_report(cloud) -> list[str]:
+    """The point-cloud report's lines before any estimate: points, spacing, normals, coincident points
+    (the facts are the library's: :func:`curv.ranges.point_spacing`, ``PointCloud.coincident_points``)."""
+    spacing = point_spacing(cloud)
+    finite = spacing[np.isfinite(spacing)]
+    lines = [f"{cloud.n_points:,} points, no faces"]
+    if finite.size:
+        lo, med, hi = np.percentile(finite, [5, 50, 95])
+        lines.append(f"spacing {med:.4g} (median; 5-95 %: {lo:.4g} .. {hi:.4g})")
+    lines.append("normals from the file" if cloud.normals is not None else
+                 "no normals in the file: each estimate fits and orients its own")
+    lines.append(f"coincident points {int(cloud.coincident_points.sum()):,}")
+    return lines
+
+
+def result_report(result) -> list[str]:
+    """What an estimate on a point cloud found out about it (``Curvature.info``): the normals it used,
+    border points, ambiguous normal orientations."""
+    info = result.info
+    if not info.get("points"):
+        return []
+    normals = info.get("normals")
+    lines = [None if not normals else "normals from the file" if normals == "file" else f"normals estimated ({normals})",
+             f"border points {info.get('border_points', 0):,} (on the rim of an open scan)"]
+    if info.get("ambiguous_normals"):
+        lines.append(f"ambiguous normals {info['ambiguous_normals']:,} (orientation undecided: no estimate there)")
+    return [line for line in lines if line]
 
 
 def item_word(obj) -> str:

@@ -13,7 +13,7 @@ from PySide6.QtWidgets import (
 from superqt import QLabeledDoubleSlider
 from superqt.utils import qdebounced
 
-from app.model.inputs import samplings
+from app.model.inputs import can_sample_points, samplings
 from app.model.sources import HEXAGON_SIZES, FileSource, SurfaceSource, snap_hexagon_count
 
 __all__ = ["SourcePanel"]
@@ -204,6 +204,13 @@ class SourcePanel(QWidget):
             self.params_form.addRow(p.name, spin)
             self.param_spins[p.name] = spin
         self.params_box.setEnabled(not self.random.isChecked())
+        points_ok = can_sample_points(self.surfaces[name])
+        for i in range(1, self.sampling.count()):  # the creased solids cannot be sampled as points
+            self.sampling.model().item(i).setEnabled(points_ok)
+        if not points_ok and self.sampling.currentData() != MESH:
+            self.sampling.blockSignals(True)
+            self.sampling.setCurrentIndex(0)
+            self.sampling.blockSignals(False)
         self._fill_sizes(name)
         self._show_sampling()
         can_random = issubclass(self.surfaces[name], MongePatch)

@@ -11,7 +11,7 @@ from PySide6.QtWidgets import QFrame, QLabel, QSizePolicy, QVBoxLayout
 from pyvistaqt import QtInteractor
 from vtkmodules.vtkCommonCore import vtkLookupTable
 from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
-from vtkmodules.vtkRenderingCore import vtkCellPicker, vtkPointPicker, vtkRenderer
+from vtkmodules.vtkRenderingCore import vtkCellPicker, vtkRenderer
 
 from app.model.colors import LABEL_FORMAT, contrasting_colours
 from app.model.inputs import DEFAULT_POINT_SIZE
@@ -83,7 +83,6 @@ class Viewport(QFrame):
         self._press = None
         self._picker = vtkCellPicker()
         self._picker.SetTolerance(0.002)
-        self._point_picker = vtkPointPicker()
         self.points_only = False
         self.plotter.installEventFilter(self)
         self.set_active(False)
@@ -266,17 +265,32 @@ class Viewport(QFrame):
         pts = np.asarray(self.poly.points)[ids]
         return int(ids[np.argmin(((pts - pos) ** 2).sum(axis=1))])
 
+    def clip_coordinates(self) -> np.ndarray:
+        """(n, 4) homogeneous clip coordinates of the drawn points through the camera (x, y, z in
+        [-w, w] inside the view, z growing away from the viewer)."""
+        renderer = self.plotter.renderer
+        camera = renderer.GetActiveCamera()
+        matrix = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1.0, 1.0)
+        m = np.array([[matrix.GetElement(r, c) for c in range(4)] for r in range(4)])
+        return np.asarray(self.poly.points) @ m[:, :3].T + m[:, 3]
+
     def _pick_point(self, x: float, y: float) -> int | None:
-        """The point of the cloud drawn under display position (x, y): the front-most point whose centre
-        lies within half a point's width of the ray (VTK's point picker)."""
-        w, h = self.plotter.ren_win.GetSize()
+        """The point of the cloud drawn under display position (x, y) (device pixels, bottom-left
+        origin): of the points whose sphere covers it, the nearest the viewer, as the depth test
+        draws them."""
+        clip = self.clip_coordinates()
+        w = clip[:, 3]
+        front = w > 0
+        ndc = clip[:, :3] / np.where(front, w, 1.0)[:, None]
+        x0, y0, x1, y1 = self.plotter.renderer.GetViewport()
+        width, height = self.plotter.ren_win.GetSize()
+        px = (x0 + 0.5 * (ndc[:, 0] + 1.0) * (x1 - x0)) * width
+        py = (y0 + 0.5 * (ndc[:, 1] + 1.0) * (y1 - y0)) * height
         radius = 0.5 * max(self.point_size or DEFAULT_POINT_SIZE, 4.0) * self.plotter.devicePixelRatioF()
-        self._point_picker.SetTolerance(radius / max(np.hypot(w, h), 1.0))
-        if not self._point_picker.Pick(x, y, 0, self.plotter.renderer):
+        hit = np.flatnonzero(front & ((px - x) ** 2 + (py - y) ** 2 <= radius * radius) & (np.abs(ndc[:, 2]) <= 1.0))
+        if hit.size == 0:
             return None
-        if self._point_picker.GetActor() is not self._mesh_actor or self._point_picker.GetPointId() < 0:
-            return None
-        return int(self._point_picker.GetPointId())
+        return int(hit[np.argmin(ndc[hit, 2])])
 
     def display_position(self, point) -> tuple[float, float]:
         """Widget position (Qt pixels) of a world point, the inverse of what picking uses."""

@@ -145,7 +145,7 @@ def test_pick_a_point_and_read_it_out(qtbot, window, ui):
 
 
 def test_compare_difference_and_truth_overlay_on_points(qtbot, window, ui):
-    _open_points(qtbot, window, ui, "ellipsoid_patch", n=3169, sampling="blue_noise")
+    _open_points(qtbot, window, ui, "ellipsoid_patch", n=3169, sampling="blue")
     doc = window.doc
     window.compare.count.setValue(2)
     ui.wait_ready()
@@ -202,7 +202,7 @@ def test_open_point_files_by_path_and_drop(qtbot, window, ui, tmp_path):
     doc = window.doc
     assert doc.is_points and doc.mesh.n_points == 1200 and doc.truth is None
     np.testing.assert_allclose(doc.mesh.normals, p / SPHERE_R)
-    assert "1200" in window.mesh_panel.text.text() and not window.mesh_panel.reload.isEnabled()
+    assert "1,200 points" in window.mesh_panel.text.text() and "normals from the file" in window.mesh_panel.text.text() and not window.mesh_panel.reload.isEnabled()
     assert np.nanmedian(doc.result(0).mean) == pytest.approx(1 / SPHERE_R, rel=0.1)
     assert not window.inspect.layer.model().item(list(Layer).index(Layer.E_REL)).isEnabled()
     ply = tmp_path / "dots.ply"
