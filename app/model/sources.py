@@ -8,6 +8,8 @@ from pathlib import Path
 
 from curv.surfaces.hexagon import PAPER_VERTEX_COUNTS as HEXAGON_SIZES
 
+from .inputs import SAMPLING_WORDS
+
 __all__ = ["FileSource", "SurfaceSource", "HEXAGON_SIZES", "snap_hexagon_count"]
 
 
@@ -73,7 +75,7 @@ class SurfaceSource:
     @property
     def label(self) -> str:
         if self.sampling is not None:
-            return f"{self.name} ({self.n_vertices} points, {self.sampling})"
+            return f"{self.name} ({self.n_vertices} points, {SAMPLING_WORDS.get(self.sampling, self.sampling)})"
         return f"{self.name} ({self.n_vertices} vertices)"
 
     @property

@@ -97,7 +97,7 @@ def glyph_subsample(n: int, *, count: int = 2000, seed: int = 0) -> np.ndarray:
 
 
 def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.ndarray,
-                     min_anisotropy: float = 0.02) -> tuple[pv.PolyData, pv.PolyData]:
+                     min_anisotropy: float = 0.02, lift: float | None = None) -> tuple[pv.PolyData, pv.PolyData]:
     """Line glyphs along d1 and d2 at ``index``, centred on the vertices.
 
     Parameters
@@ -110,6 +110,9 @@ def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.nda
         Subsample of vertices to draw.
     min_anisotropy : float
         Glyphs are hidden where ``|k1 - k2| / (|k1| + |k2|)`` is below this (umbilics: no direction).
+    lift : float, optional
+        How far along the normal the glyphs float (default 2 % of ``length``; above a point's
+        sphere on a point cloud).
 
     Returns
     -------
@@ -119,7 +122,7 @@ def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.nda
     aniso = anisotropy(k1, k2)
     keep = index[np.isfinite(aniso) & (aniso >= min_anisotropy)]
     out = []
-    lift = 0.02 * length * result.normals[keep]
+    lift = (0.02 * length if lift is None else lift) * result.normals[keep]
     for d in (result.d1, result.d2):
         half = 0.5 * length * d[keep]
         centre = points[keep] + lift

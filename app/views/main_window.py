@@ -44,6 +44,9 @@ MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.
                "Meshes (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf);;"
                "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.las *.laz);;All files (*)")
 DEFAULT_SOURCE = SurfaceSource(name="saddle", n_vertices=3169)
+ADVISE_TIP = ("Measure this mesh's noise, irregularity and density and rank the estimators and ranges by the "
+              "error the paper's study predicts; Apply in the Advice panel uses one (Ctrl+Shift+A)")
+ADVISE_POINTS_TIP = "The advisor ranks estimators for meshes (its table comes from the study's meshes), not point clouds"
 MAX_RECENT = 8
 GLYPH_PIXELS = 900
 """One direction glyph per this many pixels of a pane at most, so glyphs never bury the colours."""
@@ -166,9 +169,7 @@ class MainWindow(QMainWindow):
         self.action_advise = QAction("&Advise estimator and range", self, shortcut="Ctrl+Shift+A",
                                      triggered=self.advise)
         self.action_advise.setIconText("Advise")
-        self.action_advise.setToolTip(
-            "Measure this mesh's noise, irregularity and density and rank the estimators and ranges by the "
-            "error the paper's study predicts; Apply in the Advice panel uses one (Ctrl+Shift+A)")
+        self.action_advise.setToolTip(ADVISE_TIP)
         self.action_advise.setStatusTip("Rank the estimators and ranges for this mesh")
         est_menu.addActions([self.action_recompute, self.action_advise, self.action_cancel])
         self.inspect.advise_button.setDefaultAction(self.action_advise)
@@ -299,6 +300,9 @@ class MainWindow(QMainWindow):
         points = doc.is_points
         self.docks["readout"].setWindowTitle("Picked point" if points else "Picked vertex")
         self.docks["mesh"].setWindowTitle("Point cloud report" if points else "Mesh report")
+        # the advisor's table comes from the study's meshes: it has nothing to say about a point cloud
+        self.action_advise.setEnabled(not points)
+        self.action_advise.setToolTip(ADVISE_POINTS_TIP if points else ADVISE_TIP)
         if isinstance(change.source, SurfaceSource):
             self.source_panel.set_source(change.source)
         self.source_panel.show_current(change.source)
@@ -380,7 +384,11 @@ class MainWindow(QMainWindow):
             if state.show_directions and res is not None:
                 w, h = vp.plotter.width(), vp.plotter.height()
                 count = int(min(1500, max(doc.mesh.n_vertices // 6, 1), max(w * h // GLYPH_PIXELS, 50)))
-                vp.set_glyphs(direction_glyphs(doc.mesh.vertices, res, length=1.6 * self._geometry.edge_length,
+                length, lift = 1.6 * self._geometry.edge_length, None
+                if doc.is_points:  # glyphs as long as their own spacing, floating above the points' spheres
+                    length = 0.8 * self._geometry.edge_length * np.sqrt(doc.mesh.n_vertices / count)
+                    lift = (0.5 * state.point_size + 1.0) * vp.pixel_length()
+                vp.set_glyphs(direction_glyphs(doc.mesh.vertices, res, length=length, lift=lift,
                                                index=glyph_subsample(doc.mesh.n_vertices, count=count)))
             else:
                 vp.set_glyphs(None)

@@ -265,6 +265,14 @@ class Viewport(QFrame):
         pts = np.asarray(self.poly.points)[ids]
         return int(ids[np.argmin(((pts - pos) ** 2).sum(axis=1))])
 
+    def pixel_length(self) -> float:
+        """World length of one pixel at the camera's focal point."""
+        cam = self.plotter.renderer.GetActiveCamera()
+        height = max(self.plotter.renderer.GetSize()[1], 1)
+        if cam.GetParallelProjection():
+            return 2.0 * cam.GetParallelScale() / height
+        return 2.0 * cam.GetDistance() * np.tan(np.radians(cam.GetViewAngle()) / 2.0) / height
+
     def clip_coordinates(self) -> np.ndarray:
         """(n, 4) homogeneous clip coordinates of the drawn points through the camera (x, y, z in
         [-w, w] inside the view, z growing away from the viewer)."""

@@ -42,7 +42,7 @@ def test_sampled_torus_is_drawn_as_points_coloured_by_h(qtbot, window, ui):
     doc, vp = window.doc, window.grid.viewports[0]
     n = doc.mesh.n_points
     assert doc.is_points and isinstance(doc.mesh, curv.PointCloud) and abs(n - 3000) < 100
-    assert doc.source.label == f"torus ({n} points, uniform)"                # the count the cloud has
+    assert doc.source.label == f"torus ({n} points, uniform random)"                # the count the cloud has
     assert vp.points_only and vp.poly.n_cells == vp.poly.n_verts == n and vp.poly.GetNumberOfPolys() == 0
     prop = vp._mesh_actor.prop
     assert prop.style == "Points" and prop.render_points_as_spheres
@@ -63,7 +63,7 @@ def test_sampled_torus_is_drawn_as_points_coloured_by_h(qtbot, window, ui):
     assert window.docks["readout"].windowTitle() == "Picked point"
     assert window.docks["mesh"].windowTitle() == "Point cloud report"
     assert window.inspect.point_size.isEnabled() and not window.inspect.edges.isEnabled()
-    assert not window.feature_control.isEnabled()
+    assert not window.feature_control.isEnabled() and not window.action_advise.isEnabled()
 
 
 def test_point_size_control_grows_the_drawn_points(qtbot, window, ui):
@@ -229,7 +229,7 @@ def test_a_mesh_after_points_drops_knn_and_draws_faces(qtbot, window, ui):
     assert not doc.is_points and doc.panes[0].knn is None and doc.result(0) is not None
     assert not vp.points_only and vp.poly.GetNumberOfPolys() > 0 and vp._mesh_actor.prop.style == "Surface"
     assert not window.inspect.use_knn.isEnabled() and window.inspect.edges.isEnabled()
-    assert window.docks["readout"].windowTitle() == "Picked vertex"
+    assert window.docks["readout"].windowTitle() == "Picked vertex" and window.action_advise.isEnabled()
 
 
 def test_source_panel_samples_a_surface_as_points(qtbot, window, ui):
