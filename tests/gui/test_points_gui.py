@@ -257,3 +257,30 @@ def test_command_line_options_for_points(qtbot, window):
     for bad in (["--sample", "nosuch"], ["--point-size", "500"], ["--knn", "1"]):
         with pytest.raises(ValueError):
             configure(window, build_parser().parse_args(["--surface", "sphere", *bad]))
+
+
+def test_radius_directions_and_a_region_on_points(qtbot, window, ui):
+    _open_points(qtbot, window, ui, "torus", n=3000)
+    doc, ins, vp = window.doc, window.inspect, window.grid.viewports[0]
+    spacing = float(np.median(curv.ranges.point_spacing(doc.mesh)))
+    ins.use_radius.setChecked(True)                      # offered: two spacings, in mesh units
+    ui.wait_ready()
+    assert doc.panes[0].radius == pytest.approx(2 * spacing, rel=1e-5) and doc.panes[0].knn is None
+    assert doc.result(0) is not None and f"r={doc.panes[0].radius:g}" in vp.title.text()
+    ins.directions.setChecked(True)
+    d1, d2 = (a.mapper.dataset for a in vp._glyph_actors)
+    assert d1.n_cells > 50 and d1.n_cells == d2.n_cells
+    ends = np.asarray(d1.points).reshape(-1, 2, 3)
+    centre = ends.mean(axis=1)
+    nearest = np.argmin(((centre[:, None, :] - doc.mesh.points[None, :, :]) ** 2).sum(-1), axis=1)
+    lift = np.linalg.norm(centre - doc.mesh.points[nearest], axis=1)
+    assert np.all(lift > 0.5 * doc.display.state.point_size * vp.pixel_length())  # above the points' spheres
+    doc.set_picked(0)
+    window.region_panel.around.click()
+    ui.wait_ready()
+    region = doc.panes[0].region
+    assert region is not None and 0 < region.size < doc.mesh.n_points and 0 in region.vertices
+    own = doc.results[doc.panes[0].key]                    # estimated only there
+    outside = np.setdiff1d(np.arange(doc.mesh.n_points), region.vertices)
+    assert np.all(own.reason[outside] == curv.Reason.NOT_COMPUTED)
+    assert own.valid[region.vertices].mean() > 0.9
