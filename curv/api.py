@@ -111,6 +111,10 @@ def iter_estimate(
         kernel_normals[feats.vertices] = np.nan
     raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=centres,
                                    features=feats if on_crease else None, **options)
+    for mask_of in flags.support_marks:
+        # checks of the supports themselves (points: a support along a line), on the estimated rows
+        mask, code = yield from mask_of(radii, centres)
+        flags = flags.marked(mask, code)
     if fused:
         used_normals = raw.normals
 
@@ -180,6 +184,13 @@ class _Flags:
     marks: tuple
     info: dict
     forced: tuple = ()
+    support_marks: tuple = ()
+    """Generators ``(radii, centres) -> (mask, Reason)`` run after the estimate."""
+
+    def marked(self, mask: np.ndarray, code) -> "_Flags":
+        """These flags with one more ``(mask, code)`` mark, applied last."""
+        return _Flags(isolated=self.isolated, marks=self.marks + ((mask, code),), info=self.info,
+                      forced=self.forced[1:])
 
     def __post_init__(self):
         object.__setattr__(self, "forced", ((self.isolated, Reason.DEGENERATE),) + tuple(self.forced))
@@ -252,8 +263,19 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
         # on the rim of an open scan the fits see one side only, as on a mesh border
         (border, Reason.BORDER),
     ), info={"border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
-             "ambiguous_normals": int(ambiguous.sum())})
+             "ambiguous_normals": int(ambiguous.sum())}, support_marks=(_line_supports(cloud),))
     return used, flags, label
+
+
+def _line_supports(cloud: PointCloud):
+    """A support check: points whose support lies along a line are SINGULAR (:data:`curv.point_normals.MIN_SPREAD`)."""
+    from .point_normals import MIN_SPREAD, support_spread
+
+    def check(radii, centres):
+        spread = yield from support_spread(cloud, radii, centres)
+        return ~(spread >= MIN_SPREAD), Reason.SINGULAR
+
+    return check
 
 
 def _check_vertices(vertices, n: int) -> np.ndarray | None:

@@ -40,7 +40,8 @@ from .neighbourhood import all_centres, ball_support, cached_with_mesh, coordina
 from .pointcloud import PointCloud
 from .ranges import ball_radii, resolve
 
-__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points",
+__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "support_spread",
+           "MIN_SPREAD", "BORDER_RANGE",
            "NORMAL_RANGE", "BORDER_GAP", "AGREE_COSINE", "GRAZING_COSINE", "NORMAL_METHODS"]
 
 NORMAL_RANGE = 2
@@ -62,6 +63,12 @@ GRAZING_COSINE = 0.05
 """Orienting towards a viewpoint fails for normals within ~3 degrees of perpendicular to the view ray."""
 
 NORMAL_METHODS = ("pca", "jet")
+
+MIN_SPREAD = 0.05
+"""A support whose offsets' second principal spread is below this fraction of the first is nearly
+a line (e.g. the six nearest points of a scan row): no fit of a surface is determined by it, so
+the point is ``SINGULAR`` (:func:`support_spread`). On scan rows 4:1 apart, ``mru`` and ``an`` at
+R2 passed the fits' own singularity test there with median errors in H of 1.0 and 320."""
 
 
 @jit_parallel
@@ -134,6 +141,60 @@ def _frame_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues
             gap[p] = widest
 
 
+@jit_parallel
+def _spread_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues, spread):
+    parts = stamps.shape[0]
+    for t in prange(parts):
+        queue = queues[t]
+        stamp = stamps[t]
+        cov = np.empty((3, 3))
+        vecs = np.empty((4, 3))
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for i in range(start, stop):
+            p = centres[i]
+            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
+            cov[:, :] = 0.0
+            for j in range(1, count):
+                q = queue[j]
+                d0, d1, d2 = x[q] - x[p], y[q] - y[p], z[q] - z[p]
+                cov[0, 0] += d0 * d0
+                cov[0, 1] += d0 * d1
+                cov[0, 2] += d0 * d2
+                cov[1, 1] += d1 * d1
+                cov[1, 2] += d1 * d2
+                cov[2, 2] += d2 * d2
+            cov[1, 0] = cov[0, 1]
+            cov[2, 0] = cov[0, 2]
+            cov[2, 1] = cov[1, 2]
+            sym3_eigen(cov, vecs)
+            spread[p] = math.sqrt(max(vecs[3, 1], 0.0) / vecs[3, 2]) if vecs[3, 2] > 0.0 else 0.0
+
+
+def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | None = None,
+                   *, chunk: int | None = None):
+    """(n,) float64: how far from a line each support is, a generator (yields the fraction done).
+
+    The square root of the ratio of the second to the largest eigenvalue of ``sum (q - p)(q - p)^T``
+    over the support of p (1 for an even disc, 0 for points on a line through p); compared with
+    :data:`MIN_SPREAD`. Rows outside ``centres`` are left unset.
+    """
+    n = cloud.n_points
+    centres = all_centres(n, centres)
+    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
+    x, y, z = coordinate_columns(cloud)
+    radius = np.ascontiguousarray(radii, dtype=np.float64)
+    parts = max(1, min(threads(), centres.size))
+    stamps = new_scratch(n, parts)
+    queues = new_queues(n, parts)
+    spread = np.empty(n)
+
+    def run(lo: int, hi: int) -> None:
+        launch(_spread_kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues, spread)
+
+    yield from iter_chunks(centres.size, run, chunk=chunk)
+    return spread
+
+
 def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = None):
     """Unoriented PCA normals and angular gaps over each point's ball support (a generator).
 
@@ -161,7 +222,7 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
     """
     n = cloud.n_points
     centres = all_centres(n, None)
-    adj_ptr, adj = expansion_adjacency(cloud)
+    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
     x, y, z = coordinate_columns(cloud)
     radius = np.ascontiguousarray(radii, dtype=np.float64)
     parts = max(1, min(threads(), n))

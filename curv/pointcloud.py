@@ -1,9 +1,10 @@
 """The point-cloud model: a surface sampled as points, with or without normals, and no faces.
 
 A point cloud offers the estimators what a mesh offers them, so that one kernel per estimator
-serves both: positions (``vertices``), an ``adjacency`` to search supports along (here the
-symmetric graph of each point's :data:`curv.knn.GRAPH_NEIGHBOURS` nearest, in place of the mesh
-edges), and the per-vertex flags the API reads (``isolated_vertices``, ``nonmanifold_vertices``,
+serves both: positions (``vertices``), an ``adjacency`` (here the
+symmetric graph of each point's :data:`curv.knn.GRAPH_NEIGHBOURS` nearest, along which normals are
+oriented), a ``grid`` that gives every support exactly (the ball around the point, as the mesh's
+search gives the ball's connected vertices), and the per-vertex flags the API reads (``isolated_vertices``, ``nonmanifold_vertices``,
 ``coincident_points``). What a point's range unit is (its spacing) is :mod:`curv.ranges`' rule.
 """
 
@@ -15,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import MeshError
-from .knn import GRAPH_NEIGHBOURS, nearest_neighbours, symmetric_graph
+from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, symmetric_graph
 
 __all__ = ["PointCloud"]
 
@@ -89,6 +90,30 @@ class PointCloud:
         return self.n_points
 
     @cached_property
+    def grid(self):
+        """The uniform grid over the points (:func:`curv.knn.build_grid`), made once: it answers the
+        nearest-neighbour queries and every ball support of an estimate."""
+        return build_grid(self._points, GRAPH_NEIGHBOURS)
+
+    def ball_grid(self, radii: np.ndarray):
+        """A grid whose cells suit balls of these radii (cell edge ~1.25 x their median), cached.
+
+        A ball then spans one ring of cells around its centre's cell for most points, so a
+        support is searched among about four times its own size. Cell edges are rounded to
+        steps of 2^(1/4), so that nearby radii share a grid.
+        """
+        r = float(np.median(radii))
+        if not (np.isfinite(r) and r > 0):
+            return self.grid
+        step = round(4.0 * np.log2(1.25 * r))
+        cache = self.__dict__.setdefault("_ball_grids", {})
+        if step not in cache:
+            if len(cache) >= 4:
+                cache.pop(next(iter(cache)))
+            cache[step] = build_grid(self._points, cell=2.0 ** (step / 4.0))
+        return cache[step]
+
+    @cached_property
     def nearest(self) -> tuple[np.ndarray, np.ndarray]:
         """The :data:`~curv.knn.GRAPH_NEIGHBOURS` nearest other points of every point (computed once).
 
@@ -99,7 +124,7 @@ class PointCloud:
         distances : (n, G) float64
             Ascending (inf with -1). Read-only.
         """
-        indices, distances = nearest_neighbours(self._points, GRAPH_NEIGHBOURS)
+        indices, distances = nearest_neighbours(self._points, GRAPH_NEIGHBOURS, self.grid)
         for arr in (indices, distances):
             arr.setflags(write=False)
         return indices, distances
@@ -117,7 +142,7 @@ class PointCloud:
             if k <= GRAPH_NEIGHBOURS:
                 out = np.ascontiguousarray(self.nearest[1][:, k - 1])
             else:
-                out = np.ascontiguousarray(nearest_neighbours(self._points, k)[1][:, -1])
+                out = np.ascontiguousarray(nearest_neighbours(self._points, k, self.grid)[1][:, -1])
             out.setflags(write=False)
             cache[k] = out
         return cache[k]
@@ -127,8 +152,7 @@ class PointCloud:
         """(n, n) int8 CSR neighbour graph: p and q are joined if either is among the other's
         :data:`~curv.knn.GRAPH_NEIGHBOURS` nearest (symmetric, sorted indices).
 
-        It plays the part of the mesh edges: a support is every point reachable through it inside
-        the ball (:mod:`curv.neighbourhood`), and normals are oriented along it.
+        Normals are oriented along it (:mod:`curv.point_normals`); supports come from the grid.
         """
         indptr, neighbours = symmetric_graph(self.nearest[0])
         n = self.n_points

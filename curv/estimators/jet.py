@@ -322,7 +322,7 @@ def check_degree(degree) -> int:
 
 
 def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, features):
-    indptr, indices = expansion_adjacency(mesh, blocked_vertices(features))
+    indptr, indices = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
     ref = np.ascontiguousarray(normals, dtype=np.float64)
