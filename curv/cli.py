@@ -351,7 +351,7 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("--normals", choices=["max", "area", "angle", "fit", "pca"],
                        help="vertex normals: Max, area or angle weighted face normals, or a local jet fit "
                             "(R2); default max (the paper's protocol). Point clouds: the file's normals, "
-                            "else pca (local plane fit, R2); fit is a jet fit")
+                            "else fit (jet fits, R2); pca: local plane fits")
     p_est.add_argument("--orient-normals", nargs="+", metavar="up|outward|X Y Z",
                        help="point clouds whose normals are estimated: turn them up (+z, default), outward, "
                             "or towards a viewpoint X Y Z (a scanner's position)")

@@ -51,8 +51,8 @@ def check_point_options(args, spec) -> None:
     if given:
         raise CurvError(f"{args.input} is a point cloud; {', '.join(given)} need(s) a mesh's faces")
     if args.normals in _MESH_NORMALS:
-        raise CurvError(f"--normals {args.normals} weights face normals; on a point cloud use pca or fit "
-                        f"(default: the file's normals, else pca)")
+        raise CurvError(f"--normals {args.normals} weights face normals; on a point cloud use fit (jet) or pca "
+                        f"(default: the file's normals, else jet fits)")
     args.orient_normals_given = args.orient_normals is not None
     args.orient_normals = _orientation(args.orient_normals)
 

@@ -77,7 +77,7 @@ def test_knn_radius_and_range_run_and_are_named(files, capsys, flags, label):
 def test_estimated_normals_orientation_sets_the_sign(files, tmp_path, capsys, orient, sign):
     out = tmp_path / "o.ply"
     code, text, _ = _run(capsys, files["bare"], "-m", "qs", "-r", "2", "-q", "-o", out, *orient)
-    assert code == 0 and "normals estimated (pca" in text
+    assert code == 0 and "normals estimated (jet R2" in text
     v = plyfile.PlyData.read(str(out))["vertex"].data
     ok = v["valid"] == 1
     assert ok.mean() > 0.9
