@@ -35,7 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--sample", metavar="HOW", help="sample the surface as a point cloud instead of meshing it: "
                                                       + ", ".join(_sampling_names()))
     src.add_argument("--irregularity", type=float, default=0.0, help="RMS angle deviation in degrees (0-25)")
-    src.add_argument("--noise", type=float, default=0.0, help="Gaussian noise in mean edge lengths")
+    src.add_argument("--noise", type=float, default=0.0, help="Gaussian noise in mean edge lengths (in mean spacings with --sample)")
     src.add_argument("--seed", type=int, default=0)
     est = p.add_argument_group("estimate and display")
     est.add_argument("--method", help="estimator of pane A (default: the last session's panes, else the "

@@ -207,8 +207,8 @@ class Controller(QObject):
         secs = result.info.get("seconds")
         took = f" in {secs:.2f} s" if secs is not None else ""
         of = "" if computed == result.n else f" of {computed} computed"
-        item = item_word(self.doc.mesh)
-        self.message.emit(f"{key[0]} {key[1]}{took}; {count_text(n_bad, f'invalid {item}', f'invalid {items_word(self.doc.mesh)}')}{of}")
+        bad = count_text(n_bad, f"invalid {item_word(self.doc.mesh)}", f"invalid {items_word(self.doc.mesh)}")
+        self.message.emit(f"{key[0]} {key[1]}{took}; {bad}{of}")
         self._update_busy()
 
     def _estimate_failed(self, worker, gen, key, exc) -> None:

@@ -40,8 +40,8 @@ class Loaded:
 
 
 def prepare_source(source, prepare=None) -> Loaded:
-    """:func:`load_source`, the mesh (or point-cloud) report, the input's length unit and ``prepare(mesh)``
-    if given; runs in a worker thread."""
+    """:func:`load_source`, the mesh (or point-cloud) report and ``prepare(mesh)`` if given; runs in a
+    worker thread."""
     source, mesh, truth = load_source(source)
     # a cloud's facts need its neighbour search: done here, the cloud keeps it for the GUI thread
     report = cloud_report(mesh) if is_points(mesh) else mesh.report().lines()

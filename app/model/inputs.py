@@ -8,7 +8,8 @@ from curv import PointCloud
 from curv.ranges import point_spacing
 from curv.surfaces import SAMPLINGS
 
-__all__ = ["is_points", "unit_length", "item_word", "items_word", "samplings", "can_sample_points", "cloud_report", "result_report", "SAMPLING_WORDS", "POINT_SIZES", "DEFAULT_POINT_SIZE", "DEFAULT_KNN"]
+__all__ = ["is_points", "unit_length", "item_word", "items_word", "samplings", "can_sample_points", "cloud_report",
+           "result_report", "SAMPLING_WORDS", "POINT_SIZES", "DEFAULT_POINT_SIZE", "DEFAULT_KNN"]
 
 POINT_SIZES = (1, 40)
 """The point-size control's range, in pixels."""
@@ -73,8 +74,8 @@ def result_report(result) -> list[str]:
     if not info.get("points"):
         return []
     normals = info.get("normals")
-    lines = [None if not normals else "normals from the file" if normals == "file" else f"normals estimated ({normals})",
-             f"border points {info.get('border_points', 0):,} (on the rim of an open scan)"]
+    said = None if not normals else "normals from the file" if normals == "file" else f"normals estimated ({normals})"
+    lines = [said, f"border points {info.get('border_points', 0):,} (on the rim of an open scan)"]
     if info.get("ambiguous_normals"):
         lines.append(f"ambiguous normals {info['ambiguous_normals']:,} (orientation undecided: no estimate there)")
     return [line for line in lines if line]
