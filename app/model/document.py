@@ -227,7 +227,7 @@ class Document:
         on a mesh, and an estimator the input rules out (:func:`curv.estimators.refusal`: a face-based
         one on a point cloud) replaced by the first default pane that runs on it and is not shown yet."""
         panes = [replace(p.whole, knn=p.knn if is_points(mesh) else None) for p in self.panes]
-        runs = [p for p in self.default_panes if refusal(ESTIMATORS[p.method], mesh) is None]
+        runs = self._runnable_defaults(mesh)
         for i, p in enumerate(panes):
             if refusal(ESTIMATORS[p.method], mesh) is not None:
                 shown = {q.method for q in panes}
@@ -235,6 +235,12 @@ class Document:
                 if spare:
                     panes[i] = spare[0]
         return panes
+
+    def _runnable_defaults(self, mesh) -> list[Pane]:
+        """The default panes whose estimator runs on ``mesh`` (all of them before any input)."""
+        if mesh is None:
+            return list(self.default_panes)
+        return [p for p in self.default_panes if refusal(ESTIMATORS[p.method], mesh) is None]
 
     @property
     def is_points(self) -> bool:
@@ -283,12 +289,14 @@ class Document:
         raise KeyError(key)
 
     def set_pane_count(self, n: int) -> None:
-        """Show ``n`` panes (1 to :data:`MAX_PANES`); new panes take the next default estimator."""
+        """Show ``n`` panes (1 to :data:`MAX_PANES`); new panes take the next default estimator that runs
+        on the input."""
         n = int(min(max(n, 1), MAX_PANES))
         if n == len(self.panes):
             return
+        runs = self._runnable_defaults(self.mesh) or list(self.default_panes)
         while len(self.panes) < n:
-            self.panes.append(self.default_panes[len(self.panes) % len(self.default_panes)])
+            self.panes.append(runs[len(self.panes) % len(runs)])
         del self.panes[n:]
         self._last_good = {i: p for i, p in self._last_good.items() if i < n}
         self.active = min(self.active, n - 1)

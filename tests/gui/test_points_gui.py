@@ -285,3 +285,23 @@ def test_radius_directions_and_a_region_on_points(qtbot, window, ui):
     outside = np.setdiff1d(np.arange(doc.mesh.n_points), region.vertices)
     assert np.all(own.reason[outside] == curv.Reason.NOT_COMPUTED)
     assert own.valid[region.vertices].mean() > 0.9
+
+
+def test_panes_on_a_cloud_take_estimators_that_run_on_points():
+    from app.model import Document
+
+    order = ("mru", "meyer", "nc", "csm", "qs", "jet")                # face-based ones early
+    defaults = tuple(Pane.default(m) for m in order)
+    doc = Document(default_panes=defaults)
+    doc.set_pane_count(3)
+    assert [p.method for p in doc.panes] == ["mru", "meyer", "nc"]
+    cloud = curv.PointCloud(np.random.default_rng(0).normal(size=(200, 3)))
+    doc.set_mesh(None, cloud)                                # meyer cannot run on points: replaced
+    assert [p.method for p in doc.panes] == ["mru", "qs", "nc"]
+    doc.set_pane_count(1)
+    doc.set_pane_count(4)                                    # new panes: the defaults that run on points
+    assert [p.method for p in doc.panes] == ["mru", "nc", "qs", "jet"]
+    doc.set_mesh(None, curv.surfaces.make_surface("sphere", n_vertices=162).mesh)
+    doc.set_pane_count(1)
+    doc.set_pane_count(4)                                    # a mesh: the defaults in their order
+    assert [p.method for p in doc.panes] == ["mru", "meyer", "nc", "csm"]
