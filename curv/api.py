@@ -166,8 +166,7 @@ def iter_estimate(
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
               "feature_edges": 0 if feats is None else int(feats.edges.sum()),
-              "region": mesh.n_vertices if centres is None else int(centres.size),
-              "points": isinstance(mesh, PointCloud), **flags.info},
+              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info},
     )
 
 
@@ -190,10 +189,7 @@ class _Flags:
     def marked(self, mask: np.ndarray, code) -> "_Flags":
         """These flags with one more ``(mask, code)`` mark, applied last."""
         return _Flags(isolated=self.isolated, marks=self.marks + ((mask, code),), info=self.info,
-                      forced=self.forced[1:])
-
-    def __post_init__(self):
-        object.__setattr__(self, "forced", ((self.isolated, Reason.DEGENERATE),) + tuple(self.forced))
+                      forced=self.forced)
 
 
 def _mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_iterations, smooth_strength,
@@ -223,7 +219,8 @@ def _mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_iter
         if meaningless.any():
             used_normals = used_normals.copy()
             used_normals[meaningless] = np.nan
-    flags = _Flags(isolated=mesh.isolated_vertices, info={}, marks=(
+    flags = _Flags(isolated=mesh.isolated_vertices, info={"points": False},
+                   forced=((mesh.isolated_vertices, Reason.DEGENERATE),), marks=(
         # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
         (mesh.nonmanifold_vertices, Reason.NONMANIFOLD),
         # faces of opposite orientation meet here: the vertex normal is meaningless
@@ -257,12 +254,13 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
         used, label = _check_normals(normals, n), "given"
     border = border_points(cloud)
     coincident = cloud.coincident_points
-    flags = _Flags(isolated=cloud.isolated_vertices, forced=((ambiguous, Reason.ORIENTATION),), marks=(
+    flags = _Flags(isolated=cloud.isolated_vertices,
+                   forced=((cloud.isolated_vertices, Reason.DEGENERATE), (ambiguous, Reason.ORIENTATION)), marks=(
         # a repeat of an earlier point: that one stands for it
         (coincident, Reason.DEGENERATE),
         # on the rim of an open scan the fits see one side only, as on a mesh border
         (border, Reason.BORDER),
-    ), info={"border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
+    ), info={"points": True, "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
              "ambiguous_normals": int(ambiguous.sum())}, support_marks=(_line_supports(cloud),))
     return used, flags, label
 

@@ -261,7 +261,10 @@ def grid_ball(p, radius2, cells, coords, x, y, z, queue):
     cy = min(max(int(math.floor((py - origin[1]) / h)), 0), ny - 1)
     cz = min(max(int(math.floor((pz - origin[2]) / h)), 0), nz - 1)
     # cells far enough that a ball of this radius around any point of p's cell stays inside
-    ring = int(math.ceil(math.sqrt(radius2) / h))
+    widest = max(nx, max(ny, nz))
+    reach = math.sqrt(radius2) / h
+    # an infinite or huge ball (fewer points than knn=K asks for) covers the whole grid
+    ring = widest if not reach < widest else int(math.ceil(reach))
     z0 = max(cz - ring, 0)
     z1 = min(cz + ring, nz - 1)
     queue[0] = p

@@ -267,6 +267,8 @@ def ball_radii(mesh, rng: Range, *, uses_normals: bool) -> np.ndarray:
     if rng.knn is not None:
         if not isinstance(mesh, PointCloud):
             raise EstimatorError("knn= is for point clouds; on a mesh give range= or radius=")
+        if rng.knn >= mesh.n_points:
+            raise EstimatorError(f"knn={rng.knn} needs more than {rng.knn} points; the cloud has {mesh.n_points}")
         return (1.0 + TIE_TOLERANCE) * mesh.kth_distance(rng.knn)
     factor = support_factor(rng.k, uses_normals=uses_normals)
     return (factor * (1.0 + TIE_TOLERANCE)) * unit_lengths(mesh)

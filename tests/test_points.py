@@ -131,6 +131,8 @@ def test_options_that_need_faces_or_points_refuse(sphere2):
     for bad in (2, 0, 3.5, True):
         with pytest.raises(EstimatorError, match="knn must be"):
             curv.estimate(sphere2.cloud, "qs", knn=bad)
+    with pytest.raises(EstimatorError, match="knn=20 needs more than 20 points; the cloud has 12"):
+        curv.estimate(curv.PointCloud(sphere2.cloud.points[:12]), "qs", knn=20)
     with pytest.raises(EstimatorError, match="one of range=, radius= or knn="):
         curv.estimate(sphere2.cloud, "qs", range=2, knn=10)
 
