@@ -268,7 +268,11 @@ def _cmd_advise(args) -> int:
 
     from .advisor import advise
     from .io import load
+    from .pointio import is_point_file
 
+    if is_point_file(args.input):
+        raise CurvError(f"{args.input} is a point cloud; curv advise ranks estimators for meshes only "
+                        f"(its table comes from the mesh study)")
     mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
                 orient=args.orient, remove_unreferenced=args.remove_unreferenced)
     adv = advise(mesh)

@@ -190,3 +190,10 @@ def test_list_names_the_estimators_that_take_points(capsys):
     taking = {name for name, row in rows.items() if row[column:column + 7].strip() == "yes"}
     assert {"qs", "nc", "an", "mru", "jet"} <= taking and not {"meyer", "csm", "ru", "icc"} & taking
     assert taking == {name for name, spec in curv.ESTIMATORS.items() if spec.takes_points}
+
+
+def test_advise_refuses_a_point_cloud_in_one_line(files, capsys):
+    assert main(["advise", str(files["normals"])]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("is a point cloud; curv advise ranks estimators for meshes only (its table comes from "
+                        "the mesh study)") and len(err.splitlines()) == 1
