@@ -15,7 +15,7 @@ DEB_PKGS := xvfb xauth libgl1 libegl1 libglx-mesa0 libgl1-mesa-dri libxkbcommon-
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[gui,study,test,bench]'
+	$(PY) -m pip install --quiet -e '.[gui,study,points,test,bench]'
 	touch $(STAMP)
 
 venv: $(STAMP)

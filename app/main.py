@@ -3,6 +3,8 @@
 Examples
 --------
 curvlab part.ply
+curvlab scan.las --method jet --knn 20 --point-size 4
+curvlab --surface torus --sample blue --vertices 20000 --method qs --compare jet:2 --screenshot out.png
 curvlab --surface torus --method mru --range 3 --quantity gaussian
 curvlab --surface ellipsoid_patch --method mru --range 2 --compare qs:2 --difference --screenshot out.png
 curvlab --surface box --method mru --range 2 --compare mru:2:30 --screenshot features.png
@@ -21,21 +23,27 @@ __all__ = ["main", "build_parser", "configure"]
 
 def build_parser() -> argparse.ArgumentParser:
     """The command-line interface of ``curvlab``."""
-    p = argparse.ArgumentParser(prog="curvlab", description="Estimate and inspect the curvature of surface meshes.")
-    p.add_argument("mesh", nargs="?", help="mesh file to open (PLY, OBJ, STL, OFF, glTF, ...)")
+    p = argparse.ArgumentParser(prog="curvlab", description="Estimate and inspect the curvature of surface meshes and point clouds.")
+    p.add_argument("mesh", nargs="?", help="mesh or point-cloud file to open (PLY, OBJ, STL, OFF, glTF, ...; "
+                                          "xyz, txt, csv, PCD, LAS, LAZ and vertex-only PLY are point clouds)")
     src = p.add_argument_group("synthetic surface (default when no mesh is given)")
     src.add_argument("--surface", help="analytic surface name, e.g. sphere, torus, ellipsoid_patch")
     src.add_argument("--param", action="append", default=[], metavar="NAME=VALUE", help="surface parameter")
     src.add_argument("--random", action="store_true", help="draw the surface parameters at random from --seed")
-    src.add_argument("--vertices", type=int, help="vertex count (217, 817, 3169, 12481 for the hexagon)")
+    src.add_argument("--vertices", type=int, help="vertex count (217, 817, 3169, 12481 for the hexagon), or point count "
+                                                  "with --sample")
+    src.add_argument("--sample", metavar="HOW", help="sample the surface as a point cloud instead of meshing it: "
+                                                      + ", ".join(_sampling_names()))
     src.add_argument("--irregularity", type=float, default=0.0, help="RMS angle deviation in degrees (0-25)")
-    src.add_argument("--noise", type=float, default=0.0, help="Gaussian noise in mean edge lengths")
+    src.add_argument("--noise", type=float, default=0.0, help="Gaussian noise in mean edge lengths (in mean spacings with --sample)")
     src.add_argument("--seed", type=int, default=0)
     est = p.add_argument_group("estimate and display")
     est.add_argument("--method", help="estimator of pane A (default: the last session's panes, else the "
                                       "registry's default estimator)")
     est.add_argument("--range", help="range k of Rk for pane A (2, R2, 2.5 or R2.5)")
     est.add_argument("--radius", type=float, help="fixed support radius of pane A in mesh units (instead of --range)")
+    est.add_argument("--knn", type=int, metavar="K", help="point clouds: the support of pane A is the K nearest points "
+                                                          "(instead of --range)")
     est.add_argument("--features", type=float, metavar="DEG",
                      help="feature angle of pane A in degrees: edges sharper than this are creases (default off)")
     est.add_argument("--compare", action="append", default=[], metavar="M:R[:DEG]",
@@ -46,6 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "session's, else estimate)")
     est.add_argument("--directions", action="store_true", help="draw principal direction glyphs")
     est.add_argument("--borders", action="store_true", help="draw border edges and the panes' feature edges")
+    est.add_argument("--point-size", type=float, metavar="PX", help="width of a point cloud's points in pixels")
     est.add_argument("--cmap", help="colour map for the shown field")
     est.add_argument("--limits", help="colour limits LO,HI (default: symmetric 2-98 %% percentiles)")
     est.add_argument("--advise", action="store_true",
@@ -55,6 +64,12 @@ def build_parser() -> argparse.ArgumentParser:
     snap.add_argument("--size", default="1400x860", help="window size WxH for the snapshot")
     snap.add_argument("--timeout", type=float, default=300.0, help="seconds before the snapshot gives up")
     return p
+
+
+def _sampling_names() -> list[str]:
+    from app.model.inputs import samplings
+
+    return list(samplings())
 
 
 def _quantity_names() -> list[str]:
@@ -79,7 +94,7 @@ def configure(window, args) -> object:
     from app.views.main_window import DEFAULT_SOURCE
 
     explicit = (args.method is not None or args.range is not None or args.radius is not None or args.compare
-                or args.features is not None)
+                or args.features is not None or args.knn is not None)
     # a missing range is the estimator's default one (curv.ranges decides), a radius replaces it
     panes = [(args.method or DEFAULT_ESTIMATOR, args.range, args.features)] + [
         tuple((c.split(":", 2) + [None, None])[:3]) for c in args.compare]
@@ -90,16 +105,19 @@ def configure(window, args) -> object:
         if method not in ESTIMATORS:
             raise ValueError(f"unknown estimator {method!r}; choose one of {', '.join(ESTIMATORS)}")
         radius = args.radius if i == 0 else None
+        knn = args.knn if i == 0 else None
         try:
             pane = Pane.default(method) if not k else Pane(method, k).validated()
-            checked.append(Pane(method, pane.range, radius, features if features not in (None, "") else None).validated())
+            checked.append(Pane(method, pane.range, radius, features if features not in (None, "") else None,
+                                knn=knn).validated())
         except EstimatorError as exc:
             raise ValueError(str(exc)) from None
     doc = window.doc
     if explicit or args.screenshot:  # otherwise the panes remembered from the last session stay
         doc.set_pane_count(len(checked))
         for i, pane in enumerate(checked):
-            doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, features=pane.features)
+            doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, features=pane.features,
+                         knn=pane.knn)
     if args.difference or explicit or args.screenshot:
         doc.set_difference(args.difference)
     try:  # not given: the last session's (a snapshot starts from empty settings, so from the defaults)
@@ -109,6 +127,12 @@ def configure(window, args) -> object:
         raise ValueError(f"unknown quantity {args.quantity!r} or --show {args.show!r}; quantities: "
                          f"{', '.join(q.value for q in Quantity)}; show: {', '.join(x.value for x in Layer)}") from None
     changes = dict(show_directions=args.directions, show_borders=args.borders)
+    if args.point_size is not None:
+        from app.model.inputs import POINT_SIZES
+
+        if not POINT_SIZES[0] <= args.point_size <= POINT_SIZES[1]:
+            raise ValueError(f"--point-size must be {POINT_SIZES[0]} to {POINT_SIZES[1]} pixels; got {args.point_size:g}")
+        changes["point_size"] = float(args.point_size)
     if quantity is not None:
         changes["quantity"] = quantity
     if args.cmap:
@@ -125,7 +149,11 @@ def configure(window, args) -> object:
         if args.surface:
             raise ValueError("give either a mesh file or --surface, not both")
         return FileSource(str(Path(args.mesh).expanduser()))
-    if args.surface or args.param or args.random or args.vertices:
+    from app.model.inputs import samplings
+
+    if args.sample is not None and args.sample not in samplings():
+        raise ValueError(f"unknown sampling {args.sample!r}; choose one of {', '.join(samplings())}")
+    if args.surface or args.param or args.random or args.vertices or args.sample:
         name = args.surface or DEFAULT_SOURCE.name
         surfaces = SURFACES
         if name not in surfaces:
@@ -136,7 +164,7 @@ def configure(window, args) -> object:
             params[key.strip()] = float(value)
         n = args.vertices or getattr(surfaces[name], "default_vertices", DEFAULT_SOURCE.n_vertices)
         return SurfaceSource(name=name, params=params, n_vertices=n, irregularity=args.irregularity,
-                             noise=args.noise, seed=args.seed, random_params=args.random)
+                             noise=args.noise, seed=args.seed, random_params=args.random, sampling=args.sample)
     return DEFAULT_SOURCE
 
 

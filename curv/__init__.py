@@ -26,6 +26,7 @@ _LAZY = {
     "load": ("curv.io", "load"),
     "save_ply": ("curv.io", "save_ply"),
     "save_vtu": ("curv.io", "save_vtu"),
+    "save_vtp": ("curv.io", "save_vtp"),
     "save_result": ("curv.io", "save_result"),
     "as_mesh": ("curv.convert", "as_mesh"),
     "surfaces": ("curv.surfaces", None),

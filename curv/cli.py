@@ -58,14 +58,14 @@ def _cmd_list(args) -> int:
     from .estimators import ESTIMATORS
     from .ranges import range_label, takes_any_range
 
-    print(f"{'name':<6} {'ranges':<12} {'polygons':<9} {'borders':<8} title / reference")
+    print(f"{'name':<6} {'ranges':<12} {'polygons':<9} {'points':<7} {'borders':<8} title / reference")
     print(f"{'':<6} (k>=1, r: any real range Rk from that k on, or a fixed radius r)")
     for spec in ESTIMATORS.values():
         ranges = (f"k>={min(spec.ranges):g}, r" if takes_any_range(spec)
                   else ",".join(range_label(k) for k in spec.ranges))
         print(f"{spec.name:<6} {ranges:<12} {'no' if spec.triangles_only else 'yes':<9} "
-              f"{'invalid' if spec.closed_ring else 'fitted':<8} {spec.title}")
-        print(f"{'':<37} {spec.reference}")
+              f"{'yes' if spec.takes_points else 'no':<7} {'invalid' if spec.closed_ring else 'fitted':<8} {spec.title}")
+        print(f"{'':<45} {spec.reference}")
     return 0
 
 
@@ -102,15 +102,16 @@ def _check_colours(args) -> None:
         raise CurvUsageError(str(exc)) from None
 
 
-def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng) -> None:
+def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng, *, points: bool = False) -> None:
     from .memory import check_memory
 
     if not args.memory_check:
         return
-    est = check_memory(n_vertices, n_faces, method)
+    est = check_memory(n_vertices, n_faces, method, points=points)
     if not est.fits:
+        size = f"{n_vertices:,} points" if points else f"{n_vertices:,} vertices and {n_faces:,} faces"
         raise CurvMemoryError(
-            f"{args.input}: {method} {rng.label} on {n_vertices:,} vertices and {n_faces:,} faces "
+            f"{args.input}: {method} {rng.label} on {size} "
             f"{est.describe()}; refusing to start (use a smaller range, another estimator, "
             f"a bigger machine, or --no-memory-check)")
 
@@ -119,14 +120,24 @@ def _cmd_estimate(args) -> int:
     from .api import iter_estimate
     from .estimators import get_spec
     from .io import check_output_suffix, load, peek_counts, save_result
+    from .pointcli import check_mesh_options, check_point_options
+    from .pointio import is_point_file, peek_points
     from .quantities import EXPORTED
     from .ranges import resolve
     from .validity import describe_reasons
 
+    points = is_point_file(args.input)
     if args.method == "auto":
+        if points:
+            raise CurvError(f"{args.input} is a point cloud; --method auto advises on meshes only")
         _apply_advice(args)
     spec = get_spec(args.method)
-    rng = resolve(spec, args.range, args.radius)
+    rng = resolve(spec, args.range, args.radius, args.knn)
+    if points:
+        check_point_options(args, spec)
+    else:
+        check_mesh_options(args)
+        args.normals = args.normals or "max"
     _check_colours(args)
     if args.output:
         try:
@@ -134,29 +145,44 @@ def _cmd_estimate(args) -> int:
         except ValueError as exc:
             raise CurvOutputError(str(exc)) from None
         _check_output(args.output)
-    counts = peek_counts(args.input)
+    if points:
+        n_points = peek_points(args.input)
+        counts = None if n_points is None else (n_points, 0)
+    else:
+        counts = peek_counts(args.input)
     if counts is not None:  # refuse before reading a file that will not fit
-        _check_memory(args, *counts, spec.name, rng)
+        _check_memory(args, *counts, spec.name, rng, points=points)
     t0 = time.perf_counter()
-    mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
-                orient=args.orient, remove_unreferenced=args.remove_unreferenced)
+    if points:
+        mesh = load(args.input)
+    else:
+        mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
+                    orient=args.orient, remove_unreferenced=args.remove_unreferenced)
     t_load = time.perf_counter() - t0
     if counts is None:
-        _check_memory(args, mesh.n_vertices, mesh.n_faces, spec.name, rng)
+        _check_memory(args, mesh.n_vertices, getattr(mesh, "n_faces", 0), spec.name, rng, points=points)
     progress = Progress(f"{spec.name} {rng.label}", enabled=None if not args.quiet else False)
-    normals = {"normals": "fit"} if args.normals == "fit" else {"normal_weighting": args.normals}
-    if args.fit_range is not None:
-        if args.normals != "fit":
-            raise CurvUsageError("--fit-range is the range of the fitted normals: give it with --normals fit")
-        normals["fit_range"] = args.fit_range
-    options = {} if args.degree is None else {"degree": args.degree}
-    region = _region_vertices(args, mesh)
-    if args.features is not None:
-        from .features import check_angle
+    if points:
+        from .pointcli import estimate_keywords
 
-        args.features = check_angle(args.features)
-    gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, smooth=args.smooth, features=args.features,
-                        vertices=region, **normals, **options)
+        options = estimate_keywords(args, mesh)
+    else:
+        options = {"normals": "fit"} if args.normals == "fit" else {"normal_weighting": args.normals}
+        if args.features is not None:
+            from .features import check_angle
+
+            options["features"] = check_angle(args.features)
+        options["smooth"] = args.smooth
+    if args.fit_range is not None:
+        if args.normals not in ("fit", "pca"):
+            raise CurvUsageError("--fit-range is the range of the fitted normals: give it with --normals fit")
+        options["fit_range"] = args.fit_range
+    if args.degree is not None:
+        options["degree"] = args.degree
+    region = _region_vertices(args, mesh)
+    if rng.knn is not None:
+        options["knn"] = rng.knn
+    gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, vertices=region, **options)
     t1 = time.perf_counter()
     try:
         while True:
@@ -178,6 +204,32 @@ def _cmd_estimate(args) -> int:
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
         t_write = time.perf_counter() - t2
+    if points:
+        from .pointcli import report_lines
+
+        for line in report_lines(args, mesh, res):
+            print(line)
+    else:
+        _print_mesh_report(args, mesh)
+    reasons = describe_reasons(res.reason)
+    n_isolated = 0 if points else int(mesh.isolated_vertices.sum())
+    if n_isolated and reasons.get("DEGENERATE", 0) >= n_isolated:  # unreferenced vertices: say so
+        reasons["DEGENERATE"] -= n_isolated
+        reasons = {**{k: v for k, v in reasons.items() if v}, "ISOLATED (no face)": n_isolated}
+    invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
+    if region is not None:
+        print(f"region: {region.size} vertices estimated, the other {mesh.n_vertices - region.size} not computed")
+    unit = "points" if points else "vertices"
+    print(f"{res.method} {res.info['range_label']}: {res.valid.sum()} of {mesh.n_vertices} {unit} valid "
+          f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
+    for name in EXPORTED:
+        print(_stats_line(name, res.quantity(name)))
+    written = f", write {t_write:.2f} s; wrote {args.output}" if args.output else ""
+    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s{written}")
+    return 0
+
+
+def _print_mesh_report(args, mesh) -> None:
     rep = mesh.report()
     print(f"{args.input}: {rep.lines()[0]}")
     for line in rep.lines()[1:]:
@@ -186,21 +238,6 @@ def _cmd_estimate(args) -> int:
         print(f"  repair: {line}")
     for line in _hints(args, rep):
         print(f"  hint: {line}")
-    reasons = describe_reasons(res.reason)
-    n_isolated = int(mesh.isolated_vertices.sum())
-    if n_isolated and reasons.get("DEGENERATE", 0) >= n_isolated:  # unreferenced vertices: say so
-        reasons["DEGENERATE"] -= n_isolated
-        reasons = {**{k: v for k, v in reasons.items() if v}, "ISOLATED (no face)": n_isolated}
-    invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v}" for k, v in reasons.items() if k != "OK")
-    if region is not None:
-        print(f"region: {region.size} vertices estimated, the other {mesh.n_vertices - region.size} not computed")
-    print(f"{res.method} {res.info['range_label']}: {res.valid.sum()} of {mesh.n_vertices} vertices valid "
-          f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
-    for name in EXPORTED:
-        print(_stats_line(name, res.quantity(name)))
-    written = f", write {t_write:.2f} s; wrote {args.output}" if args.output else ""
-    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s{written}")
-    return 0
 
 
 def _region_vertices(args, mesh):
@@ -233,7 +270,7 @@ def _apply_advice(args) -> None:
 
     given = [flag for flag, value in (("--range", args.range), ("--radius", args.radius), ("--degree", args.degree),
                                       ("--fit-range", args.fit_range)) if value is not None]
-    if args.normals != "max":
+    if args.normals not in (None, "max"):
         given.append("--normals")
     if given:
         raise CurvError(f"--method auto chooses the range and the options too; drop {', '.join(given)}")
@@ -257,7 +294,11 @@ def _cmd_advise(args) -> int:
 
     from .advisor import advise
     from .io import load
+    from .pointio import is_point_file
 
+    if is_point_file(args.input):
+        raise CurvError(f"{args.input} is a point cloud; curv advise ranks estimators for meshes only "
+                        f"(its table comes from the mesh study)")
     mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
                 orient=args.orient, remove_unreferenced=args.remove_unreferenced)
     adv = advise(mesh)
@@ -314,32 +355,39 @@ class CurvMemoryError(CurvError, MemoryError):
 def build_parser() -> argparse.ArgumentParser:
     from .estimators.registry import DEFAULT_ESTIMATOR
     from .io import OUTPUT_FORMATS
+    from .pointio import POINT_SUFFIXES
     from .quantities import QUANTITIES
     from .quantities import describe as describe_quantities
 
-    parser = argparse.ArgumentParser(prog="curv", description="Curvature estimation on surface meshes.")
+    parser = argparse.ArgumentParser(prog="curv", description="Curvature estimation on surface meshes and point clouds.")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p_list = sub.add_parser("list", help="list the estimators and their ranges")
     p_list.set_defaults(func=_cmd_list)
 
-    p_est = sub.add_parser("estimate", help="estimate curvature on a mesh file")
-    p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
+    p_est = sub.add_parser("estimate", help="estimate curvature on a mesh or point-cloud file")
+    p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...) or point cloud (PLY without "
+                       "faces, " + ", ".join(POINT_SUFFIXES) + ")")
     p_est.add_argument("--method", "-m", default=DEFAULT_ESTIMATOR,
                        help=f"estimator name (see `curv list`), or auto (ask `curv advise`); default {DEFAULT_ESTIMATOR}")
     p_est.add_argument("--range", "-r", help="range k of Rk: 2, R2 or any real k such as 2.5 (at least the "
                        "estimator's smallest); default R2, or the estimator's one range (meyer R1)")
     p_est.add_argument("--radius", type=float, help="instead of --range: the same ball radius in mesh units at "
                        "every vertex")
+    p_est.add_argument("--knn", type=int, metavar="K", help="point clouds, instead of --range: the K nearest points")
     p_est.add_argument("--output", "-o", help="write the result: " + "; ".join(
         f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items()))
     p_est.add_argument("--quantity", default="mean", choices=list(QUANTITIES),
                        help="what the output colours show; default mean (" + "; ".join(describe_quantities()) + ")")
     p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
     p_est.add_argument("--clim", nargs=2, type=float, metavar=("LO", "HI"), help="colour limits")
-    p_est.add_argument("--normals", choices=["max", "area", "angle", "fit"], default="max",
+    p_est.add_argument("--normals", choices=["max", "area", "angle", "fit", "pca"],
                        help="vertex normals: Max, area or angle weighted face normals, or a local jet fit "
-                            "(R2); default max (the paper's protocol)")
+                            "(R2); default max (the paper's protocol). Point clouds: the file's normals, "
+                            "else fit (jet fits, R2); pca: local plane fits")
+    p_est.add_argument("--orient-normals", nargs="+", metavar="up|outward|X Y Z",
+                       help="point clouds whose normals are estimated: turn them up (+z, default), outward, "
+                            "or towards a viewpoint X Y Z (a scanner's position)")
     p_est.add_argument("--fit-range", help="range k of the fitted normals (with --normals fit); "
                        "default 2")
     p_est.add_argument("--degree", type=int, choices=[2, 3, 4], help="jet degree (estimator jet); default 2")

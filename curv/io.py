@@ -16,12 +16,13 @@ import numpy as np
 from .colors import colour_choice, map_colors
 from .errors import LoadError, MeshError
 from .mesh import Mesh
+from .pointcloud import PointCloud
 from .quantities import EXPORTED
 from .repair import repair
 from .result import Curvature
 from .validity import Reason, reason_legend
 
-__all__ = ["load", "save_ply", "save_vtu", "save_result", "check_output_suffix", "OUTPUT_FORMATS",
+__all__ = ["load", "save_ply", "save_vtu", "save_vtp", "save_result", "check_output_suffix", "OUTPUT_FORMATS",
            "read_arrays", "peek_counts"]
 
 _MESHIO_SUFFIXES = {".obj"}
@@ -228,13 +229,14 @@ def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:
 
 
 def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False, orient: bool = False,
-         remove_unreferenced: bool = False) -> Mesh:
-    """Load a mesh file.
+         remove_unreferenced: bool = False) -> Mesh | PointCloud:
+    """Load a mesh or a point-cloud file.
 
     Parameters
     ----------
     path : str or Path
-        PLY, OBJ, OFF (polygons kept) or anything trimesh reads (STL, glTF/GLB, ...).
+        PLY, OBJ, OFF (polygons kept) or anything trimesh reads (STL, glTF/GLB, ...); point clouds:
+        a PLY without faces, ``.xyz`` / ``.txt`` / ``.csv``, PCD, LAS/LAZ (:func:`curv.pointio.read_points`).
     merge_vertices : bool
         Merge vertices at identical positions.
     remove_degenerate : bool
@@ -246,17 +248,27 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
 
     Returns
     -------
-    Mesh
-        ``mesh.info`` holds ``{"path": ..., "repairs": [human-readable lines]}``.
+    Mesh or PointCloud
+        ``mesh.info`` holds ``{"path": ..., "repairs": [human-readable lines]}``; a point cloud
+        when the file has no faces.
 
     Raises
     ------
     LoadError
-        The file cannot be read as a mesh.
+        The file cannot be read as a mesh or point cloud.
     MeshError
-        The file was read but its data are malformed (message names the file and the problem).
+        The file was read but its data are malformed (message names the file and the problem), or
+        a repair was asked of a point cloud.
     """
+    from .pointio import is_point_file, read_points
+
     path = Path(path)
+    if is_point_file(path):
+        asked = [name for name, on in (("merge_vertices", merge_vertices), ("remove_degenerate", remove_degenerate),
+                                       ("orient", orient), ("remove_unreferenced", remove_unreferenced)) if on]
+        if asked:
+            raise MeshError(f"{path}: is a point cloud; {', '.join(asked)} repair(s) meshes only")
+        return read_points(path)
     vertices, faces = read_arrays(path)
     try:
         mesh = Mesh(vertices, faces)
@@ -297,7 +309,7 @@ def _face_list_bytes(mesh: Mesh) -> bytes:
     return out.tobytes()
 
 
-def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", cmap: str | None = None,
+def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: str = "mean", cmap: str | None = None,
              clim: tuple[float, float] | None = None, colors: np.ndarray | None = None,
              extra: dict[str, np.ndarray] | None = None, comment: str | None = None) -> Path:
     """Write a binary PLY with vertex colours and curvature properties, atomically.
@@ -307,9 +319,11 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
     path : str or Path
         Output file; written to a temporary file in the same folder, then renamed, so a failure
         never leaves a partial file.
-    mesh : Mesh
+    mesh : Mesh or PointCloud
+        A point cloud is written as a vertex-only PLY (no face element) that also holds ``nx``,
+        ``ny``, ``nz``: the normals the estimate used, so that the file reads back with them.
     curvature : Curvature
-        Values at the mesh vertices.
+        Values at the mesh vertices (the points).
     quantity : str
         What the colours show (``mean``, ``gaussian``, ``k1``, ``k2``, ``shape_index``, ``curvedness``).
     cmap : str, optional
@@ -355,6 +369,9 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
     fields = [(c, "f8") for c in "xyz"] + [(c, "u1") for c in ("red", "green", "blue", "alpha")]
     fields += [(c, "f4") for c in _FLOAT_PROPS + _DIR_PROPS] + [("valid", "u1"), ("reason", "u1")]
     fields += [(name, "f4") for name in extra]
+    points_only = isinstance(mesh, PointCloud)
+    if points_only:
+        fields += [(f"n{c}", "f4") for c in "xyz"]
     vert = np.empty(n, dtype=fields)
     for i, c in enumerate("xyz"):
         vert[c] = mesh.vertices[:, i]
@@ -369,20 +386,24 @@ def save_ply(path, mesh: Mesh, curvature: Curvature, *, quantity: str = "mean", 
     vert["reason"] = np.asarray(curvature.reason, np.uint8)
     for name, values in extra.items():
         vert[name] = np.asarray(values, dtype=np.float64)
+    if points_only:
+        for i, c in enumerate("xyz"):
+            vert[f"n{c}"] = curvature.normals[:, i]
     # plyfile describes both elements (the header); an empty face element of the right kind
     # stands in, because plyfile writes list properties one face at a time (20 s at 1M faces)
     face_kind = PlyElement.describe(np.empty(0, dtype=[("vertex_indices", "i4", (3,))]), "face",
                                     len_types={"vertex_indices": "u1"}, val_types={"vertex_indices": "i4"})
-    face_kind.data = np.empty(mesh.n_faces, dtype=[("vertex_indices", "i4", (3,))])
+    face_kind.data = np.empty(0 if points_only else mesh.n_faces, dtype=[("vertex_indices", "i4", (3,))])
     vertex_element = PlyElement.describe(vert, "vertex")
-    ply = PlyData([vertex_element, face_kind], text=False, byte_order="<",
+    ply = PlyData([vertex_element] if points_only else [vertex_element, face_kind], text=False, byte_order="<",
                   comments=[" ".join(comment.split()), reason_legend()])
     header = ply.header.encode("ascii", errors="replace") + b"\n"
 
     def write(fh):
         fh.write(header)
-        fh.write(vert.astype(vertex_element.dtype("<"), copy=False).tobytes())
-        fh.write(_face_list_bytes(mesh))
+        fh.write(vert.astype(vertex_element.dtype("<"), copy=False).view(np.uint8))  # no bytes copy
+        if not points_only:
+            fh.write(_face_list_bytes(mesh))
 
     return _atomic_write(path, write)
 
@@ -435,15 +456,16 @@ def _atomic_write(path: Path, write) -> Path:
     return path
 
 
-def save_vtu(path, mesh: Mesh, curvature: Curvature, *, colors: np.ndarray | None = None,
+def save_vtu(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors: np.ndarray | None = None,
              extra: dict[str, np.ndarray] | None = None) -> Path:
     """Write a VTK XML unstructured grid (``.vtu``, through meshio) with the curvature as point data.
 
     Parameters
     ----------
     path : str or Path
-    mesh : Mesh
-        Triangles, quads and other polygons become VTK triangle, quad and polygon cells.
+    mesh : Mesh or PointCloud
+        Triangles, quads and other polygons become VTK triangle, quad and polygon cells; a point
+        cloud's points become vertex cells.
     curvature : Curvature
     colors : (n, 4) uint8, optional
         Stored as the ``rgba`` point array (the colours on screen).
@@ -454,9 +476,28 @@ def save_vtu(path, mesh: Mesh, curvature: Curvature, *, colors: np.ndarray | Non
     -------
     Path
         Point data: ``k1``, ``k2``, ``mean``, ``gaussian`` (n,), ``d1``, ``d2`` (n, 3), ``valid``
-        and ``reason`` (n,) uint8, ``extra``, ``rgba``; field data ``reason_OK``, ``reason_BORDER``, ...
-        hold each :class:`curv.Reason` code; written atomically like :func:`save_ply`.
+        and ``reason`` (n,) uint8, ``extra``, ``rgba``; a point cloud also ``normals`` (n, 3), the
+        ones the estimate used; field data ``reason_OK``, ``reason_BORDER``, ... hold each
+        :class:`curv.Reason` code; written atomically like :func:`save_ply`.
     """
+    payload = _vtk_document(path, mesh, curvature, colors=colors, extra=extra)
+    return _atomic_write(Path(path), lambda fh: fh.write(payload))
+
+
+def save_vtp(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors: np.ndarray | None = None,
+             extra: dict[str, np.ndarray] | None = None) -> Path:
+    """Write a VTK XML poly data file (``.vtp``): the points as ``Verts`` (point cloud) or faces as ``Polys``.
+
+    The same point and field data as :func:`save_vtu`, encoded by meshio (which writes no
+    ``.vtp`` itself: its unstructured-grid document is retagged as poly data).
+    """
+    payload = _as_poly_data(_vtk_document(path, mesh, curvature, colors=colors, extra=extra),
+                            "Verts" if isinstance(mesh, PointCloud) else "Polys")
+    return _atomic_write(Path(path), lambda fh: fh.write(payload))
+
+
+def _vtk_document(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors, extra) -> bytes:
+    """The VTU document (bytes) meshio writes for ``mesh`` and ``curvature``, with the reason field data."""
     import meshio
 
     path = Path(path)
@@ -469,19 +510,54 @@ def save_vtu(path, mesh: Mesh, curvature: Curvature, *, colors: np.ndarray | Non
     data.update({k: np.asarray(v, np.float64) for k, v in (extra or {}).items()})
     if colors is not None:
         data["rgba"] = np.ascontiguousarray(colors, dtype=np.uint8)
-    cells = []
-    sizes = mesh.face_sizes
-    kinds = {3: "triangle", 4: "quad"}
-    for size in np.unique(sizes):
-        rows = np.flatnonzero(sizes == size)
-        corners = mesh.face_offsets[rows][:, None] + np.arange(size)
-        cells.append((kinds.get(int(size), "polygon"), mesh.face_indices[corners]))
+    if isinstance(mesh, PointCloud):
+        data["normals"] = np.asarray(curvature.normals, np.float64)
+        cells = [("vertex", np.arange(n, dtype=np.int64)[:, None])]
+    else:
+        cells = []
+        sizes = mesh.face_sizes
+        kinds = {3: "triangle", 4: "quad"}
+        for size in np.unique(sizes):
+            rows = np.flatnonzero(sizes == size)
+            corners = mesh.face_offsets[rows][:, None] + np.arange(size)
+            cells.append((kinds.get(int(size), "polygon"), mesh.face_indices[corners]))
     grid = meshio.Mesh(np.asarray(mesh.vertices, np.float64), cells, point_data=data)
     with tempfile.TemporaryDirectory(dir=path.parent if str(path.parent) else ".") as tmp_dir:
         staged = Path(tmp_dir) / "out.vtu"
         meshio.write(staged, grid, file_format="vtu")
-        payload = _with_reason_field_data(staged.read_bytes())
-    return _atomic_write(path, lambda fh: fh.write(payload))
+        return _with_reason_field_data(staged.read_bytes())
+
+
+def _as_poly_data(vtu: bytes, cells: str) -> bytes:
+    """meshio's VTU document as a VTP one: the grid's cells become ``Verts`` or ``Polys``.
+
+    Poly data keeps the cells' connectivity and offsets arrays and has no cell types; every other
+    array (points, point data, field data) is the same XML. Tags are found as text: base64 and
+    ASCII data never hold ``<``.
+    """
+    import re
+
+    def swap(text: bytes, old: bytes, new: bytes, *, last: bool = False) -> bytes:
+        at = text.rfind(old) if last else text.find(old)
+        if at < 0:
+            raise RuntimeError(f"unexpected VTU layout from meshio: no {old.decode()}")
+        return text[:at] + new + text[at + len(old):]
+
+    piece = re.search(rb'<Piece NumberOfPoints="(\d+)" NumberOfCells="(\d+)">', vtu)
+    start, stop = vtu.find(b"<Cells>"), vtu.find(b"</Cells>")
+    if piece is None or start < 0 or stop < start:
+        raise RuntimeError("unexpected VTU layout from meshio: no Piece or Cells")
+    counts = " ".join(f'NumberOf{k}="{piece[2].decode() if k == cells else 0}"'
+                      for k in ("Verts", "Lines", "Strips", "Polys"))
+    block, dropped = re.subn(rb'<DataArray[^>]*Name="types".*?</DataArray>\s*', b"", vtu[start + 7:stop], flags=re.S)
+    if dropped != 1:
+        raise RuntimeError("unexpected VTU layout from meshio: no cell types array")
+    vtu = (vtu[:piece.start()] + f'<Piece NumberOfPoints="{piece[1].decode()}" {counts}>'.encode()
+           + vtu[piece.end():start] + f"<{cells}>".encode() + block + f"</{cells}>".encode()
+           + vtu[stop + 8:])
+    vtu = swap(vtu, b'type="UnstructuredGrid"', b'type="PolyData"')
+    vtu = swap(vtu, b"<UnstructuredGrid>", b"<PolyData>")
+    return swap(vtu, b"</UnstructuredGrid>", b"</PolyData>", last=True)
 
 
 def _with_reason_field_data(vtu: bytes) -> bytes:
@@ -496,8 +572,9 @@ def _with_reason_field_data(vtu: bytes) -> bytes:
     return vtu[:at] + f"\n<FieldData>{arrays}</FieldData>".encode("ascii") + vtu[at:]
 
 
-OUTPUT_FORMATS = {".ply": "binary PLY with colours and curvature properties",
-                  ".vtu": "VTK XML unstructured grid with curvature point data (ParaView, pyvista)"}
+OUTPUT_FORMATS = {".ply": "binary PLY with colours and curvature properties (vertex-only for points)",
+                  ".vtu": "VTK XML unstructured grid with curvature point data (ParaView, pyvista)",
+                  ".vtp": "VTK XML poly data, the same point data (points as vertices, faces as polygons)"}
 """Output suffixes ``save_result`` writes, each in its own format."""
 
 
@@ -510,12 +587,14 @@ def check_output_suffix(path) -> str:
     return suffix
 
 
-def save_result(path, mesh: Mesh, curvature: Curvature, **kw) -> Path:
+def save_result(path, mesh: Mesh | PointCloud, curvature: Curvature, **kw) -> Path:
     """Write ``curvature`` in the format of ``path``'s suffix (:data:`OUTPUT_FORMATS`).
 
-    Keywords go to :func:`save_ply` (all of them) or :func:`save_vtu` (``colors``, ``extra``).
+    Keywords go to :func:`save_ply` (all of them) or :func:`save_vtu` / :func:`save_vtp`
+    (``colors``, ``extra``).
     """
-    if check_output_suffix(path) == ".vtu":
+    suffix = check_output_suffix(path)
+    if suffix in (".vtu", ".vtp"):
         kept = {k: v for k, v in kw.items() if k in ("colors", "extra")}
         if kept.get("colors") is None:
             q = kw.get("quantity", "mean")
@@ -523,5 +602,5 @@ def save_result(path, mesh: Mesh, curvature: Curvature, **kw) -> Path:
             cmap, lim = colour_choice(values, curvature.valid, q, cmap=kw.get("cmap"), clim=kw.get("clim"))
             kept["colors"] = map_colors(values, cmap=cmap, clim=lim, valid=curvature.valid)
             kept["extra"] = {"shown": values, **(kept.get("extra") or {})}
-        return save_vtu(path, mesh, curvature, **kept)
+        return (save_vtp if suffix == ".vtp" else save_vtu)(path, mesh, curvature, **kept)
     return save_ply(path, mesh, curvature, **kw)

@@ -25,11 +25,18 @@ Measured with ``/usr/bin/time -v curv estimate`` on a 10M-vertex torus (20M face
 the numba kernels: mru R2 peaked at 9.2 GB resident (about 450 B per unit above the base), meyer
 at 8.7 GB; rounded up by about 25 %."""
 
+PER_POINT_BYTES = 800.0
+"""Point cloud, its neighbour graph (the 10 nearest and the symmetric CSR), spacing, normals and
+their orientation, border flags, result arrays and the written file's records, per point.
+
+Measured with ``/usr/bin/time -v curv estimate`` on 10M points (docs/BENCHMARKS.md, "Point-cloud
+files"), rounded up."""
+
 STAMP_BYTES_PER_THREAD = 8.0
 """Bytes per vertex and kernel thread of the support search's visited stamps (int64)."""
 
 
-def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str) -> int:
+def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: bool = False) -> int:
     """Predicted peak resident memory of estimating ``method`` on a mesh of this size, at any range.
 
     The kernels hold no per-range temporaries beyond each thread's small queue, so the peak does
@@ -38,9 +45,11 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str) -> int:
     Parameters
     ----------
     n_vertices, n_faces : int
-        Mesh size (faces of any polygon kind).
+        Mesh size (faces of any polygon kind); for a point cloud its points and 0.
     method : str
         Registry name.
+    points : bool
+        A point cloud: :data:`PER_POINT_BYTES` per point in place of the mesh's per-unit bytes.
 
     Returns
     -------
@@ -52,7 +61,8 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str) -> int:
 
     from .estimators import get_spec
 
-    linear = BASE_BYTES + (PER_UNIT_BYTES + get_spec(method).extra_bytes_per_unit) * units
+    per_unit = PER_POINT_BYTES if points else PER_UNIT_BYTES + get_spec(method).extra_bytes_per_unit
+    linear = BASE_BYTES + per_unit * units
     return int(linear + STAMP_BYTES_PER_THREAD * threads() * float(n_vertices))
 
 
@@ -126,10 +136,10 @@ class MemoryEstimate:
         return f"needs about {format_bytes(self.needed)}, {have} available"
 
 
-def check_memory(n_vertices: int, n_faces: int, method: str, *,
+def check_memory(n_vertices: int, n_faces: int, method: str, *, points: bool = False,
                  available: int | None = None) -> MemoryEstimate:
     """Compare :func:`estimate_peak_bytes` with :func:`available_bytes` (or ``available`` if given)."""
     have = available_bytes() if available is None else available
-    return MemoryEstimate(estimate_peak_bytes(n_vertices, n_faces, method), have)
+    return MemoryEstimate(estimate_peak_bytes(n_vertices, n_faces, method, points=points), have)
 
 

@@ -16,6 +16,7 @@ from PySide6.QtCore import QObject, QThreadPool, Signal
 from superqt.utils import create_worker
 
 from app.model import AdviceRecord, Document, count_text
+from app.model.inputs import item_word, items_word
 
 from .advice import advice_compile_note, advise_mesh
 from .sources import prepare_source
@@ -163,17 +164,19 @@ class Controller(QObject):
         """Show ``pane`` (a validated :class:`~app.model.Pane`) in pane ``i`` and compute it unless its
         result is known; an earlier failure or cancel of the same pair is retried, not shown again."""
         self.doc.retry(pane.key)
-        self.doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, options=pane.options)
+        self.doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, knn=pane.knn,
+                          options=pane.options)
         self.request_missing()
 
     def _start_estimate(self, key) -> None:
         pane = self.doc.pane_for(key)
         gen = self._generation
         kwargs = pane.estimate_kwargs()
-        if "radius" in kwargs and not _ACCEPTS.get("radius"):
-            self.doc.set_failure(key, f"{pane.title} failed: this curv does not take radius= yet")
-            self.failed.emit(self.doc.failures[key])
-            return
+        for name in ("radius", "knn"):
+            if name in kwargs and not _ACCEPTS.get(name):
+                self.doc.set_failure(key, f"{pane.title} failed: this curv does not take {name}= yet")
+                self.failed.emit(self.doc.failures[key])
+                return
         box = []  # the worker, for the callbacks (they must exist before it does)
         worker = create_worker(iter_estimate, self.doc.mesh, pane.method,
                                **kwargs,
@@ -205,7 +208,8 @@ class Controller(QObject):
         secs = result.info.get("seconds")
         took = f" in {secs:.2f} s" if secs is not None else ""
         of = "" if computed == result.n else f" of {computed} computed"
-        self.message.emit(f"{key[0]} {key[1]}{took}; {count_text(n_bad, 'invalid vertex', 'invalid vertices')}{of}")
+        bad = count_text(n_bad, f"invalid {item_word(self.doc.mesh)}", f"invalid {items_word(self.doc.mesh)}")
+        self.message.emit(f"{key[0]} {key[1]}{took}; {bad}{of}")
         self._update_busy()
 
     def _estimate_failed(self, worker, gen, key, exc) -> None:

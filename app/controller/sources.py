@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+import numpy as np
 from curv.io import load
-from curv.surfaces import make_surface
+from curv.surfaces import SURFACES, make_surface, sample_points
 
+from app.model.inputs import cloud_report, is_points
 from app.model.sources import FileSource, SurfaceSource
 
 __all__ = ["load_source", "prepare_source", "Loaded"]
@@ -38,9 +40,11 @@ class Loaded:
 
 
 def prepare_source(source, prepare=None) -> Loaded:
-    """:func:`load_source`, the mesh report, and ``prepare(mesh)`` if given; runs in a worker thread."""
+    """:func:`load_source`, the mesh (or point-cloud) report and ``prepare(mesh)`` if given; runs in a
+    worker thread."""
     source, mesh, truth = load_source(source)
-    report = mesh.report().lines()
+    # a cloud's facts need its neighbour search: done here, the cloud keeps it for the GUI thread
+    report = cloud_report(mesh) if is_points(mesh) else mesh.report().lines()
     repairs = list(mesh.info.get("repairs", [])) if isinstance(getattr(mesh, "info", None), dict) else []
     return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh), repairs)
 
@@ -67,6 +71,14 @@ def load_source(source):
         flags = {name: True for name in source.repairs}
         flags.setdefault("merge_vertices", source.path.lower().endswith(".stl"))
         return source, load(source.path, **flags), None
+    if isinstance(source, SurfaceSource) and source.sampling is not None:
+        cls = SURFACES[source.name]
+        rng = np.random.default_rng(source.seed)  # one stream, as make_surface: parameters, then points
+        params = {**cls.random(rng).parameters, **source.params} if source.random_params else source.params
+        sampled = sample_points(cls(**params), source.n_vertices, sampling=source.sampling, noise=source.noise,
+                                rng=rng)
+        # blue noise and rows give about the count asked for: the source names the count the cloud has
+        return replace(source, n_vertices=sampled.cloud.n_points), sampled.cloud, sampled.truth
     if isinstance(source, SurfaceSource):
         sampled = make_surface(
             source.name, n_vertices=source.n_vertices, irregularity=source.irregularity,

@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields, replace
 
 from .colors import LimitMode
 from .events import Event
+from .inputs import DEFAULT_POINT_SIZE
 from .quantities import Quantity
 
 __all__ = ["Layer", "DisplayState", "Display"]
@@ -56,6 +57,8 @@ class DisplayState:
         Draw d1/d2 glyph lines.
     show_edges, show_borders, show_points : bool
         Wireframe overlay, border edges highlighted, vertices as points.
+    point_size : float
+        Width in pixels of a point cloud's points.
     """
 
     quantity: Quantity = Quantity.MEAN
@@ -71,6 +74,7 @@ class DisplayState:
     show_edges: bool = False
     show_borders: bool = False
     show_points: bool = False
+    point_size: float = DEFAULT_POINT_SIZE
 
     @property
     def signed(self) -> bool:

@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from curv import ranges
 from curv.colors import diverges
-from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators
+from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators, refusal
 from curv.errors import EstimatorError
 from curv.features import check_angle
 from curv.variants import Variant
@@ -16,6 +16,7 @@ from .advice import AdviceRecord
 from .colors import LimitMode, colormap, compute_limits, map_colours
 from .display import Display, Layer
 from .events import Event
+from .inputs import is_points
 from .region import Region, RestComposer
 from .scalars import field_values
 
@@ -31,7 +32,8 @@ def pane_letter(i: int) -> str:
 
 @dataclass(frozen=True)
 class Pane:
-    """One estimate view: an estimator and its range (k of Rk, real allowed) or a fixed radius.
+    """One estimate view: an estimator and its range (k of Rk, real allowed), a fixed radius or, on a
+    point cloud, the K nearest points.
 
     Attributes
     ----------
@@ -41,6 +43,8 @@ class Pane:
         k of Rk (an int when whole, so ``Pane("mru", 2)`` and the label ``R2`` agree).
     radius : float or None
         Ball radius in mesh units; replaces Rk when given.
+    knn : int or None
+        The support is the K nearest points (point clouds); replaces Rk and the radius when given.
     features : float or None
         Feature angle in degrees (``curv.estimate(..., features=)``), None for no features.
     region : Region or None
@@ -56,6 +60,7 @@ class Pane:
     radius: float | None = None
     features: float | None = None
     region: Region | None = None
+    knn: int | None = None
     options: tuple = ()
 
     def __post_init__(self):
@@ -68,7 +73,9 @@ class Pane:
 
     @property
     def label(self) -> str:
-        """``R2``, ``R2.5`` or ``r=0.3``: the range as :mod:`curv.ranges` writes it."""
+        """``R2``, ``R2.5``, ``r=0.3`` or the K nearest points: the range as :mod:`curv.ranges` writes it."""
+        if self.knn is not None:
+            return ranges.Range(knn=self.knn).label
         return ranges.Range(radius=self.radius).label if self.radius is not None else ranges.range_label(self.range)
 
     @property
@@ -100,9 +107,12 @@ class Pane:
         return f"{self.method} {self.setting}"
 
     def estimate_kwargs(self) -> dict:
-        """Keyword arguments for ``curv.iter_estimate``: ``range=k`` or ``radius=r``, and ``features=``,
-        ``vertices=`` when set."""
-        kwargs = {"radius": self.radius} if self.radius is not None else {"range": self.range}
+        """Keyword arguments for ``curv.iter_estimate``: ``range=k``, ``radius=r`` or ``knn=K``, and
+        ``features=``, ``vertices=`` when set."""
+        if self.knn is not None:
+            kwargs = {"knn": self.knn}
+        else:
+            kwargs = {"radius": self.radius} if self.radius is not None else {"range": self.range}
         if self.features is not None:
             kwargs["features"] = self.features
         if self.region is not None:
@@ -121,6 +131,8 @@ class Pane:
             opts.pop("fit_range")
             ranges.resolve(ESTIMATORS["jet"], range=dict(self.options)["fit_range"])
         spec.check_options(opts)
+        if self.knn is not None:
+            return replace(self, knn=ranges.resolve(spec, knn=self.knn).knn, radius=None, features=features)
         if self.radius is not None:
             return replace(self, radius=ranges.resolve(spec, radius=self.radius).radius, features=features)
         return replace(self, range=ranges.resolve(spec, range=self.range).value, radius=None, features=features)
@@ -222,7 +234,7 @@ class Document:
         self.failures.clear()
         self._last_good.clear()
         self._rest.clear()
-        self.panes = [p.whole for p in self.panes]  # a region names the old mesh's vertices
+        self.panes = self._panes_for(mesh)
         self.picked = None
         changes = {}
         if truth is None and self.display.layer is not Layer.ESTIMATE:
@@ -232,6 +244,31 @@ class Document:
         if changes:
             self.display.update(**changes)
         self.mesh_changed.emit(MeshChange(source, mesh, truth, self.report, self.repairs, geometry))
+
+    def _panes_for(self, mesh) -> list[Pane]:
+        """The panes on a new input: regions dropped (they name the old input's vertices), knn dropped
+        on a mesh, and an estimator the input rules out (:func:`curv.estimators.refusal`: a face-based
+        one on a point cloud) replaced by the first default pane that runs on it and is not shown yet."""
+        panes = [replace(p.whole, knn=p.knn if is_points(mesh) else None) for p in self.panes]
+        runs = self._runnable_defaults(mesh)
+        for i, p in enumerate(panes):
+            if refusal(ESTIMATORS[p.method], mesh) is not None:
+                shown = {q.method for q in panes}
+                spare = [q for q in runs if q.method not in shown] or runs
+                if spare:
+                    panes[i] = spare[0]
+        return panes
+
+    def _runnable_defaults(self, mesh) -> list[Pane]:
+        """The default panes whose estimator runs on ``mesh`` (all of them before any input)."""
+        if mesh is None:
+            return list(self.default_panes)
+        return [p for p in self.default_panes if refusal(ESTIMATORS[p.method], mesh) is None]
+
+    @property
+    def is_points(self) -> bool:
+        """Whether the input shown is a point cloud (no faces)."""
+        return is_points(self.mesh)
 
     @property
     def has_truth(self) -> bool:
@@ -259,7 +296,8 @@ class Document:
         return i == len(self.panes)
 
     def set_pane(self, i: int, **changes) -> None:
-        """Change pane ``i``'s ``method``, ``range`` and/or ``radius`` (``radius=None``: back to Rk)."""
+        """Change pane ``i``'s ``method``, ``range``, ``radius`` and/or ``knn`` (``radius=None``,
+        ``knn=None``: back to Rk)."""
         old = self.panes[i]
         new = replace(old, **changes)
         if new != old:
@@ -274,12 +312,14 @@ class Document:
         raise KeyError(key)
 
     def set_pane_count(self, n: int) -> None:
-        """Show ``n`` panes (1 to :data:`MAX_PANES`); new panes take the next default estimator."""
+        """Show ``n`` panes (1 to :data:`MAX_PANES`); new panes take the next default estimator that runs
+        on the input."""
         n = int(min(max(n, 1), MAX_PANES))
         if n == len(self.panes):
             return
+        runs = self._runnable_defaults(self.mesh) or list(self.default_panes)
         while len(self.panes) < n:
-            self.panes.append(self.default_panes[len(self.panes) % len(self.default_panes)])
+            self.panes.append(runs[len(self.panes) % len(runs)])
         del self.panes[n:]
         self._last_good = {i: p for i, p in self._last_good.items() if i < n}
         self.active = min(self.active, n - 1)

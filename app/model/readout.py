@@ -34,6 +34,7 @@ REASON_WORDS = {
     Reason.NONMANIFOLD: "non-manifold",
     Reason.NOT_COMPUTED: "not computed",
     Reason.FEATURE: "on a crease (feature edge)",
+    Reason.ORIENTATION: "normal orientation undecided",
 }
 """What the readout says for each :class:`curv.Reason` of an invalid vertex."""
 

@@ -8,6 +8,8 @@ from pathlib import Path
 
 from curv.surfaces.hexagon import PAPER_VERTEX_COUNTS as HEXAGON_SIZES
 
+from .inputs import SAMPLING_WORDS
+
 __all__ = ["FileSource", "SurfaceSource", "HEXAGON_SIZES", "snap_hexagon_count"]
 
 
@@ -55,6 +57,10 @@ class SurfaceSource:
         Seed of the random parameters, irregularity and noise.
     random_params : bool
         Draw the shape parameters at random from ``seed`` instead of ``params``.
+    sampling : str or None
+        Sample the surface as a point cloud of ``n_vertices`` points this way (one of
+        :data:`SAMPLINGS`, e.g. ``"uniform"``) instead of meshing it; ``noise`` is then a fraction of
+        the points' spacing.
     """
 
     name: str = "ellipsoid_patch"
@@ -64,9 +70,12 @@ class SurfaceSource:
     noise: float = 0.0
     seed: int | None = 0
     random_params: bool = False
+    sampling: str | None = None
 
     @property
     def label(self) -> str:
+        if self.sampling is not None:
+            return f"{self.name} ({self.n_vertices} points, {SAMPLING_WORDS.get(self.sampling, self.sampling)})"
         return f"{self.name} ({self.n_vertices} vertices)"
 
     @property
@@ -75,4 +84,4 @@ class SurfaceSource:
 
     def __hash__(self) -> int:  # params is a dict: hash on its items
         return hash((self.name, tuple(sorted(self.params.items())), self.n_vertices,
-                     self.irregularity, self.noise, self.seed, self.random_params))
+                     self.irregularity, self.noise, self.seed, self.random_params, self.sampling))

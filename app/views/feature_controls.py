@@ -50,6 +50,7 @@ class FeatureControl(QWidget):
         self.angle.valueChanged.connect(self._angle_edited)
         doc.panes_changed.connect(self.sync)
         doc.pane_changed.connect(lambda i: self.sync())
+        doc.mesh_changed.connect(lambda change: self.sync())
         self.sync()
 
     def set_offered_angle(self, angle: float) -> None:
@@ -74,6 +75,7 @@ class FeatureControl(QWidget):
     def sync(self) -> None:
         """Show the active pane's feature angle without feeding it back."""
         features = self.doc.panes[self.doc.active].features
+        self.setEnabled(not self.doc.is_points)  # creases are between faces: a point cloud has none
         with blocked(self.enabled, self.angle):
             self.enabled.setChecked(features is not None)
             if features is not None:

@@ -9,7 +9,9 @@ import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray
 
-__all__ = ["mesh_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample", "border_lines", "edge_lines",
+from app.model.inputs import is_points, unit_length
+
+__all__ = ["mesh_polydata", "cloud_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample", "border_lines", "edge_lines",
            "Geometry"]
 
 
@@ -37,7 +39,8 @@ def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
 
 
 class Geometry(tuple):
-    """``(polydata, mean edge length, border lines)`` built off the GUI thread."""
+    """``(polydata, length unit, border lines)`` built off the GUI thread (the unit: mean edge length of a
+    mesh, median spacing of a point cloud)."""
 
     @property
     def base(self) -> pv.PolyData:
@@ -50,6 +53,11 @@ class Geometry(tuple):
     @property
     def borders(self) -> pv.PolyData:
         return self[2]
+
+    @property
+    def points_only(self) -> bool:
+        """Whether this is a point cloud (vertex cells only)."""
+        return self[0].n_cells == self[0].n_verts and self[0].n_verts > 0
 
 
 def border_lines(mesh) -> pv.PolyData:
@@ -65,8 +73,19 @@ def edge_lines(mesh, edges: np.ndarray) -> pv.PolyData:
     return pv.PolyData(np.ascontiguousarray(mesh.vertices, dtype=np.float64), lines=lines)
 
 
+def cloud_polydata(cloud) -> pv.PolyData:
+    """A PolyData of a :class:`curv.PointCloud`: its points, one vertex cell each (nothing to shade)."""
+    return pv.PolyData(np.ascontiguousarray(cloud.points, dtype=np.float64))
+
+
 def prepare_geometry(mesh) -> Geometry:
-    """Render geometry of ``mesh``, its mean edge length and border lines; safe to run in a worker thread."""
+    """Render geometry of ``mesh``, its length unit and border lines; safe to run in a worker thread.
+
+    A point cloud is drawn as its points; its length unit is its median spacing and it has no border
+    edges (its border points are a result's ``BORDER`` reason).
+    """
+    if is_points(mesh):
+        return Geometry((cloud_polydata(mesh), unit_length(mesh), pv.PolyData()))
     return Geometry((mesh_polydata(mesh, vertex_normals(mesh)), float(mesh.mean_edge_length), border_lines(mesh)))
 
 
@@ -78,7 +97,7 @@ def glyph_subsample(n: int, *, count: int = 2000, seed: int = 0) -> np.ndarray:
 
 
 def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.ndarray,
-                     min_anisotropy: float = 0.02) -> tuple[pv.PolyData, pv.PolyData]:
+                     min_anisotropy: float = 0.02, lift: float | None = None) -> tuple[pv.PolyData, pv.PolyData]:
     """Line glyphs along d1 and d2 at ``index``, centred on the vertices.
 
     Parameters
@@ -91,6 +110,9 @@ def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.nda
         Subsample of vertices to draw.
     min_anisotropy : float
         Glyphs are hidden where ``|k1 - k2| / (|k1| + |k2|)`` is below this (umbilics: no direction).
+    lift : float, optional
+        How far along the normal the glyphs float (default 2 % of ``length``; above a point's
+        sphere on a point cloud).
 
     Returns
     -------
@@ -100,7 +122,7 @@ def direction_glyphs(points: np.ndarray, result, *, length: float, index: np.nda
     aniso = anisotropy(k1, k2)
     keep = index[np.isfinite(aniso) & (aniso >= min_anisotropy)]
     out = []
-    lift = 0.02 * length * result.normals[keep]
+    lift = (0.02 * length if lift is None else lift) * result.normals[keep]
     for d in (result.d1, result.d2):
         half = 0.5 * length * d[keep]
         centre = points[keep] + lift

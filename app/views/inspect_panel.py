@@ -13,12 +13,13 @@ from PySide6.QtCore import QEvent, QObject, Qt, Signal
 from PySide6.QtGui import QDoubleValidator
 from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QFormLayout, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
-    QPushButton, QToolButton, QVBoxLayout, QWidget,
+    QPushButton, QSpinBox, QToolButton, QVBoxLayout, QWidget,
 )
 from superqt import QEnumComboBox, QLabeledDoubleRangeSlider
 from superqt.utils import qdebounced
 
 from app.model import Document, Layer, LimitMode, Pane, Quantity, colormap_names, format_limit, pane_letter
+from app.model.inputs import DEFAULT_KNN, POINT_SIZES, items_word, unit_length
 
 from .histogram import Histogram
 from .style import PANE_COLOURS
@@ -49,8 +50,11 @@ def estimator_tooltip(spec, refused: str | None = None) -> str:
 
 
 RANGE_TIP = ("<b>Range Rk</b> (paper §4.1): the support of vertex p is every vertex connected to p within "
-             "k × the longest edge of p's 1-ring. Pick a preset R1–R4 or type a real k such as 2.5.<br>"
-             "<b>Radius</b>: the same ball of radius r (mesh units) at every vertex instead.")
+             "k × the longest edge of p's 1-ring; on a point cloud, every point within k × p's spacing. "
+             "Pick a preset R1–R4 or type a real k such as 2.5.<br>"
+             "<b>Radius</b>: the same ball of radius r (mesh units) at every vertex instead.<br>"
+             "<b>Nearest</b> (point clouds): the K nearest points instead.")
+POINT_SIZE_TIP = "Width of a point cloud's points in pixels (drawn as shaded spheres)"
 LIMITS_TIP = ("<b>Percentile</b>: robust limits from the 2–98 % percentiles (adjustable); <b>Min / max</b>: the "
               "whole span; <b>Manual</b>: the values you type or drag on the histogram. Signed fields that "
               "straddle 0 get symmetric limits and a diverging map; fields of one sign a sequential map. "
@@ -108,6 +112,18 @@ class InspectPanel(QWidget):
         self.radius = QLineEdit()  # read by curv.ranges, which refuses bad input with a message
         self.radius.setPlaceholderText("—")
         self.radius.setToolTip("Ball radius in mesh units (the same at every vertex), a positive number")
+        self.use_knn = QCheckBox("Nearest")
+        self.use_knn.setToolTip(RANGE_TIP)
+        self.knn = QSpinBox()  # what K may be is curv.ranges' rule: a refused K comes back with its message
+        self.knn.setRange(1, 10_000)
+        self.knn.setValue(DEFAULT_KNN)
+        self.knn.setSuffix(" points")
+        self.knn.setKeyboardTracking(False)
+        self.knn.setToolTip("The support of each point is its K nearest points (point clouds only)")
+        self.point_size = QSpinBox()
+        self.point_size.setRange(*POINT_SIZES)
+        self.point_size.setSuffix(" px")
+        self.point_size.setToolTip(POINT_SIZE_TIP)
         self.recompute = QPushButton("Recompute")
         self.recompute.setToolTip("Compute the active pane again (F5)")
         self.advise_button = QToolButton()  # the window binds it to its Advise action
@@ -165,6 +181,10 @@ class InspectPanel(QWidget):
         radius_row.addWidget(self.use_radius)
         radius_row.addWidget(self.radius, 1)
         pane_form.addRow("", radius_row)
+        knn_row = QHBoxLayout()
+        knn_row.addWidget(self.use_knn)
+        knn_row.addWidget(self.knn, 1)
+        pane_form.addRow("", knn_row)
         self.pane_form = pane_form  # the window adds the Feature angle row under the range
         pane_form.addRow("", self.advise_button)
         self.all_box = QGroupBox("All panes")
@@ -191,6 +211,7 @@ class InspectPanel(QWidget):
         for i, w in enumerate((self.directions, self.edges, self.borders, self.points)):
             overlays.addWidget(w, i // 2, i % 2)
         form.addRow(overlays)
+        form.addRow("Point size", self.point_size)
         form.addRow(self.shared)
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
@@ -210,6 +231,9 @@ class InspectPanel(QWidget):
         self.range.lineEdit().editingFinished.connect(self._range_edited)
         self.use_radius.toggled.connect(self._radius_toggled)
         self.radius.editingFinished.connect(self._radius_edited)
+        self.use_knn.toggled.connect(self._knn_toggled)
+        self.knn.valueChanged.connect(lambda _k: self._knn_edited())
+        self.point_size.valueChanged.connect(lambda px: doc.display.update(point_size=float(px)))
         self.recompute.clicked.connect(self.recompute_requested)
         self.quantity.currentEnumChanged.connect(lambda q: doc.display.update(quantity=q))
         self.layer.currentEnumChanged.connect(self._layer_edited)
@@ -260,7 +284,8 @@ class InspectPanel(QWidget):
         spec = ESTIMATORS[self.method.currentData()]
         pane = self.doc.panes[self.doc.active]
         radius = pane.radius if ranges.takes_any_range(spec) else None
-        self._set_pane(method=spec.name, range=ranges.nearest_allowed(spec, pane.range), radius=radius,
+        knn = pane.knn if ranges.takes_any_range(spec) else None
+        self._set_pane(method=spec.name, range=ranges.nearest_allowed(spec, pane.range), radius=radius, knn=knn,
                        options=())  # another estimator starts from its defaults
 
     def _range_edited(self) -> None:
@@ -269,16 +294,26 @@ class InspectPanel(QWidget):
         except EstimatorError as exc:
             self._refuse(str(exc))
             return
-        self._set_pane(range=k, radius=None)
+        self._set_pane(range=k, radius=None, knn=None)
 
     def _radius_toggled(self, on: bool) -> None:
         doc = self.doc
         if on:
             if doc.mesh is not None and not self.radius.text().strip():
-                self.radius.setText(f"{2.0 * float(doc.mesh.mean_edge_length):.6g}")
+                self.radius.setText(f"{2.0 * unit_length(doc.mesh):.6g}")
             self._radius_edited()
         else:
             self._set_pane(radius=None)
+
+    def _knn_toggled(self, on: bool) -> None:
+        if on:
+            self._knn_edited()
+        else:
+            self._set_pane(knn=None)
+
+    def _knn_edited(self) -> None:
+        if self.use_knn.isChecked():
+            self._set_pane(knn=int(self.knn.value()), radius=None)
 
     def _radius_edited(self) -> None:
         if self.use_radius.isChecked():
@@ -288,7 +323,7 @@ class InspectPanel(QWidget):
             except EstimatorError as exc:
                 self._refuse(str(exc))
                 return
-            self._set_pane(radius=radius)
+            self._set_pane(radius=radius, knn=None)
 
     def _layer_edited(self, layer: Layer) -> None:
         if layer.needs_truth and not self.doc.has_truth:
@@ -329,7 +364,8 @@ class InspectPanel(QWidget):
         self.pane_box.setStyleSheet(
             f"#pane_box {{ border: 2px solid {colour if several else '#c8c8c8'}; border-radius: 4px; margin-top: 1.2em; }}"
             "#pane_box::title { subcontrol-origin: margin; left: 8px; padding: 0 3px; }")
-        widgets = (self.method, self.range, self.use_radius, self.radius, self.quantity, self.layer,
+        widgets = (self.method, self.range, self.use_radius, self.radius, self.use_knn, self.knn, self.point_size,
+                   self.quantity, self.layer,
                    self.directions, self.edges, self.borders, self.points, self.cmap_div, self.cmap_seq,
                    self.limit_mode, self.percentiles, self.shared, self.lock)
         with blocked(*widgets, self.range.lineEdit()):
@@ -340,12 +376,22 @@ class InspectPanel(QWidget):
             for i, k in enumerate(ranges.PAPER_RANGES):
                 self.range.model().item(i).setEnabled(k in allowed)
             self.range.setEditText(ranges.range_label(pane.range))
-            self.range.setEnabled(pane.radius is None)
+            self.range.setEnabled(pane.radius is None and pane.knn is None)
             self.use_radius.setEnabled(ranges.takes_any_range(spec))
             self.use_radius.setChecked(pane.radius is not None)
             self.radius.setEnabled(pane.radius is not None)
             if pane.radius is not None:
                 self.radius.setText(f"{pane.radius:g}")
+            points = doc.is_points
+            self.use_knn.setEnabled(points and ranges.takes_any_range(spec))
+            self.use_knn.setChecked(pane.knn is not None)
+            self.knn.setEnabled(pane.knn is not None)
+            if pane.knn is not None:
+                self.knn.setValue(pane.knn)
+            self.point_size.setValue(int(round(st.point_size)))
+            self.point_size.setEnabled(points)
+            self.edges.setEnabled(not points)  # a cloud has no edges and is drawn as points
+            self.points.setEnabled(not points)
             self.quantity.setCurrentEnum(st.quantity)
             for i, layer in enumerate(Layer):
                 self.layer.model().item(i).setEnabled(doc.has_truth or not layer.needs_truth)
@@ -411,5 +457,6 @@ class InspectPanel(QWidget):
         self._show_limits(clim)
         self._show_centre_note(clim, cmap.kind)
         if n_invalid is not None:
-            self.invalid.setText(f"Invalid vertices (magenta): {n_invalid} of {n_vertices} "
+            word = "vertices" if self.doc.mesh is None else items_word(self.doc.mesh)
+            self.invalid.setText(f"Invalid {word} (magenta): {n_invalid} of {n_vertices} "
                                  f"({100.0 * n_invalid / max(n_vertices, 1):.1f} %)")

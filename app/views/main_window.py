@@ -40,8 +40,13 @@ from .source_panel import SourcePanel
 
 __all__ = ["MainWindow", "MESH_FILTER", "DEFAULT_SOURCE"]
 
-MESH_FILTER = "Meshes (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf);;All files (*)"
+MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf *.xyz *.txt *.csv *.pcd *.las *.laz);;"
+               "Meshes (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf);;"
+               "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.las *.laz);;All files (*)")
 DEFAULT_SOURCE = SurfaceSource(name="saddle", n_vertices=3169)
+ADVISE_TIP = ("Measure this mesh's noise, irregularity and density and rank the estimators and ranges by the "
+              "error the paper's study predicts; Apply in the Advice panel uses one (Ctrl+Shift+A)")
+ADVISE_POINTS_TIP = "The advisor ranks estimators for meshes (its table comes from the study's meshes), not point clouds"
 MAX_RECENT = 8
 GLYPH_PIXELS = 900
 """One direction glyph per this many pixels of a pane at most, so glyphs never bury the colours."""
@@ -164,9 +169,7 @@ class MainWindow(QMainWindow):
         self.action_advise = QAction("&Advise estimator and range", self, shortcut="Ctrl+Shift+A",
                                      triggered=self.advise)
         self.action_advise.setIconText("Advise")
-        self.action_advise.setToolTip(
-            "Measure this mesh's noise, irregularity and density and rank the estimators and ranges by the "
-            "error the paper's study predicts; Apply in the Advice panel uses one (Ctrl+Shift+A)")
+        self.action_advise.setToolTip(ADVISE_TIP)
         self.action_advise.setStatusTip("Rank the estimators and ranges for this mesh")
         est_menu.addActions([self.action_recompute, self.action_advise, self.action_cancel])
         self.inspect.advise_button.setDefaultAction(self.action_advise)
@@ -224,7 +227,7 @@ class MainWindow(QMainWindow):
             self.open_surface(source)
 
     def open_dialog(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "Open mesh", self.settings.value("last_dir", ""), MESH_FILTER)
+        path, _ = QFileDialog.getOpenFileName(self, "Open mesh or point cloud", self.settings.value("last_dir", ""), MESH_FILTER)
         if path:
             self.open_path(path)
 
@@ -288,10 +291,18 @@ class MainWindow(QMainWindow):
         if isinstance(change.source, FileSource):
             self._add_recent(str(Path(change.source.path).resolve()))
         self._geometry = change.geometry if change.geometry is not None else prepare_geometry(change.mesh)
-        self.grid.set_geometry(self._geometry.base, edge_length=self._geometry.edge_length)
+        self.grid.set_point_size(doc.display.state.point_size)
+        self.grid.set_geometry(self._geometry.base, edge_length=self._geometry.edge_length,
+                               points=self._geometry.points_only)
         self._drawn = None
         self._feature_lines = {}
         self.setWindowTitle(f"curvlab — {change.source.label}")
+        points = doc.is_points
+        self.docks["readout"].setWindowTitle("Picked point" if points else "Picked vertex")
+        self.docks["mesh"].setWindowTitle("Point cloud report" if points else "Mesh report")
+        # the advisor's table comes from the study's meshes: it has nothing to say about a point cloud
+        self.action_advise.setEnabled(not points)
+        self.action_advise.setToolTip(ADVISE_POINTS_TIP if points else ADVISE_TIP)
         if isinstance(change.source, SurfaceSource):
             self.source_panel.set_source(change.source)
         self.source_panel.show_current(change.source)
@@ -317,6 +328,13 @@ class MainWindow(QMainWindow):
             self.update_titles()
 
     def _on_display(self, names: set) -> None:
+        if "point_size" in names:
+            self.grid.set_point_size(self.doc.display.state.point_size)
+            for vp in self.grid.viewports:  # the marker stays wider than the points
+                vp.set_marker(None if self.doc.picked is None else self.doc.mesh.vertices[self.doc.picked])
+            if names == {"point_size"}:
+                self.grid.render_all()
+                return
         self.redraw()
 
     def _on_picked(self, index) -> None:
@@ -366,11 +384,16 @@ class MainWindow(QMainWindow):
             if state.show_directions and res is not None:
                 w, h = vp.plotter.width(), vp.plotter.height()
                 count = int(min(1500, max(doc.mesh.n_vertices // 6, 1), max(w * h // GLYPH_PIXELS, 50)))
-                vp.set_glyphs(direction_glyphs(doc.mesh.vertices, res, length=1.6 * doc.mesh.mean_edge_length,
+                length, lift = 1.6 * self._geometry.edge_length, None
+                if doc.is_points:  # glyphs as long as their own spacing, floating above the points' spheres
+                    length = 0.8 * self._geometry.edge_length * np.sqrt(doc.mesh.n_vertices / count)
+                    lift = (0.5 * state.point_size + 1.0) * vp.pixel_length()
+                vp.set_glyphs(direction_glyphs(doc.mesh.vertices, res, length=length, lift=lift,
                                                index=glyph_subsample(doc.mesh.n_vertices, count=count)))
             else:
                 vp.set_glyphs(None)
-            vp.set_overlays(edges=state.show_edges, points=state.show_points,
+            mesh = not doc.is_points  # a point cloud has no edges, and is drawn as points already
+            vp.set_overlays(edges=state.show_edges and mesh, points=state.show_points and mesh,
                             borders=self._geometry.borders if state.show_borders and self._geometry else None,
                             features=self.feature_lines(i) if state.show_borders else None)
             vp.set_marker(None if doc.picked is None else doc.mesh.vertices[doc.picked])
@@ -388,7 +411,7 @@ class MainWindow(QMainWindow):
         """The feature edges of view ``i``'s feature angle as lines, or None (no angle, difference pane)."""
         doc = self.doc
         angle = None if doc.is_difference(i) else doc.panes[i].features
-        if angle is None or doc.mesh is None:
+        if angle is None or doc.mesh is None or doc.is_points:
             return None
         if angle not in self._feature_lines:
             self._feature_lines[angle] = edge_lines(doc.mesh, np.asarray(doc.mesh.edges)[feature_edges(doc.mesh, angle)])

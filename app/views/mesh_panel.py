@@ -6,7 +6,8 @@ from __future__ import annotations
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import QCheckBox, QLabel, QPushButton, QVBoxLayout, QWidget
 
-from app.model import Document, FileSource
+from app.model import Document, FileSource, pane_letter
+from app.model.inputs import result_report
 
 __all__ = ["MeshPanel", "REPAIRS"]
 
@@ -44,17 +45,24 @@ class MeshPanel(QWidget):
         lay.addWidget(self.reload)
         lay.addStretch(1)
         doc.mesh_changed.connect(lambda change: self.refresh())
+        doc.result_changed.connect(lambda key: self.refresh())
+        doc.panes_changed.connect(self.refresh)
+        doc.pane_changed.connect(lambda i: self.refresh())
         self.refresh()
 
     def refresh(self) -> None:
         doc = self.doc
         if doc.mesh is None:
-            self.text.setText("<i>No mesh yet.</i>")
+            self.text.setText("<i>No mesh or point cloud yet.</i>")
         else:
             lines = [f"<b>{doc.source.label}</b>"] + list(doc.report)
             lines += [f"repair: {r}" for r in doc.repairs]
+            res = doc.result(doc.active) if doc.is_points else None
+            if res is not None:  # what the active pane's estimate found: its normals, the border points
+                lines += [f"<b>Pane {pane_letter(doc.active)}</b> ({doc.panes[doc.active].title}):"]
+                lines += result_report(res)
             self.text.setText("<br>".join(lines))
-        is_file = isinstance(doc.source, FileSource)
+        is_file = isinstance(doc.source, FileSource) and not doc.is_points  # the repairs mend faces
         for key, box in self.repairs.items():
             box.setEnabled(is_file)
             box.setChecked(is_file and key in doc.source.repairs)

@@ -8,6 +8,8 @@ import pyvista as pv
 from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QGridLayout, QWidget
 
+from app.model.inputs import DEFAULT_POINT_SIZE
+
 from .viewport import Viewport
 
 __all__ = ["PaneGrid"]
@@ -37,6 +39,8 @@ class PaneGrid(QWidget):
         self.linked = True
         self._base: pv.PolyData | None = None
         self._edge = 1.0
+        self._points = False
+        self._point_size = float(DEFAULT_POINT_SIZE)
         self._syncing = False
         self._synced_mtime = 0
         self.set_count(1)
@@ -58,7 +62,7 @@ class PaneGrid(QWidget):
             vp.vertex_picked.connect(self.vertex_picked)
             vp.plotter.ren_win.AddObserver("EndEvent", self._after_render)
             if self._base is not None:
-                vp.set_geometry(self._base, edge_length=self._edge)
+                vp.set_geometry(self._base, edge_length=self._edge, points=self._points, point_size=self._point_size)
             self.viewports.append(vp)
         self._arrange()
         self.set_linked(self.linked)  # new viewports look through the shared camera (or a copy): the view stays
@@ -96,13 +100,20 @@ class PaneGrid(QWidget):
         if self._base is not None:
             QTimer.singleShot(0, lambda: self.reset_camera(render=True))
 
-    def set_geometry(self, base: pv.PolyData, *, edge_length: float) -> None:
-        """Show a new mesh in every viewport and frame it (rendered by the next :meth:`render_all`)."""
-        self._base, self._edge = base, edge_length
+    def set_geometry(self, base: pv.PolyData, *, edge_length: float, points: bool = False) -> None:
+        """Show a new mesh (or point cloud, drawn as points) in every viewport and frame it (rendered
+        by the next :meth:`render_all`)."""
+        self._base, self._edge, self._points = base, edge_length, bool(points)
         for vp in self.viewports:
-            vp.set_geometry(base, edge_length=edge_length)
+            vp.set_geometry(base, edge_length=edge_length, points=self._points, point_size=self._point_size)
         self.reset_camera(render=False)
         self._refit_later()  # again once Qt has laid the panes out (VTK fits their sizes then)
+
+    def set_point_size(self, pixels: float) -> None:
+        """Draw a point cloud's points ``pixels`` wide in every viewport (kept for the next cloud)."""
+        self._point_size = float(pixels)
+        for vp in self.viewports:
+            vp.set_point_size(self._point_size)
 
     def reset_camera(self, *, render: bool = True) -> None:
         """Frame the mesh from above at an angle."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 from PySide6.QtWidgets import QTextBrowser, QTextEdit
 
 from app.model import Document, pane_letter, readout_columns, readout_rows
+from app.model.inputs import item_word
 from app.model.readout import fmt_vec
 
 COMPACT_AFTER = 2
@@ -35,11 +36,12 @@ class Readout(QTextBrowser):
     def refresh(self) -> None:
         doc, i = self.doc, self.doc.picked
         if i is None or doc.mesh is None:
-            self.setHtml("<i>Click on the mesh to pick a vertex.</i>")
+            self.setHtml(f"<i>Click on the {'point cloud' if doc.is_points else 'mesh'} to pick a "
+                         f"{'point' if doc.is_points else 'vertex'}.</i>")
             return
         p = doc.mesh.vertices[i]
         compact = len(readout_columns(doc)) > COMPACT_AFTER  # narrow columns: no sideways scrolling
-        html = [f"<b>vertex {i}</b> at {fmt_vec(p)}"]
+        html = [f"<b>{item_word(doc.mesh)} {i}</b> at {fmt_vec(p)}"]
         if compact:
             html.append("<br>" + " · ".join(f"<b>{pane_letter(j)}:</b> {pane.title}" for j, pane in enumerate(doc.panes)))
         html.append(f"<table cellspacing={2 if compact else 4}><tr><th></th>")

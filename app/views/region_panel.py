@@ -8,6 +8,7 @@ from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QCheckBox, QFormLayout, QHBoxLayout, QLabel, QLineEdit, QPushButton, QWidget
 
 from app.model import Document, pane_letter
+from app.model.inputs import unit_length
 from app.model.region import REST_NOTE, ball_region, index_region, show_region, shown_region
 
 __all__ = ["RegionPanel", "vertices_in_view"]
@@ -21,12 +22,7 @@ def vertices_in_view(viewport) -> np.ndarray:
     between the near and far planes); sides facing away or hidden behind others count too."""
     if viewport.poly is None:
         return np.zeros(0, np.int64)
-    renderer = viewport.plotter.renderer
-    camera = renderer.GetActiveCamera()
-    matrix = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1.0, 1.0)
-    m = np.array([[matrix.GetElement(r, c) for c in range(4)] for r in range(4)])
-    points = np.asarray(viewport.poly.points)
-    clip = points @ m[:, :3].T + m[:, 3]  # homogeneous clip coordinates (n, 4)
+    clip = viewport.clip_coordinates()
     w = clip[:, 3]
     inside = (w > 0) & np.all(np.abs(clip[:, :3]) <= w[:, None], axis=1)
     return np.flatnonzero(inside).astype(np.int64)
@@ -121,7 +117,7 @@ class RegionPanel(QWidget):
 
     # -- model -> widgets ----------------------------------------------------------------------
     def _on_mesh(self, change) -> None:
-        self.radius.setText(f"{DEFAULT_RADIUS_EDGES * float(change.mesh.mean_edge_length):.3g}")
+        self.radius.setText(f"{DEFAULT_RADIUS_EDGES * unit_length(change.mesh):.3g}")
         self.sync()
 
     def _on_picked(self, index) -> None:

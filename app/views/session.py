@@ -45,7 +45,7 @@ def restore_session(settings: QSettings, doc: Document) -> None:
     doc.display.update(**changes)
     try:
         saved = json.loads(str(settings.value("panes", "[]")))
-        panes = [Pane(p["method"], p["range"], p.get("radius"), p.get("features"),
+        panes = [Pane(p["method"], p["range"], p.get("radius"), p.get("features"), knn=p.get("knn"),
                       options=tuple(tuple(o) for o in p.get("options", ()))).validated() for p in saved]
     except (ValueError, TypeError, KeyError, LookupError):
         return
@@ -53,7 +53,7 @@ def restore_session(settings: QSettings, doc: Document) -> None:
         doc.set_pane_count(len(panes))
         for i, pane in enumerate(panes):
             doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, features=pane.features,
-                         options=pane.options)
+                         knn=pane.knn, options=pane.options)
     doc.set_difference(str(settings.value("panes/difference", "false")).lower() == "true")
 
 
@@ -66,7 +66,8 @@ def save_session(settings: QSettings, doc: Document) -> None:
     settings.setValue("cmap/diverging_cmap", st.diverging_cmap)
     settings.setValue("cmap/sequential_cmap", st.sequential_cmap)
     settings.setValue("panes", json.dumps([{"method": p.method, "range": p.range, "radius": p.radius,
-                                            "features": p.features, "options": [list(o) for o in p.options]}
+                                            "features": p.features, "knn": p.knn,
+                                            "options": [list(o) for o in p.options]}
                                            for p in doc.panes]))
     settings.setValue("limits/mode", st.limit_mode.value)
     settings.setValue("limits/percentiles", json.dumps(list(st.percentiles)))

@@ -14,6 +14,7 @@ from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
 from vtkmodules.vtkRenderingCore import vtkCellPicker, vtkRenderer
 
 from app.model.colors import LABEL_FORMAT, contrasting_colours
+from app.model.inputs import DEFAULT_POINT_SIZE
 
 from .style import PANE_COLOURS
 
@@ -82,12 +83,19 @@ class Viewport(QFrame):
         self._press = None
         self._picker = vtkCellPicker()
         self._picker.SetTolerance(0.002)
+        self.points_only = False
         self.plotter.installEventFilter(self)
         self.set_active(False)
 
     # -- geometry -------------------------------------------------------------------------------
-    def set_geometry(self, base: pv.PolyData, *, edge_length: float) -> None:
-        """Show ``base`` (shared points and cells) with a fresh colour array, all grey."""
+    def set_geometry(self, base: pv.PolyData, *, edge_length: float, points: bool = False,
+                     point_size: float = DEFAULT_POINT_SIZE) -> None:
+        """Show ``base`` (shared points and cells) with a fresh colour array, all grey.
+
+        With ``points`` (a point cloud) every point is drawn as a shaded sphere ``point_size`` pixels
+        wide (VTK's sphere impostors; they render under software GL too) and picking takes the point
+        nearest the click.
+        """
         if self._mesh_actor is not None:
             self.plotter.remove_actor(self._mesh_actor, render=False)
         self.clear_glyphs()
@@ -95,12 +103,25 @@ class Viewport(QFrame):
         self.colours = np.tile(_GREY, (base.n_points, 1))
         self.poly.point_data.set_array(self.colours, "rgba")
         self.colours = self.poly.point_data["rgba"]  # the VTK-backed array, written in place later
+        self.points_only = bool(points)
+        style = dict(style="points", point_size=point_size, render_points_as_spheres=True) if points else {}
         self._mesh_actor = self.plotter.add_mesh(
             self.poly, scalars="rgba", rgb=True, show_scalar_bar=False, reset_camera=False,
-            render=False, name="mesh", pickable=True)
-        self._mesh_actor.prop.interpolation = "gouraud"
+            render=False, name="mesh", pickable=True, **style)
+        if not points:
+            self._mesh_actor.prop.interpolation = "gouraud"
         self._edge = float(edge_length)
         self.set_marker(None)
+
+    def set_point_size(self, pixels: float) -> None:
+        """Draw a point cloud's points ``pixels`` wide (a mesh is left alone)."""
+        if self._mesh_actor is not None and self.points_only:
+            self._mesh_actor.prop.point_size = float(pixels)
+
+    @property
+    def point_size(self) -> float | None:
+        """The drawn width of a point cloud's points in pixels (None for a mesh)."""
+        return float(self._mesh_actor.prop.point_size) if self._mesh_actor is not None and self.points_only else None
 
     def set_colours(self, rgba: np.ndarray | None, *, clim=None, cmap=None, title: str = "") -> None:
         """Write ``rgba`` (n, 4) uint8 into the mesh colours (grey if None) and update the colour bar."""
@@ -198,7 +219,7 @@ class Viewport(QFrame):
         if point is not None:  # a fixed size in pixels: visible at any zoom, in a colour the map lacks
             marker = pv.PolyData(np.asarray(point, float).reshape(1, 3))
             self._marker_actor = self.plotter.add_mesh(
-                marker, color=tuple(c / 255 for c in self._marker_colour), point_size=16,
+                marker, color=tuple(c / 255 for c in self._marker_colour), point_size=max(16, (self.point_size or 0) + 8),
                 render_points_as_spheres=True, render=False, reset_camera=False, pickable=False, lighting=False)
 
     def set_active(self, active: bool, *, difference: bool = False) -> None:
@@ -232,6 +253,8 @@ class Viewport(QFrame):
             return None
         ratio = self.plotter.devicePixelRatioF()
         height = self.plotter.height() * ratio
+        if self.points_only:
+            return self._pick_point(x * ratio, height - y * ratio - 1)
         if not self._picker.Pick(x * ratio, height - y * ratio - 1, 0, self.plotter.renderer):
             return None
         if self._picker.GetActor() is not self._mesh_actor or self._picker.GetCellId() < 0:
@@ -241,6 +264,41 @@ class Viewport(QFrame):
         pos = np.array(self._picker.GetPickPosition())
         pts = np.asarray(self.poly.points)[ids]
         return int(ids[np.argmin(((pts - pos) ** 2).sum(axis=1))])
+
+    def pixel_length(self) -> float:
+        """World length of one pixel at the camera's focal point."""
+        cam = self.plotter.renderer.GetActiveCamera()
+        height = max(self.plotter.renderer.GetSize()[1], 1)
+        if cam.GetParallelProjection():
+            return 2.0 * cam.GetParallelScale() / height
+        return 2.0 * cam.GetDistance() * np.tan(np.radians(cam.GetViewAngle()) / 2.0) / height
+
+    def clip_coordinates(self) -> np.ndarray:
+        """(n, 4) homogeneous clip coordinates of the drawn points through the camera (x, y, z in
+        [-w, w] inside the view, z growing away from the viewer)."""
+        renderer = self.plotter.renderer
+        camera = renderer.GetActiveCamera()
+        matrix = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1.0, 1.0)
+        m = np.array([[matrix.GetElement(r, c) for c in range(4)] for r in range(4)])
+        return np.asarray(self.poly.points) @ m[:, :3].T + m[:, 3]
+
+    def _pick_point(self, x: float, y: float) -> int | None:
+        """The point of the cloud drawn under display position (x, y) (device pixels, bottom-left
+        origin): of the points whose sphere covers it, the nearest the viewer, as the depth test
+        draws them."""
+        clip = self.clip_coordinates()
+        w = clip[:, 3]
+        front = w > 0
+        ndc = clip[:, :3] / np.where(front, w, 1.0)[:, None]
+        x0, y0, x1, y1 = self.plotter.renderer.GetViewport()
+        width, height = self.plotter.ren_win.GetSize()
+        px = (x0 + 0.5 * (ndc[:, 0] + 1.0) * (x1 - x0)) * width
+        py = (y0 + 0.5 * (ndc[:, 1] + 1.0) * (y1 - y0)) * height
+        radius = 0.5 * max(self.point_size or DEFAULT_POINT_SIZE, 4.0) * self.plotter.devicePixelRatioF()
+        hit = np.flatnonzero(front & ((px - x) ** 2 + (py - y) ** 2 <= radius * radius) & (np.abs(ndc[:, 2]) <= 1.0))
+        if hit.size == 0:
+            return None
+        return int(hit[np.argmin(ndc[hit, 2])])
 
     def display_position(self, point) -> tuple[float, float]:
         """Widget position (Qt pixels) of a world point, the inverse of what picking uses."""
