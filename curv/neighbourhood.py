@@ -36,7 +36,7 @@ from .mesh import Mesh
 from .pointcloud import PointCloud
 from .ranges import Range, ball_radii
 
-__all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "Neighbourhood",
+__all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "support_sizes", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
 QUEUE_START = 0
@@ -250,6 +250,59 @@ def _support_fill(centres, radius2, indptr, indices, x, y, z, stamps, queues, st
             start = out_ptr[i]
             for j in range(1, count):
                 out[start + j - 1] = queue[j]
+
+
+@jit_parallel
+def _support_sizes(centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops, counts, flagged):
+    for t in prange(starts.size):
+        queue = queues[t]
+        stamp = stamps[t]
+        for i in range(starts[t], stops[t]):
+            p = centres[i]
+            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
+            counts[i] = count - 1
+            hit = False
+            for j in range(count):
+                hit = hit or flags[queue[j]]
+            flagged[i] = hit
+
+
+def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None,
+                  flags: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """How many vertices each support holds, and whether it holds a flagged one, without storing it.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    radii : (n,) float64
+        Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
+    vertices : (c,) int, optional
+        Centres; default all.
+    flags : (n,) bool, optional
+        E.g. ``mesh.border_vertices``; default none flagged.
+
+    Returns
+    -------
+    counts : (c,) int64
+        Support size of each centre, itself excluded.
+    flagged : (c,) bool
+        The support (the centre included) holds a flagged vertex.
+    """
+    centres = np.arange(mesh.n_vertices, dtype=np.int64) if vertices is None else \
+        np.ascontiguousarray(vertices, dtype=np.int64)
+    flags = np.zeros(mesh.n_vertices, np.bool_) if flags is None else np.ascontiguousarray(flags, np.bool_)
+    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
+    indptr, indices = expansion_adjacency(mesh, None)
+    x, y, z = coordinate_columns(mesh)
+    parts = max(1, min(threads(), centres.size))
+    stamps = new_scratch(mesh.n_vertices, parts)
+    queues = new_queues(mesh.n_vertices, parts)
+    starts, stops = thread_slices(centres.size, parts)
+    counts = np.empty(centres.size, np.int64)
+    flagged = np.empty(centres.size, np.bool_)
+    launch(_support_sizes, centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops,
+           counts, flagged)
+    return counts, flagged
 
 
 def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, *,

@@ -125,7 +125,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
     h : float
         The coordinate scale: largest distance from p to a support vertex.
     """
-    nd = (degree + 1) * (degree + 2) // 2
+    nd = (degree + 1) * (degree + 2) // 2  # unknowns(degree); the registry's min_neighbours is nd - 1
     if count < nd:
         return _TOO_FEW, 0.0
     rx, ry, rz = normals[p, 0], normals[p, 1], normals[p, 2]
@@ -421,4 +421,5 @@ register(EstimatorSpec(
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     options={"degree": DEGREES},
     kernels=(_jet_kernel,),
+    min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
 ))

@@ -71,6 +71,11 @@ class EstimatorSpec:
         Can compute the default (Max-weighted) vertex normals in its own pass over the mesh: called
         with ``normals=None`` it returns them in :attr:`Principal.normals`, already NaN at
         :func:`curv.normals.unusable_normal_vertices`, saving a separate pass.
+    min_neighbours : int or callable
+        Fewest support vertices (the centre excluded) a vertex needs, else ``TOO_FEW_NEIGHBOURS``:
+        the fit's unknowns, or a function of the estimator options giving it (the jet's degree);
+        0 for the estimators without a fit. Read through :meth:`fewest_neighbours` (the advisor
+        counts the vertices a candidate can estimate with it).
     extra_bytes_per_unit : float
         Peak memory beyond the common per-vertex arrays, in bytes per size unit (vertices + faces / 2):
         whole-mesh per-edge and per-face arrays and stamps (``csm``, ``icc``); :mod:`curv.memory`
@@ -96,6 +101,12 @@ class EstimatorSpec:
     kernels: tuple = field(default=(), repr=False, compare=False)
     extra_bytes_per_unit: float = 0.0
     takes_points: bool = False
+    min_neighbours: object = field(default=0, compare=False)
+
+    def fewest_neighbours(self, options: dict | None = None) -> int:
+        """:attr:`min_neighbours` for these estimator options."""
+        m = self.min_neighbours
+        return int(m(dict(options or {})) if callable(m) else m)
 
     def check_options(self, options: dict) -> dict:
         """Validate estimator options; :class:`EstimatorError` names the allowed ones."""
