@@ -119,9 +119,9 @@ def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng, *, poin
 def _cmd_estimate(args) -> int:
     from .api import iter_estimate
     from .estimators import get_spec
-    from .io import check_output_suffix, load, peek_counts, save_result
+    from .io import check_output_suffix, is_point_file, load, peek_counts, save_result
     from .pointcli import check_mesh_options, check_point_options
-    from .pointio import is_point_file, peek_points
+    from .pointio import peek_points
     from .quantities import EXPORTED
     from .ranges import resolve
     from .validity import describe_reasons
@@ -145,11 +145,10 @@ def _cmd_estimate(args) -> int:
         except ValueError as exc:
             raise CurvOutputError(str(exc)) from None
         _check_output(args.output)
-    if points:
+    counts = peek_counts(args.input)  # a PLY header, mesh or points
+    if counts is None and points:
         n_points = peek_points(args.input)
         counts = None if n_points is None else (n_points, 0)
-    else:
-        counts = peek_counts(args.input)
     if counts is not None:  # refuse before reading a file that will not fit
         _check_memory(args, *counts, spec.name, rng, points=points)
     t0 = time.perf_counter()
@@ -175,7 +174,8 @@ def _cmd_estimate(args) -> int:
         options["smooth"] = args.smooth
     if args.fit_range is not None:
         if args.normals not in ("fit", "pca"):
-            raise CurvUsageError("--fit-range is the range of the fitted normals: give it with --normals fit")
+            raise CurvUsageError("--fit-range is the range of the fitted normals: give it with --normals fit"
+                                 + (" or pca" if points else ""))
         options["fit_range"] = args.fit_range
     if args.degree is not None:
         options["degree"] = args.degree
@@ -293,8 +293,7 @@ def _cmd_advise(args) -> int:
     import json
 
     from .advisor import advise
-    from .io import load
-    from .pointio import is_point_file
+    from .io import is_point_file, load
 
     if is_point_file(args.input):
         raise CurvError(f"{args.input} is a point cloud; curv advise ranks estimators for meshes only "

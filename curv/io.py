@@ -16,32 +16,18 @@ import numpy as np
 from .colors import colour_choice, map_colors
 from .errors import LoadError, MeshError
 from .mesh import Mesh
+from .paths import check_readable as _check_path
+from .paths import one_line as _one_line
 from .pointcloud import PointCloud
 from .quantities import EXPORTED
 from .repair import repair
 from .result import Curvature
 from .validity import Reason, reason_legend
 
-__all__ = ["load", "save_ply", "save_vtu", "save_vtp", "save_result", "check_output_suffix", "OUTPUT_FORMATS",
+__all__ = ["load", "is_point_file", "save_ply", "save_vtu", "save_vtp", "save_result", "check_output_suffix", "OUTPUT_FORMATS",
            "read_arrays", "peek_counts"]
 
 _MESHIO_SUFFIXES = {".obj"}
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) < 200 else text[:197] + "..."
-
-
-def _check_path(path: Path) -> None:
-    if not path.exists():
-        raise LoadError(f"{path}: no such file")
-    if path.is_dir():
-        raise LoadError(f"{path}: is a directory, not a mesh file")
-    if not os.access(path, os.R_OK):
-        raise LoadError(f"{path}: permission denied")
-    if path.stat().st_size == 0:
-        raise LoadError(f"{path}: file is empty")
 
 
 def _ply_header(fh) -> tuple[str, dict[str, int], dict[str, list[str]]]:
@@ -204,6 +190,18 @@ def peek_counts(path) -> tuple[int, int] | None:
     return None
 
 
+def is_point_file(path) -> bool:
+    """True when ``path`` holds a point cloud: a point-cloud suffix, or a PLY that declares no faces."""
+    from .pointio import POINT_SUFFIXES
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".ply" and path.is_file():
+        counts = peek_counts(path)
+        return counts is not None and counts[1] == 0
+    return suffix in POINT_SUFFIXES
+
+
 def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:
     """Read raw ``(vertices (n, 3), faces)`` from a file without building a :class:`Mesh`.
 
@@ -260,7 +258,7 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
         The file was read but its data are malformed (message names the file and the problem), or
         a repair was asked of a point cloud.
     """
-    from .pointio import is_point_file, read_points
+    from .pointio import read_points
 
     path = Path(path)
     if is_point_file(path):

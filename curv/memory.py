@@ -25,12 +25,13 @@ Measured with ``/usr/bin/time -v curv estimate`` on a 10M-vertex torus (20M face
 the numba kernels: mru R2 peaked at 9.2 GB resident (about 450 B per unit above the base), meyer
 at 8.7 GB; rounded up by about 25 %."""
 
-PER_POINT_BYTES = 800.0
-"""Point cloud, its neighbour graph (the 10 nearest and the symmetric CSR), spacing, normals and
-their orientation, border flags, result arrays and the written file's records, per point.
+PER_POINT_BYTES = 1000.0
+"""Point cloud, its neighbour search (the 10 nearest, the grid), spacing, normals and their
+orientation, border flags, result arrays and the written file's records, per point.
 
-Measured with ``/usr/bin/time -v curv estimate`` on 10M points (docs/BENCHMARKS.md, "Point-cloud
-files"), rounded up."""
+Measured on ``curv estimate torus10M.ply -m qs -r 2 -o out.ply`` (10M points without normals):
+the process's peak resident size reached 8.16 GB during the estimate (about 800 B a point above
+the base; docs/BENCHMARKS.md, "Point-cloud files"), rounded up by 25 % as for meshes."""
 
 STAMP_BYTES_PER_THREAD = 8.0
 """Bytes per vertex and kernel thread of the support search's visited stamps (int64)."""

@@ -14,52 +14,30 @@ from pathlib import Path
 import numpy as np
 
 from .errors import LoadError, MeshError
+from .paths import check_readable, one_line as _one_line
 from .pointcloud import PointCloud
 
-__all__ = ["POINT_SUFFIXES", "is_point_file", "read_points", "peek_points"]
+__all__ = ["POINT_SUFFIXES", "read_points", "peek_points"]
 
 POINT_SUFFIXES = {".xyz": "text: x y z [nx ny nz], whitespace or comma separated, optional header line",
                   ".txt": "text, as .xyz", ".csv": "text, as .xyz",
                   ".pcd": "PCD (ascii, binary, binary_compressed)",
                   ".las": "LAS (laspy)", ".laz": "LAZ (laspy with its lazrs backend)"}
-"""Suffixes that always hold points; a ``.ply`` holds points when it declares no faces."""
+"""Suffixes that always hold points; a ``.ply`` holds points when it declares no faces (:func:`curv.io.is_point_file`)."""
 
 _NORMAL_NAMES = (("nx", "ny", "nz"), ("normal_x", "normal_y", "normal_z"), ("normalx", "normaly", "normalz"))
 _LAS_HINT = "pip install 'curvlab[points]'"
 
 
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) < 200 else text[:197] + "..."
-
-
-def _is_point_ply(path: Path) -> bool:
-    from .io import peek_counts
-
-    counts = peek_counts(path)
-    return counts is not None and counts[1] == 0
-
-
-def is_point_file(path) -> bool:
-    """True when ``path`` holds a point cloud: a point suffix, or a PLY that declares no faces."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    return suffix in POINT_SUFFIXES or (suffix == ".ply" and path.is_file() and _is_point_ply(path))
-
-
 def peek_points(path) -> int | None:
-    """The point count a PLY, PCD or LAS/LAZ header declares, without reading the data; else None.
+    """The point count a PCD or LAS/LAZ header declares, without reading the data; else None.
 
-    Never raises: :func:`read_points` reports what is wrong with the file.
+    (A PLY's counts are :func:`curv.io.peek_counts`'.) Never raises: :func:`read_points` reports
+    what is wrong with the file.
     """
     path = Path(path)
     suffix = path.suffix.lower()
     try:
-        if suffix == ".ply":
-            from .io import peek_counts
-
-            counts = peek_counts(path)
-            return None if counts is None or counts[1] else counts[0]
         if suffix == ".pcd":
             return _pcd_header(path)[0]["points"]
         if suffix in (".las", ".laz"):
@@ -369,10 +347,8 @@ def read_points(path) -> PointCloud:
     LoadError
         Missing, empty or malformed file, a NaN coordinate, a missing field: one line naming the file.
     """
-    from .io import _check_path
-
     path = Path(path)
-    _check_path(path)
+    check_readable(path)
     reader = _READERS.get(path.suffix.lower())
     if reader is None:
         raise LoadError(f"{path}: not a point-cloud file (use one of .ply, {', '.join(POINT_SUFFIXES)})")

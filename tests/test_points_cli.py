@@ -197,3 +197,13 @@ def test_advise_refuses_a_point_cloud_in_one_line(files, capsys):
     err = capsys.readouterr().err.strip()
     assert err.endswith("is a point cloud; curv advise ranks estimators for meshes only (its table comes from "
                         "the mesh study)") and len(err.splitlines()) == 1
+
+
+def test_a_cloud_too_big_for_memory_is_refused_from_its_header(tmp_path, capsys):
+    path = tmp_path / "huge.ply"  # a header that declares 10^9 points, and no data
+    path.write_text("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
+                    "property float y\nproperty float z\nend_header\n")
+    code, _, err = _run(capsys, path, "-m", "qs")
+    assert code == 2 and "qs R2 on 1,000,000,000 points needs about" in err and "refusing to start" in err
+    code, _, err = _run(capsys, path, "-m", "qs", "--no-memory-check")
+    assert code == 2 and "refusing" not in err and str(path) in err  # now the reader finds no data

@@ -288,10 +288,12 @@ def test_repairs_are_refused_on_a_point_cloud(tmp_path, cloud):
 
 
 def test_peek_points_reads_the_count_from_headers(tmp_path, cloud):
+    from curv.io import is_point_file, peek_counts
     from curv.pointio import peek_points
 
     points, normals = cloud
-    assert peek_points(_ply(tmp_path / "a.ply", points)) == 40
+    ply = _ply(tmp_path / "a.ply", points)
+    assert peek_counts(ply) == (40, 0) and is_point_file(ply)
     assert peek_points(_pcd(tmp_path / "a.pcd", points, normals, "binary")) == 40
     assert peek_points(_write(tmp_path / "a.xyz", "0 0 0\n")) is None
     assert peek_points(tmp_path / "missing.pcd") is None
