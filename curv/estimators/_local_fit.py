@@ -7,7 +7,14 @@ pair is ever stored; the helpers below solve them and turn the fitted shape oper
 ``W = [[e, f], [f, g]]`` into principal curvatures and directions.
 
 Every fit kernel has the same arguments (see :func:`run_fit`) and writes its vertices' rows of
-``k1, k2, d1, d2, reason``.
+``k1, k2, d1, d2, reason`` and of the standard errors ``k1_se, k2_se``.
+
+Standard errors (docs/UNCERTAINTY.md): with m equations, p unknowns and the residual sum of
+squares ``RSS = bᵀb - xᵀAᵀb``, the noise variance is ``sigma² = RSS / (m - p)`` and the fitted
+coefficients have covariance ``sigma² (AᵀA)⁻¹``. A principal curvature is ``k_i = d_iᵀ W d_i``
+with d_i = (c, s) its unit direction in (U, V); to first order ``dk_i = d_iᵀ dW d_i``, so its
+gradient over (e, f, g) is ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2, and
+``se(k_i)² = sigma² gᵀ (AᵀA)⁻¹ g``.
 """
 
 from __future__ import annotations
@@ -24,7 +31,8 @@ from ..result import Principal
 from ..validity import Reason
 
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
-           "mark_degenerate", "slice_bounds",
+           "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse_form",
+           "cholesky_scaled", "factor_inverse_forms", "store_se3",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 MIN_TANGENT_LENGTH = 1e-9
@@ -196,6 +204,120 @@ def store_principal(p, e, f, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2):
 
 
 @jit
+def principal_gradients(e, f, g):
+    """First-order gradients of k1 and k2 of W = [[e, f], [f, g]] over (e, f, g).
+
+    ``dk_i = d_iᵀ dW d_i`` with d1 = (c, s), d2 = (-s, c) the eigenvectors (:func:`store_principal`).
+
+    Returns
+    -------
+    g10, g11, g12, g20, g21, g22 : float
+        ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2.
+    """
+    theta = 0.5 * math.atan2(f, 0.5 * (e - g))
+    c = math.cos(theta)
+    s = math.sin(theta)
+    return c * c, 2.0 * c * s, s * s, s * s, -2.0 * c * s, c * c
+
+
+@jit
+def noise_variance(bb, xatb, m, p):
+    """``sigma² = RSS / (m - p)`` with ``RSS = bᵀb - xᵀAᵀb`` (clipped at 0 against rounding); NaN if m <= p."""
+    if m <= p:
+        return math.nan
+    return max(bb - xatb, 0.0) / (m - p)
+
+
+@jit
+def sym3_inverse_form(a00, a01, a02, a11, a12, a22, g0, g1, g2):
+    """``gᵀ A⁻¹ g`` for a symmetric 3x3 A (by its cofactors; NaN when A is singular)."""
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if det == 0.0:
+        return math.nan
+    return (c00 * g0 * g0 + c11 * g1 * g1 + c22 * g2 * g2
+            + 2.0 * (c01 * g0 * g1 + c02 * g0 * g2 + c12 * g1 * g2)) / det
+
+
+@jit
+def store_se3(p, a00, a01, a02, a11, a12, a22, sigma2, e, f, g, k1_se, k2_se):
+    """Row p of the standard errors of a 3-unknown fit of W = [[e, f], [f, g]].
+
+    ``a..`` is the fit's AᵀA, ``sigma2`` its noise variance (:func:`noise_variance`); its unknowns
+    are (e, f, g) (nc, mru) or their negatives (qs): a gradient's sign does not change a variance.
+    """
+    g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
+    k1_se[p] = math.sqrt(sigma2 * sym3_inverse_form(a00, a01, a02, a11, a12, a22, g10, g11, g12))
+    k2_se[p] = math.sqrt(sigma2 * sym3_inverse_form(a00, a01, a02, a11, a12, a22, g20, g21, g22))
+
+
+@jit
+def cholesky_scaled(ata, size, work, srow):
+    """Jacobi-scaled Cholesky ``D A D = L Lᵀ`` of a symmetric A (the lower triangle of its leading ``size`` block).
+
+    Writes L to the lower triangle and diagonal of ``work`` and D = diag(A)^(-1/2) to ``work[srow]``;
+    ``work`` may be ``ata`` itself (each entry of A is read before its place is written).
+
+    Returns
+    -------
+    bool
+        False when A is not positive definite.
+    """
+    for i in range(size):
+        d = ata[i, i]
+        if not d > 0.0:
+            return False
+        work[srow, i] = 1.0 / math.sqrt(d)
+    for j in range(size):
+        acc = 1.0
+        for k in range(j):
+            acc -= work[j, k] * work[j, k]
+        if not acc > 1e-300:
+            return False
+        ljj = math.sqrt(acc)
+        work[j, j] = ljj
+        for i in range(j + 1, size):
+            t = ata[i, j] * work[srow, i] * work[srow, j]
+            for k in range(j):
+                t -= work[i, k] * work[j, k]
+            work[i, j] = t / ljj
+    return True
+
+
+@jit
+def factor_inverse_forms(factor, scales, srow, size, grads):
+    """``gᵀ A⁻¹ g = |L⁻¹ D g|²`` for each row g of ``grads``, from ``D A D = L Lᵀ``.
+
+    Parameters
+    ----------
+    factor : (K, K) float64
+        L in its lower triangle and diagonal (:func:`cholesky_scaled`, or the jet's
+        ``solve_spd_scaled``).
+    scales : (R, K) float64
+        ``scales[srow, :size]`` is the diagonal of D.
+    srow, size : int
+    grads : (r, K) float64
+        The gradients; row j is overwritten, its column 0 ending as ``g_jᵀ A⁻¹ g_j``.
+    """
+    for r in range(grads.shape[0]):
+        total = 0.0
+        for i in range(size):
+            # forward substitution in place: grads[r, :i] already hold (L⁻¹ D g)[:i]
+            t = grads[r, i] * scales[srow, i]
+            for k in range(i):
+                t -= factor[i, k] * grads[r, k]
+            t /= factor[i, i]
+            grads[r, i] = t
+            total += t * t
+        grads[r, 0] = total
+
+
+@jit
 def slice_bounds(lo, hi, t, parts):
     """Vertices ``start .. stop-1`` of slice t of ``parts`` equal slices of ``lo .. hi-1``."""
     return lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
@@ -241,7 +363,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
     kernel : numba dispatcher
         ``kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2,
-        d1, d2, reason)`` estimates the vertices ``centres[lo:hi]``, splitting them into
+        d1, d2, reason, k1_se, k2_se)`` estimates the vertices ``centres[lo:hi]``, splitting them into
         ``stamps.shape[0]`` slices, each with its own row of the stamps and queues.
     chunk : int, optional
         Vertices per call (default adaptive).
@@ -270,10 +392,11 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
+    k1_se, k2_se = np.full(n, np.nan), np.full(n, np.nan)
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
-               k1, k2, d1, d2, reason)
+               k1, k2, d1, d2, reason, k1_se, k2_se)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
-    return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason)
+    return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason, k1_se=k1_se, k2_se=k2_se)
