@@ -11,7 +11,9 @@ Every fit kernel has the same arguments (see :func:`run_fit`) and writes its ver
 
 Standard errors (docs/UNCERTAINTY.md): with m equations, p unknowns and the residual sum of
 squares ``RSS = bᵀb - xᵀAᵀb``, the noise variance is ``sigma² = RSS / (m - p)`` and the fitted
-coefficients have covariance ``sigma² (AᵀA)⁻¹``. A principal curvature is ``k_i = d_iᵀ W d_i``
+coefficients have covariance ``sigma² (AᵀA)⁻¹`` when the equations' errors are independent. In
+nc, qs and an they are not: every height is measured from the centre's own noisy position
+(:func:`store_se3` models that shared part). A principal curvature is ``k_i = d_iᵀ W d_i``
 with d_i = (c, s) its unit direction in (U, V); to first order ``dk_i = d_iᵀ dW d_i``, so its
 gradient over (e, f, g) is ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2, and
 ``se(k_i)² = sigma² gᵀ (AᵀA)⁻¹ g``.
@@ -31,8 +33,8 @@ from ..result import Principal
 from ..validity import Reason
 
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
-           "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse_form",
-           "cholesky_scaled", "factor_inverse_forms", "store_se3",
+           "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse_bilinear",
+           "cholesky_scaled", "factor_whiten", "row_dot", "store_se3",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 MIN_TANGENT_LENGTH = 1e-9
@@ -221,16 +223,16 @@ def principal_gradients(e, f, g):
 
 
 @jit
-def noise_variance(bb, xatb, m, p):
-    """``sigma² = RSS / (m - p)`` with ``RSS = bᵀb - xᵀAᵀb`` (clipped at 0 against rounding); NaN if m <= p."""
-    if m <= p:
+def noise_variance(bb, xatb, dof):
+    """``sigma² = RSS / dof`` with ``RSS = bᵀb - xᵀAᵀb`` (clipped at 0 against rounding); NaN if dof <= 0."""
+    if not dof > 0.0:
         return math.nan
-    return max(bb - xatb, 0.0) / (m - p)
+    return max(bb - xatb, 0.0) / dof
 
 
 @jit
-def sym3_inverse_form(a00, a01, a02, a11, a12, a22, g0, g1, g2):
-    """``gᵀ A⁻¹ g`` for a symmetric 3x3 A (by its cofactors; NaN when A is singular)."""
+def sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, g0, g1, g2, h0, h1, h2):
+    """``gᵀ A⁻¹ h`` for a symmetric 3x3 A (by its cofactors; NaN when A is singular)."""
     c00 = a11 * a22 - a12 * a12
     c01 = a02 * a12 - a01 * a22
     c02 = a01 * a12 - a02 * a11
@@ -240,20 +242,52 @@ def sym3_inverse_form(a00, a01, a02, a11, a12, a22, g0, g1, g2):
     det = a00 * c00 + a01 * c01 + a02 * c02
     if det == 0.0:
         return math.nan
-    return (c00 * g0 * g0 + c11 * g1 * g1 + c22 * g2 * g2
-            + 2.0 * (c01 * g0 * g1 + c02 * g0 * g2 + c12 * g1 * g2)) / det
+    return (g0 * (c00 * h0 + c01 * h1 + c02 * h2) + g1 * (c01 * h0 + c11 * h1 + c12 * h2)
+            + g2 * (c02 * h0 + c12 * h1 + c22 * h2)) / det
 
 
 @jit
-def store_se3(p, a00, a01, a02, a11, a12, a22, sigma2, e, f, g, k1_se, k2_se):
+def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, e, f, g, k1_se, k2_se):
     """Row p of the standard errors of a 3-unknown fit of W = [[e, f], [f, g]].
 
-    ``a..`` is the fit's AᵀA, ``sigma2`` its noise variance (:func:`noise_variance`); its unknowns
-    are (e, f, g) (nc, mru) or their negatives (qs): a gradient's sign does not change a variance.
+    With ``shared`` > 0, the centre's own height error enters every equation alike: the errors
+    are modelled as ``eps_q + delta`` (independent, all of variance sigma²) and s = Σ rows. Then
+
+    - ``E[RSS] = sigma² (m - 3 + shared - sᵀM⁻¹s)`` gives sigma², and
+    - ``var(k) = sigma² (gᵀM⁻¹g + (gᵀM⁻¹s)²)`` with M = AᵀA and g the gradient of
+      :func:`principal_gradients` (the unknowns are (e, f, g) or their negatives: a gradient's
+      sign does not change a variance).
+
+    With ``shared`` = 0 the errors are independent: ``sigma² = RSS / (m - 3)``, ``var(k) = sigma² gᵀM⁻¹g``.
+
+    Parameters
+    ----------
+    a00 .. a22 : float
+        M = AᵀA.
+    bb, xatb : float
+        bᵀb and xᵀAᵀb.
+    m : int
+        Equations.
+    shared : int
+        Equations sharing the centre's error (m or 0).
+    s0, s1, s2 : float
+        Their row sum (ignored when ``shared`` is 0).
     """
+    if not shared > 0:
+        s0 = s1 = s2 = 0.0
+    dof = m - 3 + shared - sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, s0, s1, s2, s0, s1, s2)
+    sigma2 = noise_variance(bb, xatb, dof if m > 3 else 0.0)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
-    k1_se[p] = math.sqrt(sigma2 * sym3_inverse_form(a00, a01, a02, a11, a12, a22, g10, g11, g12))
-    k2_se[p] = math.sqrt(sigma2 * sym3_inverse_form(a00, a01, a02, a11, a12, a22, g20, g21, g22))
+    k1_se[p] = math.sqrt(sigma2 * _shared_form(a00, a01, a02, a11, a12, a22, g10, g11, g12, s0, s1, s2))
+    k2_se[p] = math.sqrt(sigma2 * _shared_form(a00, a01, a02, a11, a12, a22, g20, g21, g22, s0, s1, s2))
+
+
+@jit
+def _shared_form(a00, a01, a02, a11, a12, a22, g0, g1, g2, s0, s1, s2):
+    """``gᵀM⁻¹g + (gᵀM⁻¹s)²`` (:func:`store_se3`)."""
+    gg = sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, g0, g1, g2, g0, g1, g2)
+    gs = sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, g0, g1, g2, s0, s1, s2)
+    return gg + gs * gs
 
 
 @jit
@@ -290,8 +324,9 @@ def cholesky_scaled(ata, size, work, srow):
 
 
 @jit
-def factor_inverse_forms(factor, scales, srow, size, grads):
-    """``gᵀ A⁻¹ g = |L⁻¹ D g|²`` for each row g of ``grads``, from ``D A D = L Lᵀ``.
+def factor_whiten(factor, scales, srow, size, rows):
+    """Replace each row v of ``rows`` by ``L⁻¹ D v``, from ``D A D = L Lᵀ``, so that ``gᵀA⁻¹h`` is the
+    dot product of the whitened g and h.
 
     Parameters
     ----------
@@ -301,20 +336,25 @@ def factor_inverse_forms(factor, scales, srow, size, grads):
     scales : (R, K) float64
         ``scales[srow, :size]`` is the diagonal of D.
     srow, size : int
-    grads : (r, K) float64
-        The gradients; row j is overwritten, its column 0 ending as ``g_jᵀ A⁻¹ g_j``.
+    rows : (r, K) float64
+        Overwritten in their first ``size`` columns.
     """
-    for r in range(grads.shape[0]):
-        total = 0.0
+    for r in range(rows.shape[0]):
         for i in range(size):
-            # forward substitution in place: grads[r, :i] already hold (L⁻¹ D g)[:i]
-            t = grads[r, i] * scales[srow, i]
+            # forward substitution in place: rows[r, :i] already hold (L⁻¹ D v)[:i]
+            t = rows[r, i] * scales[srow, i]
             for k in range(i):
-                t -= factor[i, k] * grads[r, k]
-            t /= factor[i, i]
-            grads[r, i] = t
-            total += t * t
-        grads[r, 0] = total
+                t -= factor[i, k] * rows[r, k]
+            rows[r, i] = t / factor[i, i]
+
+
+@jit
+def row_dot(rows, i, j, size):
+    """``rows[i, :size] . rows[j, :size]``."""
+    acc = 0.0
+    for k in range(size):
+        acc += rows[i, k] * rows[j, k]
+    return acc
 
 
 @jit

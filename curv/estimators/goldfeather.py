@@ -24,9 +24,9 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import (MIN_TANGENT_LENGTH, cholesky_scaled, factor_inverse_forms, finish_fit, mark_degenerate,
-                         noise_variance, offset_in_frame, principal_gradients, run_fit, slice_bounds, solve_scaled,
-                         solve_sym3, store_se3, tangent_frame)
+from ._local_fit import (MIN_TANGENT_LENGTH, cholesky_scaled, factor_whiten, finish_fit, mark_degenerate,
+                         noise_variance, offset_in_frame, principal_gradients, row_dot, run_fit, slice_bounds,
+                         solve_scaled, solve_sym3, store_se3, tangent_frame)
 from .registry import EstimatorSpec, register
 
 MIN_NORMAL_Z = 0.1
@@ -42,7 +42,7 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         return
     frame = tangent_frame(n0, n1, n2)
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
-    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = 0.0
+    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -64,10 +64,14 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         b1 += c1 * kn
         b2 += c2 * kn
         bb += kn * kn
+        s0 += c0
+        s1 += c1
+        s2 += c2
     e, f, g, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
-    sigma2 = noise_variance(bb, e * b0 + f * b1 + g * b2, used, 3)
-    store_se3(p, a00, a01, a02, a11, a12, a22, sigma2, e, f, g, k1_se, k2_se)
+    # p's own height error enters every kn (as if with equal weight: see docs/UNCERTAINTY.md)
+    store_se3(p, a00, a01, a02, a11, a12, a22, bb, e * b0 + f * b1 + g * b2, used, used, s0, s1, s2,
+              e, f, g, k1_se, k2_se)
 
 
 @jit
@@ -79,7 +83,7 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         return
     frame = tangent_frame(n0, n1, n2)
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
-    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = 0.0
+    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -99,11 +103,15 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         b1 += c1 * w
         b2 += c2 * w
         bb += w * w
+        s0 += c0
+        s1 += c1
+        s2 += c2
     A, B, C, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
     # W = -Hessian of the height along N
     finish_fit(p, -A, -B, -C, singular, used, frame, k1, k2, d1, d2, reason)
-    sigma2 = noise_variance(bb, A * b0 + B * b1 + C * b2, used, 3)
-    store_se3(p, a00, a01, a02, a11, a12, a22, sigma2, -A, -B, -C, k1_se, k2_se)
+    # every height is measured from p, so p's own height error is shared by all equations
+    store_se3(p, a00, a01, a02, a11, a12, a22, bb, A * b0 + B * b1 + C * b2, used, used, s0, s1, s2,
+              -A, -B, -C, k1_se, k2_se)
 
 
 @jit
@@ -124,10 +132,12 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     """Adjacent-normal cubic fit at vertex p.
 
     Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
-    normal equations the solve overwrites; ``grads`` (2, 7).
+    normal equations the solve overwrites; ``grads`` (5, 7).
 
     Heights and slopes enter the fit (and its noise variance) with equal weight in the
-    radius-scaled coordinates: ``sigma²`` pools the two kinds of residual.
+    radius-scaled coordinates: ``sigma²`` pools the two kinds of residual. p's own height error is
+    shared by the height equations and the tilt of its normal by each kind of slope equation,
+    modelled as in :func:`~curv.estimators._local_fit.store_se3`.
     """
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
@@ -143,6 +153,8 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     atb[:] = 0.0
     bb = 0.0
     equations = 0
+    sloped = 0
+    grads[:, :] = 0.0  # rows 2-4 sum the rows of the height, u-slope and v-slope equations
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -160,6 +172,8 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         _accumulate(ata, atb, row, w)
         bb += w * w
         equations += 1
+        for j in range(7):
+            grads[2, j] += row[j]
         a = nx[q] * ux + ny[q] * uy + nz[q] * uz
         b = nx[q] * vx + ny[q] * vy + nz[q] * vz
         c = nx[q] * n0 + ny[q] * n1 + nz[q] * n2
@@ -168,10 +182,15 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         # slopes of the neighbour's normal: w_u = -a/c, w_v = -b/c
         row[0], row[1], row[2], row[3], row[4], row[5], row[6] = u, v, 0.0, 3.0 * uu, 2.0 * uv, vv, 0.0
         _accumulate(ata, atb, row, -a / c)
+        for j in range(7):
+            grads[3, j] += row[j]
         row[0], row[1], row[2], row[3], row[4], row[5], row[6] = 0.0, u, v, 0.0, uu, 2.0 * uv, 3.0 * vv
         _accumulate(ata, atb, row, -b / c)
+        for j in range(7):
+            grads[4, j] += row[j]
         bb += (a * a + b * b) / (c * c)
         equations += 2
+        sloped += 1
     for j in range(7):
         atb0[j] = atb[j]
         for k in range(7):
@@ -183,14 +202,22 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     xatb = 0.0
     for j in range(7):
         xatb += sol[j] * atb0[j]
-    sigma2 = noise_variance(bb, xatb, equations, 7)
     # k_i's gradient over the 7 unknowns: (c², 2cs, s²) on the quadratic terms, 0 on the cubic ones
-    grads[:, :] = 0.0
+    grads[0:2, :] = 0.0
     grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
-    if cholesky_scaled(ata0, 7, ata0, 7):
-        factor_inverse_forms(ata0, ata0, 7, 7, grads)
-        k1_se[p] = math.sqrt(sigma2 * grads[0, 0]) * inv_r
-        k2_se[p] = math.sqrt(sigma2 * grads[1, 0]) * inv_r
+    if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
+        factor_whiten(ata0, ata0, 7, 7, grads)
+        dof = (equations - 7 + used - row_dot(grads, 2, 2, 7)
+               + sloped - row_dot(grads, 3, 3, 7) + sloped - row_dot(grads, 4, 4, 7))
+        sigma2 = noise_variance(bb, xatb, dof)
+        for i in range(2):
+            var = row_dot(grads, i, i, 7)
+            for shared in range(2, 5):
+                var += row_dot(grads, i, shared, 7) ** 2
+            if i == 0:
+                k1_se[p] = math.sqrt(sigma2 * var) * inv_r
+            else:
+                k2_se[p] = math.sqrt(sigma2 * var) * inv_r
 
 
 @jit_parallel
@@ -230,7 +257,7 @@ def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         stamp = stamps[t]
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)
-        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((2, 7))
+        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((5, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]

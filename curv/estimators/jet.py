@@ -40,7 +40,7 @@ from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
 from ..neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch
 from ..validity import Reason
-from ._local_fit import factor_inverse_forms, noise_variance, principal_gradients, slice_bounds
+from ._local_fit import factor_whiten, noise_variance, principal_gradients, row_dot, slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
 
@@ -317,7 +317,8 @@ SLOPE_STEP = 1e-6
 def jet_se(vec, m, h, count, nd, ww, grads, out_se, row):
     """Standard errors of the jet's k1, k2 at the origin (first order), after :func:`fit_jet`.
 
-    ``sigma² = RSS / (count - N_d)`` with ``RSS = ww - Jᵀ(Aᵀb)``; the covariance of the
+    ``sigma² = RSS / (count - N_d)`` with ``RSS = ww - Jᵀ(Aᵀb)``; the jet has its own constant and
+    linear terms, so the centre's noise is one more independent equation. The covariance of the
     coefficients J is ``sigma² (AᵀA)⁻¹``, read from the Cholesky factor the fit left in ``m`` and
     its scaling in ``vec[2]``. Through the fundamental-forms step, ``dk_i = d_iᵀ dW d_i`` with
     ``dW`` the derivative of :func:`_jet_shape_operator` along each coefficient: exact for the
@@ -327,7 +328,7 @@ def jet_se(vec, m, h, count, nd, ww, grads, out_se, row):
     xatb = 0.0
     for a in range(nd):
         xatb += vec[1, a] * vec[0, a]
-    sigma2 = noise_variance(ww, xatb, count, nd)
+    sigma2 = noise_variance(ww, xatb, count - nd)
     ju, jv, juu, juv, jvv = vec[1, 1], vec[1, 2], 2.0 * vec[1, 3], vec[1, 4], 2.0 * vec[1, 5]
     e, f, g = _jet_shape_operator(ju, jv, juu, juv, jvv)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
@@ -349,9 +350,9 @@ def jet_se(vec, m, h, count, nd, ww, grads, out_se, row):
             de, df, dg = _jet_shape_operator(ju, jv, 0.0, 0.0, 2.0)
         grads[0, index] = g10 * de + g11 * df + g12 * dg
         grads[1, index] = g20 * de + g21 * df + g22 * dg
-    factor_inverse_forms(m, vec, 2, nd, grads)
-    out_se[0, row] = math.sqrt(sigma2 * grads[0, 0]) / h
-    out_se[1, row] = math.sqrt(sigma2 * grads[1, 0]) / h
+    factor_whiten(m, vec, 2, nd, grads)
+    out_se[0, row] = math.sqrt(sigma2 * row_dot(grads, 0, 0, nd)) / h
+    out_se[1, row] = math.sqrt(sigma2 * row_dot(grads, 1, 1, nd)) / h
 
 
 @jit_parallel

@@ -16,7 +16,7 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, noise_variance, offset_in_frame, run_fit,
+from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit,
                          slice_bounds, solve_sym3, store_se3, tangent_frame)
 from .registry import EstimatorSpec, register
 
@@ -53,9 +53,9 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
     # AᵀA = [[uu, uv, 0], [uv, uu + vv, uv], [0, uv, vv]], Aᵀb = (au, av + bu, bv)
     e, f, g, singular = solve_sym3(suu, suv, 0.0, suu + svv, suv, svv, sau, sav + sbu, sbv)
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
-    # two equations per neighbour
-    sigma2 = noise_variance(saa_bb, e * sau + f * (sav + sbu) + g * sbv, 2 * used, 3)
-    store_se3(p, suu, suv, 0.0, suu + svv, suv, svv, sigma2, e, f, g, k1_se, k2_se)
+    # two equations per neighbour, errors taken as independent (docs/UNCERTAINTY.md)
+    store_se3(p, suu, suv, 0.0, suu + svv, suv, svv, saa_bb, e * sau + f * (sav + sbu) + g * sbv, 2 * used, 0,
+              0.0, 0.0, 0.0, e, f, g, k1_se, k2_se)
 
 
 @jit_parallel
