@@ -202,7 +202,7 @@ class Document:
         self.panes = [p.whole for p in self.panes]  # a region names the old mesh's vertices
         self.picked = None
         changes = {}
-        if truth is None and self.display.layer is not Layer.ESTIMATE:
+        if truth is None and self.display.layer.needs_truth:
             changes["layer"] = Layer.ESTIMATE
         if self.display.limit_mode is LimitMode.MANUAL and not self.display.lock_limits:
             changes["limit_mode"] = LimitMode.PERCENTILE
