@@ -33,7 +33,7 @@ from ..result import Principal
 from ..validity import Reason
 
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
-           "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse_bilinear",
+           "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
@@ -209,17 +209,23 @@ def store_principal(p, e, f, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2):
 def principal_gradients(e, f, g):
     """First-order gradients of k1 and k2 of W = [[e, f], [f, g]] over (e, f, g).
 
-    ``dk_i = d_iᵀ dW d_i`` with d1 = (c, s), d2 = (-s, c) the eigenvectors (:func:`store_principal`).
+    ``dk_i = d_iᵀ dW d_i`` with d1 = (c, s), d2 = (-s, c) the eigenvectors (:func:`store_principal`:
+    angle theta with ``cos 2theta = (e - g) / 2 / rad``, ``sin 2theta = f / rad``), written without
+    trigonometry: ``c² = (1 + cos 2theta) / 2``, ``2cs = sin 2theta``.
 
     Returns
     -------
     g10, g11, g12, g20, g21, g22 : float
         ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2.
     """
-    theta = 0.5 * math.atan2(f, 0.5 * (e - g))
-    c = math.cos(theta)
-    s = math.sin(theta)
-    return c * c, 2.0 * c * s, s * s, s * s, -2.0 * c * s, c * c
+    half = 0.5 * (e - g)
+    rad = math.hypot(half, f)
+    if rad > 0.0:
+        cos2, sin2 = half / rad, f / rad
+    else:  # an umbilic: atan2(0, 0) = 0, as in store_principal
+        cos2, sin2 = 1.0, 0.0
+    cc, ss = 0.5 * (1.0 + cos2), 0.5 * (1.0 - cos2)
+    return cc, sin2, ss, ss, -sin2, cc
 
 
 @jit
@@ -231,19 +237,23 @@ def noise_variance(bb, xatb, dof):
 
 
 @jit
-def sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, g0, g1, g2, h0, h1, h2):
-    """``gᵀ A⁻¹ h`` for a symmetric 3x3 A (by its cofactors; NaN when A is singular)."""
+def sym3_inverse(a00, a01, a02, a11, a12, a22):
+    """The six entries of A⁻¹ for a symmetric 3x3 A, by its cofactors (inf/NaN when A is singular)."""
     c00 = a11 * a22 - a12 * a12
     c01 = a02 * a12 - a01 * a22
     c02 = a01 * a12 - a02 * a11
     c11 = a00 * a22 - a02 * a02
     c12 = a01 * a02 - a00 * a12
     c22 = a00 * a11 - a01 * a01
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    if det == 0.0:
-        return math.nan
-    return (g0 * (c00 * h0 + c01 * h1 + c02 * h2) + g1 * (c01 * h0 + c11 * h1 + c12 * h2)
-            + g2 * (c02 * h0 + c12 * h1 + c22 * h2)) / det
+    inv = 1.0 / (a00 * c00 + a01 * c01 + a02 * c02)
+    return c00 * inv, c01 * inv, c02 * inv, c11 * inv, c12 * inv, c22 * inv
+
+
+@jit
+def sym3_bilinear(i00, i01, i02, i11, i12, i22, g0, g1, g2, h0, h1, h2):
+    """``gᵀ S h`` for the symmetric 3x3 S = [[i00, i01, i02], [., i11, i12], [., ., i22]]."""
+    return (g0 * (i00 * h0 + i01 * h1 + i02 * h2) + g1 * (i01 * h0 + i11 * h1 + i12 * h2)
+            + g2 * (i02 * h0 + i12 * h1 + i22 * h2))
 
 
 @jit
@@ -273,21 +283,20 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
     s0, s1, s2 : float
         Their row sum (ignored when ``shared`` is 0).
     """
-    if not shared > 0:
-        s0 = s1 = s2 = 0.0
-    dof = m - 3 + shared - sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, s0, s1, s2, s0, s1, s2)
-    sigma2 = noise_variance(bb, xatb, dof if m > 3 else 0.0)
+    i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
-    k1_se[p] = math.sqrt(sigma2 * _shared_form(a00, a01, a02, a11, a12, a22, g10, g11, g12, s0, s1, s2))
-    k2_se[p] = math.sqrt(sigma2 * _shared_form(a00, a01, a02, a11, a12, a22, g20, g21, g22, s0, s1, s2))
-
-
-@jit
-def _shared_form(a00, a01, a02, a11, a12, a22, g0, g1, g2, s0, s1, s2):
-    """``gᵀM⁻¹g + (gᵀM⁻¹s)²`` (:func:`store_se3`)."""
-    gg = sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, g0, g1, g2, g0, g1, g2)
-    gs = sym3_inverse_bilinear(a00, a01, a02, a11, a12, a22, g0, g1, g2, s0, s1, s2)
-    return gg + gs * gs
+    var1 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g10, g11, g12, g10, g11, g12)
+    var2 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g20, g21, g22, g20, g21, g22)
+    dof = m - 3.0
+    if shared > 0:
+        dof += shared - sym3_bilinear(i00, i01, i02, i11, i12, i22, s0, s1, s2, s0, s1, s2)
+        gs1 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g10, g11, g12, s0, s1, s2)
+        gs2 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g20, g21, g22, s0, s1, s2)
+        var1 += gs1 * gs1
+        var2 += gs2 * gs2
+    sigma2 = noise_variance(bb, xatb, dof if m > 3 else 0.0)
+    k1_se[p] = math.sqrt(sigma2 * var1)
+    k2_se[p] = math.sqrt(sigma2 * var2)
 
 
 @jit
