@@ -203,7 +203,9 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     for j in range(7):
         xatb += sol[j] * atb0[j]
     # k_i's gradient over the 7 unknowns: (c², 2cs, s²) on the quadratic terms, 0 on the cubic ones
-    grads[0:2, :] = 0.0
+    for j in range(7):
+        grads[0, j] = 0.0
+        grads[1, j] = 0.0
     grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
     if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
         factor_whiten(ata0, ata0, 7, 7, grads)
