@@ -50,8 +50,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="add a pane (up to 3), optionally with a feature angle, e.g. mru:2:30")
     est.add_argument("--difference", action="store_true", help="show the A - B difference pane")
     est.add_argument("--quantity", help=", ".join(_quantity_names()) + " (default: the last session's, else mean)")
-    est.add_argument("--show", help="estimate, exact, error or e_rel (analytic sources; default: the last "
-                                    "session's, else estimate)")
+    est.add_argument("--show", help="estimate, uncertainty (2 standard errors), exact, error or e_rel (the last "
+                                    "three: analytic sources; default: the last session's, else estimate)")
     est.add_argument("--directions", action="store_true", help="draw principal direction glyphs")
     est.add_argument("--borders", action="store_true", help="draw border edges and the panes' feature edges")
     est.add_argument("--point-size", type=float, metavar="PX", help="width of a point cloud's points in pixels")

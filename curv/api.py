@@ -123,6 +123,7 @@ def iter_estimate(
         return flags if centres is None else flags[centres]
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
+    k1_se, k2_se = _standard_errors(raw, at, smooth, k1.shape[0])
     # root causes, whatever the estimator saw (no face or no other point at all; a normal whose
     # orientation was left undecided): later codes win
     for mask, code in flags.forced:
@@ -140,6 +141,7 @@ def iter_estimate(
     swap = np.flatnonzero(k2 > k1)
     k1[swap], k2[swap] = k2[swap], k1[swap]
     d1[swap], d2[swap] = d2[swap], d1[swap]
+    k1_se[swap], k2_se[swap] = k2_se[swap], k1_se[swap]
     # keep (d1, d2, N) right-handed so results are reproducible
     d2[_triple_product(d1, d2, at(used_normals)) < 0] *= -1.0
     if smooth is Smoothing.VALUES:
@@ -150,16 +152,17 @@ def iter_estimate(
         k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)
         d1, d2 = np.where(swap[:, None], d2, d1), np.where(swap[:, None], -d1, d2)
     valid = reason == Reason.OK
-    for arr in (k1, k2):
+    for arr in (k1, k2, k1_se, k2_se):
         arr[~valid] = np.nan
     d1[~valid] = np.nan
     d2[~valid] = np.nan
     if centres is not None:
         k1, k2, d1, d2, reason, valid = _full_length(mesh.n_vertices, centres, k1, k2, d1, d2, reason, valid)
+        k1_se, k2_se = (_scatter(mesh.n_vertices, centres, se) for se in (k1_se, k2_se))
     yield 1.0
     return Curvature(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
-        method=spec.name, range=rng.value,
+        method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
               "normals": normals_label, **options,
               "radius": rng.radius,
@@ -290,6 +293,22 @@ def _check_vertices(vertices, n: int) -> np.ndarray | None:
         bad = int(arr[(arr < 0) | (arr >= n)][0])
         raise EstimatorError(f"vertex index {bad} is out of range for a mesh of {n} vertices")
     return arr
+
+
+def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """This call's rows of the fit's standard errors (copies), NaN for an estimator without a fit
+    and for the smoothing variants: smoothing correlates the noise of neighbouring vertices (before
+    the fit with ``mesh``, after it with ``values``), which the residual model assumes independent."""
+    if raw.k1_se is None or smooth is not Smoothing.NONE:
+        return np.full(rows, np.nan), np.full(rows, np.nan)
+    return at(raw.k1_se).copy(), at(raw.k2_se).copy()
+
+
+def _scatter(n: int, centres: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(n,) NaN with ``values`` at ``centres``."""
+    out = np.full(n, np.nan)
+    out[centres] = values
+    return out
 
 
 def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):

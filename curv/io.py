@@ -19,7 +19,7 @@ from .mesh import Mesh
 from .paths import check_readable as _check_path
 from .paths import one_line as _one_line
 from .pointcloud import PointCloud
-from .quantities import EXPORTED
+from .quantities import EXPORTED, STANDARD_ERRORS
 from .repair import repair
 from .result import Curvature
 from .validity import Reason, reason_legend
@@ -278,7 +278,7 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
     return mesh
 
 
-_FLOAT_PROPS = EXPORTED
+_FLOAT_PROPS = EXPORTED + STANDARD_ERRORS
 _DIR_PROPS = tuple(f"d{i}{c}" for i in (1, 2) for c in "xyz")
 
 
@@ -341,7 +341,7 @@ def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: s
     -------
     Path
         The written file, with the permissions a plain ``open(path, "w")`` would give. Properties: x, y, z, red, green, blue, alpha (uchar), k1, k2, mean,
-        gaussian, d1x..d1z, d2x..d2z (float), valid and reason (uchar; a second header comment
+        gaussian, k1_se, k2_se, d1x..d1z, d2x..d2z (float), valid and reason (uchar; a second header comment
         names the :class:`curv.Reason` codes), ``shown`` (the coloured values, when the colours
         come from ``quantity``), plus ``extra``; faces as ``vertex_indices`` lists.
     """
@@ -473,9 +473,9 @@ def save_vtu(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors: np.
     Returns
     -------
     Path
-        Point data: ``k1``, ``k2``, ``mean``, ``gaussian`` (n,), ``d1``, ``d2`` (n, 3), ``valid``
-        and ``reason`` (n,) uint8, ``extra``, ``rgba``; a point cloud also ``normals`` (n, 3), the
-        ones the estimate used; field data ``reason_OK``, ``reason_BORDER``, ... hold each
+        Point data: ``k1``, ``k2``, ``mean``, ``gaussian``, ``k1_se``, ``k2_se`` (n,), ``d1``, ``d2`` (n, 3),
+        ``valid`` and ``reason`` (n,) uint8, ``extra``, ``rgba``; a point cloud also ``normals`` (n, 3),
+        the ones the estimate used; field data ``reason_OK``, ``reason_BORDER``, ... hold each
         :class:`curv.Reason` code; written atomically like :func:`save_ply`.
     """
     payload = _vtk_document(path, mesh, curvature, colors=colors, extra=extra)

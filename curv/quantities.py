@@ -12,7 +12,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["QuantitySpec", "QUANTITIES", "EXPORTED", "get_quantity", "compute", "describe", "anisotropy"]
+__all__ = ["QuantitySpec", "QUANTITIES", "EXPORTED", "STANDARD_ERRORS", "get_quantity", "compute", "describe", "anisotropy"]
 
 
 @dataclass(frozen=True)
@@ -68,6 +68,10 @@ QUANTITIES: dict[str, QuantitySpec] = {q.name: q for q in _SPECS}
 
 EXPORTED = ("k1", "k2", "mean", "gaussian")
 """The quantities every export writes as float fields and the CLI summarises (the rest derive from k1, k2)."""
+
+STANDARD_ERRORS = ("k1_se", "k2_se")
+"""The :class:`~curv.result.Curvature` fields of the standard errors of k1 and k2 (docs/UNCERTAINTY.md),
+which every export writes as float fields after :data:`EXPORTED` (NaN where undefined)."""
 
 
 def anisotropy(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:

@@ -28,6 +28,9 @@ class Principal:
     normals : (n, 3) float64 or None
         The normals the estimator computed itself (only when it was asked to: see
         ``EstimatorSpec.computes_normals``).
+    k1_se, k2_se : (n,) float64 or None
+        Standard errors of ``k1`` and ``k2`` from the fit's residuals (least-squares estimators
+        only; None for the others).
     """
 
     k1: np.ndarray
@@ -36,6 +39,8 @@ class Principal:
     d2: np.ndarray
     reason: np.ndarray
     normals: np.ndarray | None = None
+    k1_se: np.ndarray | None = None
+    k2_se: np.ndarray | None = None
 
 
 def _quantity_property(name: str) -> property:
@@ -63,6 +68,11 @@ class Curvature:
         Why a vertex is invalid (:class:`curv.Reason`), ``0`` where valid.
     method : str
         Registry name of the estimator (``"exact"`` for analytic truth).
+    k1_se, k2_se : (n,) float64
+        Standard errors of ``k1`` and ``k2`` from the least-squares fit's residuals (``nc``, ``qs``,
+        ``an``, ``mru``, ``jet``; docs/UNCERTAINTY.md): they cover noise in the positions and
+        normals, not model bias. NaN where ``valid`` is False, where the fit has no spare
+        equations, for the estimators without a fit and for the smoothing variants.
     range : int, float or None
         The range k of Rk (an int when whole, e.g. 2 for R2; 2.5 for R2.5); None when a fixed
         ``radius`` was given (``info["radius"]``; ``info["range_label"]`` reads ``R2`` or ``r=0.3``).
@@ -80,10 +90,16 @@ class Curvature:
     method: str = ""
     range: int | float | None = None
     info: dict = field(default_factory=dict)
+    k1_se: np.ndarray = None
+    k2_se: np.ndarray = None
 
     def __post_init__(self):
         if self.reason is None:
             self.reason = np.where(self.valid, Reason.OK, Reason.NOT_COMPUTED).astype(np.uint8)
+        if self.k1_se is None:
+            self.k1_se = np.full(self.k1.shape, np.nan)
+        if self.k2_se is None:
+            self.k2_se = np.full(self.k2.shape, np.nan)
 
     @property
     def n(self) -> int:

@@ -20,15 +20,18 @@ class Layer(enum.Enum):
     EXACT = "exact"
     ERROR = "error"
     E_REL = "e_rel"
+    UNCERTAINTY = "uncertainty"
+    """Twice the standard error of the estimate's k2 when k2 is the quantity, else of its k1
+    (``Curvature.k1_se``, ``k2_se``: least-squares estimators only)."""
 
     @property
     def title(self) -> str:
         return {"estimate": "Estimate", "exact": "Exact value", "error": "Signed error (est - exact)",
-                "e_rel": "Relative error e_rel"}[self.value]
+                "e_rel": "Relative error e_rel", "uncertainty": "Uncertainty (2 sigma)"}[self.value]
 
     @property
     def needs_truth(self) -> bool:
-        return self is not Layer.ESTIMATE
+        return self not in (Layer.ESTIMATE, Layer.UNCERTAINTY)
 
     def __str__(self) -> str:
         return self.title
@@ -81,7 +84,7 @@ class DisplayState:
         """Whether the shown field is signed (diverging map, limits centred on 0)."""
         if self.layer is Layer.ERROR:
             return True
-        if self.layer is Layer.E_REL:
+        if self.layer in (Layer.E_REL, Layer.UNCERTAINTY):
             return False
         return self.quantity.signed
 
@@ -90,10 +93,18 @@ class DisplayState:
         """The natural range of the shown field (the quantity's, for estimate and exact values)."""
         return self.quantity.natural if self.layer in (Layer.ESTIMATE, Layer.EXACT) else None
 
+    @property
+    def uncertain_of(self) -> str:
+        """The principal curvature whose uncertainty :attr:`Layer.UNCERTAINTY` shows: k2 when the
+        quantity is k2, else k1 (a standard error of H or K would need the two's covariance)."""
+        return "k2" if self.quantity.value == "k2" else "k1"
+
     def field_name(self, *, difference: bool = False) -> str:
         """What the colours show, for colour bars and export comments (``Mean H error (est - exact)``)."""
         if self.layer is Layer.E_REL:
             name = "e_rel (relative error of k1, k2)"
+        elif self.layer is Layer.UNCERTAINTY:
+            name = f"2 standard errors of {self.uncertain_of}"
         elif self.layer is Layer.ERROR:
             name = f"{self.quantity.title} error (estimate - exact)"
         elif self.layer is Layer.EXACT:
@@ -105,6 +116,8 @@ class DisplayState:
     def field_title(self, *, difference: bool = False) -> str:
         """Short colour-bar title."""
         name = "e_rel" if self.layer is Layer.E_REL else self.quantity.title
+        if self.layer is Layer.UNCERTAINTY:
+            name = f"2σ of {self.uncertain_of}"
         if self.layer is Layer.ERROR:
             name += " error"
         elif self.layer is Layer.EXACT:

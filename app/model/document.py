@@ -237,7 +237,7 @@ class Document:
         self.panes = self._panes_for(mesh)
         self.picked = None
         changes = {}
-        if truth is None and self.display.layer is not Layer.ESTIMATE:
+        if truth is None and self.display.layer.needs_truth:
             changes["layer"] = Layer.ESTIMATE
         if self.display.limit_mode is LimitMode.MANUAL and not self.display.lock_limits:
             changes["limit_mode"] = LimitMode.PERCENTILE

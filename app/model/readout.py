@@ -10,12 +10,17 @@ from curv.validity import Reason
 from .document import Document, pane_letter
 from .scalars import relative_error
 
-__all__ = ["readout_columns", "readout_rows", "fmt", "fmt_vec", "REASON_WORDS"]
+__all__ = ["readout_columns", "readout_rows", "fmt", "fmt_se", "fmt_vec", "REASON_WORDS"]
 
 
 def fmt(x) -> str:
     """A value of the readout (``—`` where there is none)."""
     return "—" if x is None or not np.isfinite(x) else f"{x:.5g}"
+
+
+def fmt_se(x) -> str:
+    """An uncertainty of the readout: two significant digits (``0.042``)."""
+    return f"{x:.2g}"
 
 
 def fmt_vec(v, *, stacked: bool = False) -> str:
@@ -65,7 +70,7 @@ def readout_columns(doc: Document, *, short: bool = False) -> list[str]:
 def readout_rows(doc: Document, index: int, *, stacked: bool = False) -> list[tuple[str, list[str]]]:
     """Rows ``(label, [value per column])`` for vertex ``index``, columns as :func:`readout_columns`.
 
-    Rows: k1, k2, H, K, d1, d2 (components one per line when ``stacked``), the status (``valid`` or
+    Rows: k1, k2 (``0.52 ± 0.04``: two standard errors, where the estimator gives them), H, K, d1, d2 (components one per line when ``stacked``), the status (``valid`` or
     the :class:`curv.Reason`), the shown field and, for an analytic source, e_rel.
     """
     cols = [doc.result(i) for i in range(len(doc.panes))]
@@ -87,7 +92,16 @@ def readout_rows(doc: Document, index: int, *, stacked: bool = False) -> list[tu
         row += [""] * diff + ([fmt_vec(get(truth), stacked=stacked)] if truth is not None else [])
         return (label, row)
 
-    rows = [scalar_row("k1", lambda r: r.k1[index]), scalar_row("k2", lambda r: r.k2[index]),
+    def principal_row(name):
+        """k1 or k2, as ``0.52 ± 0.04`` (2 standard errors) where the estimate has a standard error."""
+        label, row = scalar_row(name, lambda r: getattr(r, name)[index])
+        ses = [getattr(r, f"{name}_se")[index] if r is not None else np.nan for r in cols]
+        for j, se in enumerate(ses):
+            if np.isfinite(se) and row[j] != "—":
+                row[j] = f"{row[j]} ± {fmt_se(2.0 * se)}"
+        return (f"{name} ± 2σ" if np.isfinite(ses).any() else label, row)
+
+    rows = [principal_row("k1"), principal_row("k2"),
             scalar_row("H", lambda r: r.mean[index]), scalar_row("K", lambda r: r.gaussian[index]),
             vector_row("d1", lambda r: r.d1[index]), vector_row("d2", lambda r: r.d2[index])]
     status = [_reason(r, index) if r is not None else "…" for r in cols]

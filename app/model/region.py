@@ -111,7 +111,7 @@ def over_rest(part, rest, region: Region):
         return part
     idx = region.vertices
     merged = {}
-    for name in ("k1", "k2", "d1", "d2", "valid", "reason"):
+    for name in ("k1", "k2", "d1", "d2", "valid", "reason", "k1_se", "k2_se"):
         arr = getattr(rest, name).copy()
         arr[idx] = getattr(part, name)[idx]
         merged[name] = arr

@@ -57,6 +57,8 @@ def field_values(result, truth, state: DisplayState) -> np.ndarray:
         return np.asarray(truth.quantity(name), dtype=np.float64)
     if layer is Layer.E_REL:
         return relative_error(result, truth)
+    if layer is Layer.UNCERTAINTY:
+        return 2.0 * np.asarray(getattr(result, f"{state.uncertain_of}_se"), dtype=np.float64)
     est = np.asarray(result.quantity(name), dtype=np.float64)
     if layer is Layer.ERROR:
         return est - truth.quantity(name)

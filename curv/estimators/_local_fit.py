@@ -7,7 +7,16 @@ pair is ever stored; the helpers below solve them and turn the fitted shape oper
 ``W = [[e, f], [f, g]]`` into principal curvatures and directions.
 
 Every fit kernel has the same arguments (see :func:`run_fit`) and writes its vertices' rows of
-``k1, k2, d1, d2, reason``.
+``k1, k2, d1, d2, reason`` and of the standard errors ``k1_se, k2_se``.
+
+Standard errors (docs/UNCERTAINTY.md): with m equations, p unknowns and the residual sum of
+squares ``RSS = bᵀb - xᵀAᵀb``, the noise variance is ``sigma² = RSS / (m - p)`` and the fitted
+coefficients have covariance ``sigma² (AᵀA)⁻¹`` when the equations' errors are independent. In
+nc, qs and an they are not: every height is measured from the centre's own noisy position
+(:func:`store_se3` models that shared part). A principal curvature is ``k_i = d_iᵀ W d_i``
+with d_i = (c, s) its unit direction in (U, V); to first order ``dk_i = d_iᵀ dW d_i``, so its
+gradient over (e, f, g) is ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2, and
+``se(k_i)² = sigma² gᵀ (AᵀA)⁻¹ g``.
 """
 
 from __future__ import annotations
@@ -24,7 +33,8 @@ from ..result import Principal
 from ..validity import Reason
 
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
-           "mark_degenerate", "slice_bounds",
+           "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
+           "cholesky_scaled", "factor_whiten", "row_dot", "store_se3",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 MIN_TANGENT_LENGTH = 1e-9
@@ -196,6 +206,167 @@ def store_principal(p, e, f, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2):
 
 
 @jit
+def principal_gradients(e, f, g):
+    """First-order gradients of k1 and k2 of W = [[e, f], [f, g]] over (e, f, g).
+
+    ``dk_i = d_iᵀ dW d_i`` with d1 = (c, s), d2 = (-s, c) the eigenvectors (:func:`store_principal`:
+    angle theta with ``cos 2theta = (e - g) / 2 / rad``, ``sin 2theta = f / rad``), written without
+    trigonometry: ``c² = (1 + cos 2theta) / 2``, ``2cs = sin 2theta``.
+
+    Returns
+    -------
+    g10, g11, g12, g20, g21, g22 : float
+        ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2.
+    """
+    half = 0.5 * (e - g)
+    rad = math.hypot(half, f)
+    if rad > 0.0:
+        cos2, sin2 = half / rad, f / rad
+    else:  # an umbilic: atan2(0, 0) = 0, as in store_principal
+        cos2, sin2 = 1.0, 0.0
+    cc, ss = 0.5 * (1.0 + cos2), 0.5 * (1.0 - cos2)
+    return cc, sin2, ss, ss, -sin2, cc
+
+
+@jit
+def noise_variance(bb, xatb, dof):
+    """``sigma² = RSS / dof`` with ``RSS = bᵀb - xᵀAᵀb`` (clipped at 0 against rounding); NaN if dof <= 0."""
+    if not dof > 0.0:
+        return math.nan
+    return max(bb - xatb, 0.0) / dof
+
+
+@jit
+def sym3_inverse(a00, a01, a02, a11, a12, a22):
+    """The six entries of A⁻¹ for a symmetric 3x3 A, by its cofactors (inf/NaN when A is singular)."""
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    inv = 1.0 / (a00 * c00 + a01 * c01 + a02 * c02)
+    return c00 * inv, c01 * inv, c02 * inv, c11 * inv, c12 * inv, c22 * inv
+
+
+@jit
+def sym3_bilinear(i00, i01, i02, i11, i12, i22, g0, g1, g2, h0, h1, h2):
+    """``gᵀ S h`` for the symmetric 3x3 S = [[i00, i01, i02], [., i11, i12], [., ., i22]]."""
+    return (g0 * (i00 * h0 + i01 * h1 + i02 * h2) + g1 * (i01 * h0 + i11 * h1 + i12 * h2)
+            + g2 * (i02 * h0 + i12 * h1 + i22 * h2))
+
+
+@jit
+def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, e, f, g, k1_se, k2_se):
+    """Row p of the standard errors of a 3-unknown fit of W = [[e, f], [f, g]].
+
+    With ``shared`` > 0, the centre's own height error enters every equation alike: the errors
+    are modelled as ``eps_q + delta`` (independent, all of variance sigma²) and s = Σ rows. Then
+
+    - ``E[RSS] = sigma² (m - 3 + shared - sᵀM⁻¹s)`` gives sigma², and
+    - ``var(k) = sigma² (gᵀM⁻¹g + (gᵀM⁻¹s)²)`` with M = AᵀA and g the gradient of
+      :func:`principal_gradients` (the unknowns are (e, f, g) or their negatives: a gradient's
+      sign does not change a variance).
+
+    With ``shared`` = 0 the errors are independent: ``sigma² = RSS / (m - 3)``, ``var(k) = sigma² gᵀM⁻¹g``.
+
+    Parameters
+    ----------
+    a00 .. a22 : float
+        M = AᵀA.
+    bb, xatb : float
+        bᵀb and xᵀAᵀb.
+    m : int
+        Equations.
+    shared : int
+        Equations sharing the centre's error (m or 0).
+    s0, s1, s2 : float
+        Their row sum (ignored when ``shared`` is 0).
+    """
+    i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
+    g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
+    var1 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g10, g11, g12, g10, g11, g12)
+    var2 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g20, g21, g22, g20, g21, g22)
+    dof = m - 3.0
+    if shared > 0:
+        dof += shared - sym3_bilinear(i00, i01, i02, i11, i12, i22, s0, s1, s2, s0, s1, s2)
+        gs1 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g10, g11, g12, s0, s1, s2)
+        gs2 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g20, g21, g22, s0, s1, s2)
+        var1 += gs1 * gs1
+        var2 += gs2 * gs2
+    sigma2 = noise_variance(bb, xatb, dof if m > 3 else 0.0)
+    k1_se[p] = math.sqrt(sigma2 * var1)
+    k2_se[p] = math.sqrt(sigma2 * var2)
+
+
+@jit
+def cholesky_scaled(ata, size, work, srow):
+    """Jacobi-scaled Cholesky ``D A D = L Lᵀ`` of a symmetric A (the lower triangle of its leading ``size`` block).
+
+    Writes L to the lower triangle and diagonal of ``work`` and D = diag(A)^(-1/2) to ``work[srow]``;
+    ``work`` may be ``ata`` itself (each entry of A is read before its place is written).
+
+    Returns
+    -------
+    bool
+        False when A is not positive definite.
+    """
+    for i in range(size):
+        d = ata[i, i]
+        if not d > 0.0:
+            return False
+        work[srow, i] = 1.0 / math.sqrt(d)
+    for j in range(size):
+        acc = 1.0
+        for k in range(j):
+            acc -= work[j, k] * work[j, k]
+        if not acc > 1e-300:
+            return False
+        ljj = math.sqrt(acc)
+        work[j, j] = ljj
+        for i in range(j + 1, size):
+            t = ata[i, j] * work[srow, i] * work[srow, j]
+            for k in range(j):
+                t -= work[i, k] * work[j, k]
+            work[i, j] = t / ljj
+    return True
+
+
+@jit
+def factor_whiten(factor, scales, srow, size, rows):
+    """Replace each row v of ``rows`` by ``L⁻¹ D v``, from ``D A D = L Lᵀ``, so that ``gᵀA⁻¹h`` is the
+    dot product of the whitened g and h.
+
+    Parameters
+    ----------
+    factor : (K, K) float64
+        L in its lower triangle and diagonal (:func:`cholesky_scaled`, or the jet's
+        ``solve_spd_scaled``).
+    scales : (R, K) float64
+        ``scales[srow, :size]`` is the diagonal of D.
+    srow, size : int
+    rows : (r, K) float64
+        Overwritten in their first ``size`` columns.
+    """
+    for r in range(rows.shape[0]):
+        for i in range(size):
+            # forward substitution in place: rows[r, :i] already hold (L⁻¹ D v)[:i]
+            t = rows[r, i] * scales[srow, i]
+            for k in range(i):
+                t -= factor[i, k] * rows[r, k]
+            rows[r, i] = t / factor[i, i]
+
+
+@jit
+def row_dot(rows, i, j, size):
+    """``rows[i, :size] . rows[j, :size]``."""
+    acc = 0.0
+    for k in range(size):
+        acc += rows[i, k] * rows[j, k]
+    return acc
+
+
+@jit
 def slice_bounds(lo, hi, t, parts):
     """Vertices ``start .. stop-1`` of slice t of ``parts`` equal slices of ``lo .. hi-1``."""
     return lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
@@ -241,7 +412,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
     kernel : numba dispatcher
         ``kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2,
-        d1, d2, reason)`` estimates the vertices ``centres[lo:hi]``, splitting them into
+        d1, d2, reason, k1_se, k2_se)`` estimates the vertices ``centres[lo:hi]``, splitting them into
         ``stamps.shape[0]`` slices, each with its own row of the stamps and queues.
     chunk : int, optional
         Vertices per call (default adaptive).
@@ -270,10 +441,11 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
+    k1_se, k2_se = np.full(n, np.nan), np.full(n, np.nan)
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
-               k1, k2, d1, d2, reason)
+               k1, k2, d1, d2, reason, k1_se, k2_se)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
-    return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason)
+    return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason, k1_se=k1_se, k2_se=k2_se)

@@ -24,8 +24,9 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
-                         solve_scaled, solve_sym3, tangent_frame)
+from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, cholesky_scaled, factor_whiten, finish_fit, mark_degenerate,
+                         noise_variance, offset_in_frame, principal_gradients, row_dot, run_fit, slice_bounds,
+                         solve_scaled, solve_sym3, store_se3, tangent_frame)
 from .registry import EstimatorSpec, register
 
 MIN_NORMAL_Z = 0.1
@@ -33,7 +34,7 @@ MIN_NORMAL_Z = 0.1
 
 
 @jit
-def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
+def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se):
     """Normal-curvature least squares at vertex p over its support ``queue[1:count]``."""
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
@@ -41,7 +42,7 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
         return
     frame = tangent_frame(n0, n1, n2)
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
-    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = 0.0
+    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -62,12 +63,19 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
         b0 += c0 * kn
         b1 += c1 * kn
         b2 += c2 * kn
+        bb += kn * kn
+        s0 += c0
+        s1 += c1
+        s2 += c2
     e, f, g, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
+    # p's own height error enters every kn (as if with equal weight: see docs/UNCERTAINTY.md)
+    store_se3(p, a00, a01, a02, a11, a12, a22, bb, e * b0 + f * b1 + g * b2, used, used, s0, s1, s2,
+              e, f, g, k1_se, k2_se)
 
 
 @jit
-def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
+def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se):
     """Quadratic height fit at vertex p over its support ``queue[1:count]``."""
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
@@ -75,7 +83,7 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
         return
     frame = tangent_frame(n0, n1, n2)
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
-    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = 0.0
+    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -94,9 +102,16 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
         b0 += c0 * w
         b1 += c1 * w
         b2 += c2 * w
+        bb += w * w
+        s0 += c0
+        s1 += c1
+        s2 += c2
     A, B, C, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
     # W = -Hessian of the height along N
     finish_fit(p, -A, -B, -C, singular, used, frame, k1, k2, d1, d2, reason)
+    # every height is measured from p, so p's own height error is shared by all equations
+    store_se3(p, a00, a01, a02, a11, a12, a22, bb, A * b0 + B * b1 + C * b2, used, used, s0, s1, s2,
+              -A, -B, -C, k1_se, k2_se)
 
 
 @jit
@@ -112,8 +127,18 @@ def _accumulate(ata, atb, row, rhs):
 
 
 @jit
-def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, ata, atb, row, sol):
-    """Adjacent-normal cubic fit at vertex p (``ata`` (7,7), ``atb``, ``row``, ``sol`` (7,): scratch)."""
+def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, ata, atb, row, sol,
+           ata0, atb0, grads):
+    """Adjacent-normal cubic fit at vertex p.
+
+    Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
+    normal equations the solve overwrites; ``grads`` (5, 7).
+
+    Heights and slopes enter the fit (and its noise variance) with equal weight in the
+    radius-scaled coordinates: ``sigma²`` pools the two kinds of residual. p's own height error is
+    shared by the height equations and the tilt of its normal by each kind of slope equation,
+    modelled as in :func:`~curv.estimators._local_fit.store_se3`.
+    """
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
         mark_degenerate(p, k1, k2, d1, d2, reason)
@@ -126,6 +151,10 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, ata,
     tiny2 = MIN_TANGENT_LENGTH ** 2
     ata[:, :] = 0.0
     atb[:] = 0.0
+    bb = 0.0
+    equations = 0
+    sloped = 0
+    grads[:, :] = 0.0  # rows 2-4 sum the rows of the height, u-slope and v-slope equations
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -141,6 +170,10 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, ata,
         row[0], row[1], row[2] = 0.5 * uu, uv, 0.5 * vv
         row[3], row[4], row[5], row[6] = uu * u, uu * v, u * vv, vv * v
         _accumulate(ata, atb, row, w)
+        bb += w * w
+        equations += 1
+        for j in range(7):
+            grads[2, j] += row[j]
         a = nx[q] * ux + ny[q] * uy + nz[q] * uz
         b = nx[q] * vx + ny[q] * vy + nz[q] * vz
         c = nx[q] * n0 + ny[q] * n1 + nz[q] * n2
@@ -149,16 +182,49 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, ata,
         # slopes of the neighbour's normal: w_u = -a/c, w_v = -b/c
         row[0], row[1], row[2], row[3], row[4], row[5], row[6] = u, v, 0.0, 3.0 * uu, 2.0 * uv, vv, 0.0
         _accumulate(ata, atb, row, -a / c)
+        for j in range(7):
+            grads[3, j] += row[j]
         row[0], row[1], row[2], row[3], row[4], row[5], row[6] = 0.0, u, v, 0.0, uu, 2.0 * uv, 3.0 * vv
         _accumulate(ata, atb, row, -b / c)
+        for j in range(7):
+            grads[4, j] += row[j]
+        bb += (a * a + b * b) / (c * c)
+        equations += 2
+        sloped += 1
+    for j in range(7):
+        atb0[j] = atb[j]
+        for k in range(7):
+            ata0[j, k] = ata[j, k]
     singular = solve_scaled(ata, atb, sol)
     # second derivatives back in unscaled coordinates
-    finish_fit(p, -sol[0] * inv_r, -sol[1] * inv_r, -sol[2] * inv_r, singular, used, frame,
-               k1, k2, d1, d2, reason)
+    e, f, g = -sol[0] * inv_r, -sol[1] * inv_r, -sol[2] * inv_r
+    finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
+    xatb = 0.0
+    for j in range(7):
+        xatb += sol[j] * atb0[j]
+    # k_i's gradient over the 7 unknowns: (c², 2cs, s²) on the quadratic terms, 0 on the cubic ones
+    for j in range(7):
+        grads[0, j] = 0.0
+        grads[1, j] = 0.0
+    grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
+    if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
+        factor_whiten(ata0, ata0, 7, 7, grads)
+        dof = (equations - 7 + used - row_dot(grads, 2, 2, 7)
+               + sloped - row_dot(grads, 3, 3, 7) + sloped - row_dot(grads, 4, 4, 7))
+        sigma2 = noise_variance(bb, xatb, dof)
+        for i in range(2):
+            var = row_dot(grads, i, i, 7)
+            for shared in range(2, 5):
+                var += row_dot(grads, i, shared, 7) ** 2
+            if i == 0:
+                k1_se[p] = math.sqrt(sigma2 * var) * inv_r
+            else:
+                k2_se[p] = math.sqrt(sigma2 * var) * inv_r
 
 
 @jit_parallel
-def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
+                k1_se, k2_se):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -167,11 +233,12 @@ def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
+            _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se)
 
 
 @jit_parallel
-def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
+                k1_se, k2_se):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -180,23 +247,25 @@ def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
+            _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se)
 
 
 @jit_parallel
-def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
+                k1_se, k2_se):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)
+        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((5, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
-                   ata, atb, row, sol)
+            _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se,
+                   ata, atb, row, sol, ata0, atb0, grads)
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,

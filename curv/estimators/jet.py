@@ -17,6 +17,8 @@ At each vertex p, with support S(p) = p and the vertices of its ball (:mod:`curv
    ``N = 2 J_02 / |.|``; the shape operator ``I^-1 II`` in an orthonormal tangent basis, its
    eigenpairs the principal curvatures (sign of the house: ``W = -II`` for a graph along ``n``,
    so an outward sphere gives +1/r) and directions, mapped back to 3-D and to unscaled units.
+4. **Standard errors** of k1, k2 from the fit's residuals, propagated through step 3 to first
+   order (:func:`jet_se`, docs/UNCERTAINTY.md).
 
 Which normal: the given vertex normal (Max by default) only orients the fit and is the normal the
 result reports; k1, k2 are the jet's own (its normal ``n``). The directions are carried from the
@@ -38,7 +40,7 @@ from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
 from ..neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch
 from ..validity import Reason
-from ._local_fit import slice_bounds
+from ._local_fit import factor_whiten, noise_variance, principal_gradients, row_dot, slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
 
@@ -124,13 +126,15 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
         ``Reason`` code (``OK`` when fitted).
     h : float
         The coordinate scale: largest distance from p to a support vertex.
+    ww : float
+        The sum of the squared heights ``bᵀb`` (scaled coordinates), for the residuals.
     """
     nd = (degree + 1) * (degree + 2) // 2  # unknowns(degree); the registry's min_neighbours is nd - 1
     if count < nd:
-        return _TOO_FEW, 0.0
+        return _TOO_FEW, 0.0, 0.0
     rx, ry, rz = normals[p, 0], normals[p, 1], normals[p, 2]
     if not (math.isfinite(rx) and math.isfinite(ry) and math.isfinite(rz)):
-        return _DEGENERATE, 0.0
+        return _DEGENERATE, 0.0, 0.0
     px, py, pz = x[p], y[p], z[p]
     # centroid c and covariance sum (q - c)(q - c)^T, from offsets to p for accuracy
     cx = cy = cz = 0.0
@@ -143,7 +147,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
         cz += dz
         h2 = max(h2, dx * dx + dy * dy + dz * dz)
     if not h2 > 0.0:
-        return _DEGENERATE, 0.0
+        return _DEGENERATE, 0.0, 0.0
     cx /= count
     cy /= count
     cz /= count
@@ -167,7 +171,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
     # (a support wrapping round a thin rim) gives an arbitrary fit whose sign flips with rounding.
     along = evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz
     if not abs(along) >= MIN_NORMAL_COSINE * math.sqrt(rx * rx + ry * ry + rz * rz):
-        return _DEGENERATE, 0.0
+        return _DEGENERATE, 0.0, 0.0
     # e3: least variance (the height axis), turned towards the reference normal; e1: most variance
     sign = 1.0 if along >= 0.0 else -1.0
     for a in range(3):
@@ -178,6 +182,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
     frame[1, 2] = frame[2, 0] * frame[0, 1] - frame[2, 1] * frame[0, 0]
     # normal equations of the height fit in coordinates divided by h
     inv_h = 1.0 / math.sqrt(h2)
+    ww = 0.0
     for a in range(nd):
         vec[0, a] = 0.0
         for b in range(a, nd):
@@ -189,6 +194,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
         v = dx * frame[1, 0] + dy * frame[1, 1] + dz * frame[1, 2]
         w = dx * frame[2, 0] + dy * frame[2, 1] + dz * frame[2, 2]
         _monomials(u, v, degree, vec)
+        ww += w * w
         for a in range(nd):
             ma = vec[1, a]
             vec[0, a] += ma * w
@@ -196,11 +202,11 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
                 m[a, b] += ma * vec[1, b]
     rcond = solve_spd_scaled(m, vec, nd)
     if not rcond >= RCOND:
-        return _SINGULAR, 0.0
+        return _SINGULAR, 0.0, 0.0
     for a in range(nd):
         if not math.isfinite(vec[1, a]):
-            return _SINGULAR, 0.0
-    return _OK, math.sqrt(h2)
+            return _SINGULAR, 0.0, 0.0
+    return _OK, math.sqrt(h2), ww
 
 
 @jit
@@ -219,6 +225,44 @@ def jet_normal(vec, frame, out, row):
 
 
 @jit
+def _jet_frame(ju, jv):
+    """The jet normal n and the orthonormal tangent basis (T1, T2) at the origin, in the PCA frame.
+
+    The tangents are S_u = (1, 0, J_u), S_v = (0, 1, J_v); T1 = S_u / |S_u|, T2 = n x T1, so that
+    S_u = s T1 and S_v = a T1 + b T2.
+
+    Returns
+    -------
+    n0, n1, n2, t10, t11, t12, t20, t21, t22, s, a, b : float
+    """
+    wn = math.sqrt(1.0 + ju * ju + jv * jv)
+    n0, n1, n2 = -ju / wn, -jv / wn, 1.0 / wn
+    s = math.sqrt(1.0 + ju * ju)
+    t10, t11, t12 = 1.0 / s, 0.0, ju / s
+    t20, t21, t22 = n1 * t12 - n2 * t11, n2 * t10 - n0 * t12, n0 * t11 - n1 * t10
+    a = jv * t12  # S_v . T1
+    b = t21 + jv * t22  # S_v . T2
+    return n0, n1, n2, t10, t11, t12, t20, t21, t22, s, a, b
+
+
+@jit
+def _jet_shape_operator(ju, jv, juu, juv, jvv):
+    """The shape operator ``W = [[e, f], [f, g]]`` of the graph at the origin in the basis (T1, T2).
+
+    ``II`` in the (S_u, S_v) basis is L, M, N = S_xy . n = J_xy / |(-J_u, -J_v, 1)|; in T it is
+    ``P^-T II P^-1`` with ``P = [[s, a], [0, b]]``; W = -II (house sign).
+    """
+    wn = math.sqrt(1.0 + ju * ju + jv * jv)
+    el, em, en = juu / wn, juv / wn, jvv / wn
+    _, _, _, _, _, _, _, _, _, s, a, b = _jet_frame(ju, jv)
+    i00, i01, i11 = 1.0 / s, -a / (s * b), 1.0 / b
+    e = -(i00 * i00 * el)
+    f = -(i00 * (i01 * el + i11 * em))
+    g = -(i01 * i01 * el + 2.0 * i01 * i11 * em + i11 * i11 * en)
+    return e, f, g
+
+
+@jit
 def jet_principal(vec, frame, h, normals, out_k, out_d1, out_d2, row):
     """Principal curvatures and directions of the jet at the origin (step 3 of the module notes).
 
@@ -232,23 +276,8 @@ def jet_principal(vec, frame, h, normals, out_k, out_d1, out_d2, row):
         ``Reason.OK``, or ``DEGENERATE`` when the jet normal is about 78 degrees or more from ``normals[row]``.
     """
     ju, jv = vec[1, 1], vec[1, 2]
-    juu, juv, jvv = 2.0 * vec[1, 3], vec[1, 4], 2.0 * vec[1, 5]
-    wn = math.sqrt(1.0 + ju * ju + jv * jv)
-    # jet normal n and the tangents S_u = (1, 0, J_u), S_v = (0, 1, J_v), in the PCA frame
-    n0, n1, n2 = -ju / wn, -jv / wn, 1.0 / wn
-    # second fundamental form in the (S_u, S_v) basis: L, M, N = S_xy . n
-    el, em, en = juu / wn, juv / wn, jvv / wn
-    # orthonormal tangent basis T1 = S_u / |S_u|, T2 = n x T1; S_u = s T1, S_v = a T1 + b T2
-    s = math.sqrt(1.0 + ju * ju)
-    t10, t11, t12 = 1.0 / s, 0.0, ju / s
-    t20, t21, t22 = n1 * t12 - n2 * t11, n2 * t10 - n0 * t12, n0 * t11 - n1 * t10
-    a = jv * t12  # S_v . T1
-    b = t21 + jv * t22  # S_v . T2
-    # II in T: P^-T II P^-1 with P = [[s, a], [0, b]]; the shape operator is -II (house sign)
-    i00, i01, i11 = 1.0 / s, -a / (s * b), 1.0 / b
-    e = -(i00 * i00 * el)
-    f = -(i00 * (i01 * el + i11 * em))
-    g = -(i01 * i01 * el + 2.0 * i01 * i11 * em + i11 * i11 * en)
+    e, f, g = _jet_shape_operator(ju, jv, 2.0 * vec[1, 3], vec[1, 4], 2.0 * vec[1, 5])
+    n0, n1, n2, t10, t11, t12, t20, t21, t22, _, _, _ = _jet_frame(ju, jv)
     k1, k2, c, sn = sym2_eigen(e, f, g)
     out_k[0, row] = k1 / h
     out_k[1, row] = k2 / h
@@ -280,20 +309,70 @@ def _rotate(out, row, ax0, ax1, ax2, cosine):
     out[row, 2] = cosine * v2 + (ax0 * v1 - ax1 * v0) + ax2 * dot
 
 
+SLOPE_STEP = 1e-6
+"""Step of the central differences of W over the jet's slopes J_u, J_v (W is linear in the rest)."""
+
+
+@jit
+def jet_se(vec, m, h, count, nd, ww, grads, out_se, row):
+    """Standard errors of the jet's k1, k2 at the origin (first order), after :func:`fit_jet`.
+
+    ``sigma² = RSS / (count - N_d)`` with ``RSS = ww - Jᵀ(Aᵀb)``; the jet has its own constant and
+    linear terms, so the centre's noise is one more independent equation. The covariance of the
+    coefficients J is ``sigma² (AᵀA)⁻¹``, read from the Cholesky factor the fit left in ``m`` and
+    its scaling in ``vec[2]``. Through the fundamental-forms step, ``dk_i = d_iᵀ dW d_i`` with
+    ``dW`` the derivative of :func:`_jet_shape_operator` along each coefficient: exact for the
+    second derivatives (W is linear in them), central differences for the slopes.
+    Writes ``out_se[0, row], out_se[1, row]`` in mesh units; ``grads`` (2, K) is scratch.
+    """
+    xatb = 0.0
+    for a in range(nd):
+        xatb += vec[1, a] * vec[0, a]
+    sigma2 = noise_variance(ww, xatb, count - nd)
+    ju, jv, juu, juv, jvv = vec[1, 1], vec[1, 2], 2.0 * vec[1, 3], vec[1, 4], 2.0 * vec[1, 5]
+    e, f, g = _jet_shape_operator(ju, jv, juu, juv, jvv)
+    g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
+    grads[:, :] = 0.0
+    for index in range(1, 6):
+        if index == 1:
+            ep, fp, gp = _jet_shape_operator(ju + SLOPE_STEP, jv, juu, juv, jvv)
+            em, fm, gm = _jet_shape_operator(ju - SLOPE_STEP, jv, juu, juv, jvv)
+            de, df, dg = (ep - em) / (2.0 * SLOPE_STEP), (fp - fm) / (2.0 * SLOPE_STEP), (gp - gm) / (2.0 * SLOPE_STEP)
+        elif index == 2:
+            ep, fp, gp = _jet_shape_operator(ju, jv + SLOPE_STEP, juu, juv, jvv)
+            em, fm, gm = _jet_shape_operator(ju, jv - SLOPE_STEP, juu, juv, jvv)
+            de, df, dg = (ep - em) / (2.0 * SLOPE_STEP), (fp - fm) / (2.0 * SLOPE_STEP), (gp - gm) / (2.0 * SLOPE_STEP)
+        elif index == 3:  # J_20 = J_uu / 2
+            de, df, dg = _jet_shape_operator(ju, jv, 2.0, 0.0, 0.0)
+        elif index == 4:  # J_11 = J_uv
+            de, df, dg = _jet_shape_operator(ju, jv, 0.0, 1.0, 0.0)
+        else:  # J_02 = J_vv / 2
+            de, df, dg = _jet_shape_operator(ju, jv, 0.0, 0.0, 2.0)
+        grads[0, index] = g10 * de + g11 * df + g12 * dg
+        grads[1, index] = g20 * de + g21 * df + g22 * dg
+    factor_whiten(m, vec, 2, nd, grads)
+    out_se[0, row] = math.sqrt(sigma2 * row_dot(grads, 0, 0, nd)) / h
+    out_se[1, row] = math.sqrt(sigma2 * row_dot(grads, 1, 1, nd)) / h
+
+
 @jit_parallel
-def _jet_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason):
+def _jet_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason,
+                k_se):
     parts = stamps.shape[0]
+    nd = (degree + 1) * (degree + 2) // 2
     for t in prange(parts):
         stamp = stamps[t]
         queue = queues[t]
         m, vec, cov, frame, evec = _scratch()
+        grads = np.empty((2, MAX_UNKNOWNS))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
-            code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
+            code, h, ww = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
                 code = jet_principal(vec, frame, h, normals, k, d1, d2, p)
+                jet_se(vec, m, h, count, nd, ww, grads, k_se, p)
             reason[p] = code
 
 
@@ -308,7 +387,7 @@ def _jet_normal_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, 
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
-            code, h = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
+            code, _, _ = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
                 jet_normal(vec, frame, out, p)
             reason[p] = code
@@ -370,19 +449,23 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     centres = all_centres(n, centres)
     out = empty_principal(n)
     k = np.full((2, n), np.nan) if centres.size == n else np.empty((2, n))
+    k_se = np.full((2, n), np.nan)
     radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii, centres, features)
 
     def run(lo, hi):
         launch(_jet_kernel, centres, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues,
-               k, out.d1, out.d2, out.reason)
+               k, out.d1, out.d2, out.reason, k_se)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     out.k1, out.k2 = k[0], k[1]
+    out.k1_se, out.k2_se = k_se[0], k_se[1]
     bad = centres[out.reason[centres] != _OK]
     out.d1[bad] = np.nan
     out.d2[bad] = np.nan
     out.k1[bad] = np.nan
     out.k2[bad] = np.nan
+    out.k1_se[bad] = np.nan
+    out.k2_se[bad] = np.nan
     return out
 
 

@@ -16,13 +16,13 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
-                         solve_sym3, tangent_frame)
+from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit,
+                         slice_bounds, solve_sym3, store_se3, tangent_frame)
 from .registry import EstimatorSpec, register
 
 
 @jit
-def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
+def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se):
     """Normal-difference least squares at vertex p over its support ``queue[1:count]``."""
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
@@ -32,7 +32,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
     ux, uy, uz, vx, vy, vz = frame
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     # normal equations of the two equation kinds: rows (u, v, 0) and (0, u, v)
-    suu = suv = svv = sau = sav = sbu = sbv = 0.0
+    suu = suv = svv = sau = sav = sbu = sbv = saa_bb = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -49,13 +49,18 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason):
         sav += a * v
         sbu += b * u
         sbv += b * v
+        saa_bb += a * a + b * b
     # AᵀA = [[uu, uv, 0], [uv, uu + vv, uv], [0, uv, vv]], Aᵀb = (au, av + bu, bv)
     e, f, g, singular = solve_sym3(suu, suv, 0.0, suu + svv, suv, svv, sau, sav + sbu, sbv)
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
+    # two equations per neighbour, errors taken as independent (docs/UNCERTAINTY.md)
+    store_se3(p, suu, suv, 0.0, suu + svv, suv, svv, saa_bb, e * sau + f * (sav + sbu) + g * sbv, 2 * used, 0,
+              0.0, 0.0, 0.0, e, f, g, k1_se, k2_se)
 
 
 @jit_parallel
-def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason):
+def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
+                k1_se, k2_se):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -64,7 +69,7 @@ def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stam
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason)
+            _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se)
 
 
 def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,

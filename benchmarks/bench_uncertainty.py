@@ -1,0 +1,95 @@
+"""Calibration of the per-vertex standard errors (``Curvature.k1_se``, ``k2_se``) on noisy analytic meshes.
+
+Run by hand (not part of the test suite)::
+
+    .venv/bin/python benchmarks/bench_uncertainty.py                 # docs/UNCERTAINTY.md's table
+    .venv/bin/python benchmarks/bench_uncertainty.py --samples 1 --densities 817
+
+The meshes are the study's (:func:`curv.study.testmesh.build_test_mesh`): a random Monge patch of
+eq. 5.1 (quadratic, ellipsoid patch, trigonometric) on the regular hexagon mesh at each density,
+with 3D Gaussian noise of 0, 33, 67 and 100 % of the paper's level (:data:`curv.variants.NOISE_FRACTION`
+of the mean edge length), evaluated away from the border as in the study. For every estimator and
+range the table gives the share of (evaluated, valid) vertices with ``|k_est - k_true| <= 2 se``,
+for k1 and k2 pooled over the surfaces, samples and densities, and the median of ``|k_est - k_true| / se``
+over both. A Gaussian error of exactly the standard error's size would give 95 % and a median of 0.67;
+above that the standard error is too small, below it too large.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import curv
+from curv.study.protocol import Task
+from curv.study.testmesh import build_test_mesh
+from curv.surfaces import PAPER_SURFACES
+
+VARIANTS = (("nc", 1, {}), ("nc", 2, {}), ("nc", 4, {}), ("qs", 1, {}), ("qs", 2, {}), ("qs", 4, {}),
+            ("an", 2, {}), ("an", 3, {}), ("an", 4, {}), ("mru", 2, {}), ("mru", 3, {}), ("mru", 4, {}),
+            ("jet", 2, {}), ("jet", 3, {}), ("jet", 4, {}), ("jet", 4, {"degree": 4}))
+NOISE = (0.0, 0.33, 0.67, 1.0)
+
+
+def label(method: str, k: int, opts: dict) -> str:
+    return f"{method} R{k}" + (f" degree {opts['degree']}" if opts else "")
+
+
+def error_ratios(res, truth, evaluated) -> np.ndarray:
+    """(2, c) ``|k_est - k_true| / se`` of k1 and k2 at the evaluated valid vertices."""
+    ok = evaluated & res.valid
+    with np.errstate(divide="ignore", invalid="ignore"):  # se = 0 where a noise-free fit is exact
+        return np.stack([np.abs(k[ok] - kt[ok]) / se[ok]
+                         for k, kt, se in ((res.k1, truth.k1, res.k1_se), (res.k2, truth.k2, res.k2_se))])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--densities", type=int, nargs="+", default=[817, 3169, 12481])
+    parser.add_argument("--samples", type=int, default=2, help="random surfaces per function and density")
+    parser.add_argument("--seed", type=int, default=7)
+    args = parser.parse_args()
+    t0 = time.perf_counter()
+    # totals[(variant, noise)] and by_density[(variant, density)] at 100 % noise
+    totals: dict = {}
+    by_density: dict = {}
+    for density in args.densities:
+        for function in PAPER_SURFACES:
+            for sample in range(args.samples):
+                for noise in NOISE:
+                    tm = build_test_mesh(Task(seed=args.seed, function=function, density=density,
+                                              irregularity=0.0, noise=noise, sample=sample))
+                    for method, k, opts in VARIANTS:
+                        res = curv.estimate(tm.mesh, method, k, **opts)
+                        ratios = error_ratios(res, tm.truth, tm.evaluated)
+                        key = label(method, k, opts)
+                        totals.setdefault((key, noise), []).append(ratios)
+                        if noise > 0:
+                            by_density.setdefault((key, density), []).append(ratios)
+    names = [label(*v) for v in VARIANTS]
+
+    def cell(parts) -> str:
+        r = np.concatenate(parts, axis=1)
+        inside = 100 * np.mean(r <= 2.0, axis=1)
+        return f"{inside[0]:.0f} / {inside[1]:.0f} ({np.median(r):.2f})"
+
+    print(f"Share of vertices with |k - k_true| <= 2 se, k1 / k2 in %, (median |k - k_true| / se; 0.67 if "
+          f"Gaussian with the error's size); "
+          f"densities {', '.join(map(str, args.densities))}, {args.samples} random surfaces of each of "
+          f"{', '.join(PAPER_SURFACES)} per density, seed {args.seed}\n")
+    print("| estimator | " + " | ".join(f"noise {round(100 * x)} %" for x in NOISE) + " |")
+    print("|---|" + "---|" * len(NOISE))
+    for name in names:
+        print(f"| {name} | " + " | ".join(cell(totals[name, x]) for x in NOISE) + " |")
+    print("\nNoisy meshes (33-100 %) by density:\n")
+    print("| estimator | " + " | ".join(f"{d} vertices" for d in args.densities) + " |")
+    print("|---|" + "---|" * len(args.densities))
+    for name in names:
+        print(f"| {name} | " + " | ".join(cell(by_density[name, d]) for d in args.densities) + " |")
+    print(f"\n{time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
