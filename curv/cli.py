@@ -270,7 +270,7 @@ def _apply_advice(args) -> None:
 
     given = [flag for flag, value in (("--range", args.range), ("--radius", args.radius), ("--degree", args.degree),
                                       ("--fit-range", args.fit_range)) if value is not None]
-    if args.normals != "max":
+    if args.normals not in (None, "max"):
         given.append("--normals")
     if given:
         raise CurvError(f"--method auto chooses the range and the options too; drop {', '.join(given)}")
