@@ -289,12 +289,14 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, help="write the markdown tables here")
     parser.add_argument("--points", action="store_true",
                         help="point clouds sampled from the same patches, against MeshLab's APSS and the meshes")
+    parser.add_argument("--extras", action="store_true",
+                        help="--points: also normals fitted over R4 (points and mesh) and the jet at degree 4")
     args = parser.parse_args(argv)
     samples = 2 if args.quick else args.samples
     if args.points:
         import points_accuracy
 
-        return points_accuracy.main(samples, args.workers, MAX_INVALID_SHARE, args.out)
+        return points_accuracy.main(samples, args.workers, MAX_INVALID_SHARE, args.out, extras=args.extras)
     t0 = time.perf_counter()
     cal = calibrate()
     signs = {name: sign for name, (sign, _) in cal.items()}

@@ -41,6 +41,10 @@ APSS_SCALES = (3.0, 4.0, 6.0, 8.0, 12.0)
 """APSS filter scales tried (MeshLab multiplies them by the mean point spacing); the best per cell is
 kept, which favours APSS."""
 EVALUATION_RANGE = 4
+EXTRA_NORMAL_RANGE = 4
+"""``extras``: every estimator again on normals fitted over R4 (degree-2 jet), on points and on the
+mesh (the mesh study's choice under noise), and the jet at degree 4 (its choice on clean meshes)."""
+EXTRA_JET_DEGREE = 4
 MESH_NAME = "mesh"
 
 
@@ -134,6 +138,18 @@ def _errors(t1, t2, k1, k2) -> dict:
             "c": 0.5 * (np.abs(t1) + np.abs(t2))}
 
 
+def _variants(names, extras: bool):
+    """``[(label, method, k, normal set, options)]``: each estimator at each named range, and the extras."""
+    import curv
+
+    out = [(f"{name} R{k}", name, k, "default", {}) for name in names for k in curv.ESTIMATORS[name].ranges]
+    if extras:
+        out += [(f"{lab} + normals R{EXTRA_NORMAL_RANGE}", name, k, "fitted", opt) for lab, name, k, _, opt in out]
+        out += [(f"jet degree {EXTRA_JET_DEGREE} R{k}", "jet", k, "default", {"degree": EXTRA_JET_DEGREE})
+                for k in curv.ESTIMATORS["jet"].ranges]
+    return out
+
+
 def run_surface(job):
     """Every variant on the clouds and the mesh of one random surface at one noise level.
 
@@ -151,7 +167,9 @@ def run_surface(job):
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import sample_points
 
-    function, noise, sample = job
+    from curv.fitted_normals import fitted_normals
+
+    function, noise, sample, extras = job
     task = Task(seed=0, function=function, density=DENSITY, irregularity=0.0, noise=noise, sample=sample)
     tm = build_test_mesh(task)
     surface = tm.sampled.surface
@@ -160,14 +178,15 @@ def run_surface(job):
     # the mesh reference: curvlab's mesh estimators on the study's mesh of the same surface
     mesh, ev = tm.mesh, tm.evaluated
     t1, t2 = tm.truth.k1[ev], tm.truth.k2[ev]
-    normals = vertex_normals(mesh)
+    normals = {"default": vertex_normals(mesh)}
+    if extras:
+        normals["fitted"] = fitted_normals(mesh, range=EXTRA_NORMAL_RANGE, degree=2)
     errors, seconds = {}, {}
-    for name, spec in curv.ESTIMATORS.items():
-        for k in spec.ranges:
-            t0 = time.perf_counter()
-            res = curv.estimate(mesh, name, k, normals=normals)
-            seconds[f"{name} R{k}"] = time.perf_counter() - t0
-            errors[f"{name} R{k}"] = _errors(t1, t2, res.k1[ev], res.k2[ev])
+    for label, name, k, which, options in _variants(list(curv.ESTIMATORS), extras):
+        t0 = time.perf_counter()
+        res = curv.estimate(mesh, name, k, normals=normals[which], **options)
+        seconds[label] = time.perf_counter() - t0
+        errors[label] = _errors(t1, t2, res.k1[ev], res.k2[ev])
     out.append(((MESH_NAME, noise), errors, seconds, {}))
 
     for s_index, sampling in enumerate(SAMPLINGS):
@@ -182,13 +201,18 @@ def run_surface(job):
         t0 = time.perf_counter()
         est = point_normals(cloud)
         normal_seconds = time.perf_counter() - t0
+        normals = {"default": est.normals}
+        if extras:
+            fitted = point_normals(cloud, range=EXTRA_NORMAL_RANGE).normals.copy()
+            # both are oriented up from the same PCA frames; keep the R2 normals' side where they differ
+            fitted[np.einsum("ij,ij->i", fitted, est.normals) < 0] *= -1.0
+            normals["fitted"] = fitted
         errors, seconds = {}, {}
-        for name in point_estimators():
-            for k in curv.ESTIMATORS[name].ranges:
-                t0 = time.perf_counter()
-                res = curv.estimate(cloud, name, k, normals=est.normals)
-                seconds[f"{name} R{k}"] = time.perf_counter() - t0 + normal_seconds
-                errors[f"{name} R{k}"] = _errors(t1, t2, res.k1[ev], res.k2[ev])
+        for label, name, k, which, options in _variants(point_estimators(), extras):
+            t0 = time.perf_counter()
+            res = curv.estimate(cloud, name, k, normals=normals[which], **options)
+            seconds[label] = time.perf_counter() - t0 + normal_seconds
+            errors[label] = _errors(t1, t2, res.k1[ev], res.k2[ev])
         for scale in APSS_SCALES:
             label = f"APSS scale {scale:g}"
             t0 = time.perf_counter()
@@ -281,7 +305,7 @@ def _init_worker():
     os.environ["CURV_THREADS"] = "1"
 
 
-def main(samples: int, workers: int, max_invalid: float, out=None) -> int:
+def main(samples: int, workers: int, max_invalid: float, out=None, extras: bool = False) -> int:
     """Run the protocol on ``samples`` surfaces per function and noise level and print the tables."""
     from concurrent.futures import ProcessPoolExecutor
 
@@ -290,7 +314,7 @@ def main(samples: int, workers: int, max_invalid: float, out=None) -> int:
     print("APSS sign and scale (converted: H = Mean / 2, K = Gauss):")
     for line in calibration:
         print("  " + line)
-    jobs = [(fn, noise, s) for noise in NOISES for fn in FUNCTIONS for s in range(samples)]
+    jobs = [(fn, noise, s, extras) for noise in NOISES for fn in FUNCTIONS for s in range(samples)]
     pooled: dict = {}
     seconds: dict = {}
     facts: dict = {}
@@ -311,7 +335,8 @@ def main(samples: int, workers: int, max_invalid: float, out=None) -> int:
               f"trigonometric, {samples} surfaces per function and noise level, seed 0), about {DENSITY} "
               f"points each, uniform random or blue-noise sampling; noise 100 % = 3-D Gaussian noise of "
               f"{100 * _noise_fraction():g} % of the matching study mesh's mean edge length per coordinate. "
-              f"Normals estimated from the points (jet R2, oriented up), shared by every variant. Ranked "
+              f"Normals estimated from the points (jet R2, oriented up), shared by every variant "
+              f"({'extras: also normals fitted over R4, on points and mesh, and the jet at degree 4' if extras else 'no extras'}). Ranked "
               f"variants leave at most {100 * max_invalid:g} % of the evaluated points invalid. "
               f"{len(jobs)} surfaces in {elapsed:.0f} s on {workers} workers.", "",
               "APSS sign and scale (H = Mean / 2, K = Gauss, k = H +- sqrt(max(H^2 - K, 0))):", ""]
