@@ -4,6 +4,9 @@ Run by hand (not part of the test suite)::
 
     .venv/bin/python benchmarks/bench_accuracy.py --out docs/accuracy_table.md     # 10 surfaces a cell
     .venv/bin/python benchmarks/bench_accuracy.py --quick                          # 2 surfaces: smoke run
+    .venv/bin/python benchmarks/bench_accuracy.py --points --samples 10            # point clouds vs APSS
+
+``--points`` runs the protocol on point clouds instead (``benchmarks/points_accuracy.py``).
 
 The meshes are the study's (:func:`curv.study.testmesh.build_test_mesh`): the 3169-vertex hexagon
 lifted onto a random Monge patch of each of the three functions of eq. 5.1, at irregularity 0 and 25
@@ -284,8 +287,16 @@ def main(argv=None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--top", type=int, default=12, help="curvlab variants listed per cell")
     parser.add_argument("--out", type=Path, help="write the markdown tables here")
+    parser.add_argument("--points", action="store_true",
+                        help="point clouds sampled from the same patches, against MeshLab's APSS and the meshes")
+    parser.add_argument("--extras", action="store_true",
+                        help="--points: also normals fitted over R4 (points and mesh) and the jet at degree 4")
     args = parser.parse_args(argv)
     samples = 2 if args.quick else args.samples
+    if args.points:
+        import points_accuracy
+
+        return points_accuracy.main(samples, args.workers, MAX_INVALID_SHARE, args.out, extras=args.extras)
     t0 = time.perf_counter()
     cal = calibrate()
     signs = {name: sign for name, (sign, _) in cal.items()}
