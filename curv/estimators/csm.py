@@ -39,7 +39,7 @@ from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
 from ..neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
                              new_queues, new_scratch)
-from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
+from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements,
                              vertex_bits)
 from ._small_linalg import sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
@@ -171,7 +171,7 @@ def _edge_term(e, edges, x, y, z, px, py, pz, r2, scale, tensor):
 
 @jit_parallel
 def _csm_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, halfedge_edge, edges, beta_scale,
-               tri, vector_area, face_area, degenerate, border, nonmanifold, crease, normals,
+               tri, vector_area, face_area, degenerate, border, nonmanifold, cut, crease, normals,
                vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
@@ -187,8 +187,9 @@ def _csm_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, h
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
-            # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle); area(B ∩ mesh). Faces and edges that
-            # touch a crease vertex are left out: the surface ends there for this centre
+            # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle); area(B ∩ mesh). A crease vertex adds
+            # no faces or edges of its own: those on the centre's side are reached from that side,
+            # and the crease's edges are left out
             sums[:] = 0.0
             area = 0.0
             for i in range(count):
@@ -197,22 +198,25 @@ def _csm_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, h
                 for j in range(vc_ptr[v], vc_ptr[v + 1]):
                     h = vc[j]
                     f = h // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
+                    if cut and crease[v]:
+                        if degenerate[f]:
+                            hit |= DEGENERATE_BIT
+                        continue
                     if fstamp[f] != mark:
                         fstamp[f] = mark
                         if degenerate[f]:
                             hit |= DEGENERATE_BIT
-                        elif not touches(crease, tri, f):
+                        else:
                             area += face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
-                    if crease[v]:
+                    # the edge out of v in triangle f: on a consistently oriented mesh every interior
+                    # edge of v is one (border and non-manifold edges have no dihedral term)
+                    e = halfedge_edge[h]
+                    if e < 0 or estamp[e] == mark:
                         continue
-                    for g in (h, 3 * f + (h + 2) % 3):  # the edges out of and into v in triangle f
-                        e = halfedge_edge[g]
-                        if e < 0 or estamp[e] == mark:
-                            continue
-                        estamp[e] = mark
-                        s = beta_scale[e]
-                        if s != 0.0 and not (crease[edges[e, 0]] or crease[edges[e, 1]]):
-                            _edge_term(e, edges, x, y, z, px, py, pz, r2, s, sums)
+                    estamp[e] = mark
+                    s = beta_scale[e]
+                    if s != 0.0:
+                        _edge_term(e, edges, x, y, z, px, py, pz, r2, s, sums)
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
             singular = not (area > 0.0 and math.isfinite(sums[0] + sums[1] + sums[2] + sums[3] + sums[4] + sums[5]))
@@ -251,8 +255,10 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         The vertices to estimate (default all). The per-edge dihedral angles are then computed
         only for the edges their supports touch.
     features : curv.features.FeatureSet, optional
-        The ball stops at creases, and the edges and faces touching a crease vertex are left out
-        (the crease's own dihedral term with them).
+        The ball stops at creases: edges and faces come from the centre's side only, and the
+        feature edges' dihedral terms are left out. (Leaving out every face and edge that touches
+        a crease vertex instead, as icc does, made the capped cylinder's ring-1 error 0.138
+        against 0.107 allowed.)
 
     Yields
     ------
@@ -295,7 +301,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     def run(lo: int, hi: int) -> None:
         launch(_csm_chunk, centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge, edges,
                beta_scale, tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices,
-               mesh.nonmanifold_vertices, crease, normals, vstamps, queues, estamps, fstamps,
+               mesh.nonmanifold_vertices, blocked is not None, crease, normals, vstamps, queues, estamps, fstamps,
                out.k1, out.k2, out.d1, out.d2, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)

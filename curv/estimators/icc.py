@@ -144,7 +144,7 @@ def _row_is_finite(a, r):
 
 @jit_parallel
 def _icc_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, tri, vector_area, face_area,
-               degenerate, measures, border, nonmanifold, crease, normals, from_measures, vstamps, queues, fstamps,
+               degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, vstamps, queues, fstamps,
                k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
@@ -169,7 +169,7 @@ def _icc_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, t
                     if degenerate[f]:
                         hit |= DEGENERATE_BIT
                         continue
-                    if touches(crease, tri, f):
+                    if cut and touches(crease, tri, f):
                         continue  # the surface ends at a crease for this centre: its faces are left out
                     if not _row_is_finite(measures, f):
                         hit |= DEGENERATE_BIT  # a corner without a normal
@@ -249,7 +249,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     def run(lo: int, hi: int) -> None:
         launch(_icc_chunk, centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, tri,
                mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
-               mesh.nonmanifold_vertices, crease, normals, from_measures, vstamps, queues, fstamps,
+               mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, vstamps, queues, fstamps,
                out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
