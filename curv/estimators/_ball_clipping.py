@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..jit import jit, jit_parallel, launch, prange
+from ..jit import jit
 from ..mesh import Mesh
 from ..neighbourhood import ball_support, coordinate_columns
 from ..validity import Reason
