@@ -233,13 +233,13 @@ def _grow(a, count):
 
 
 @jit
-def _touched(centres, radius2, indptr, indices, x, y, z, vc_ptr, vc, with_edges, halfedge_edge, vstamp, queue,
+def _touched(centres, radii, indptr, indices, x, y, z, vc_ptr, vc, with_edges, halfedge_edge, vstamp, queue,
              fseen, eseen):
     faces = np.empty(64, np.int64)
     edges = np.empty(64, np.int64)
     nf = ne = 0
     for p in centres:
-        count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, vstamp, queue)
+        count, queue = ball_support(p, radii[p] ** 2, indptr, indices, x, y, z, vstamp, queue)
         for i in range(count):
             v = queue[i]
             for j in range(vc_ptr[v], vc_ptr[v + 1]):
@@ -262,7 +262,7 @@ def _touched(centres, radius2, indptr, indices, x, y, z, vc_ptr, vc, with_edges,
     return faces[:nf], edges[:ne]
 
 
-def touched_elements(mesh: Mesh, centres: np.ndarray, radius2: np.ndarray, indptr: np.ndarray,
+def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr: np.ndarray,
                      indices: np.ndarray, *, edges: bool) -> tuple[np.ndarray, np.ndarray | None]:
     """The triangles (and edges) the supports of ``centres`` touch: what a region's estimate reads.
 
@@ -272,8 +272,8 @@ def touched_elements(mesh: Mesh, centres: np.ndarray, radius2: np.ndarray, indpt
         Triangle mesh.
     centres : (c,) int64
         The vertices to estimate.
-    radius2 : (n,) float64
-        Squared ball radius of every vertex.
+    radii : (n,) float64
+        Ball radius of every vertex.
     indptr, indices : (n+1,), (a,) int64
         :func:`curv.neighbourhood.expansion_adjacency`.
     edges : bool
@@ -295,7 +295,7 @@ def touched_elements(mesh: Mesh, centres: np.ndarray, radius2: np.ndarray, indpt
     vc_ptr, vc = mesh.vertex_corners
     halfedge = mesh.halfedge_edge if edges else np.empty(0, np.int64)
     eseen = np.zeros(mesh.edges.shape[0] if edges else 0, np.bool_)
-    faces, edge_ids = _touched(centres, radius2, indptr, indices, *coordinate_columns(mesh), vc_ptr, vc, edges,
+    faces, edge_ids = _touched(centres, radii, indptr, indices, *coordinate_columns(mesh), vc_ptr, vc, edges,
                                halfedge, np.zeros(n, np.int64), np.empty(n, np.int64),
                                np.zeros(mesh.n_faces, np.bool_), eseen)
     return faces, (edge_ids if edges else None)

@@ -170,7 +170,7 @@ def _edge_term(e, edges, x, y, z, px, py, pz, r2, scale, tensor):
 
 
 @jit_parallel
-def _csm_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, halfedge_edge, edges, beta_scale,
+def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, halfedge_edge, edges, beta_scale,
                tri, vector_area, face_area, degenerate, border, nonmanifold, cut, crease, normals,
                vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
@@ -183,7 +183,7 @@ def _csm_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, h
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
             mark = p + 1  # the stamps start zeroed
-            r2 = radius2[p]
+            r2 = radii[p] ** 2
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
@@ -284,8 +284,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     blocked = blocked_vertices(features)
     indptr, indices = expansion_adjacency(mesh, blocked)
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
-    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    touched = touched_elements(mesh, centres, radius2, indptr, indices, edges=True)[1] if region else None
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=True)[1] if region else None
     beta_scale = edge_beta_scale(mesh, touched)
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
@@ -299,7 +299,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     out = empty_principal(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_csm_chunk, centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge, edges,
+        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge, edges,
                beta_scale, tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices,
                mesh.nonmanifold_vertices, blocked is not None, crease, normals, vstamps, queues, estamps, fstamps,
                out.k1, out.k2, out.d1, out.d2, out.reason)

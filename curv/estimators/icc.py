@@ -143,7 +143,7 @@ def _row_is_finite(a, r):
 
 
 @jit_parallel
-def _icc_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, tri, vector_area, face_area,
+def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri, vector_area, face_area,
                degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, vstamps, queues, fstamps,
                k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
@@ -153,11 +153,12 @@ def _icc_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, t
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
             mark = p + 1  # the stamps start zeroed
-            r2 = radius2[p]
+            r2 = radii[p] ** 2
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
             total[0, :] = 0.0
+            mean[p] = gaussian[p] = math.nan
             for i in range(count):
                 v = queue[i]
                 hit |= vertex_bits(v, border, nonmanifold)
@@ -233,8 +234,8 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     blocked = blocked_vertices(features)
     indptr, indices = expansion_adjacency(mesh, blocked)
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
-    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    touched = touched_elements(mesh, centres, radius2, indptr, indices, edges=False)[0] if region else None
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[0] if region else None
     measures = face_measures(mesh, normals, touched)
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
@@ -243,11 +244,11 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     queues = new_queues(n, parts)
     fstamps = np.zeros((parts, tri.shape[0]), np.int32)
     out = empty_principal(n)
-    mean = np.full(n, np.nan)
-    gaussian = np.full(n, np.nan)
+    mean = np.empty(n)  # NaN at each centre before its sums (a region touches only its own pages)
+    gaussian = np.empty(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, centres, lo, hi, radius2, indptr, indices, x, y, z, vc_ptr, vc, tri,
+        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri,
                mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
                mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, vstamps, queues, fstamps,
                out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
