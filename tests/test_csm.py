@@ -160,3 +160,20 @@ def test_disc_triangle_area_with_a_corner_just_outside(poke):
     whole = 0.5 * top
     sliver = poke * math.sqrt(2 * poke)  # at most the triangle of height poke over the chord
     assert -1e-15 <= whole - got <= sliver + 1e-15
+
+
+def test_a_region_computes_only_the_triangles_and_edges_its_supports_touch():
+    from curv.estimators._ball_clipping import touched_elements
+    from curv.neighbourhood import expansion_adjacency, supports
+
+    mesh = icosphere(3)
+    radii = ball_radii(mesh, Range(k=2.0), uses_normals=False)
+    centres = np.array([0, 5, 17], np.int64)
+    indptr, indices = expansion_adjacency(mesh)
+    faces, edges = touched_elements(mesh, centres, radii, indptr, indices, edges=True)
+    ptr, support = supports(mesh, radii, centres)
+    reached = np.zeros(mesh.n_vertices, bool)
+    reached[np.concatenate([centres, support])] = True
+    np.testing.assert_array_equal(np.sort(faces), np.flatnonzero(reached[mesh.triangles].any(axis=1)))
+    np.testing.assert_array_equal(np.sort(edges), np.flatnonzero(reached[mesh.edges].any(axis=1)))
+    assert faces.size < mesh.n_faces / 2
