@@ -24,9 +24,14 @@ intersection and ``area(B ∩ face)`` the exact area of the triangle within the 
 How it runs
 -----------
 One parallel kernel per chunk of vertices (:func:`curv.jit.iter_chunks`); per vertex it searches
-the support and visits every edge and face touching it once (per-thread stamps over edges and
-faces, like the search's own visited stamps over vertices), so no (centre, edge) pairs are stored.
-The per-edge ``beta(e) / |e|`` and the per-face frames and areas are computed once per mesh.
+the support and visits every edge and face touching it once, through the corners of the support's
+vertices (per-thread stamps over edges and faces, like the search's own visited stamps over
+vertices), so no (centre, edge) pairs are stored. One test sorts each face and edge: all corners
+inside the (convex) ball, the whole of it; only the faces and edges that cross the sphere are
+clipped exactly (:func:`curv.estimators._ball_clipping.face_in_ball_area`, :func:`segment_in_ball`).
+What neighbouring centres share is computed once: ``beta(e) / |e|`` per edge, and the mesh's
+cached face areas and vector areas. With ``centres`` (a region), ``beta`` is computed only for
+the edges the region's supports touch, so the cost follows the region.
 """
 
 from __future__ import annotations

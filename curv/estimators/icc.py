@@ -33,6 +33,12 @@ vertex noise the eigenvalues of M are the more robust (K from mu2 is the noisier
 noise of 0.1 mean edge lengths on the 3169-vertex patches, median e_rel at R4 0.09-0.25 from M
 against 0.15-0.68 from mu1 and mu2. :func:`icc_mean_gaussian` returns H and K themselves.
 
+Only the triangles that cross the sphere are clipped (all three corners inside: weight 1), and the
+measures of the triangles are computed once per call, for a region only those its supports touch.
+With ``features``, the triangles touching a crease vertex are left out of the sums: their normal
+field would use the crease vertex's normal (or its side's), tilted by O(h) from the surface's,
+which the normal differences turn into an O(1) error next to the crease.
+
 Validity: a ball that reaches a border sees one side of the surface only, so vertices whose
 support holds a border vertex are BORDER (as csm); a degenerate triangle or a vertex without
 normal in a touched triangle makes the centre DEGENERATE; non-manifold vertices in the support
