@@ -39,10 +39,6 @@ from .ranges import Range, ball_radii
 __all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "support_sizes", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
-QUEUE_START = 0
-"""Length of the queue a kernel starts with: :func:`ball_support` replaces it by a full-length one."""
-
-
 def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     """The support of vertex ``p``: the mesh search (:func:`mesh_ball_support`) or a point cloud's ball.
 
@@ -92,24 +88,15 @@ def mesh_ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
         over vertices: slicing ``stamps[t]`` anew for every vertex made a fit kernel 8x slower.
     queue : (n,) int64
         The calling thread's queue, a slot per vertex (its row of :func:`new_queues`): a support
-        can never overflow it, and pages it never reaches cost no memory. (A shorter one is
-        replaced by a full-length one before the search; prefer passing the row, since numba's
-        parallel loops mishandle an array rebound inside them in some expressions.)
+        can never overflow it, and pages it never reaches cost no memory.
 
     Returns
     -------
     count : int
         ``queue[0] == p`` and ``queue[1:count]`` is the support (centre excluded), in BFS order.
     queue : (n,) int64
-        The queue: keep it for the next centre.
-
-    Notes
-    -----
-    Growing the queue inside the search loop instead (rebinding the array there) made numba
-    reload it on every access: ten times slower.
+        The same queue (kept in the return so that callers read ``count, queue = ...``).
     """
-    if queue.size < stamp.size:
-        queue = np.empty(stamp.size, np.int64)
     px, py, pz = x[p], y[p], z[p]
     mark = p + 1
     queue[0] = p

@@ -3,13 +3,14 @@
 import numpy as np
 
 import curv
-from curv.estimators._ball_clipping import face_frames, face_geometry, face_in_ball_area
+from curv.estimators._ball_clipping import face_in_ball_area
+from curv.neighbourhood import coordinate_columns
 
 
 def triangle_in_ball_area(a, b, c, centre, radius) -> float:
     """Area of triangle (a, b, c) (3-vectors) inside the ball of ``radius`` around ``centre``."""
     mesh = curv.Mesh(np.array([a, b, c], float), [[0, 1, 2]])
-    normal, area = face_geometry(mesh)
-    frames = face_frames(mesh, normal)
-    ox, oy, oz = np.asarray(centre, float) - np.asarray(a, float)
-    return face_in_ball_area(frames, 0, ox, oy, oz, float(radius) ** 2, area[0])
+    x, y, z = coordinate_columns(mesh)
+    px, py, pz = np.asarray(centre, float)
+    return face_in_ball_area(mesh.triangles, 0, x, y, z, mesh.face_vector_areas, mesh.face_areas, px, py, pz,
+                             float(radius) ** 2)

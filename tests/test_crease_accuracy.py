@@ -50,10 +50,8 @@ SOLIDS = {
 # shrink with the mesh.
 MISSES_WITH_FEATURES = {
     ("capped_cylinder", "ru"): "side: ring 1 e = 0.028 vs interior 0.0003 (sector normals at the rim vertices)",
-    ("capped_cylinder", "icc"): "side: ring 1 e = 0.019, ring 2 0.012 vs interior 1e-15",
     ("hemisphere", "csm"): "dome: ring 1 e = 0.13 (1500) / 0.11 (4000) vs interior 0.052 (limit 0.114)",
     ("hemisphere", "ru"): "dome: ring 1 e = 0.22 vs interior 1e-14 (sector normals at the rim vertices)",
-    ("hemisphere", "icc"): "dome: ring 1 e = 0.14-0.15, ring 2 0.093 vs interior 1e-6",
 }
 MISSES_WITHOUT_FEATURES = {
     (solid, "meyer"): "meyer's 1-ring next to a crease lies in one smooth part (its faces are flat or on the "

@@ -136,3 +136,44 @@ def test_closing_the_generator_stops_early():
     for _ in range(5):
         next(gen)
     gen.close()  # a cancel: no error, nothing left running
+
+
+@pytest.mark.parametrize("cut", [1 - 1e-9, 0.999999, 0.9, 0.3, -0.3, -0.9, -0.999999, -1 + 1e-9])
+def test_disc_triangle_area_with_one_edge_through_the_disc(cut):
+    """A large triangle below its edge at ``y = cut`` holds the part of the unit disc below it: pi
+    less the cap above, from almost the whole disc (the arc inside the triangle near 2 pi) to a
+    sliver (an arc near 0)."""
+    theta = 2.0 * math.acos(cut)  # angle of the cap's arc above the line
+    below = math.pi - 0.5 * (theta - math.sin(theta))
+    # counter-clockwise: (-50, cut) -> (0, -50) -> (50, cut)
+    got = disc_triangle_area(-50.0, cut, 0.0, -50.0, 50.0, cut, 1.0)
+    assert got == pytest.approx(below, abs=1e-13)  # absolute: the expected value itself cancels
+
+
+@pytest.mark.parametrize("poke", [1e-12, 1e-7, 1e-3, 0.2])
+def test_disc_triangle_area_with_a_corner_just_outside(poke):
+    """A corner barely outside the disc: the two arcs around it are tiny, and the area is the
+    triangle's less the sliver beyond the circle (two tiny arcs, never a full turn)."""
+    top = 1.0 + poke
+    tri = (-0.5, 0.0, 0.5, 0.0, 0.0, top)
+    got = disc_triangle_area(*tri, 1.0)
+    whole = 0.5 * top
+    sliver = poke * math.sqrt(2 * poke)  # at most the triangle of height poke over the chord
+    assert -1e-15 <= whole - got <= sliver + 1e-15
+
+
+def test_a_region_computes_only_the_triangles_and_edges_its_supports_touch():
+    from curv.estimators._ball_clipping import touched_elements
+    from curv.neighbourhood import expansion_adjacency, supports
+
+    mesh = icosphere(3)
+    radii = ball_radii(mesh, Range(k=2.0), uses_normals=False)
+    centres = np.array([0, 5, 17], np.int64)
+    indptr, indices = expansion_adjacency(mesh)
+    faces, edges = touched_elements(mesh, centres, radii, indptr, indices, edges=True)
+    ptr, support = supports(mesh, radii, centres)
+    reached = np.zeros(mesh.n_vertices, bool)
+    reached[np.concatenate([centres, support])] = True
+    np.testing.assert_array_equal(np.sort(faces), np.flatnonzero(reached[mesh.triangles].any(axis=1)))
+    np.testing.assert_array_equal(np.sort(edges), np.flatnonzero(reached[mesh.edges].any(axis=1)))
+    assert faces.size < mesh.n_faces / 2

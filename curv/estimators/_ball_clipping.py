@@ -1,5 +1,5 @@
-"""What the ball-clipping estimators (``csm``, ``icc``) share: exact face areas inside a ball,
-per-face frames, and the reason code of a support from the vertex flags it touched.
+"""What the ball-clipping estimators (``csm``, ``icc``) share: exact face areas inside a ball, the
+reason code of a support from the flags it touched, and the triangles and edges a region reads.
 
 Estimator modules do not import each other (an import-linter contract); shared kernels live in
 underscore modules like this one.
@@ -11,16 +11,16 @@ import math
 
 import numpy as np
 
-from ..jit import jit, jit_parallel, launch, prange
+from ..jit import jit
 from ..mesh import Mesh
-from ..neighbourhood import coordinate_columns
+from ..neighbourhood import ball_support, coordinate_columns
 from ..validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area",
-           "face_geometry", "face_frames", "face_frames_kernel", "face_in_ball_area", "support_flags"]
+           "face_in_ball_area", "vertex_bits", "touches", "touched_elements", "element_list"]
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
-"""Bits of the per-vertex flags a support may hit (:func:`support_flags`)."""
+"""Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
 
 _OK, _BORDER, _SINGULAR = int(Reason.OK), int(Reason.BORDER), int(Reason.SINGULAR)
 _DEGENERATE, _NONMANIFOLD = int(Reason.DEGENERATE), int(Reason.NONMANIFOLD)
@@ -45,151 +45,262 @@ def support_reason(singular, hit, normal_ok):
 
 
 @jit
-def _chord(ax, ay, bx, by, rho2):
-    """Parameters ``t1 <= t2`` in [0, 1] of the part of edge a -> b inside the disc of squared radius ``rho2``.
-
-    ``(0, 1)`` for an edge inside the disc, ``(0, 0)`` where its line misses the disc.
-    """
-    dx = bx - ax
-    dy = by - ay
-    if ax * ax + ay * ay <= rho2 and bx * bx + by * by <= rho2:
-        return 0.0, 1.0
-    a = dx * dx + dy * dy
-    b = dx * ax + dy * ay
-    c = ax * ax + ay * ay - rho2
-    disc = b * b - a * c
-    if not (disc > 0.0 and a > 0.0):
-        return 0.0, 0.0
-    sq = math.sqrt(disc)
-    return min(max((-b - sq) / a, 0.0), 1.0), min(max((-b + sq) / a, 0.0), 1.0)
-
-
-@jit
 def _angle(ax, ay, bx, by):
-    """Signed angle from direction a to direction b."""
+    """Signed angle from direction a to direction b, in (-pi, pi]."""
     return math.atan2(ax * by - ay * bx, ax * bx + ay * by)
 
 
 @jit
-def _corner_sectors(ex, ey, t_exit, cx, cy, nx, ny, t_entry):
-    """Signed angle of the circular sectors at corner c of the fan from the disc centre.
+def _corner(k, p0x, p0y, p1x, p1y, p2x, p2y):
+    """Corner ``k % 3`` of the triangle."""
+    k = k % 3
+    if k == 0:
+        return p0x, p0y
+    if k == 1:
+        return p1x, p1y
+    return p2x, p2y
 
-    The edge into c leaves the disc at e (``t_exit < 1``: a sector from e to c), the edge out of
-    c enters it at n (``t_entry > 0``: a sector from c to n). Where both are true crossings of the
-    circle (0 < t < 1) the two sectors are one, from e to n: each part is less than pi/2 (from a
-    point of the circle outwards along a line), so their sum is one ``atan2``.
+
+ARC_SPLIT = 1e-3
+"""Below this ratio |sin| / cos an arc's angle is near 0 or 2 pi, where one ``atan2`` cannot tell which."""
+
+
+@jit
+def _arc(ex, ey, exit_edge, nx, ny, entry_edge, p0x, p0y, p1x, p1y, p2x, p2y):
+    """Angle in (0, 2 pi) of the counter-clockwise arc from the exit point e to the entry point n.
+
+    The triangle's boundary leaves the disc at e (on edge ``exit_edge``) and comes back at n (on
+    ``entry_edge``); the arc from e to n closes the part of the triangle inside the disc, so it
+    turns counter-clockwise. One ``atan2`` and the side of the chord e -> n (the disc centre lies
+    to its right exactly when the arc is longer than pi) give the angle, except where e and n
+    nearly coincide (an angle near 0 or 2 pi): there the angles of the fan from e over the outside
+    corners to n, each less than pi, are summed.
     """
-    out_of = t_exit < 1.0
-    into = t_entry > 0.0
-    if out_of and into and t_exit > 0.0 and t_entry < 1.0:
-        return _angle(ex, ey, nx, ny)
+    cross = ex * ny - ey * nx
+    dot = ex * nx + ey * ny
+    if dot <= 0.0 or abs(cross) > ARC_SPLIT * dot:
+        angle = math.atan2(cross, dot)
+        return angle if angle > 0.0 else angle + 2.0 * math.pi
     angle = 0.0
-    if out_of:
-        angle += _angle(ex, ey, cx, cy)
-    if into:
-        angle += _angle(cx, cy, nx, ny)
-    return angle
+    ax, ay = ex, ey
+    k = exit_edge + 1
+    for _ in range(3):
+        cx, cy = _corner(k, p0x, p0y, p1x, p1y, p2x, p2y)
+        angle += _angle(ax, ay, cx, cy)
+        ax, ay = cx, cy
+        if k % 3 == entry_edge:
+            break
+        k += 1
+    return angle + _angle(ax, ay, nx, ny)
 
 
 @jit
 def disc_triangle_area(p0x, p0y, p1x, p1y, p2x, p2y, rho2):
     """Area of a counter-clockwise 2-D triangle inside the disc of squared radius ``rho2`` at 0.
 
-    Summed as the fan from the disc centre over the boundary: a straight triangle over the part
-    of each edge inside the disc (its chord), circular sectors of radius ``sqrt(rho2)`` where the
-    boundary is outside (before and after each chord; a missed edge is one sector end to end).
+    The region's boundary is the parts of the edges inside the disc (chords) and arcs of the
+    circle; its area is the fan from the disc centre over it: a straight triangle over each chord
+    (``(t2 - t1) * (corner x edge) / 2`` for the part ``t1..t2`` of an edge), a sector of
+    ``rho2 * angle / 2`` over each arc (from where the boundary leaves the disc to where it comes
+    back, :func:`_arc`). No crossing at all: the disc lies inside the triangle or outside it.
     """
-    # chord of edge i (corner i -> corner i + 1): from a_i = corner + s_i d to b_i = corner + t_i d
-    s0, t0 = _chord(p0x, p0y, p1x, p1y, rho2)
-    s1, t1 = _chord(p1x, p1y, p2x, p2y, rho2)
-    s2, t2 = _chord(p2x, p2y, p0x, p0y, rho2)
-    a0x, a0y = p0x + s0 * (p1x - p0x), p0y + s0 * (p1y - p0y)
-    b0x, b0y = p0x + t0 * (p1x - p0x), p0y + t0 * (p1y - p0y)
-    a1x, a1y = p1x + s1 * (p2x - p1x), p1y + s1 * (p2y - p1y)
-    b1x, b1y = p1x + t1 * (p2x - p1x), p1y + t1 * (p2y - p1y)
-    a2x, a2y = p2x + s2 * (p0x - p2x), p2y + s2 * (p0y - p2y)
-    b2x, b2y = p2x + t2 * (p0x - p2x), p2y + t2 * (p0y - p2y)
-    straight = 0.5 * ((a0x * b0y - a0y * b0x) + (a1x * b1y - a1y * b1x) + (a2x * b2y - a2y * b2x))
-    # sectors around each corner: after the chord of the edge into it, before that of the edge out
-    angle = (_corner_sectors(b2x, b2y, t2, p0x, p0y, a0x, a0y, s0)
-             + _corner_sectors(b0x, b0y, t0, p1x, p1y, a1x, a1y, s1)
-             + _corner_sectors(b1x, b1y, t1, p2x, p2y, a2x, a2y, s2))
-    return straight + 0.5 * rho2 * angle
-
-
-def face_geometry(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Unit normals (m, 3) and areas (m,) of the triangles; zeros on degenerate faces."""
-    degenerate = mesh.degenerate_faces
-    normal = np.where(degenerate[:, None], 0.0, mesh.face_normals)
-    area = np.where(degenerate, 0.0, mesh.face_areas)
-    return normal, area
-
-
-@jit_parallel
-def _face_frames(tri, x, y, z, face_normal, out):
-    for f in prange(tri.shape[0]):
-        c0, c1, c2 = tri[f, 0], tri[f, 1], tri[f, 2]
-        ex, ey, ez = x[c1] - x[c0], y[c1] - y[c0], z[c1] - z[c0]
-        fx, fy, fz = x[c2] - x[c0], y[c2] - y[c0], z[c2] - z[c0]
-        nx, ny, nz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
-        x1 = math.sqrt(ex * ex + ey * ey + ez * ez)
-        if not x1 > 0.0:
-            x1 = 1.0  # degenerate: never clipped (zero area)
-        ux, uy, uz = ex / x1, ey / x1, ez / x1
-        vx = ny * uz - nz * uy
-        vy = nz * ux - nx * uz
-        vz = nx * uy - ny * ux
-        out[f, 0], out[f, 1], out[f, 2] = ux, uy, uz
-        out[f, 3], out[f, 4], out[f, 5] = vx, vy, vz
-        out[f, 6], out[f, 7], out[f, 8] = nx, ny, nz
-        out[f, 9] = x1
-        out[f, 10] = fx * ux + fy * uy + fz * uz
-        out[f, 11] = fx * vx + fy * vy + fz * vz
-
-
-face_frames_kernel = _face_frames
-"""The numba dispatcher behind :func:`face_frames` (for first-run compile announcements)."""
-
-
-def face_frames(mesh: Mesh, face_normal: np.ndarray) -> np.ndarray:
-    """(m, 12) per triangle: its frame u, v, n (u along corner 0 -> 1, v = n x u) and its corners in it.
-
-    Columns ``ux uy uz vx vy vz nx ny nz x1 x2 y2``: corner 0 is the origin, corner 1 ``(x1, 0)``,
-    corner 2 ``(x2, y2)``. ``face_normal`` is the first output of :func:`face_geometry`. Once per
-    mesh, so that clipping a face to a ball needs no square root or division.
-    """
-    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
-    x, y, z = coordinate_columns(mesh)
-    out = np.empty((tri.shape[0], 12))
-    launch(_face_frames, tri, x, y, z, face_normal, out)
-    return out
+    straight = 0.0
+    sectors = 0.0
+    first_entry = -1  # an entry met before any exit closes the arc of the last exit
+    fx = fy = 0.0
+    open_exit = -1
+    ex = ey = 0.0
+    touched = False
+    for i in range(3):
+        ax, ay = _corner(i, p0x, p0y, p1x, p1y, p2x, p2y)
+        bx, by = _corner(i + 1, p0x, p0y, p1x, p1y, p2x, p2y)
+        dx, dy = bx - ax, by - ay
+        # |a + t d|^2 = rho2  <=>  qa t^2 + 2 qb t + qc = 0
+        qa = dx * dx + dy * dy
+        qb = dx * ax + dy * ay
+        qc = ax * ax + ay * ay - rho2
+        a_in = qc <= 0.0
+        b_in = bx * bx + by * by <= rho2
+        if a_in and b_in:
+            straight += ax * dy - ay * dx
+            touched = True
+            continue
+        if not qa > 0.0:
+            continue  # a point outside
+        disc = qb * qb - qa * qc
+        if a_in or b_in:
+            disc = max(disc, 0.0)  # one end in, one out: the roots are real
+        elif not disc > 0.0:
+            continue  # both ends outside, and the line misses the disc (or touches it)
+        sq = math.sqrt(disc)
+        t1 = 0.0 if a_in else min(max((-qb - sq) / qa, 0.0), 1.0)
+        t2 = 1.0 if b_in else min(max((-qb + sq) / qa, 0.0), 1.0)
+        if not a_in and not b_in and not (0.0 < t1 < t2 < 1.0):
+            continue  # both ends outside and the chord is not between them
+        straight += (t2 - t1) * (ax * dy - ay * dx)
+        touched = True
+        if not a_in:  # enters at t1
+            nx, ny = ax + t1 * dx, ay + t1 * dy
+            if open_exit >= 0:
+                sectors += _arc(ex, ey, open_exit, nx, ny, i, p0x, p0y, p1x, p1y, p2x, p2y)
+                open_exit = -1
+            elif first_entry < 0:
+                first_entry, fx, fy = i, nx, ny
+        if not b_in:  # leaves at t2
+            ex, ey = ax + t2 * dx, ay + t2 * dy
+            open_exit = i
+    if open_exit >= 0 and first_entry >= 0:
+        sectors += _arc(ex, ey, open_exit, fx, fy, first_entry, p0x, p0y, p1x, p1y, p2x, p2y)
+    if not touched:
+        # no corner inside and no edge through the disc: the disc is inside the triangle or apart
+        inside = ((p0x * p1y - p0y * p1x) >= 0.0 and (p1x * p2y - p1y * p2x) >= 0.0
+                  and (p2x * p0y - p2y * p0x) >= 0.0)
+        return math.pi * rho2 if inside else 0.0
+    return 0.5 * (straight + rho2 * sectors)
 
 
 @jit
-def face_in_ball_area(frames, f, ox, oy, oz, radius2, area):
-    """Exact area of triangle f (:func:`face_frames` row, full area ``area``) inside a ball.
+def face_in_ball_area(tri, f, x, y, z, vector_area, area, px, py, pz, radius2):
+    """Exact area of triangle f inside the ball of squared radius ``radius2`` around ``(px, py, pz)``.
 
-    ``o`` is the ball centre minus corner 0 of the face. The whole area where all three corners
-    are inside (the ball is convex), else :func:`disc_triangle_area` in the plane of the face.
+    Parameters
+    ----------
+    tri : (m, 3) int
+        Triangles.
+    f : int
+        The triangle.
+    x, y, z : (n,) float64
+        Vertex coordinates.
+    vector_area, area : (m, 3), (m,) float64
+        ``Mesh.face_vector_areas`` and ``Mesh.face_areas`` (area > 0: callers skip degenerate faces).
+
+    Notes
+    -----
+    One test decides most faces: all three corners inside the (convex) ball, the whole area.
+    Otherwise the face crosses the sphere, and its part inside is the triangle clipped to the disc
+    where the ball meets its plane (:func:`disc_triangle_area`, in a frame of the face made here:
+    nothing per face is stored between centres).
     """
-    cu = ox * frames[f, 0] + oy * frames[f, 1] + oz * frames[f, 2]
-    cv = ox * frames[f, 3] + oy * frames[f, 4] + oz * frames[f, 5]
-    h = ox * frames[f, 6] + oy * frames[f, 7] + oz * frames[f, 8]
-    x1, x2, y2 = frames[f, 9], frames[f, 10], frames[f, 11]
-    rho2 = radius2 - h * h  # squared radius of the disc B ∩ plane, around the foot (cu, cv)
+    c0, c1, c2 = tri[f, 0], tri[f, 1], tri[f, 2]
+    a0x, a0y, a0z = x[c0] - px, y[c0] - py, z[c0] - pz
+    a1x, a1y, a1z = x[c1] - px, y[c1] - py, z[c1] - pz
+    a2x, a2y, a2z = x[c2] - px, y[c2] - py, z[c2] - pz
+    if (a0x * a0x + a0y * a0y + a0z * a0z <= radius2 and a1x * a1x + a1y * a1y + a1z * a1z <= radius2
+            and a2x * a2x + a2y * a2y + a2z * a2z <= radius2):
+        return area[f]
+    inv = 1.0 / area[f]
+    nx, ny, nz = vector_area[f, 0] * inv, vector_area[f, 1] * inv, vector_area[f, 2] * inv
+    h = a0x * nx + a0y * ny + a0z * nz
+    rho2 = radius2 - h * h  # squared radius of the disc B ∩ plane, around the foot of the centre
     if not rho2 > 0.0:
         return 0.0
-    if cu * cu + cv * cv <= rho2 and (x1 - cu) ** 2 + cv * cv <= rho2 and (x2 - cu) ** 2 + (y2 - cv) ** 2 <= rho2:
-        return area
-    part = disc_triangle_area(-cu, -cv, x1 - cu, -cv, x2 - cu, y2 - cv, rho2)
+    # frame of the face: u along corner 0 -> 1, v = n x u; the corners' in-plane coordinates
+    # relative to the foot are their offsets from the centre dotted with u and v
+    ux, uy, uz = a1x - a0x, a1y - a0y, a1z - a0z
+    inv = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux, uy, uz = ux * inv, uy * inv, uz * inv
+    vx, vy, vz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux
+    part = disc_triangle_area(a0x * ux + a0y * uy + a0z * uz, a0x * vx + a0y * vy + a0z * vz,
+                              a1x * ux + a1y * uy + a1z * uz, a1x * vx + a1y * vy + a1z * vz,
+                              a2x * ux + a2y * uy + a2z * uz, a2x * vx + a2y * vy + a2z * vz, rho2)
     return part if math.isfinite(part) else 0.0
 
 
-def support_flags(mesh: Mesh) -> np.ndarray:
-    """(n,) uint8 per-vertex bits a support may hit: border, non-manifold, on a degenerate face."""
-    flags = mesh.border_vertices.astype(np.uint8) * BORDER_BIT
-    flags |= mesh.nonmanifold_vertices.astype(np.uint8) * NONMANIFOLD_BIT
-    degenerate = mesh.degenerate_faces
-    if degenerate.any():
-        flags[mesh.triangles[degenerate].reshape(-1)] |= DEGENERATE_BIT
-    return flags
+@jit
+def vertex_bits(v, border, nonmanifold):
+    """The flags vertex v adds to a support it lies in (BORDER_BIT, NONMANIFOLD_BIT)."""
+    bits = 0
+    if border[v]:
+        bits |= BORDER_BIT
+    if nonmanifold[v]:
+        bits |= NONMANIFOLD_BIT
+    return bits
+
+
+@jit
+def touches(crease, tri, f):
+    """Whether triangle f has a corner on a crease (``crease`` (n,) bool)."""
+    return crease[tri[f, 0]] or crease[tri[f, 1]] or crease[tri[f, 2]]
+
+
+@jit
+def _grow(a, count):
+    if count < a.size:
+        return a
+    b = np.empty(2 * a.size, a.dtype)
+    b[:a.size] = a
+    return b
+
+
+@jit
+def _touched(centres, radii, indptr, indices, x, y, z, vc_ptr, vc, with_edges, halfedge_edge, vstamp, queue,
+             fseen, eseen):
+    faces = np.empty(64, np.int64)
+    edges = np.empty(64, np.int64)
+    nf = ne = 0
+    for p in centres:
+        count, queue = ball_support(p, radii[p] ** 2, indptr, indices, x, y, z, vstamp, queue)
+        for i in range(count):
+            v = queue[i]
+            for j in range(vc_ptr[v], vc_ptr[v + 1]):
+                h = vc[j]
+                f = h // 3
+                if not fseen[f]:
+                    fseen[f] = True
+                    faces = _grow(faces, nf)
+                    faces[nf] = f
+                    nf += 1
+                if not with_edges:
+                    continue
+                for g in (h, 3 * f + (h + 2) % 3):  # the edges out of and into v
+                    e = halfedge_edge[g]
+                    if e >= 0 and not eseen[e]:
+                        eseen[e] = True
+                        edges = _grow(edges, ne)
+                        edges[ne] = e
+                        ne += 1
+    return faces[:nf], edges[:ne]
+
+
+def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr: np.ndarray,
+                     indices: np.ndarray, *, edges: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """The triangles (and edges) the supports of ``centres`` touch: what a region's estimate reads.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Triangle mesh.
+    centres : (c,) int64
+        The vertices to estimate.
+    radii : (n,) float64
+        Ball radius of every vertex.
+    indptr, indices : (n+1,), (a,) int64
+        :func:`curv.neighbourhood.expansion_adjacency`.
+    edges : bool
+        Collect the edges too (they need the mesh's edge table).
+
+    Returns
+    -------
+    faces : (k,) int64
+        Every triangle with a corner in a support, once.
+    edges : (l,) int64 or None
+        Every edge of those corners, once (None unless asked).
+
+    Notes
+    -----
+    A sequential walk over the supports: its cost follows the region, and the seen-masks are
+    zeroed pages that only the region touches.
+    """
+    n = mesh.n_vertices
+    vc_ptr, vc = mesh.vertex_corners
+    halfedge = mesh.halfedge_edge if edges else np.empty(0, np.int64)
+    eseen = np.zeros(mesh.edges.shape[0] if edges else 0, np.bool_)
+    faces, edge_ids = _touched(centres, radii, indptr, indices, *coordinate_columns(mesh), vc_ptr, vc, edges,
+                               halfedge, np.zeros(n, np.int64), np.empty(n, np.int64),
+                               np.zeros(mesh.n_faces, np.bool_), eseen)
+    return faces, (edge_ids if edges else None)
+
+
+def element_list(count: int, touched: np.ndarray | None) -> np.ndarray:
+    """(k,) int64 the elements a per-face or per-edge pass must compute: ``touched``, or all ``count``."""
+    return np.arange(count, dtype=np.int64) if touched is None else touched

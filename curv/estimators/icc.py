@@ -33,6 +33,12 @@ vertex noise the eigenvalues of M are the more robust (K from mu2 is the noisier
 noise of 0.1 mean edge lengths on the 3169-vertex patches, median e_rel at R4 0.09-0.25 from M
 against 0.15-0.68 from mu1 and mu2. :func:`icc_mean_gaussian` returns H and K themselves.
 
+Only the triangles that cross the sphere are clipped (all three corners inside: weight 1), and the
+measures of the triangles are computed once per call, for a region only those its supports touch.
+With ``features``, the triangles touching a crease vertex are left out of the sums: their normal
+field would use the crease vertex's normal (or its side's), tilted by O(h) from the surface's,
+which the normal differences turn into an O(1) error next to the crease.
+
 Validity: a ball that reaches a border sees one side of the surface only, so vertices whose
 support holds a border vertex are BORDER (as csm); a degenerate triangle or a vertex without
 normal in a touched triangle makes the centre DEGENERATE; non-manifold vertices in the support
@@ -48,13 +54,12 @@ import numpy as np
 
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
-from ..features import sector_corner_normals
-from ..neighbourhood import (QUEUE_START, all_centres, ball_support, blocked_vertices, coordinate_columns,
-                             expansion_adjacency, new_scratch)
+from ..neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
+                             new_queues, new_scratch)
 from ..validity import Reason
 from ._local_fit import store_principal, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, face_frames, face_frames_kernel, face_geometry, face_in_ball_area,
-                             support_flags, support_reason)
+from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
+                             vertex_bits)
 from .registry import EstimatorSpec, empty_principal, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures"]
@@ -67,16 +72,16 @@ MEASURES = 9
 
 
 @jit_parallel
-def _face_measures(tri, x, y, z, corner_normals, degenerate, out):
-    for f in prange(tri.shape[0]):
+def _face_measures(ids, tri, x, y, z, normals, degenerate, out):
+    for index in prange(ids.size):
+        f = ids[index]
         i, j, k = tri[f, 0], tri[f, 1], tri[f, 2]
-        ci, cj, ck = 3 * f, 3 * f + 1, 3 * f + 2  # the corners of triangle f
         # edges e = x_j - x_i, g = x_k - x_i and the normal differences du = u_j - u_i, dv = u_k - u_i
         ex, ey, ez = x[j] - x[i], y[j] - y[i], z[j] - z[i]
         gx, gy, gz = x[k] - x[i], y[k] - y[i], z[k] - z[i]
-        uix, uiy, uiz = corner_normals[ci, 0], corner_normals[ci, 1], corner_normals[ci, 2]
-        ujx, ujy, ujz = corner_normals[cj, 0], corner_normals[cj, 1], corner_normals[cj, 2]
-        ukx, uky, ukz = corner_normals[ck, 0], corner_normals[ck, 1], corner_normals[ck, 2]
+        uix, uiy, uiz = normals[i, 0], normals[i, 1], normals[i, 2]
+        ujx, ujy, ujz = normals[j, 0], normals[j, 1], normals[j, 2]
+        ukx, uky, ukz = normals[k, 0], normals[k, 1], normals[k, 2]
         dux, duy, duz = ujx - uix, ujy - uiy, ujz - uiz
         dvx, dvy, dvz = ukx - uix, uky - uiy, ukz - uiz
         bx = (uix + ujx + ukx) / 3.0  # ū
@@ -108,7 +113,7 @@ def _face_measures(tri, x, y, z, corner_normals, degenerate, out):
             out[f, 0] = math.nan  # a degenerate face makes every centre touching it DEGENERATE
 
 
-def face_measures(mesh: Mesh, normals: np.ndarray, features=None) -> np.ndarray:
+def face_measures(mesh: Mesh, normals: np.ndarray, ids: np.ndarray | None = None) -> np.ndarray:
     """The corrected curvature measures of every triangle with the vertex normals interpolated.
 
     Parameters
@@ -117,9 +122,8 @@ def face_measures(mesh: Mesh, normals: np.ndarray, features=None) -> np.ndarray:
         Triangle mesh.
     normals : (n, 3) float64
         Unit vertex normals (NaN rows allowed: their triangles get NaN measures).
-    features : curv.features.FeatureSet, optional
-        At a crease each corner interpolates the normal of its own sector
-        (:func:`curv.features.sector_corner_normals`).
+    ids : (k,) int64, optional
+        Compute only these triangles (a region's); the other rows are left unset.
 
     Returns
     -------
@@ -128,11 +132,11 @@ def face_measures(mesh: Mesh, normals: np.ndarray, features=None) -> np.ndarray:
         zz (see the module notes). NaN rows where a corner has no normal or the face is
         degenerate.
     """
-    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
-    x, y, z = (np.ascontiguousarray(mesh.vertices[:, c]) for c in range(3))
+    tri = np.ascontiguousarray(mesh.triangles)
+    x, y, z = coordinate_columns(mesh)
     out = np.empty((tri.shape[0], MEASURES))
-    corner_normals = sector_corner_normals(mesh, np.ascontiguousarray(normals, dtype=np.float64), features)
-    launch(_face_measures, tri, x, y, z, corner_normals, mesh.degenerate_faces, out)
+    launch(_face_measures, element_list(tri.shape[0], ids), tri, x, y, z,
+           np.ascontiguousarray(normals, dtype=np.float64), mesh.degenerate_faces, out)
     return out
 
 
@@ -145,38 +149,40 @@ def _row_is_finite(a, r):
 
 
 @jit_parallel
-def _icc_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames, face_area,
-               measures, flags, other_side, normals, from_measures, vstamps, fstamps, k1, k2, d1, d2, mean,
-               gaussian, reason):
+def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri, vector_area, face_area,
+               degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, vstamps, queues, fstamps,
+               k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
-        queue = np.empty(QUEUE_START, np.int64)
-        vstamp, fstamp = vstamps[t], fstamps[t]
+        queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
         total = np.empty((1, MEASURES))
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
             mark = p + 1  # the stamps start zeroed
-            r2 = radius2[p]
+            r2 = radii[p] ** 2
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
             total[0, :] = 0.0
+            mean[p] = gaussian[p] = math.nan
             for i in range(count):
                 v = queue[i]
-                hit |= flags[v]
-                if other_side[v]:
-                    continue  # a crease vertex: its faces on the centre's side are reached from that side
-                for j in range(vf_ptr[v], vf_ptr[v + 1]):
-                    f = vf_idx[j]
+                hit |= vertex_bits(v, border, nonmanifold)
+                for j in range(vc_ptr[v], vc_ptr[v + 1]):
+                    f = vc[j] // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
                     if fstamp[f] == mark:
                         continue
                     fstamp[f] = mark
-                    if not _row_is_finite(measures, f):
+                    if degenerate[f]:
                         hit |= DEGENERATE_BIT
                         continue
+                    if cut and touches(crease, tri, f):
+                        continue  # the surface ends at a crease for this centre: its faces are left out
+                    if not _row_is_finite(measures, f):
+                        hit |= DEGENERATE_BIT  # a corner without a normal
+                        continue
                     # weight: the fraction of the face's area inside B
-                    c0 = tri[f, 0]
-                    inside = face_in_ball_area(frames, f, px - x[c0], py - y[c0], pz - z[c0], r2, face_area[f])
+                    inside = face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
                     w = min(inside / face_area[f], 1.0)
                     if w > 0.0:
                         for c in range(MEASURES):
@@ -220,38 +226,37 @@ def _icc_chunk(centres, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_id
 def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: int | None,
                    from_measures: bool = True, centres: np.ndarray | None = None, features=None):
     """Run the kernel over chunks of vertices; returns ``(Principal, mean (n,), gaussian (n,))``."""
-    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)  # MeshError on polygons
+    tri = np.ascontiguousarray(mesh.triangles)  # MeshError on polygons
     n = mesh.n_vertices
+    region = centres is not None
     centres = all_centres(n, centres)
     # the mesh's connectivity may not be built yet: one piece per step, so that cancel stays prompt
-    for name in ("degenerate_faces", "face_normals", "adjacency", "vertex_faces", "border_vertices",
+    for name in ("degenerate_faces", "face_vector_areas", "adjacency", "vertex_corners", "border_vertices",
                  "nonmanifold_vertices"):
         getattr(mesh, name)
         yield 0.0
     normals = np.ascontiguousarray(normals, dtype=np.float64)
-    measures = face_measures(mesh, normals, features)
-    face_normal, face_area = face_geometry(mesh)
-    frames = face_frames(mesh, face_normal)
-    del face_normal
-    flags = support_flags(mesh)
-    yield 0.0
     x, y, z = coordinate_columns(mesh)
     blocked = blocked_vertices(features)
     indptr, indices = expansion_adjacency(mesh, blocked)
-    other_side = np.zeros(n, np.bool_) if blocked is None else blocked
-    vf = mesh.vertex_faces
-    vf_ptr, vf_idx = vf.indptr.astype(np.int64), vf.indices.astype(np.int64)
-    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
+    crease = np.zeros(n, np.bool_) if blocked is None else blocked
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[0] if region else None
+    measures = face_measures(mesh, normals, touched)
+    yield 0.0
+    vc_ptr, vc = mesh.vertex_corners
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
+    queues = new_queues(n, parts)
     fstamps = np.zeros((parts, tri.shape[0]), np.int32)
     out = empty_principal(n)
-    mean = np.full(n, np.nan)
-    gaussian = np.full(n, np.nan)
+    mean = np.empty(n)  # NaN at each centre before its sums (a region touches only its own pages)
+    gaussian = np.empty(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, centres, lo, hi, radius2, indptr, indices, x, y, z, vf_ptr, vf_idx, tri, frames,
-               face_area, measures, flags, other_side, normals, from_measures, vstamps, fstamps,
+        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri,
+               mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
+               mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, vstamps, queues, fstamps,
                out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
@@ -277,8 +282,9 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     centres : (c,) int64, optional
         The vertices to estimate (default all).
     features : curv.features.FeatureSet, optional
-        The ball stops at creases (faces from the centre's side only, each corner at a crease with
-        its sector's normal).
+        The ball stops at creases, and the faces touching a crease vertex are left out of the sums
+        (a crease vertex's normal, or its side's, tilts them: an error that does not shrink with
+        the mesh).
 
     Yields
     ------
@@ -327,6 +333,6 @@ register(EstimatorSpec(
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
-    kernels=(_face_measures, face_frames_kernel, _icc_chunk),
+    kernels=(_face_measures, _icc_chunk),
     options={"from_measures": (True, False)},
 ))
