@@ -15,6 +15,7 @@ from .convert import as_mesh
 from .mesh import Mesh
 from .ranges import ball_radii, parse_range, resolve
 from .features import feature_set
+from .filled import filled
 from .normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
 from .result import Curvature
 from .smoothing import smooth_positions, smooth_values
@@ -111,12 +112,12 @@ def iter_estimate(
         if meaningless.any():
             used_normals = used_normals.copy()
             used_normals[meaningless] = np.nan
-    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
+    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=centres) if spec.has_support else None
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
     if on_crease and used_normals is not None:
-        # a crease vertex's normal blends both sides: no neighbour-normal term may use it (ru and
-        # icc take their sector's normal instead, curv.features.sector_corner_normals)
+        # a crease vertex's normal blends both sides: no neighbour-normal term may use it (icc takes
+        # its sector's normal instead, curv.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = used_normals.copy()
         kernel_normals[feats.vertices] = np.nan
     raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=centres,
@@ -166,7 +167,7 @@ def iter_estimate(
         k1, k2, d1, d2, reason, valid = _full_length(mesh.n_vertices, centres, k1, k2, d1, d2, reason, valid)
     yield 1.0
     return Curvature(
-        k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
+        k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
         method=spec.name, range=rng.value,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
               "normals": _normals_label(normals, normal_weighting, fit_range), **options,
@@ -195,10 +196,13 @@ def _check_vertices(vertices, n: int) -> np.ndarray | None:
 
 
 def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
-    """Scatter a region's rows into full-length outputs: NaN and ``NOT_COMPUTED`` elsewhere."""
-    out_k1, out_k2 = np.full(n, np.nan), np.full(n, np.nan)
-    out_d1, out_d2 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
-    out_reason = np.full(n, Reason.NOT_COMPUTED, np.uint8)
+    """Scatter a region's rows into full-length outputs: NaN and ``NOT_COMPUTED`` elsewhere.
+
+    At the cost of the region's rows, not of n (:func:`curv.filled.filled`).
+    """
+    out_k1, out_k2 = filled(n, np.nan), filled(n, np.nan)
+    out_d1, out_d2 = filled((n, 3), np.nan), filled((n, 3), np.nan)
+    out_reason = filled(n, Reason.NOT_COMPUTED, np.uint8)
     out_valid = np.zeros(n, bool)
     out_k1[centres], out_k2[centres], out_d1[centres], out_d2[centres] = k1, k2, d1, d2
     out_reason[centres], out_valid[centres] = reason, valid

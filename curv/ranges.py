@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import EstimatorError
+from .filled import filled
 
 __all__ = ["Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
            "default_range", "smallest_range", "takes_any_range", "canonical_k", "nearest_allowed",
@@ -203,7 +204,7 @@ def resolve(spec, range=None, radius=None) -> Range:
     return Range(k=k)
 
 
-def ball_radii(mesh, rng: Range, *, uses_normals: bool) -> np.ndarray:
+def ball_radii(mesh, rng: Range, *, uses_normals: bool, at: np.ndarray | None = None) -> np.ndarray:
     """(n,) float64 radius of the ball each vertex collects its support in, tolerance included.
 
     Parameters
@@ -212,7 +213,17 @@ def ball_radii(mesh, rng: Range, *, uses_normals: bool) -> np.ndarray:
     rng : Range
     uses_normals : bool
         Whether the estimator also uses its neighbours' normals (support ``k - 1``).
+    at : (c,) int64, optional
+        Only these vertices need a radius (an estimate over a region): the other rows are NaN, and
+        the cost follows ``at``, not the mesh (:func:`curv.filled.filled`).
     """
+    if at is not None:
+        out = filled(mesh.n_vertices, np.nan)
+        if rng.radius is not None:
+            out[at] = rng.radius * (1.0 + TIE_TOLERANCE)
+        else:
+            out[at] = (support_factor(rng.k, uses_normals=uses_normals) * (1.0 + TIE_TOLERANCE)) * mesh.longest_edge[at]
+        return out
     if rng.radius is not None:
         return np.full(mesh.n_vertices, rng.radius * (1.0 + TIE_TOLERANCE))
     factor = support_factor(rng.k, uses_normals=uses_normals)
