@@ -16,6 +16,7 @@ from .mesh import Mesh
 from .ranges import ball_radii, parse_range, resolve
 from .features import feature_set
 from .filled import filled
+from .neighbourhood import latest_with_mesh
 from .normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
 from .result import Curvature
 from .smoothing import smooth_positions, smooth_values
@@ -118,8 +119,8 @@ def iter_estimate(
     if on_crease and used_normals is not None:
         # a crease vertex's normal blends both sides: no neighbour-normal term may use it (icc takes
         # its sector's normal instead, curv.features.sector_corner_normals; ru leaves its faces out)
-        kernel_normals = used_normals.copy()
-        kernel_normals[feats.vertices] = np.nan
+        kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
+                                          lambda: _without(used_normals, feats.vertices))
     raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=centres,
                                    features=feats if on_crease else None, **options)
     if fused:
@@ -174,7 +175,7 @@ def iter_estimate(
               "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
-              "feature_edges": 0 if feats is None else int(feats.edges.sum()),
+              "feature_edges": 0 if feats is None else feats.count,
               "region": mesh.n_vertices if centres is None else int(centres.size)},
     )
 
@@ -207,6 +208,14 @@ def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
     out_k1[centres], out_k2[centres], out_d1[centres], out_d2[centres] = k1, k2, d1, d2
     out_reason[centres], out_valid[centres] = reason, valid
     return out_k1, out_k2, out_d1, out_d2, out_reason, out_valid
+
+
+def _without(normals: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """A read-only copy of ``normals`` (n, 3) with NaN rows at ``vertices`` (n,) bool, in the same layout."""
+    out = normals.copy(order="K")
+    out[vertices] = np.nan
+    out.setflags(write=False)
+    return out
 
 
 def _default_normals(mesh: Mesh, weighting, *, smoothed: bool) -> np.ndarray:

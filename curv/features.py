@@ -154,25 +154,43 @@ class FeatureSet:
         Vertices on a feature edge (corners included).
     corners : (n,) bool
         Vertices where three or more feature edges meet.
+    count : int
+        Number of feature edges.
     """
 
     label: object
     edges: np.ndarray
     vertices: np.ndarray
     corners: np.ndarray
+    count: int = 0
 
     @property
     def any(self) -> bool:
         """Whether there is any feature edge."""
-        return bool(self.edges.any())
+        return self.count > 0
 
 
 def feature_set(mesh: Mesh, angle_or_mask) -> FeatureSet:
-    """The :class:`FeatureSet` of ``mesh`` for a threshold in degrees or a per-edge mask."""
+    """The :class:`FeatureSet` of ``mesh`` for a threshold in degrees or a per-edge mask (read-only arrays).
+
+    The set of the latest angle is kept with the mesh, so that estimates over small regions at the
+    same angle do no whole-mesh work to find the creases again.
+    """
+    from .neighbourhood import latest_with_mesh
+
+    if isinstance(angle_or_mask, (bool, np.bool_)) or np.ndim(angle_or_mask) != 0:
+        return _feature_set(mesh, angle_or_mask, "mask")
+    angle = check_angle(angle_or_mask)
+    return latest_with_mesh(mesh, "feature set", (angle,), lambda: _feature_set(mesh, angle, angle))
+
+
+def _feature_set(mesh: Mesh, angle_or_mask, label) -> FeatureSet:
     edges = feature_edges(mesh, angle_or_mask)
-    label = "mask" if np.ndim(angle_or_mask) != 0 else check_angle(angle_or_mask)
-    return FeatureSet(label=label, edges=edges, vertices=feature_vertices(mesh, edges),
-                      corners=feature_corners(mesh, edges))
+    out = FeatureSet(label=label, edges=edges, vertices=feature_vertices(mesh, edges),
+                     corners=feature_corners(mesh, edges), count=int(edges.sum()))
+    for arr in (out.edges, out.vertices, out.corners):
+        arr.setflags(write=False)
+    return out
 
 
 def sector_corner_normals(mesh: Mesh, normals: np.ndarray, features: FeatureSet | None) -> np.ndarray:

@@ -26,7 +26,7 @@ from .jit import jit, jit_parallel, launch, prange, thread_slices, threads
 from .mesh import Mesh
 from .ranges import Range, ball_radii
 
-__all__ = ["ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "Neighbourhood",
+__all__ = ["ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "latest_with_mesh", "supports", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
 QUEUE_START = 0
@@ -128,12 +128,14 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None) -> tuple[
 
     Notes
     -----
-    The plain form (no ``blocked``) is cached with the mesh, so that an estimate over a small
-    region does no O(n) work to build it again.
+    The plain form (no ``blocked``) is cached with the mesh, and the form for the latest
+    ``blocked`` array (the same object again: a cached feature set's vertices), so that an estimate
+    over a small region does no O(n) work to build it again.
     """
     if blocked is None or not blocked.any():
         return cached_with_mesh(mesh, "expansion", lambda: _expansion(mesh, mesh.nonmanifold_vertices))
-    return _expansion(mesh, mesh.nonmanifold_vertices | blocked)
+    return latest_with_mesh(mesh, "blocked expansion", (blocked,),
+                            lambda: _expansion(mesh, mesh.nonmanifold_vertices | blocked))
 
 
 def _expansion(mesh: Mesh, bad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -183,6 +185,28 @@ def cached_with_mesh(mesh: Mesh, key: str, build):
     if key not in entry:
         entry[key] = build()
     return entry[key]
+
+
+def latest_with_mesh(mesh: Mesh, key: str, token: tuple, build):
+    """``build()`` for ``token``, keeping only the latest token's value per mesh and ``key``.
+
+    For what depends on a choice as well as on the mesh (a feature angle, a feature set's arrays):
+    asking again with the same choice costs nothing, a new choice replaces the old value (so a user
+    trying many angles does not pile up whole-mesh arrays). ``token`` is a tuple of floats (compared
+    by value) and arrays (compared by identity; the entry holds them, so their ids stay theirs).
+    """
+    entry = _CACHE.setdefault(mesh, {})
+    held = entry.get(key)
+    if held is None or len(held[0]) != len(token) or not all(_same(a, b) for a, b in zip(held[0], token)):
+        entry.pop(key, None)  # free the old value before building the new one
+        entry[key] = (token, build())
+    return entry[key][1]
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return a is b
+    return type(a) is type(b) and a == b
 
 
 @jit_parallel
