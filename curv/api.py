@@ -14,7 +14,7 @@ from .jit import COMPILE_MESSAGE, Progress, compile_pending
 from .convert import as_mesh
 from .mesh import Mesh
 from .ranges import ball_radii, parse_range, resolve
-from .features import feature_set
+from .features import check_angle, feature_set
 from .filled import filled
 from .neighbourhood import latest_with_mesh
 from .normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
@@ -85,7 +85,7 @@ def iter_estimate(
     centres = _check_vertices(vertices, mesh.n_vertices)
     if centres is not None and smooth is Smoothing.VALUES:
         raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
-    feats = None if features is None else feature_set(mesh, features)
+    feats = None if features is None else _feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
     t0 = time.perf_counter()
@@ -208,6 +208,15 @@ def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
     out_k1[centres], out_k2[centres], out_d1[centres], out_d2[centres] = k1, k2, d1, d2
     out_reason[centres], out_valid[centres] = reason, valid
     return out_k1, out_k2, out_d1, out_d2, out_reason, out_valid
+
+
+def _feature_set(mesh: Mesh, features):
+    """:func:`curv.features.feature_set`; the latest angle's is kept with the mesh, so that estimates
+    over small regions at one angle do no whole-mesh work to find the creases again."""
+    if isinstance(features, (bool, np.bool_)) or np.ndim(features) != 0:
+        return feature_set(mesh, features)  # a caller's mask (or a one-line error)
+    angle = check_angle(features)
+    return latest_with_mesh(mesh, "feature set", (angle,), lambda: feature_set(mesh, angle))
 
 
 def _without(normals: np.ndarray, vertices: np.ndarray) -> np.ndarray:

@@ -171,21 +171,9 @@ class FeatureSet:
 
 
 def feature_set(mesh: Mesh, angle_or_mask) -> FeatureSet:
-    """The :class:`FeatureSet` of ``mesh`` for a threshold in degrees or a per-edge mask (read-only arrays).
-
-    The set of the latest angle is kept with the mesh, so that estimates over small regions at the
-    same angle do no whole-mesh work to find the creases again.
-    """
-    from .neighbourhood import latest_with_mesh
-
-    if isinstance(angle_or_mask, (bool, np.bool_)) or np.ndim(angle_or_mask) != 0:
-        return _feature_set(mesh, angle_or_mask, "mask")
-    angle = check_angle(angle_or_mask)
-    return latest_with_mesh(mesh, "feature set", (angle,), lambda: _feature_set(mesh, angle, angle))
-
-
-def _feature_set(mesh: Mesh, angle_or_mask, label) -> FeatureSet:
+    """The :class:`FeatureSet` of ``mesh`` for a threshold in degrees or a per-edge mask (read-only arrays)."""
     edges = feature_edges(mesh, angle_or_mask)
+    label = "mask" if np.ndim(angle_or_mask) != 0 else check_angle(angle_or_mask)
     out = FeatureSet(label=label, edges=edges, vertices=feature_vertices(mesh, edges),
                      corners=feature_corners(mesh, edges), count=int(edges.sum()))
     for arr in (out.edges, out.vertices, out.corners):
