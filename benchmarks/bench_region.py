@@ -16,15 +16,19 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-import curv
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's curv and app
 
-from app.model.colors import colormap, map_colours
-from app.model.region import REST_COLOUR
-from bench_large import torus
+import curv  # noqa: E402
+
+from app.model.colors import colormap, map_colours  # noqa: E402
+from app.model.region import REST_COLOUR  # noqa: E402
+from bench_large import torus  # noqa: E402
 
 METHODS = ("mru", "nc", "qs", "an", "jet", "ru", "meyer", "csm", "icc")
 REGION = 1000
