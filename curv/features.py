@@ -11,8 +11,10 @@ What the estimators do with them (``curv.estimate(..., features=30)``):
 - the support search (:func:`curv.neighbourhood.expansion_adjacency`) reaches a feature vertex but
   never expands through it, so a vertex next to a crease is estimated from its own side only;
 - neighbour-normal terms leave feature vertices' normals out (their vertex normal blends both
-  sides); estimators that interpolate normals over faces (``ru``, ``icc``) give each corner of a
-  face at a feature vertex the normal of its own *sector* (:func:`sector_corner_normals`);
+  sides); ``icc``, which interpolates normals over faces, gives each corner of a face at a
+  feature vertex the normal of its own *sector* (:func:`sector_corner_normals`), and ``ru`` leaves
+  the faces that touch a feature vertex out of its average (a sector normal at a curved rim is
+  tilted by O(h), an O(1) error in a normal difference over one edge);
 - ``csm`` and ``icc`` collect edges and faces from the centre's side only (never from a feature
   vertex), so the crease's dihedral term is left out;
 - feature vertices get ``Reason.FEATURE`` (NaN values): the smooth curvature is undefined there.
