@@ -196,11 +196,14 @@ def latest_with_mesh(mesh: Mesh, key: str, token: tuple, build):
     by value) and arrays (compared by identity; the entry holds them, so their ids stay theirs).
     """
     entry = _CACHE.setdefault(mesh, {})
-    held = entry.get(key)
-    if held is None or len(held[0]) != len(token) or not all(_same(a, b) for a, b in zip(held[0], token)):
-        entry.pop(key, None)  # free the old value before building the new one
-        entry[key] = (token, build())
-    return entry[key][1]
+    held = entry.get(key)  # one read: another thread may replace the entry meanwhile
+    if held is not None and len(held[0]) == len(token) and all(_same(a, b) for a, b in zip(held[0], token)):
+        return held[1]
+    held = None
+    entry.pop(key, None)  # free the old value before building the new one
+    value = build()
+    entry[key] = (token, value)
+    return value
 
 
 def _same(a, b) -> bool:
