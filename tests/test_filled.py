@@ -60,3 +60,24 @@ def test_a_large_region_result_is_full_length_nan_outside():
     np.testing.assert_array_equal(res.d2[idx], full.d2[idx])
     res.d1[np.flatnonzero(rest)[:10]] = 0.0             # the arrays are the caller's to write
     assert (res.d1[np.flatnonzero(rest)[:10]] == 0.0).all()
+
+
+def test_the_latest_choice_is_kept_with_the_mesh():
+    from curv.neighbourhood import latest_with_mesh
+
+    mesh = Torus().mesh(300).mesh
+    built = []
+
+    def build():
+        built.append(object())
+        return built[-1]
+
+    first = latest_with_mesh(mesh, "test", (30.0,), build)
+    assert latest_with_mesh(mesh, "test", (30.0,), build) is first and len(built) == 1
+    assert latest_with_mesh(mesh, "test", (40.0,), build) is built[1]
+    assert latest_with_mesh(mesh, "test", (30.0,), build) is built[2]     # only the latest is kept
+    flags = np.zeros(3, bool)
+    kept = latest_with_mesh(mesh, "test", (flags,), build)
+    assert latest_with_mesh(mesh, "test", (flags,), build) is kept           # arrays by identity
+    assert latest_with_mesh(mesh, "test", (flags.copy(),), build) is not kept
+    assert latest_with_mesh(Torus().mesh(300).mesh, "test", (flags,), build) is not kept  # per mesh
