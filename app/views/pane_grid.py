@@ -13,10 +13,6 @@ from .viewport import Viewport
 __all__ = ["PaneGrid"]
 
 
-VIEW_ANGLE = 30.0
-"""The camera's view angle in degrees before framing (VTK's default)."""
-
-
 class PaneGrid(QWidget):
     """Holds 1-5 :class:`Viewport` s (4 panes + difference) laid out in a grid.
 
@@ -115,7 +111,6 @@ class PaneGrid(QWidget):
         # the renderer's own reset: pyvista's Plotter.reset_camera renders even with render=False
         # (a whole extra frame: 1.7 s on a 1M mesh under Xvfb)
         first.renderer.reset_camera(render=False)
-        first.camera.view_angle = VIEW_ANGLE  # the zoom below narrows it: start from the default each time
         # VTK fits the first pane (its aspect included); a linked camera must also fit a narrower pane
         aspects = [vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports]
         narrow = min(aspects) / max(min(aspects[0], 1.0), 1e-3) if self.linked else 1.0
