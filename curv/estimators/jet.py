@@ -322,7 +322,7 @@ def check_degree(degree) -> int:
 
 
 def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, features):
-    indptr, indices = expansion_adjacency(mesh, blocked_vertices(features))
+    indptr, indices = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
     # any layout: the cached normals are column-major, and a copy would cost the whole mesh per region
@@ -417,7 +417,7 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
 
 register(EstimatorSpec(
     name="jet", in_paper=False, title="Osculating jet fitting", ranges=(1, 2, 3, 4), function=iter_jet,
-    triangles_only=False, uses_normals=False, closed_ring=False,
+    triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True,
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     options={"degree": DEGREES},

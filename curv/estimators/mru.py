@@ -76,7 +76,7 @@ def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
-    triangles_only=False, uses_normals=True, closed_ring=False,
+    triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
     summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel,),
 ))
