@@ -52,8 +52,7 @@ class Snapshot(QObject):
         if self._done:
             return
         QApplication.processEvents()
-        self.window.grid.render_all()
-        image = self.window.grab()
+        image = self.window.grab()  # renders every viewport (a render before it was a second frame)
         wanted = getattr(self.window, "requested_size", None)
         if wanted is not None and (image.width(), image.height()) != tuple(wanted):
             print(f"curvlab: the window could not be {wanted[0]}x{wanted[1]}; "

@@ -16,7 +16,9 @@ from .convert import as_mesh
 from .mesh import Mesh
 from .pointcloud import PointCloud
 from .ranges import ball_radii, parse_range, resolve
-from .features import feature_set
+from .features import check_angle, feature_set
+from .filled import filled
+from .neighbourhood import latest_with_mesh
 from .normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
 from .result import Curvature
 from .smoothing import smooth_positions, smooth_values
@@ -89,7 +91,7 @@ def iter_estimate(
         raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
     if isinstance(mesh, PointCloud) and (features is not None or smooth is not Smoothing.NONE):
         raise EstimatorError("features= and smooth= need a mesh's edges and faces; a point cloud takes neither")
-    feats = None if features is None else feature_set(mesh, features)
+    feats = None if features is None else _feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
     t0 = time.perf_counter()
@@ -101,14 +103,14 @@ def iter_estimate(
         work_mesh, used_normals, flags, fused = _mesh_setup(mesh, spec, normals, normal_weighting, smooth,
                                                             smooth_iterations, smooth_strength, fit_range, feats)
         normals_label = _normals_label(normals, normal_weighting, fit_range)
-    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
+    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=centres) if spec.has_support else None
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
     if on_crease and used_normals is not None:
-        # a crease vertex's normal blends both sides: no neighbour-normal term may use it (ru and
-        # icc take their sector's normal instead, curv.features.sector_corner_normals)
-        kernel_normals = used_normals.copy()
-        kernel_normals[feats.vertices] = np.nan
+        # a crease vertex's normal blends both sides: no neighbour-normal term may use it (icc takes
+        # its sector's normal instead, curv.features.sector_corner_normals; ru leaves its faces out)
+        kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
+                                          lambda: _without(used_normals, feats.vertices))
     raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=centres,
                                    features=feats if on_crease else None, **options)
     for mask_of in flags.support_marks:
@@ -161,14 +163,14 @@ def iter_estimate(
         k1_se, k2_se = (_scatter(mesh.n_vertices, centres, se) for se in (k1_se, k2_se))
     yield 1.0
     return Curvature(
-        k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
+        k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
         method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
               "normals": normals_label, **options,
               "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
-              "feature_edges": 0 if feats is None else int(feats.edges.sum()),
+              "feature_edges": 0 if feats is None else feats.count,
               "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info},
     )
 
@@ -305,21 +307,41 @@ def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray,
 
 
 def _scatter(n: int, centres: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """(n,) NaN with ``values`` at ``centres``."""
-    out = np.full(n, np.nan)
+    """(n,) NaN with ``values`` at ``centres``, at the cost of the centres (:func:`curv.filled.filled`)."""
+    out = filled(n, np.nan)
     out[centres] = values
     return out
 
 
 def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
-    """Scatter a region's rows into full-length outputs: NaN and ``NOT_COMPUTED`` elsewhere."""
-    out_k1, out_k2 = np.full(n, np.nan), np.full(n, np.nan)
-    out_d1, out_d2 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
-    out_reason = np.full(n, Reason.NOT_COMPUTED, np.uint8)
+    """Scatter a region's rows into full-length outputs: NaN and ``NOT_COMPUTED`` elsewhere.
+
+    At the cost of the region's rows, not of n (:func:`curv.filled.filled`).
+    """
+    out_k1, out_k2 = filled(n, np.nan), filled(n, np.nan)
+    out_d1, out_d2 = filled((n, 3), np.nan), filled((n, 3), np.nan)
+    out_reason = filled(n, Reason.NOT_COMPUTED, np.uint8)
     out_valid = np.zeros(n, bool)
     out_k1[centres], out_k2[centres], out_d1[centres], out_d2[centres] = k1, k2, d1, d2
     out_reason[centres], out_valid[centres] = reason, valid
     return out_k1, out_k2, out_d1, out_d2, out_reason, out_valid
+
+
+def _feature_set(mesh: Mesh, features):
+    """:func:`curv.features.feature_set`; the latest angle's is kept with the mesh, so that estimates
+    over small regions at one angle do no whole-mesh work to find the creases again."""
+    if isinstance(features, (bool, np.bool_)) or np.ndim(features) != 0:
+        return feature_set(mesh, features)  # a caller's mask (or a one-line error)
+    angle = check_angle(features)
+    return latest_with_mesh(mesh, "feature set", (angle,), lambda: feature_set(mesh, angle))
+
+
+def _without(normals: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """A read-only copy of ``normals`` (n, 3) with NaN rows at ``vertices`` (n,) bool, in the same layout."""
+    out = normals.copy(order="K")
+    out[vertices] = np.nan
+    out.setflags(write=False)
+    return out
 
 
 def _default_normals(mesh: Mesh, weighting, *, smoothed: bool) -> np.ndarray:

@@ -11,8 +11,10 @@ What the estimators do with them (``curv.estimate(..., features=30)``):
 - the support search (:func:`curv.neighbourhood.expansion_adjacency`) reaches a feature vertex but
   never expands through it, so a vertex next to a crease is estimated from its own side only;
 - neighbour-normal terms leave feature vertices' normals out (their vertex normal blends both
-  sides); estimators that interpolate normals over faces (``ru``, ``icc``) give each corner of a
-  face at a feature vertex the normal of its own *sector* (:func:`sector_corner_normals`);
+  sides); ``icc``, which interpolates normals over faces, gives each corner of a face at a
+  feature vertex the normal of its own *sector* (:func:`sector_corner_normals`), and ``ru`` leaves
+  the faces that touch a feature vertex out of its average (a sector normal at a curved rim is
+  tilted by O(h), an O(1) error in a normal difference over one edge);
 - ``csm`` and ``icc`` collect edges and faces from the centre's side only (never from a feature
   vertex), so the crease's dihedral term is left out;
 - feature vertices get ``Reason.FEATURE`` (NaN values): the smooth curvature is undefined there.
@@ -154,25 +156,31 @@ class FeatureSet:
         Vertices on a feature edge (corners included).
     corners : (n,) bool
         Vertices where three or more feature edges meet.
+    count : int
+        Number of feature edges.
     """
 
     label: object
     edges: np.ndarray
     vertices: np.ndarray
     corners: np.ndarray
+    count: int = 0
 
     @property
     def any(self) -> bool:
         """Whether there is any feature edge."""
-        return bool(self.edges.any())
+        return self.count > 0
 
 
 def feature_set(mesh: Mesh, angle_or_mask) -> FeatureSet:
-    """The :class:`FeatureSet` of ``mesh`` for a threshold in degrees or a per-edge mask."""
+    """The :class:`FeatureSet` of ``mesh`` for a threshold in degrees or a per-edge mask (read-only arrays)."""
     edges = feature_edges(mesh, angle_or_mask)
     label = "mask" if np.ndim(angle_or_mask) != 0 else check_angle(angle_or_mask)
-    return FeatureSet(label=label, edges=edges, vertices=feature_vertices(mesh, edges),
-                      corners=feature_corners(mesh, edges))
+    out = FeatureSet(label=label, edges=edges, vertices=feature_vertices(mesh, edges),
+                     corners=feature_corners(mesh, edges), count=int(edges.sum()))
+    for arr in (out.edges, out.vertices, out.corners):
+        arr.setflags(write=False)
+    return out
 
 
 def sector_corner_normals(mesh: Mesh, normals: np.ndarray, features: FeatureSet | None) -> np.ndarray:

@@ -36,7 +36,7 @@ from .mesh import Mesh
 from .pointcloud import PointCloud
 from .ranges import Range, ball_radii
 
-__all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "support_sizes", "Neighbourhood",
+__all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "latest_with_mesh", "supports", "support_sizes", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
 def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
@@ -154,16 +154,18 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np
 
     Notes
     -----
-    The plain form (no ``blocked``) is cached with the mesh, so that an estimate over a small
-    region does no O(n) work to build it again. On a point cloud: a grid, ``(cells, coords)``
-    (:func:`curv.knn.build_grid`), which :func:`ball_support` searches instead of edges; its
-    cells suit the balls of ``radii`` (:meth:`curv.PointCloud.ball_grid`) when they are given.
+    The plain form (no ``blocked``) is cached with the mesh, and the form for the latest
+    ``blocked`` array (the same object again: a cached feature set's vertices), so that an estimate
+    over a small region does no O(n) work to build it again. On a point cloud: a grid, ``(cells,
+    coords)`` (:func:`curv.knn.build_grid`), which :func:`ball_support` searches instead of edges;
+    its cells suit the balls of ``radii`` (:meth:`curv.PointCloud.ball_grid`) when they are given.
     """
     if isinstance(mesh, PointCloud):
         return mesh.grid if radii is None else mesh.ball_grid(radii)
     if blocked is None or not blocked.any():
         return cached_with_mesh(mesh, "expansion", lambda: _expansion(mesh, mesh.nonmanifold_vertices))
-    return _expansion(mesh, mesh.nonmanifold_vertices | blocked)
+    return latest_with_mesh(mesh, "blocked expansion", (blocked,),
+                            lambda: _expansion(mesh, mesh.nonmanifold_vertices | blocked))
 
 
 def _expansion(mesh: Mesh, bad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -213,6 +215,31 @@ def cached_with_mesh(mesh: Mesh, key: str, build):
     if key not in entry:
         entry[key] = build()
     return entry[key]
+
+
+def latest_with_mesh(mesh: Mesh, key: str, token: tuple, build):
+    """``build()`` for ``token``, keeping only the latest token's value per mesh and ``key``.
+
+    For what depends on a choice as well as on the mesh (a feature angle, a feature set's arrays):
+    asking again with the same choice costs nothing, a new choice replaces the old value (so a user
+    trying many angles does not pile up whole-mesh arrays). ``token`` is a tuple of floats (compared
+    by value) and arrays (compared by identity; the entry holds them, so their ids stay theirs).
+    """
+    entry = _CACHE.setdefault(mesh, {})
+    held = entry.get(key)  # one read: another thread may replace the entry meanwhile
+    if held is not None and len(held[0]) == len(token) and all(_same(a, b) for a, b in zip(held[0], token)):
+        return held[1]
+    held = None
+    entry.pop(key, None)  # free the old value before building the new one
+    value = build()
+    entry[key] = (token, value)
+    return value
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return a is b
+    return type(a) is type(b) and a == b
 
 
 @jit_parallel

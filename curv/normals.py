@@ -41,9 +41,17 @@ def unusable_normal_vertices(mesh: Mesh) -> np.ndarray:
 
     Where the faces around a vertex are not one consistently oriented fan (a non-manifold vertex,
     or an endpoint of an edge whose two faces disagree on orientation), the averaged normal mixes
-    unrelated sheets.
+    unrelated sheets. Computed once per mesh (read-only), so that an estimate over a small region
+    does not combine the flags of the whole mesh again.
     """
-    return mesh.nonmanifold_vertices | mesh.inconsistent_vertices
+    from .neighbourhood import cached_with_mesh
+
+    def build():
+        flags = mesh.nonmanifold_vertices | mesh.inconsistent_vertices
+        flags.setflags(write=False)
+        return flags
+
+    return cached_with_mesh(mesh, "unusable_normals", build)
 
 
 @jit
@@ -126,7 +134,8 @@ KERNELS = (_vertex_normals,)
 """The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""
 
 
-def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX) -> np.ndarray:
+def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX,
+                   order: str = "C") -> np.ndarray:
     """Unit vertex normals.
 
     Parameters
@@ -135,6 +144,9 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
         Triangle or polygon mesh; orientation of the faces gives the side of the normal.
     weighting : {"max", "area", "angle"}
         Face weights: Max (1999), face area, or corner angle.
+    order : {"C", "F"}
+        Memory layout of the result: "F" keeps each coordinate contiguous (what the fit kernels
+        read, :func:`cached_max_normals`).
 
     Returns
     -------
@@ -150,18 +162,22 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
     else:
         code, face_weight = MAX, np.zeros((0, 3))
     indptr, corners = mesh.vertex_corners
-    out = np.empty((mesh.n_vertices, 3))
+    out = np.empty((mesh.n_vertices, 3), order=order)
     launch(_vertex_normals, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev,
            mesh.corner_face, mesh.vertices, code, face_weight, out)
     return out
 
 
 def cached_max_normals(mesh: Mesh) -> np.ndarray:
-    """(n, 3) Max-weighted :func:`vertex_normals` of ``mesh``, computed once per mesh (read-only)."""
+    """(n, 3) Max-weighted :func:`vertex_normals` of ``mesh``, computed once per mesh (read-only).
+
+    Column-major, so that a kernel's per-coordinate columns (``normals[:, 0]``) are views: an
+    estimate over a small region copies nothing of the whole mesh's size.
+    """
     from .neighbourhood import cached_with_mesh
 
     def build():
-        out = vertex_normals(mesh)
+        out = vertex_normals(mesh, order="F")
         out.setflags(write=False)
         return out
 

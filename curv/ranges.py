@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import EstimatorError
+from .filled import filled
 from .pointcloud import PointCloud
 
 __all__ = ["Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
@@ -247,7 +248,7 @@ def unit_lengths(shape) -> np.ndarray:
     return shape.longest_edge
 
 
-def ball_radii(mesh, rng: Range, *, uses_normals: bool) -> np.ndarray:
+def ball_radii(mesh, rng: Range, *, uses_normals: bool, at: np.ndarray | None = None) -> np.ndarray:
     """(n,) float64 radius of the ball each vertex collects its support in, tolerance included.
 
     Parameters
@@ -256,12 +257,22 @@ def ball_radii(mesh, rng: Range, *, uses_normals: bool) -> np.ndarray:
     rng : Range
     uses_normals : bool
         Whether the estimator also uses its neighbours' normals (support ``k - 1``; not for knn).
+    at : (c,) int64, optional
+        Only these vertices of a mesh need a radius (an estimate over a region): the other rows are
+        NaN, and the cost follows ``at``, not the mesh (:func:`curv.filled.filled`).
 
     Raises
     ------
     EstimatorError
         ``knn`` on a mesh (its supports follow the mesh edges; use a range or a radius).
     """
+    if at is not None and rng.knn is None and not isinstance(mesh, PointCloud):
+        out = filled(mesh.n_vertices, np.nan)
+        if rng.radius is not None:
+            out[at] = rng.radius * (1.0 + TIE_TOLERANCE)
+        else:
+            out[at] = (support_factor(rng.k, uses_normals=uses_normals) * (1.0 + TIE_TOLERANCE)) * mesh.longest_edge[at]
+        return out
     if rng.radius is not None:
         return np.full(mesh.n_vertices, rng.radius * (1.0 + TIE_TOLERANCE))
     if rng.knn is not None:

@@ -71,6 +71,9 @@ class Controller(QObject):
         self._advise_after_load = False
         self._closed = False
         self._busy = False
+        # subscribed before the views: a new mesh's estimates start before the views draw it (a
+        # first render of a large mesh takes seconds; the estimate runs beside it, off this thread)
+        document.mesh_changed.connect(lambda change: self.request_missing())
 
     # -- state ----------------------------------------------------------------------------------
     @property

@@ -16,9 +16,10 @@ import math
 import numpy as np
 
 from ..jit import jit
+from ..result import Principal
 from ..validity import Reason
 
-__all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag"]
+__all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag", "unset_principal"]
 
 OK = np.uint8(Reason.OK)
 BORDER = np.uint8(Reason.BORDER)
@@ -157,3 +158,13 @@ def ring_reason(singular, border, degenerate, nonmanifold):
     if singular:
         return SINGULAR
     return OK
+
+
+def unset_principal(n: int) -> Principal:
+    """Uninitialised (n,) and (n, 3) outputs of a 1-ring kernel, which writes every row it estimates.
+
+    Unlike a NaN-filled result, allocating them costs nothing until a row is written, so an estimate
+    over a small region of a large mesh touches only the region's rows.
+    """
+    return Principal(k1=np.empty(n), k2=np.empty(n), d1=np.empty((n, 3)), d2=np.empty((n, 3)),
+                     reason=np.empty(n, np.uint8))

@@ -404,7 +404,8 @@ def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndar
     indptr, indices = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    ref = np.ascontiguousarray(normals, dtype=np.float64)
+    # any layout: the cached normals are column-major, and a copy would cost the whole mesh per region
+    ref = np.asarray(normals, dtype=np.float64)
     parts = max(1, min(threads(), centres.size))
     # A queue as long as the mesh per thread: ball_support never has to grow it. Growing it inside
     # the prange body (reassigning the array there) returned garbage supports on large balls.

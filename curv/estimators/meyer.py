@@ -26,12 +26,13 @@ import numpy as np
 
 from .. import connectivity
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..filled import filled
 from ..mesh import Mesh
 from ..neighbourhood import all_centres
 from ..normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
 from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
-from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, turn_by_corner
-from .registry import EstimatorSpec, empty_principal, register
+from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, turn_by_corner, unset_principal
+from .registry import EstimatorSpec, register
 
 __all__ = ["iter_meyer"]
 
@@ -168,18 +169,19 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
     """
     n = mesh.n_vertices
     centres = all_centres(n, centres)
-    out = empty_principal(n)
+    out = unset_principal(n)
     if not mesh.is_triangular:
         mesh.triangles  # raises the MeshError that names the polygon sizes
     indptr, corners = mesh.vertex_corners
     own_normals = normals is None
     if own_normals:
-        normals = np.empty((n, 3)) if centres.size == n else np.full((n, 3), np.nan)
+        # NaN outside a region, at the cost of the region's rows
+        normals = np.empty((n, 3)) if centres.size == n else filled((n, 3), np.nan)
         unusable = unusable_normal_vertices(mesh)
     else:
-        normals = np.ascontiguousarray(normals, dtype=np.float64)
+        normals = np.asarray(normals, dtype=np.float64)  # any layout: no copy of the whole mesh
         unusable = np.zeros(0, bool)
-    width = int(np.diff(indptr).max(initial=0)) + 1
+    width = int((indptr[centres + 1] - indptr[centres]).max(initial=0)) + 1
     args = (width, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
             mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices, unusable,
             own_normals, normals, out.k1, out.k2, out.d1, out.d2, out.reason)

@@ -7,6 +7,11 @@
    normal N_p, and ``W_f`` is re-expressed in the vertex frame (U_p, V_p).
 3. Per vertex, the corner tensors are averaged with the corner's mixed Voronoi area as weight.
 
+Next to a crease (``features=``) a face that touches a feature vertex is left out of the average:
+the normal of a crease vertex blends both sides, and the normal of one side alone (its sector's)
+is tilted by O(h) at a curved rim, which a normal difference over an edge of length h turns into
+an O(1) error. The faces on the vertex's own side away from the crease give the tensor alone.
+
 The eigen-decomposition of the averaged tensor gives the principal curvatures and directions. It
 uses the vertex normals of the whole 1-ring, hence range R2.
 """
@@ -19,12 +24,11 @@ import numpy as np
 
 from .. import connectivity
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange
-from ..features import sector_corner_normals
 from ..mesh import Mesh
 from ..neighbourhood import all_centres
 from ._local_fit import solve_sym3, store_principal, tangent_frame
-from ._triangle_corners import corner_triangle, ring_flag, ring_reason
-from .registry import EstimatorSpec, empty_principal, register
+from ._triangle_corners import corner_triangle, ring_flag, ring_reason, unset_principal
+from .registry import EstimatorSpec, register
 
 __all__ = ["iter_ru"]
 
@@ -34,7 +38,7 @@ MIN_ROTATION_COS = -1.0 + 1e-9
 
 @jit_parallel
 def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, corner_face, x, degenerate_faces,
-        border, nonmanifold, normals, corner_normals, k1, k2, d1, d2, reason):
+        border, nonmanifold, normals, crease, k1, k2, d1, d2, reason):
     for j in prange(lo, hi):
         p = centres[j]
         c_lo, c_hi = indptr[p], indptr[p + 1]
@@ -45,12 +49,12 @@ def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, cor
         for i in range(c_lo, c_hi):
             c = corners[i]
             b, q = indices[corner_next[c]], indices[corner_prev[c]]
+            if crease.size and (crease[b] or crease[q]):
+                continue  # no normal of this face's crease vertex belongs to p's side
             degenerate = degenerate_faces[corner_face[c]]
             touches_degenerate |= degenerate
-            # the neighbours' normals as this face sees them (their sector's at a crease)
-            cb, cq = corner_next[c], corner_prev[c]
-            nbx, nby, nbz = corner_normals[cb, 0], corner_normals[cb, 1], corner_normals[cb, 2]
-            ncx, ncy, ncz = corner_normals[cq, 0], corner_normals[cq, 1], corner_normals[cq, 2]
+            nbx, nby, nbz = normals[b, 0], normals[b, 1], normals[b, 2]
+            ncx, ncy, ncz = normals[q, 0], normals[q, 1], normals[q, 2]
             (abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, _, twice_area, _, _, _,
              area) = corner_triangle(x, p, b, q, degenerate)
             if (degenerate or twice_area == 0.0 or ab2 == 0.0
@@ -168,8 +172,7 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
     centres : (c,) int64, optional
         The vertices to estimate (default all).
     features : curv.features.FeatureSet, optional
-        A neighbour on a crease enters with the normal of the centre's side of it
-        (:func:`curv.features.sector_corner_normals`).
+        The faces that touch a feature vertex are left out of the average (the module's notes).
 
     Yields
     ------
@@ -182,14 +185,15 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
     """
     n = mesh.n_vertices
     centres = all_centres(n, centres)
-    out = empty_principal(n)
+    out = unset_principal(n)
     if not mesh.is_triangular:
         mesh.triangles  # raises the MeshError that names the polygon sizes
     indptr, corners = mesh.vertex_corners
+    crease = features.vertices if features is not None and features.any else np.zeros(0, bool)
+    # normals in any memory layout: a copy would cost the whole mesh for a small region
     args = (indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
             mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
-            np.ascontiguousarray(normals, dtype=np.float64), sector_corner_normals(mesh, normals, features),
-            out.k1, out.k2, out.d1, out.d2, out.reason)
+            np.asarray(normals, dtype=np.float64), crease, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
         launch(_ru, centres, lo, hi, *args)
