@@ -321,11 +321,22 @@ class Mesh:
         return _kernels.vertex_incidence(self.edges, self.n_vertices)
 
     @cached_property
-    def _neighbours(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(indptr (n+1,), neighbours (a,))`` int64: each vertex's edge neighbours, sorted, found
-        from its corners (no edge table: a fresh estimate that needs only the 1-ring never builds it)."""
+    def corner_pass(self) -> _kernels.CornerPass:
+        """The vertex flags, edge neighbours, longest 1-ring edge and Max normals, from one walk over
+        the corners around each vertex (:func:`curv.connectivity.corner_pass`; no edge table, so a
+        fresh estimate never builds it). The arrays are read-only; the properties below expose them."""
         indptr, corners = self.vertex_corners
-        return _kernels.ring_neighbours(indptr, corners, self._indices, self.corner_next, self.corner_prev)
+        out = _kernels.corner_pass(indptr, corners, self._indices, self.corner_next, self.corner_prev,
+                                   self._vertices)
+        for arr in out:
+            arr.setflags(write=False)
+        return out
+
+    @property
+    def neighbour_lists(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(indptr (n+1,), neighbours (a,))`` int64, read-only: each vertex's edge neighbours, sorted
+        (the rows of :attr:`adjacency`)."""
+        return self.corner_pass.neighbour_ptr, self.corner_pass.neighbours
 
     @cached_property
     def adjacency(self) -> sp.csr_matrix:
@@ -333,14 +344,14 @@ class Mesh:
 
         Indices are sorted within each row.
         """
-        indptr, neighbours = self._neighbours
+        indptr, neighbours = self.neighbour_lists
         n = self.n_vertices
         return _csr(np.ones(neighbours.size, np.int8), neighbours, indptr, (n, n))
 
     @cached_property
     def valence(self) -> np.ndarray:
         """(n,) int64 number of edge neighbours of each vertex."""
-        return np.diff(self._neighbours[0])
+        return np.diff(self.neighbour_lists[0])
 
     @cached_property
     def vertex_faces(self) -> sp.csr_matrix:
@@ -361,10 +372,7 @@ class Mesh:
 
         This is the unit of the estimation range (paper §4.1). 0 for a vertex with no edge.
         """
-        indptr, neighbours = self._neighbours
-        out = np.empty(self.n_vertices)
-        launch(_kernels.longest_incident_edges, indptr, neighbours, self._vertices, out)
-        return out
+        return self.corner_pass.longest_edge
 
     # ------------------------------------------------------------------ faces geometry
     @cached_property
@@ -510,7 +518,7 @@ class Mesh:
         group. Vertices on non-manifold edges are included too.
         """
         # two corners at v are linked when their faces share an edge at v with exactly two faces;
-        # the linked groups are the fans (curv.connectivity.vertex_flags)
+        # the linked groups are the fans (curv.connectivity.corner_pass)
         return self._vertex_flags[0]
 
     @cached_property
@@ -518,12 +526,10 @@ class Mesh:
         """(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of opposite orientation meet there)."""
         return self._vertex_flags[2]
 
-    @cached_property
+    @property
     def _vertex_flags(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(nonmanifold, border, inconsistent)`` vertex flags in one pass over the corners, without
-        the edge table (:func:`curv.connectivity.vertex_flags`)."""
-        indptr, corners = self.vertex_corners
-        return _kernels.vertex_flags(indptr, corners, self._indices, self.corner_next, self.corner_prev)
+        """``(nonmanifold, border, inconsistent)`` vertex flags (:attr:`corner_pass`)."""
+        return self.corner_pass[:3]
 
     @cached_property
     def components(self) -> tuple[int, np.ndarray]:

@@ -137,17 +137,15 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None) -> tuple[
 
 
 def _expansion(mesh: Mesh, bad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    adjacency = mesh.adjacency
-    indptr = adjacency.indptr.astype(np.int64)
-    indices = adjacency.indices.astype(np.int64)
+    indptr, indices = mesh.neighbour_lists
     if bad.any():
         keep = np.repeat(~bad, np.diff(indptr))
         counts = np.where(bad, 0, np.diff(indptr))
         indptr = np.zeros(mesh.n_vertices + 1, np.int64)
         np.cumsum(counts, out=indptr[1:])
         indices = indices[keep]
-    for arr in (indptr, indices):
-        arr.setflags(write=False)
+        for arr in (indptr, indices):
+            arr.setflags(write=False)
     return indptr, indices
 
 

@@ -10,10 +10,14 @@ from __future__ import annotations
 import enum
 import math
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .jit import jit, jit_parallel, launch, prange
-from .mesh import Mesh
+
+if TYPE_CHECKING:  # the mesh's corner pass uses this module's kernels: no import at run time
+    from .mesh import Mesh
 
 __all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "unusable_normal_vertices", "max_normal",
            "max_weight", "unit", "KERNELS", "cached_max_normals"]
@@ -157,12 +161,9 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
 
 
 def cached_max_normals(mesh: Mesh) -> np.ndarray:
-    """(n, 3) Max-weighted :func:`vertex_normals` of ``mesh``, computed once per mesh (read-only)."""
-    from .neighbourhood import cached_with_mesh
+    """(n, 3) Max-weighted :func:`vertex_normals` of ``mesh``, computed once per mesh (read-only).
 
-    def build():
-        out = vertex_normals(mesh)
-        out.setflags(write=False)
-        return out
-
-    return cached_with_mesh(mesh, "max_normals", build)
+    They come from the mesh's one walk over its corners (:attr:`curv.Mesh.corner_pass`), which a fresh
+    estimate makes anyway for the vertex flags and the neighbours.
+    """
+    return mesh.corner_pass.max_normals
