@@ -28,7 +28,8 @@ from .jit import jit, jit_parallel, launch, prange, threads
 from .normals import max_normal, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
-           "corner_pass", "CornerPass", "triangle_geometry", "KERNELS"]
+           "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
+           "KERNELS"]
 
 SMALL_GROUP = 32
 """The halfedges around a vertex are sorted by insertion up to this many; more (a vertex with a
@@ -512,6 +513,66 @@ def triangle_geometry(tri, vertices, vector_area, area, degenerate):
         degenerate[f] = i == j or j == k or i == k or a <= 1e-12 * longest2
 
 
+@jit
+def duplicate_positions(vertices, out):
+    """``out[v]`` = True where vertex v sits at exactly the position of a vertex with a lower index.
+
+    One pass in index order with an open-addressing hash table of the positions seen (linear time;
+    a sort would be n log n and a grid of equal x costs a sort of runs nothing).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite positions (``0.0`` and ``-0.0`` are the same position, as for ``==``).
+    out : (n,) bool
+    """
+    n = vertices.shape[0]
+    size = 1
+    while size < 2 * n:
+        size *= 2
+    table = np.full(size, -1, np.int64)
+    mask = size - 1
+    for v in range(n):
+        x, y, z = vertices[v, 0], vertices[v, 1], vertices[v, 2]
+        slot = hash((x, y, z)) & mask
+        out[v] = False
+        while True:
+            w = table[slot]
+            if w < 0:
+                table[slot] = v
+                break
+            if vertices[w, 0] == x and vertices[w, 1] == y and vertices[w, 2] == z:
+                out[v] = True
+                break
+            slot = (slot + 1) & mask
+
+
+@jit_parallel
+def dihedral_angles(edge_faces, face_count, face_normals, out):
+    """``out[e]``: degrees between the unit normals of edge e's two faces; NaN unless it has exactly two.
+
+    ``atan2(|n0 x n1|, n0 . n1)``: accurate at small and large angles alike. NaN normals (degenerate
+    faces) give NaN.
+
+    Parameters
+    ----------
+    edge_faces : (e, 2) int64
+    face_count : (e,) int64
+    face_normals : (m, 3) float64
+    out : (e,) float64
+    """
+    for e in prange(edge_faces.shape[0]):
+        f, g = edge_faces[e, 0], edge_faces[e, 1]
+        if face_count[e] != 2 or f < 0 or g < 0:
+            out[e] = math.nan
+            continue
+        ax, ay, az = face_normals[f, 0], face_normals[f, 1], face_normals[f, 2]
+        bx, by, bz = face_normals[g, 0], face_normals[g, 1], face_normals[g, 2]
+        cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+        out[e] = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * (180.0 / math.pi)
+
+
 KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
-           vertex_face_incidence, _corner_pass, _gather_neighbours, triangle_geometry)
+           vertex_face_incidence, _corner_pass, _gather_neighbours, triangle_geometry, duplicate_positions,
+           dihedral_angles)
 """The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""

@@ -111,11 +111,15 @@ def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
             if not np.all(np.mod(f, 1) == 0):
                 raise MeshError("face indices must be integers")
         f = f.astype(np.int64)
-        # A padded array marks unused trailing slots with -1.
-        pad = f == -1
-        trailing = np.flip(np.cumprod(np.flip(pad, axis=1), axis=1), axis=1).astype(bool)
-        sizes = (~trailing).sum(axis=1)
-        indices = f[~trailing]
+        if f.size and f.min() >= 0:  # no padding: every row is a whole polygon (no mask to build)
+            sizes = np.full(f.shape[0], f.shape[1], np.int64)
+            indices = f.reshape(-1)
+        else:
+            # A padded array marks unused trailing slots with -1.
+            pad = f == -1
+            trailing = np.flip(np.cumprod(np.flip(pad, axis=1), axis=1), axis=1).astype(bool)
+            sizes = (~trailing).sum(axis=1)
+            indices = f[~trailing]
     else:
         try:
             polys = [np.asarray(p).reshape(-1) for p in faces]
@@ -134,14 +138,16 @@ def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
         raise MeshError(f"face {small[0]} has {sizes[small[0]]} vertices; a face needs at least 3")
     offsets = np.zeros(sizes.size + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
-    face_of = np.repeat(np.arange(sizes.size), sizes)
-    neg = np.flatnonzero(indices < 0)
-    if neg.size:
-        raise MeshError(f"face {face_of[neg[0]]} has a negative vertex index {indices[neg[0]]}")
-    high = np.flatnonzero(indices >= n_vertices)
-    if high.size:
+    if indices.size and (indices.min() < 0 or indices.max() >= n_vertices):
+        def face_of(corner: int) -> int:
+            return int(np.searchsorted(offsets, corner, side="right")) - 1
+
+        neg = np.flatnonzero(indices < 0)
+        if neg.size:
+            raise MeshError(f"face {face_of(neg[0])} has a negative vertex index {indices[neg[0]]}")
+        high = np.flatnonzero(indices >= n_vertices)
         raise MeshError(
-            f"face {face_of[high[0]]} refers to vertex {indices[high[0]]}, "
+            f"face {face_of(high[0])} refers to vertex {indices[high[0]]}, "
             f"but the mesh has only {n_vertices} vertices"
         )
     return indices, offsets
@@ -426,14 +432,8 @@ class Mesh:
         and non-manifold edges and next to a degenerate face. Which of them are creases is
         :mod:`curv.features`' rule.
         """
-        faces = self.edge_faces
-        interior = (self.edge_face_count == 2) & (faces[:, 0] >= 0) & (faces[:, 1] >= 0)
-        out = np.full(faces.shape[0], np.nan)
-        idx = np.flatnonzero(interior)
-        n0 = self.face_normals[faces[idx, 0]]
-        n1 = self.face_normals[faces[idx, 1]]
-        # atan2 of |cross| and dot: accurate at small and large angles alike
-        out[idx] = np.degrees(np.arctan2(np.linalg.norm(np.cross(n0, n1), axis=1), np.einsum("ij,ij->i", n0, n1)))
+        out = np.empty(self.edge_faces.shape[0])
+        launch(_kernels.dihedral_angles, self.edge_faces, self.edge_face_count, self.face_normals, out)
         out.setflags(write=False)
         return out
 
@@ -485,18 +485,8 @@ class Mesh:
     @cached_property
     def duplicate_vertices(self) -> np.ndarray:
         """(n,) bool: vertices at exactly the position of a vertex with a lower index."""
-        v = self._vertices
-        order = np.lexsort(v.T[::-1])
-        same = np.all(v[order[1:]] == v[order[:-1]], axis=1)
-        out = np.zeros(self.n_vertices, bool)
-        out[order[1:][same]] = True
-        # within a run of equal rows the lowest index must stay unmarked
-        first = np.ones(self.n_vertices, bool)
-        first[1:] = ~same
-        run = np.cumsum(first) - 1
-        lowest = np.full(run[-1] + 1, self.n_vertices)
-        np.minimum.at(lowest, run, order)
-        out[lowest[run]] = False
+        out = np.empty(self.n_vertices, bool)
+        _kernels.duplicate_positions(self._vertices, out)
         return out
 
     @cached_property
