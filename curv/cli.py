@@ -173,7 +173,9 @@ def _cmd_estimate(args) -> int:
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
         t_write = time.perf_counter() - t2
+    t3 = time.perf_counter()
     rep = mesh.report()
+    t_report = time.perf_counter() - t3
     print(f"{args.input}: {rep.lines()[0]}")
     for line in rep.lines()[1:]:
         print(f"  {line}")
@@ -194,7 +196,7 @@ def _cmd_estimate(args) -> int:
     for name in EXPORTED:
         print(_stats_line(name, res.quantity(name)))
     written = f", write {t_write:.2f} s; wrote {args.output}" if args.output else ""
-    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s{written}")
+    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s, report {t_report:.2f} s{written}")
     return 0
 
 

@@ -29,7 +29,7 @@ from .normals import max_normal, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
            "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
-           "KERNELS"]
+           "corner_links", "component_labels", "KERNELS"]
 
 SMALL_GROUP = 32
 """The halfedges around a vertex are sorted by insertion up to this many; more (a vertex with a
@@ -572,7 +572,59 @@ def dihedral_angles(edge_faces, face_count, face_normals, out):
         out[e] = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * (180.0 / math.pi)
 
 
+@jit_parallel
+def corner_links(offsets, corner_face, corner_next, corner_prev):
+    """The next and previous corner of every corner within its face (faces are contiguous runs).
+
+    Parameters
+    ----------
+    offsets : (m + 1,) int64
+        Face f's corners are ``offsets[f] .. offsets[f + 1] - 1``.
+    corner_face : (h,) int64
+        Face of each corner.
+    corner_next, corner_prev : (h,) int64
+        Filled.
+    """
+    for c in prange(corner_face.size):
+        f = corner_face[c]
+        first, last = offsets[f], offsets[f + 1] - 1
+        corner_next[c] = first if c == last else c + 1
+        corner_prev[c] = last if c == first else c - 1
+
+
+@jit
+def component_labels(indptr, neighbours, labels):
+    """Connected components of a graph given as neighbour lists; returns their count.
+
+    Union-find over the edges, then labels numbered in order of each component's lowest vertex (as
+    :func:`scipy.sparse.csgraph.connected_components` numbers them).
+
+    Parameters
+    ----------
+    indptr, neighbours : (n + 1,), (a,) int64
+        Symmetric neighbour lists.
+    labels : (n,) int64
+        Filled with the component of each vertex, ``0 .. count - 1``.
+    """
+    n = indptr.size - 1
+    parent = np.arange(n)
+    for u in range(n):
+        for i in range(indptr[u], indptr[u + 1]):
+            a, b = _root(parent, u), _root(parent, neighbours[i])
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+    count = 0
+    for u in range(n):
+        r = _root(parent, u)
+        if r == u:  # the root is the lowest vertex of its component, so it comes first
+            labels[u] = count
+            count += 1
+        else:
+            labels[u] = labels[r]
+    return count
+
+
 KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
            vertex_face_incidence, _corner_pass, _gather_neighbours, triangle_geometry, duplicate_positions,
-           dihedral_angles)
+           dihedral_angles, corner_links, component_labels)
 """The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""

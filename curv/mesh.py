@@ -244,20 +244,21 @@ class Mesh:
         return np.repeat(np.arange(self.n_faces, dtype=np.int64), self.face_sizes)
 
     @cached_property
+    def _corner_links(self) -> tuple[np.ndarray, np.ndarray]:
+        h = self._indices.size
+        nxt, prev = np.empty(h, np.int64), np.empty(h, np.int64)
+        launch(_kernels.corner_links, self._offsets, self.corner_face, nxt, prev)
+        return nxt, prev
+
+    @property
     def corner_next(self) -> np.ndarray:
         """(h,) int64 index (into ``face_indices``) of the next corner in the same face."""
-        h = np.arange(self._indices.size, dtype=np.int64)
-        nxt = h + 1
-        last = self._offsets[1:] - 1
-        nxt[last] = self._offsets[:-1]
-        return nxt
+        return self._corner_links[0]
 
-    @cached_property
+    @property
     def corner_prev(self) -> np.ndarray:
         """(h,) int64 index of the previous corner in the same face."""
-        prev = np.empty_like(self.corner_next)
-        prev[self.corner_next] = np.arange(self.corner_next.size)
-        return prev
+        return self._corner_links[1]
 
     @cached_property
     def vertex_corners(self) -> tuple[np.ndarray, np.ndarray]:
@@ -524,8 +525,9 @@ class Mesh:
     @cached_property
     def components(self) -> tuple[int, np.ndarray]:
         """``(count, labels)``: connected components of the vertex graph; labels is (n,) int."""
-        ncomp, labels = sp.csgraph.connected_components(self.adjacency, directed=False)
-        return int(ncomp), labels
+        labels = np.empty(self.n_vertices, np.int64)
+        count = _kernels.component_labels(*self.neighbour_lists, labels)
+        return int(count), labels
 
     def report(self) -> MeshReport:
         """Summarise the mesh: sizes, polygon kinds, components, borders and defects."""
