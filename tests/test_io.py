@@ -86,11 +86,11 @@ def test_save_ply_is_atomic_on_failure(tmp_path, sphere_result, monkeypatch):
     target = tmp_path / "out.ply"
     target.write_bytes(b"old")
 
-    def fail_after_header_and_vertices(mesh):
+    def fail_after_header_and_vertices(fh, mesh):
         # by now the header and the vertex records are in the temporary file
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(curv.io, "_face_list_bytes", fail_after_header_and_vertices)
+    monkeypatch.setattr(curv.io, "_write_face_lists", fail_after_header_and_vertices)
     with pytest.raises(KeyboardInterrupt):
         save_ply(target, mesh, res)
     assert target.read_bytes() == b"old"
