@@ -29,7 +29,7 @@ from .normals import max_normal, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
            "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
-           "corner_links", "component_labels", "KERNELS"]
+           "corner_links", "component_labels", "edge_counts", "EDGE_COUNTS", "KERNELS"]
 
 SMALL_GROUP = 32
 """The halfedges around a vertex are sorted by insertion up to this many; more (a vertex with a
@@ -547,6 +547,15 @@ def duplicate_positions(vertices, out):
             slot = (slot + 1) & mask
 
 
+@jit
+def _dihedral(face_normals, f, g):
+    """Degrees between the unit normals of faces f and g: ``atan2(|n0 x n1|, n0 . n1)``."""
+    ax, ay, az = face_normals[f, 0], face_normals[f, 1], face_normals[f, 2]
+    bx, by, bz = face_normals[g, 0], face_normals[g, 1], face_normals[g, 2]
+    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * (180.0 / math.pi)
+
+
 @jit_parallel
 def dihedral_angles(edge_faces, face_count, face_normals, out):
     """``out[e]``: degrees between the unit normals of edge e's two faces; NaN unless it has exactly two.
@@ -566,10 +575,7 @@ def dihedral_angles(edge_faces, face_count, face_normals, out):
         if face_count[e] != 2 or f < 0 or g < 0:
             out[e] = math.nan
             continue
-        ax, ay, az = face_normals[f, 0], face_normals[f, 1], face_normals[f, 2]
-        bx, by, bz = face_normals[g, 0], face_normals[g, 1], face_normals[g, 2]
-        cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
-        out[e] = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * (180.0 / math.pi)
+        out[e] = _dihedral(face_normals, f, g)
 
 
 @jit_parallel
@@ -624,7 +630,71 @@ def component_labels(indptr, neighbours, labels):
     return count
 
 
+EDGE_COUNTS = ("edges", "border", "nonmanifold", "inconsistent", "sharp")
+"""The columns of :func:`edge_counts`."""
+
+
+@jit_parallel
+def _edge_counts(indptr, corners, indices, corner_next, corner_prev, corner_face, face_normals, sharp_angle,
+                 width, parts, totals):
+    n = indptr.size - 1
+    for t in prange(parts):
+        key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            k = _upper_halfedges(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, key,
+                                 halfedge)
+            start = 0
+            for i in range(1, k + 1):
+                if i < k and key[i] >> 1 == key[start] >> 1:
+                    continue
+                # halfedges start .. i-1 are those of the edge (u, w), w > u: one per face
+                faces = i - start
+                totals[t, 0] += 1
+                if faces == 1:
+                    totals[t, 1] += 1
+                elif faces > 2:
+                    totals[t, 2] += 1
+                else:
+                    if (key[start] & 1) == (key[start + 1] & 1):  # both run the same way
+                        totals[t, 3] += 1
+                    if _dihedral(face_normals, corner_face[halfedge[start]], corner_face[halfedge[start + 1]]) \
+                            > sharp_angle:
+                        totals[t, 4] += 1
+                start = i
+
+
+def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+                corner_prev: np.ndarray, corner_face: np.ndarray, face_normals: np.ndarray,
+                sharp_angle: float) -> dict[str, int]:
+    """How many edges, border, non-manifold, inconsistent and sharp edges, without the edge table.
+
+    The same counts as :func:`edge_table` and :func:`dihedral_angles` give (an edge (u, w) is seen
+    at u < w, from the halfedges around u), for a mesh report that needs no per-edge array.
+
+    Parameters
+    ----------
+    indptr, corners : (n + 1,), (h,) int64
+        Corners grouped by vertex.
+    indices, corner_next, corner_prev, corner_face : (h,) int64
+    face_normals : (m, 3) float64
+        Unit face normals (NaN for degenerate faces).
+    sharp_angle : float
+        Edges with two faces whose dihedral angle is above this (degrees) are sharp.
+
+    Returns
+    -------
+    dict
+        ``{name: count}`` for the names of :data:`EDGE_COUNTS`.
+    """
+    parts = max(1, min(threads(), indptr.size - 1))
+    totals = np.zeros((parts, len(EDGE_COUNTS)), np.int64)
+    launch(_edge_counts, indptr, corners, indices, corner_next, corner_prev, corner_face, face_normals,
+           float(sharp_angle), _ring_width(indptr), parts, totals)
+    return dict(zip(EDGE_COUNTS, (int(c) for c in totals.sum(axis=0))))
+
+
 KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
            vertex_face_incidence, _corner_pass, _gather_neighbours, triangle_geometry, duplicate_positions,
-           dihedral_angles, corner_links, component_labels)
+           dihedral_angles, corner_links, component_labels, _edge_counts)
 """The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""

@@ -531,33 +531,40 @@ class Mesh:
 
     def report(self) -> MeshReport:
         """Summarise the mesh: sizes, polygon kinds, components, borders and defects."""
-        sizes, counts = np.unique(self.face_sizes, return_counts=True)
+        sizes, face_counts = np.unique(self.face_sizes, return_counts=True)
         iso = self.isolated_vertices
         ncomp, labels = self.components
-        ncomp_faces = len(np.unique(labels[~iso])) if (~iso).any() else 0
-        border = self.border_edges
+        ncomp_faces = int(np.count_nonzero(np.bincount(labels[~iso], minlength=ncomp)))
+        from .features import SHARP_DEGREES
+
+        indptr, corners = self.vertex_corners
+        counts = _kernels.edge_counts(indptr, corners, self._indices, self.corner_next, self.corner_prev,
+                                      self.corner_face, self.face_normals, SHARP_DEGREES)
         loops = 0
-        if border.any():
-            be = self.edges[border]
+        if counts["border"]:
+            be = self.edges[self.border_edges]
             verts = np.unique(be)
             remap = np.searchsorted(verts, be)
             g = sp.csr_matrix((np.ones(len(be)), (remap[:, 0], remap[:, 1])), shape=(verts.size,) * 2)
             loops = int(sp.csgraph.connected_components(g, directed=False)[0])
+        # the crease rule (its threshold suggestion) needs every dihedral angle, so the edge table:
+        # only when there is a sharp edge at all
+        sharp = _sharp_edge_facts(self) if counts["sharp"] else {"sharp_edges": 0, "suggested_features": None}
         return MeshReport(
             vertices=self.n_vertices,
             faces=self.n_faces,
-            edges=int(self.edges.shape[0]),
-            polygon_kinds={int(s): int(c) for s, c in zip(sizes, counts)},
+            edges=counts["edges"],
+            polygon_kinds={int(s): int(c) for s, c in zip(sizes, face_counts)},
             components=ncomp_faces,
-            border_edges=int(border.sum()),
+            border_edges=counts["border"],
             border_loops=loops,
-            nonmanifold_edges=int(self.nonmanifold_edges.sum()),
+            nonmanifold_edges=counts["nonmanifold"],
             nonmanifold_vertices=int(self.nonmanifold_vertices.sum()),
             degenerate_faces=int(self.degenerate_faces.sum()),
             isolated_vertices=int(iso.sum()),
-            inconsistent_edges=int(self.inconsistent_edges.sum()),
+            inconsistent_edges=counts["inconsistent"],
             duplicate_vertices=int(self.duplicate_vertices.sum()),
-            **_sharp_edge_facts(self),
+            **sharp,
         )
 
     # ------------------------------------------------------------------ derived meshes

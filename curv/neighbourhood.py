@@ -290,9 +290,7 @@ class Neighbourhood:
 
     def any(self, flags: np.ndarray) -> np.ndarray:
         """(c,) bool: whether any support vertex has ``flags[vertex]`` set; ``flags`` is (n,) bool."""
-        hits = np.zeros(self.size, np.int64)
-        np.add.at(hits, self.rows, flags[self.indices])
-        return hits > 0
+        return np.bincount(self.rows, weights=flags[self.indices], minlength=self.size) > 0
 
 
 def iter_neighbourhoods(mesh: Mesh, factor: float, *, block_size: int | None = None,
