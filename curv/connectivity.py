@@ -579,23 +579,21 @@ def dihedral_angles(edge_faces, face_count, face_normals, out):
 
 
 @jit_parallel
-def corner_links(offsets, corner_face, corner_next, corner_prev):
+def corner_links(offsets, corner_next, corner_prev):
     """The next and previous corner of every corner within its face (faces are contiguous runs).
 
     Parameters
     ----------
     offsets : (m + 1,) int64
         Face f's corners are ``offsets[f] .. offsets[f + 1] - 1``.
-    corner_face : (h,) int64
-        Face of each corner.
     corner_next, corner_prev : (h,) int64
         Filled.
     """
-    for c in prange(corner_face.size):
-        f = corner_face[c]
+    for f in prange(offsets.size - 1):
         first, last = offsets[f], offsets[f + 1] - 1
-        corner_next[c] = first if c == last else c + 1
-        corner_prev[c] = last if c == first else c - 1
+        for c in range(first, last + 1):
+            corner_next[c] = first if c == last else c + 1
+            corner_prev[c] = last if c == first else c - 1
 
 
 @jit

@@ -142,7 +142,7 @@ def _read_ply(path: Path):
             raise LoadError(f"{path}: PLY faces have no vertex_indices list")
         column = face[key]
         if column.dtype != object:
-            return vertices, np.array(column, dtype=np.int64)
+            return vertices, np.asarray(column)  # Mesh converts to int64 once, copying
         sizes = np.fromiter((len(p) for p in column), dtype=np.int64, count=len(column))
         if np.all(sizes == sizes[0]) and sizes[0] > 0:
             return vertices, np.stack(column).astype(np.int64)

@@ -247,7 +247,7 @@ class Mesh:
     def _corner_links(self) -> tuple[np.ndarray, np.ndarray]:
         h = self._indices.size
         nxt, prev = np.empty(h, np.int64), np.empty(h, np.int64)
-        launch(_kernels.corner_links, self._offsets, self.corner_face, nxt, prev)
+        launch(_kernels.corner_links, self._offsets, nxt, prev)
         return nxt, prev
 
     @property
