@@ -548,12 +548,20 @@ def duplicate_positions(vertices, out):
 
 
 @jit
-def _dihedral(face_normals, f, g):
-    """Degrees between the unit normals of faces f and g: ``atan2(|n0 x n1|, n0 . n1)``."""
-    ax, ay, az = face_normals[f, 0], face_normals[f, 1], face_normals[f, 2]
-    bx, by, bz = face_normals[g, 0], face_normals[g, 1], face_normals[g, 2]
+def _angle_between(a, b):
+    """Degrees between unit vectors a and b (3-tuples): ``atan2(|a x b|, a . b)``, accurate at small and
+    large angles alike."""
+    ax, ay, az = a
+    bx, by, bz = b
     cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
     return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * (180.0 / math.pi)
+
+
+@jit
+def _dihedral(face_normals, f, g):
+    """Degrees between the unit normals of faces f and g (rows of ``face_normals``)."""
+    return _angle_between((face_normals[f, 0], face_normals[f, 1], face_normals[f, 2]),
+                          (face_normals[g, 0], face_normals[g, 1], face_normals[g, 2]))
 
 
 @jit_parallel
@@ -633,8 +641,8 @@ EDGE_COUNTS = ("edges", "border", "nonmanifold", "inconsistent", "sharp")
 
 
 @jit_parallel
-def _edge_counts(indptr, corners, indices, corner_next, corner_prev, corner_face, face_normals, sharp_angle,
-                 width, parts, totals):
+def _edge_counts(indptr, corners, indices, corner_next, corner_prev, corner_face, vector_area, area, degenerate,
+                 sharp_angle, width, parts, totals):
     n = indptr.size - 1
     for t in prange(parts):
         key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
@@ -656,15 +664,20 @@ def _edge_counts(indptr, corners, indices, corner_next, corner_prev, corner_face
                 else:
                     if (key[start] & 1) == (key[start + 1] & 1):  # both run the same way
                         totals[t, 3] += 1
-                    if _dihedral(face_normals, corner_face[halfedge[start]], corner_face[halfedge[start + 1]]) \
-                            > sharp_angle:
-                        totals[t, 4] += 1
+                    f, g = corner_face[halfedge[start]], corner_face[halfedge[start + 1]]
+                    if not (degenerate[f] or degenerate[g]):
+                        # the unit normals as Mesh.face_normals divides them, without that (m, 3) array
+                        af, ag = area[f], area[g]
+                        nf = (vector_area[f, 0] / af, vector_area[f, 1] / af, vector_area[f, 2] / af)
+                        ng = (vector_area[g, 0] / ag, vector_area[g, 1] / ag, vector_area[g, 2] / ag)
+                        if _angle_between(nf, ng) > sharp_angle:
+                            totals[t, 4] += 1
                 start = i
 
 
 def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
-                corner_prev: np.ndarray, corner_face: np.ndarray, face_normals: np.ndarray,
-                sharp_angle: float) -> dict[str, int]:
+                corner_prev: np.ndarray, corner_face: np.ndarray, vector_area: np.ndarray, area: np.ndarray,
+                degenerate: np.ndarray, sharp_angle: float) -> dict[str, int]:
     """How many edges, border, non-manifold, inconsistent and sharp edges, without the edge table.
 
     The same counts as :func:`edge_table` and :func:`dihedral_angles` give (an edge (u, w) is seen
@@ -675,8 +688,9 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     indptr, corners : (n + 1,), (h,) int64
         Corners grouped by vertex.
     indices, corner_next, corner_prev, corner_face : (h,) int64
-    face_normals : (m, 3) float64
-        Unit face normals (NaN for degenerate faces).
+    vector_area, area, degenerate : (m, 3) float64, (m,) float64, (m,) bool
+        :attr:`Mesh.face_vector_areas`, :attr:`Mesh.face_areas`, :attr:`Mesh.degenerate_faces`: the unit
+        normal is their quotient, none at a degenerate face (as :attr:`Mesh.face_normals`).
     sharp_angle : float
         Edges with two faces whose dihedral angle is above this (degrees) are sharp.
 
@@ -687,8 +701,8 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     """
     parts = max(1, min(threads(), indptr.size - 1))
     totals = np.zeros((parts, len(EDGE_COUNTS)), np.int64)
-    launch(_edge_counts, indptr, corners, indices, corner_next, corner_prev, corner_face, face_normals,
-           float(sharp_angle), _ring_width(indptr), parts, totals)
+    launch(_edge_counts, indptr, corners, indices, corner_next, corner_prev, corner_face, vector_area, area,
+           degenerate, float(sharp_angle), _ring_width(indptr), parts, totals)
     return dict(zip(EDGE_COUNTS, (int(c) for c in totals.sum(axis=0))))
 
 

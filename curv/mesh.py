@@ -539,7 +539,8 @@ class Mesh:
 
         indptr, corners = self.vertex_corners
         counts = _kernels.edge_counts(indptr, corners, self._indices, self.corner_next, self.corner_prev,
-                                      self.corner_face, self.face_normals, SHARP_DEGREES)
+                                      self.corner_face, self.face_vector_areas, self.face_areas,
+                                      self.degenerate_faces, SHARP_DEGREES)
         loops = 0
         if counts["border"]:
             be = self.edges[self.border_edges]
