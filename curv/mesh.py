@@ -246,18 +246,20 @@ class Mesh:
     @cached_property
     def _corner_links(self) -> tuple[np.ndarray, np.ndarray]:
         h = self._indices.size
-        nxt, prev = np.empty(h, np.int64), np.empty(h, np.int64)
+        # int32 where it fits: two (h,) arrays kept for the mesh's life (960 MB as int64 at 10M vertices)
+        kind = np.int32 if h < 2**31 else np.int64
+        nxt, prev = np.empty(h, kind), np.empty(h, kind)
         launch(_kernels.corner_links, self._offsets, nxt, prev)
         return nxt, prev
 
     @property
     def corner_next(self) -> np.ndarray:
-        """(h,) int64 index (into ``face_indices``) of the next corner in the same face."""
+        """(h,) int32 (int64 beyond 2**31 corners) index (into ``face_indices``) of the next corner in the same face."""
         return self._corner_links[0]
 
     @property
     def corner_prev(self) -> np.ndarray:
-        """(h,) int64 index of the previous corner in the same face."""
+        """(h,) int32 (int64 beyond 2**31 corners) index of the previous corner in the same face."""
         return self._corner_links[1]
 
     @cached_property
