@@ -514,16 +514,25 @@ def triangle_geometry(tri, vertices, vector_area, area, degenerate):
 
 
 @jit
-def duplicate_positions(vertices, out):
+def _mix(h, bits):
+    """Fold 64 bits into the hash h (multiply-xorshift: nearby coordinates spread over the table)."""
+    h = (h ^ bits) * np.uint64(0x9E3779B97F4A7C15)
+    return h ^ (h >> np.uint64(31))
+
+
+@jit
+def duplicate_positions(vertices, bits, out):
     """``out[v]`` = True where vertex v sits at exactly the position of a vertex with a lower index.
 
     One pass in index order with an open-addressing hash table of the positions seen (linear time;
-    a sort would be n log n and a grid of equal x costs a sort of runs nothing).
+    a sort would be n log n).
 
     Parameters
     ----------
     vertices : (n, 3) float64
         Finite positions (``0.0`` and ``-0.0`` are the same position, as for ``==``).
+    bits : (n, 3) uint64
+        The same memory as ``vertices`` seen as integers (``vertices.view(np.uint64)``), to hash.
     out : (n,) bool
     """
     n = vertices.shape[0]
@@ -531,10 +540,14 @@ def duplicate_positions(vertices, out):
     while size < 2 * n:
         size *= 2
     table = np.full(size, -1, np.int64)
-    mask = size - 1
+    mask = np.uint64(size - 1)
     for v in range(n):
         x, y, z = vertices[v, 0], vertices[v, 1], vertices[v, 2]
-        slot = hash((x, y, z)) & mask
+        h = np.uint64(0)
+        for c in range(3):
+            # -0.0 == 0.0: both hash as 0
+            h = _mix(h, bits[v, c] if vertices[v, c] != 0.0 else np.uint64(0))
+        slot = h & mask
         out[v] = False
         while True:
             w = table[slot]
@@ -544,7 +557,7 @@ def duplicate_positions(vertices, out):
             if vertices[w, 0] == x and vertices[w, 1] == y and vertices[w, 2] == z:
                 out[v] = True
                 break
-            slot = (slot + 1) & mask
+            slot = (slot + np.uint64(1)) & mask
 
 
 @jit

@@ -489,7 +489,7 @@ class Mesh:
     def duplicate_vertices(self) -> np.ndarray:
         """(n,) bool: vertices at exactly the position of a vertex with a lower index."""
         out = np.empty(self.n_vertices, bool)
-        _kernels.duplicate_positions(self._vertices, out)
+        _kernels.duplicate_positions(self._vertices, self._vertices.view(np.uint64), out)
         return out
 
     @cached_property
