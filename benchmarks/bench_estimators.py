@@ -22,6 +22,16 @@ Meshes (``--mesh``):
 - ``torus``: a closed torus whose grid parameters are jittered: right-angled, uneven triangles whose
   longest 1-ring edge is ~1.4 mean edges, so every Rk support holds about twice as many vertices
   (R2: ~32, R4: ~130) as on the hexagon (R2: ~18, R4: ~60). A stress case.
+
+Point clouds (``--points``)::
+
+    .venv/bin/python benchmarks/bench_estimators.py --points --sizes 1000000
+
+N uniform random points of the unit sphere (seed 0), no normals. Timed: the whole
+``curv.estimate(curv.PointCloud(points), method, 2)`` (grid, nearest neighbours, spacing, PCA,
+orientation and jet normals, borders, the estimate) for ``qs``, ``mru``, ``jet`` (``--only`` to
+change), and in the same run the peers: scipy's cKDTree (build and k=20 query), cKDTree + pgeof's
+covariance features on that kNN (no principal curvatures), and curv's own grid kNN (k=20) alone.
 """
 
 from __future__ import annotations
@@ -109,12 +119,90 @@ class PeakRSS:
         return (self.peak - self.base) / 2**20
 
 
+def sphere_points(n: int) -> np.ndarray:
+    """(n, 3) uniform random points of the unit sphere (seed 0)."""
+    p = np.random.default_rng(0).normal(size=(n, 3))
+    return p / np.linalg.norm(p, axis=1, keepdims=True)
+
+
+def _points_child(kind: str, name: str, k: float, n: int) -> dict:
+    """A point-cloud measurement in the subprocess: see the module notes (``--points``)."""
+    pts = sphere_points(n)
+    extra = {}
+    if kind == "curv":
+        import curv
+
+        curv.estimate(curv.PointCloud(sphere_points(500)), name, k)  # kernels from the cache
+        gc.collect()
+        with PeakRSS() as mem:
+            t0 = time.perf_counter()
+            res = curv.estimate(curv.PointCloud(pts), name, k)
+            seconds = time.perf_counter() - t0
+        extra["valid"] = float(res.valid.mean())
+        extra["mean_H"] = float(np.median(res.mean[res.valid]))
+    elif kind == "gridknn":
+        from curv.knn import nearest_neighbours
+
+        nearest_neighbours(sphere_points(500), 20)
+        gc.collect()
+        with PeakRSS() as mem:
+            t0 = time.perf_counter()
+            nearest_neighbours(pts, 20)
+            seconds = time.perf_counter() - t0
+    elif kind in ("ckdtree", "pgeof"):
+        from scipy.spatial import cKDTree
+
+        if kind == "pgeof":
+            import pgeof
+        gc.collect()
+        with PeakRSS() as mem:
+            t0 = time.perf_counter()
+            _, nn = cKDTree(pts).query(pts, 21, workers=-1)
+            if kind == "pgeof":
+                xyz = pts.astype(np.float32)
+                flat = nn[:, 1:].astype(np.uint32).ravel()
+                ptr = (np.arange(n + 1) * 20).astype(np.uint32)
+                pgeof.compute_features(xyz, flat, ptr)
+            seconds = time.perf_counter() - t0
+    else:
+        raise ValueError(kind)
+    return {"seconds": seconds, "peak_above_mesh_mb": mem.above_base_mb, **extra}
+
+
+def run_points(args) -> None:
+    """``--points``: curv's point estimators against cKDTree (+ pgeof) in the same run."""
+    import curv
+
+    variants = [tuple(v.split(":")) for v in args.only] if args.only else [("qs", 2), ("mru", 2), ("jet", 2)]
+    print(f"# cores: {os.cpu_count()}, numpy {np.__version__}, curv {curv.__version__}, best of {args.repeat}")
+    for n in args.sizes:
+        print(f"\n## unit sphere, {n} uniform random points, no normals")
+        peers = {label: run_one(kind, kind, 20, n, "points", args.repeat)
+                 for label, kind in (("cKDTree k=20", "ckdtree"), ("cKDTree+pgeof", "pgeof"),
+                                     ("curv grid k=20", "gridknn"))}
+        print(f"{'variant':<16} {'seconds':>8} {'peak MB':>8} {'valid':>6} {'median H':>9}  vs cKDTree+pgeof")
+        for m, k in variants:
+            r = run_one("curv", m, float(k), n, "points", args.repeat)
+            label = f"{m} R{float(k):g}"
+            if "error" in r:
+                print(f"{label:<16} error: {r['error']}")
+                continue
+            ratio = peers["cKDTree+pgeof"].get("seconds", float("nan")) / r["seconds"]
+            print(f"{label:<16} {r['seconds']:8.2f} {r['peak_above_mesh_mb']:8.0f} {r['valid']:6.4f} "
+                  f"{r['mean_H']:9.5f}  {ratio:8.2f}x", flush=True)
+        for p, r in peers.items():
+            text = f"{r['seconds']:8.2f} {r['peak_above_mesh_mb']:8.0f}" if "seconds" in r else f"error: {r['error']}"
+            print(f"{p:<16} {text}")
+
+
 def _tiny(kind_mesh: str):
     return MESHES["sphere"](200)
 
 
 def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
     """Runs in the subprocess: build the arrays, warm up on a tiny mesh, take the baseline, time one call."""
+    if mesh_kind == "points":
+        return _points_child(kind, name, k, n)
     v, f = MESHES[mesh_kind](n)
     extra = {}
     if kind == "curv":
@@ -229,6 +317,8 @@ def main(argv=None) -> int:
     parser.add_argument("--repeat", type=int, default=1,
                         help="runs per variant, each a fresh process; the fastest is reported (shared "
                              "machines vary by tens of percent from run to run)")
+    parser.add_argument("--points", action="store_true",
+                        help="point clouds: uniform random points of the unit sphere (see above)")
     parser.add_argument("--child", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
@@ -236,6 +326,9 @@ def main(argv=None) -> int:
         print(json.dumps(_child(kind, name, float(k), int(n), mesh_kind)))
         return 0
 
+    if args.points:
+        run_points(args)
+        return 0
     import curv
     from curv.estimators import all_variants
 

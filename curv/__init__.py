@@ -31,6 +31,7 @@ _LAZY = {
     "surfaces": ("curv.surfaces", None),
     "advise": ("curv.advisor", "advise"),
     "Advice": ("curv.advisor", "Advice"),
+    "Candidate": ("curv.advisor", "Candidate"),
     "features": ("curv.features", None),
     "feature_edges": ("curv.features", "feature_edges"),
     "feature_vertices": ("curv.features", "feature_vertices"),

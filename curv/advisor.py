@@ -31,8 +31,8 @@ import numpy as np
 from .errors import MeshError
 from .mesh import Mesh
 
-__all__ = ["Advice", "MeshFeatures", "advise", "measure_features", "load_table", "TABLE_RESOURCE",
-           "FIT_METHOD", "FIT_RANGE"]
+__all__ = ["Advice", "Candidate", "MeshFeatures", "advise", "measure_features", "load_table", "valid_shares",
+           "TABLE_RESOURCE", "FIT_METHOD", "FIT_RANGE", "VALID_SHARE_SLACK", "VALID_SAMPLE"]
 
 TABLE_RESOURCE = "data/advisor_table.json"
 """The table inside the ``curv`` package (see :mod:`curv.advisor_table`)."""
@@ -41,6 +41,14 @@ FIT_METHOD = "qs"
 FIT_RANGE = 3
 """The local fit the noise and density measures use: the quadratic height fit at R3 (it works on
 polygons and at borders, and over R3 its curvature is not yet dominated by the noise it measures)."""
+
+VALID_SHARE_SLACK = 0.02
+"""A candidate that leaves more than this share of the vertices invalid beyond the candidate that
+leaves the fewest ranks after every candidate that does not (whatever its predicted error)."""
+
+VALID_SAMPLE = 2000
+"""Vertices the valid shares are counted on (all of them on smaller meshes; a fixed random sample,
+seed 0, on larger ones: the share then has a standard error of at most 1.1 %)."""
 
 _MAD_TO_SIGMA = 1.4826
 """Median absolute deviation -> standard deviation of a Gaussian."""
@@ -116,14 +124,70 @@ class MeshFeatures:
 
 
 @dataclass(frozen=True)
+class Candidate:
+    """One ranked candidate: a whole :func:`curv.estimate` call and what the advisor expects of it.
+
+    Attributes
+    ----------
+    method : str
+        Registry name.
+    range : int
+        k of Rk.
+    options : dict
+        The other keyword arguments of the call: an estimator option (``{"degree": 4}``) or the
+        fitted normals (``{"normals": "fit", "fit_range": 4}``); empty for the defaults.
+    expected_erel : float
+        Predicted median e_rel on the vertices it estimates.
+    valid_share : float
+        Share of the mesh's vertices it gives a value at (:func:`valid_shares`).
+    """
+
+    method: str
+    range: int
+    options: dict
+    expected_erel: float
+    valid_share: float = 1.0
+
+    @property
+    def variant(self):
+        """The :class:`curv.variants.Variant` of this call."""
+        from .variants import Variant
+
+        return Variant(self.method, self.range, options=self.options)
+
+    @property
+    def kwargs(self) -> dict:
+        """``curv.estimate(mesh, **candidate.kwargs)``."""
+        return self.variant.kwargs
+
+    @property
+    def label(self) -> str:
+        """``jet R4 degree 4``, ``mru R3 normals fit R4``, ``qs R2``: the call for a person."""
+        extra = self.variant.options_label
+        return f"{self.method} R{self.range}" + (f" {extra}" if extra else "")
+
+    @property
+    def call(self) -> str:
+        """The call as Python text: ``curv.estimate(mesh, method='jet', range=4, degree=4)``."""
+        return "curv.estimate(mesh, " + ", ".join(f"{k}={v!r}" for k, v in self.kwargs.items()) + ")"
+
+    def as_dict(self) -> dict:
+        return {"method": self.method, "range": self.range, "options": dict(self.options),
+                "expected_erel": self.expected_erel, "valid_share": self.valid_share, "label": self.label,
+                "kwargs": self.kwargs}
+
+
+@dataclass(frozen=True)
 class Advice:
     """The advisor's answer for one mesh.
 
     Attributes
     ----------
     features : MeshFeatures
-    ranking : list of (str, int, float)
-        Every candidate ``(method, range, predicted median e_rel)``, best first.
+    ranking : list of Candidate
+        Every candidate, best first: those that leave at most :data:`VALID_SHARE_SLACK` more of the
+        mesh invalid than the best-covering one by predicted median e_rel, then the others by
+        predicted median e_rel.
     method : str
         Recommended estimator (registry name).
     range : int
@@ -137,6 +201,10 @@ class Advice:
         ``features`` angle that separates its creases from its smooth edges
         (:func:`curv.features.suggest_threshold`); the study's meshes are smooth, so the ranking
         assumes the creases are handled that way.
+    options : dict
+        The recommendation's other keyword arguments (see :class:`Candidate`).
+    valid_share : float
+        Share of the vertices the recommendation estimates.
     """
 
     features: MeshFeatures
@@ -146,17 +214,45 @@ class Advice:
     expected_erel: float
     why: str
     suggested_features: float | None = None
+    options: dict = field(default_factory=dict)
+    valid_share: float = 1.0
+
+    @property
+    def best(self) -> Candidate:
+        """The recommendation (the first of :attr:`ranking`)."""
+        return self.ranking[0]
+
+    @property
+    def kwargs(self) -> dict:
+        """The whole recommended call: ``curv.estimate(mesh, **advice.kwargs)`` (method, range,
+        options, and ``features=`` when the mesh has many sharp edges)."""
+        out = dict(self.best.kwargs)
+        if self.suggested_features is not None:
+            out["features"] = self.suggested_features
+        return out
+
+    @property
+    def call(self) -> str:
+        """The recommended call as Python text (see :attr:`kwargs`)."""
+        return "curv.estimate(mesh, " + ", ".join(f"{k}={v!r}" for k, v in self.kwargs.items()) + ")"
+
+    @property
+    def label(self) -> str:
+        """The recommendation for a person: ``jet R4 degree 4``."""
+        return self.best.label
 
     def as_dict(self) -> dict:
-        """A JSON-ready dict (``features``, ``ranking`` as a list of dicts, the recommendation)."""
+        """A JSON-ready dict (``features``, ``ranking`` as a list of dicts, the recommendation and its
+        whole call as ``kwargs``)."""
         f = asdict(self.features)
         f["polygon_kinds"] = {str(k): v for k, v in self.features.polygon_kinds.items()}
         f["noise_level"] = self.features.noise_level
         return {
-            "method": self.method, "range": self.range, "expected_erel": self.expected_erel, "why": self.why,
-            "suggested_features": self.suggested_features,
+            "method": self.method, "range": self.range, "options": dict(self.options), "kwargs": self.kwargs,
+            "call": self.call, "label": self.label, "expected_erel": self.expected_erel,
+            "valid_share": self.valid_share, "why": self.why, "suggested_features": self.suggested_features,
             "features": f,
-            "ranking": [{"method": m, "range": r, "expected_erel": e} for m, r, e in self.ranking],
+            "ranking": [c.as_dict() for c in self.ranking],
         }
 
 
@@ -339,28 +435,128 @@ def predict(table: dict, features: MeshFeatures) -> dict:
 
 
 def candidates(table: dict, features: MeshFeatures) -> list[str]:
-    """Variant ids of the table the mesh admits: registered, and triangle-only ones only on triangles."""
+    """Variant ids of the table the mesh admits: registered, with options the estimator accepts,
+    and not refused for the mesh's faces (:func:`curv.estimators.refusal`: triangle-only estimators
+    on polygons)."""
+    from .errors import EstimatorError
     from .estimators import ESTIMATORS
+    from .estimators.registry import refusal
+    from .variants import Variant
 
+    faces = _FaceKinds(features.polygon_kinds)
     out = []
     for vid in table["variants"]:
-        name = vid.partition(":")[0]
-        spec = ESTIMATORS.get(name)
-        if spec is None or (spec.triangles_only and not features.triangular):
+        v = Variant.from_id(vid)
+        spec = ESTIMATORS.get(v.method)
+        if spec is None or refusal(spec, faces) is not None:
+            continue
+        try:
+            spec.check_options({k: x for k, x in v.options if k not in ("normals", "fit_range")})
+        except EstimatorError:
             continue
         out.append(vid)
     return out
 
 
-def _why(features: MeshFeatures, method: str, k: int, erel: float) -> str:
+class _FaceKinds:
+    """What :func:`curv.estimators.refusal` reads of a mesh, from the measured polygon kinds."""
+
+    def __init__(self, kinds: dict):
+        self.face_sizes = np.array(sorted(kinds), np.int64)
+        self.is_triangular = set(kinds) <= {3}
+
+
+def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE) -> dict:
+    """Share of the vertices each variant can estimate on ``mesh``, from the supports' sizes.
+
+    Counted on the same vertices for every variant (all of them up to ``sample``, else a fixed random
+    sample of that many, seed 0) with one support search per distinct ball
+    (:func:`curv.neighbourhood.support_sizes`, the radius from :func:`curv.ranges.ball_radii`), by the
+    registry's facts: a vertex is lost when it is on a border or has no usable normal (every
+    estimator), when its support holds fewer vertices than the fit needs
+    (:meth:`EstimatorSpec.fewest_neighbours`: the fit's unknowns, the jet's by degree), when a
+    closed-ring estimator's support reaches a border (``meyer``, ``ru``: the vertex or a 1-ring
+    neighbour is on one), and
+    everywhere for an estimator the mesh is refused by (:func:`curv.estimators.refusal`: triangle-only
+    on polygons). ``normals="fit"`` also needs the degree-2 jet of ``fit_range`` to fit. Singular
+    systems are not foreseen (rare on a mesh without degenerate faces).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    variant_ids : iterable of str
+    sample : int
+
+    Returns
+    -------
+    dict
+        ``{variant id: share in [0, 1]}``.
+    """
+    from .estimators import get_spec
+    from .estimators.registry import refusal
+    from .neighbourhood import support_sizes
+    from .normals import unusable_normal_vertices
+    from .ranges import ball_radii, resolve
+    from .variants import Variant
+
+    n = mesh.n_vertices
+    centres = np.arange(n) if n <= sample else np.sort(np.random.default_rng(0).choice(n, size=sample, replace=False))
+    border = mesh.border_vertices
+    base = ~border[centres] & ~unusable_normal_vertices(mesh)[centres]
+    balls: dict = {}
+
+    def ball(spec, k) -> tuple[np.ndarray, np.ndarray]:
+        """(support sizes, support reaches a border) of the centres in ``spec``'s ball at Rk."""
+        rng = resolve(spec, k)
+        key = (rng.k, spec.uses_normals, spec.has_support)
+        if key not in balls:
+            if spec.has_support:
+                balls[key] = support_sizes(mesh, ball_radii(mesh, rng, uses_normals=spec.uses_normals), centres, border)
+            else:  # a 1-ring formula: lost on or next to a border (its corners' rings are not closed)
+                near = border | (mesh.adjacency @ border.astype(np.float64) > 0)
+                balls[key] = (np.full(centres.size, np.iinfo(np.int64).max), near[centres])
+        return balls[key]
+
+    def can(spec, k, options) -> np.ndarray:
+        if refusal(spec, mesh) is not None:
+            return np.zeros(centres.size, bool)
+        size, reaches_border = ball(spec, k)
+        ok = base & (size >= spec.fewest_neighbours(options))
+        return ok & ~reaches_border if spec.closed_ring else ok
+
+    out = {}
+    for vid in variant_ids:
+        v = Variant.from_id(vid)
+        opts = dict(v.options)
+        fit = opts.pop("normals", None) == "fit"
+        fit_range = opts.pop("fit_range", 2)
+        ok = can(get_spec(v.method), v.range, opts)
+        if fit:
+            ok = ok & can(get_spec("jet"), fit_range, {})
+        out[vid] = float(ok.mean()) if ok.size else 0.0
+    return out
+
+
+def rank(pred: dict, shares: dict) -> list[str]:
+    """Variant ids best first: those within :data:`VALID_SHARE_SLACK` of the best share by predicted
+    error, then the rest by predicted error; variants that estimate no vertex are left out."""
+    ids = [v for v in pred if np.isfinite(pred[v]) and shares.get(v, 1.0) > 0]
+    if not ids:
+        return []
+    top = max(shares.get(v, 1.0) for v in ids)
+    return sorted(ids, key=lambda v: (shares.get(v, 1.0) < top - VALID_SHARE_SLACK, pred[v]))
+
+
+def _why(features: MeshFeatures, best: Candidate) -> str:
     level = features.noise_level
     noise = "no measurable noise" if level < 0.05 else f"noise about {level:.2g} of the paper's level"
     irr = features.irregularity_deg
     shape = "regular" if irr < 5 else ("mildly irregular" if irr < 12 else "irregular")
     polys = "" if features.triangular else ", polygons"
     border = f", {100 * features.border_share:.0f} % border" if features.border_share >= 0.05 else ""
+    cover = "" if best.valid_share >= 0.995 else f", valid at {100 * best.valid_share:.0f} % of the vertices"
     return (f"{noise}, {shape} ({irr:.0f} degrees), density {features.density:.2g}{polys}{border}: "
-            f"{method} R{k}, expected median e_rel {erel:.2g}")
+            f"{best.label}, expected median e_rel {best.expected_erel:.2g}{cover}")
 
 
 def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
@@ -368,7 +564,8 @@ def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
 
     Parameters
     ----------
-    mesh : Mesh
+    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
+        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`.
     normals : (n, 3) array_like, optional
         Vertex normals for the measuring fit; default Max-weighted (the study's).
     table : dict, optional
@@ -385,24 +582,28 @@ def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
     """
     from .variants import Variant
 
+    from .convert import as_mesh
+
+    mesh = as_mesh(mesh)
     table = load_table() if table is None else table
     features = measure_features(mesh, normals=normals, table=table)
     pred = predict(table, features)
+    ids = [v for v in candidates(table, features) if np.isfinite(pred[v])]
+    shares = valid_shares(mesh, ids)
     ranking = []
-    for vid in candidates(table, features):
-        if np.isfinite(pred[vid]):
-            v = Variant.from_id(vid)
-            ranking.append((v.method, v.range, pred[vid]))
+    for vid in rank({v: pred[v] for v in ids}, shares):
+        v = Variant.from_id(vid)
+        ranking.append(Candidate(v.method, v.range, dict(v.options), float(pred[vid]), shares[vid]))
     if not ranking:
         raise MeshError("cannot advise: no estimator of the table applies to this mesh")
-    ranking.sort(key=lambda t: t[2])
-    method, k, erel = ranking[0]
+    best = ranking[0]
     angle = _sharp_edge_angle(mesh)
-    why = _why(features, method, k, erel)
+    why = _why(features, best)
     if angle is not None:
         why += f"; many sharp edges: estimate with features={angle:g} so the creases are not smoothed over"
-    return Advice(features=features, ranking=ranking, method=method, range=k, expected_erel=erel,
-                  why=why, suggested_features=angle)
+    return Advice(features=features, ranking=ranking, method=best.method, range=best.range,
+                  expected_erel=best.expected_erel, why=why, suggested_features=angle, options=dict(best.options),
+                  valid_share=best.valid_share)
 
 
 def _sharp_edge_angle(mesh: Mesh) -> float | None:

@@ -28,7 +28,20 @@ on 2 cores shared with another study run, from scratch)::
     python -m curv.advisor_table --work /tmp/advisor-study-3 --workers 2
 
 Every grid setting is a default (``--samples``, ``--densities``, ``--noise``,
-``--irregularity``, ``--closed``, ``--closed-vertices`` change them). 217 vertices is left out: on
+``--irregularity``, ``--closed``, ``--closed-vertices`` change them).
+
+The shipped table is that base table extended (``extend``) with the option candidates (jet degree
+3 and 4 at R2-R4; ``normals="fit"`` at ``fit_range`` 2 and 4 for nc, qs, an, mru, ru, icc) as new
+columns, run on every sample-0 mesh of the base table (patches and closed surfaces), and with
+coarse meshes as new rows (every candidate): patches
+of 217, 331 and 469 vertices, evaluated away from the border at the largest of R4..R1 that leaves
+at least 30 vertices, and sphere, ellipsoid and torus at 162, 252 and 362 vertices, one sample
+each::
+
+    python -m curv.advisor_table extend --base base.json --work /tmp/advisor-ext --workers 2
+
+(``base.json``: the base table the first command writes, ``--out base.json``). The coarse rows are
+measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
 and a rerun over a finished directory only refits the calibration and the kernel (seconds).
@@ -426,7 +439,278 @@ def build_table(settings: StudySettings, work_dir, *, workers: int | None = None
                       seconds=seconds)
 
 
+# ---------------------------------------------------------------------------- extension: options and coarse meshes
+FIT_NORMAL_ESTIMATORS = ("nc", "qs", "an", "mru", "ru", "icc")
+"""Estimators whose result depends on the vertex normals (a frame, neighbour normals or the
+interpolated normal field), so fitted normals are a different candidate; ``jet`` only orients its
+own fit with them, ``meyer`` computes its own, ``csm`` uses none."""
+FIT_RANGES = (2, 4)
+"""``fit_range`` of the ``normals="fit"`` candidates: the default and the widest named range (the
+winner on dense noisy meshes)."""
+JET_DEGREES = (3, 4)
+"""The jet degrees beyond the default 2 offered as candidates (at R2-R4: a triangle 1-ring has too
+few points for them)."""
+COARSE_DENSITIES = (217, 331, 469)
+"""Hexagon subdivisions s = 8, 10, 12 below the study's grid: the paper's coarsest mesh and between."""
+COARSE_CLOSED_VERTICES = (162, 252, 362)
+"""Closed surfaces below the grid's 642 (geodesic sizes 10 f² + 2)."""
+OPTION_DENSITIES = DEFAULT_DENSITIES
+"""The base table's patch densities the option candidates run on (sample 0, every noise level,
+irregularity and function)."""
+OPTION_CLOSED_VERTICES = DEFAULT_CLOSED_VERTICES
+"""The base table's closed-surface sizes the option candidates run on (sample 0)."""
+MIN_EVALUATED = 30
+"""A patch evaluates its vertices away from the border at the largest of R4..R1 that leaves at least
+this many (the study's R4 leaves none on a 217-vertex hexagon)."""
+
+
+def option_variants() -> list[str]:
+    """Variant ids of the documented options that change the result: jet degrees 3 and 4 at R2-R4,
+    ``normals="fit"`` at each of :data:`FIT_RANGES` for :data:`FIT_NORMAL_ESTIMATORS` at their
+    named ranges (R2-R4 for the fits; icc also R1)."""
+    from .estimators import ESTIMATORS
+    from .variants import Variant
+
+    out = [Variant("jet", k, options={"degree": d}).id for d in JET_DEGREES for k in (2, 3, 4)]
+    for fr in FIT_RANGES:
+        for name in FIT_NORMAL_ESTIMATORS:
+            spec = ESTIMATORS[name]
+            ks = [k for k in spec.ranges if k >= 2 or name == "icc"]
+            out += [Variant(name, k, options={"normals": "fit", "fit_range": fr}).id for k in ks]
+    return out
+
+
+def evaluated_for_table(mesh) -> np.ndarray:
+    """(n,) bool: vertices with no border vertex within the largest range of R4..R1 that leaves at
+    least :data:`MIN_EVALUATED` of them (R4 is the study's rule), all vertices on a closed mesh."""
+    from .study.testmesh import evaluated_vertices
+
+    if not mesh.border_vertices.any():
+        return np.ones(mesh.n_vertices, bool)
+    for k in (4, 3, 2, 1):
+        out = evaluated_vertices(mesh, range_factor=k)
+        if out.sum() >= MIN_EVALUATED:
+            return out
+    return out
+
+
+def variant_errors(mesh, truth, evaluated, variant_ids) -> dict:
+    """``{variant id: median e_rel}`` of every variant on one mesh (NaN where it raised or gave no
+    value): Max normals, fitted normals computed once per fit range."""
+    from .api import estimate
+    from .fitted_normals import fitted_normals
+    from .normals import vertex_normals
+    from .study.metrics import summarize
+    from .variants import Variant
+
+    normals = {None: vertex_normals(mesh)}
+    erel = {}
+    for vid in variant_ids:
+        v = Variant.from_id(vid)
+        kw = v.kwargs
+        try:
+            if kw.pop("normals", None) == "fit":
+                fr = kw.pop("fit_range", 2)
+                if fr not in normals:
+                    normals[fr] = fitted_normals(mesh, range=fr)
+                kw["normals"] = normals[fr]
+            else:
+                kw["normals"] = normals[None]
+            erel[vid] = summarize(truth, estimate(mesh, **kw), evaluated)["median_erel"]
+        except Exception:  # recorded as missing, like a failing variant of the study
+            erel[vid] = float("nan")
+    return erel
+
+
+def candidate_point(args: tuple) -> tuple[dict, dict]:
+    """Raw measures and the median e_rel of ``variant_ids`` on one table mesh.
+
+    ``args = (key, variant_ids)``; ``key`` is a study key ``[seed, function, density,
+    irregularity, noise, sample]`` (a Monge patch, evaluated by :func:`evaluated_for_table`) or a
+    closed-surface key ``[seed, name, n_vertices, 0.0, noise, sample]`` (as
+    :func:`closed_mesh_point`, every vertex evaluated).
+    """
+    import zlib
+
+    from .study.protocol import Task
+    from .study.testmesh import build_test_mesh
+    from .surfaces import make_surface
+
+    key, variant_ids = args
+    seed, name, n, irr, level, sample = key
+    if name in DEFAULT_CLOSED:
+        params = random_closed_params(name, np.random.default_rng([seed, 8, zlib.crc32(name.encode()), sample]))
+        rng = np.random.default_rng([seed, 7, zlib.crc32(name.encode()), n, sample])
+        s = make_surface(name, n_vertices=n, noise=level * NOISE_FRACTION, seed=rng, **params)
+        mesh, truth, planar = s.mesh, s.truth, float("nan")
+    else:
+        tm = build_test_mesh(Task(int(seed), name, int(n), float(irr), float(level), int(sample)))
+        mesh, truth, planar = tm.mesh, tm.truth, tm.irregularity
+    evaluated = evaluated_for_table(mesh)
+    raw = raw_measures(mesh)
+    scale = np.abs(truth.k1[evaluated]) + np.abs(truth.k2[evaluated])
+    row = {"key": list(key), "noise_true": level * NOISE_FRACTION, "irregularity_planar": planar,
+           "density_true": raw["mean_edge"] * float(np.median(scale)), "noise_raw": raw["noise_raw"],
+           "irregularity_raw": raw["irregularity_raw_deg"], "density": raw["density"],
+           "n_evaluated": int(evaluated.sum())}
+    return row, variant_errors(mesh, truth, evaluated, variant_ids)
+
+
+def extension_jobs(base: dict, *, samples: int = 1, option_samples: int = 1, seed: int = 0) -> list[tuple]:
+    """The jobs that extend ``base`` (a table): every variant on the coarse patches and closed
+    surfaces (``samples`` each), the option variants on the base table's meshes of sample below
+    ``option_samples`` at :data:`OPTION_DENSITIES` and :data:`OPTION_CLOSED_VERTICES`. Largest
+    meshes first (load balance)."""
+    settings = base["metadata"]["settings"]
+    every = list(base["variants"]) + [v for v in option_variants() if v not in base["variants"]]
+    options = [v for v in every if v not in base["variants"]]
+    jobs = []
+    for key in base["truth"]["key"]:
+        sizes = OPTION_CLOSED_VERTICES if key[1] in DEFAULT_CLOSED else OPTION_DENSITIES
+        if key[5] < option_samples and key[2] in sizes:
+            jobs.append((list(key), tuple(options)))
+    for s in range(samples):
+        for fn in settings["functions"]:
+            for d in COARSE_DENSITIES:
+                for irr in settings["irregularity"]:
+                    for lv in settings["noise"]:
+                        jobs.append(([seed, fn, d, float(irr), float(lv), s], tuple(every)))
+        for nm in DEFAULT_CLOSED:
+            for n in COARSE_CLOSED_VERTICES:
+                for lv in settings["noise"]:
+                    jobs.append(([seed, nm, n, 0.0, float(lv), s], tuple(every)))
+    jobs.sort(key=lambda j: -j[0][2] * len(j[1]))
+    return jobs
+
+
+def run_extension(jobs: list[tuple], work_dir, *, workers: int | None = None, progress=None) -> dict:
+    """Run (or resume) ``jobs`` (:func:`candidate_point`) into ``work_dir/extension.json``:
+    ``{key text: [row, {variant id: e_rel}]}``; saved after every batch, so a run may be split."""
+    from .study.executors import open_executor
+
+    work_dir = Path(work_dir)
+    work_dir.mkdir(parents=True, exist_ok=True)
+    path = work_dir / "extension.json"
+    done = json.loads(path.read_text()) if path.exists() else {}
+    todo = [j for j in jobs if not set(j[1]) <= set(done.get(_key_text(j[0]), [None, {}])[1])]
+    say = progress or (lambda text: None)
+    say(f"{len(jobs)} jobs, {len(todo)} to run")
+    t0 = time.perf_counter()
+    batch = 16
+    with open_executor(workers=workers) as ex:
+        for b in range(0, len(todo), batch):
+            part = todo[b:b + batch]
+            for job, (row, erel) in zip(part, ex.map(candidate_point, part)):
+                old = done.get(_key_text(job[0]), [row, {}])
+                done[_key_text(job[0])] = [row, {**old[1], **erel}]
+            tmp = path.with_suffix(".tmp")
+            tmp.write_text(json.dumps(done))
+            tmp.replace(path)
+            say(f"{min(b + batch, len(todo))}/{len(todo)} jobs, {time.perf_counter() - t0:.0f} s")
+    return done
+
+
+def extend_table(base: dict, done: dict, *, command: str = "", jobs=None) -> dict:
+    """``base`` with the option variants as new columns and the coarse meshes as new rows (their
+    points measured with the base table's calibration), the kernel refitted by leave-one-out.
+    Option columns are NaN on the base meshes they were not run on (the prediction leaves NaN
+    entries out per column)."""
+    from .advisor import calibrate_irregularity, calibrate_noise
+
+    cal = base["calibration"]
+    variants = list(base["variants"]) + [v for v in option_variants() if v not in base["variants"]]
+    col = {v: j for j, v in enumerate(variants)}
+    keys = [list(k) for k in base["truth"]["key"]]
+    erel = np.full((len(keys), len(variants)), np.nan)
+    erel[:, : len(base["variants"])] = np.array(base["median_erel"], float)
+    points = [list(p) for p in base["points"]]
+    truth = {k: list(v) for k, v in base["truth"].items()}
+    truth.setdefault("n_evaluated", [None] * len(keys))
+    index = {_key_text(k): i for i, k in enumerate(keys)}
+    if jobs is not None:  # exactly the planned meshes (a work directory may hold more)
+        planned = {_key_text(j[0]) for j in jobs}
+        done = {k: v for k, v in done.items() if k in planned}
+    new_rows = []
+    for ktext, (row, values) in done.items():
+        i = index.get(ktext)
+        if i is None:
+            new_rows.append((row, values))
+            continue
+        for vid, x in values.items():
+            if vid in col and x is not None and np.isfinite(x) and x > 0:
+                erel[i, col[vid]] = x
+    extra = np.full((len(new_rows), len(variants)), np.nan)
+    for r, (row, values) in enumerate(new_rows):
+        noise = calibrate_noise(row["noise_raw"], cal, row["density"])
+        points.append([row["density"], noise / NOISE_FRACTION,
+                       calibrate_irregularity(row["irregularity_raw"], noise, cal)])
+        for name, value in (("key", row["key"]), ("noise_true", row["noise_true"]),
+                            ("irregularity_planar", row["irregularity_planar"]),
+                            ("density_true", row["density_true"]), ("n_evaluated", row["n_evaluated"])):
+            truth[name].append(value)
+        for vid, x in values.items():
+            if vid in col and x is not None and np.isfinite(x) and x > 0:
+                extra[r, col[vid]] = x
+    erel = np.concatenate([erel, extra])
+    pts = np.array(points, float)
+    keep = np.all(np.isfinite(pts), axis=1) & np.isfinite(erel).any(axis=1)
+    pts, erel = pts[keep], erel[keep]
+    truth = {k: [v for v, ok in zip(vals, keep) if ok] for k, vals in truth.items()}
+    kernel = fit_kernel(pts, erel)
+    meta = dict(base["metadata"])
+    meta.update(extension_command=command, created=time.strftime("%Y-%m-%d %H:%M:%S %Z"), n_meshes=int(len(pts)),
+                coarse={"densities": list(COARSE_DENSITIES), "closed_vertices": list(COARSE_CLOSED_VERTICES),
+                        "min_evaluated": MIN_EVALUATED},
+                options={"jet_degrees": list(JET_DEGREES), "fit_ranges": list(FIT_RANGES),
+                         "fit_normal_estimators": list(FIT_NORMAL_ESTIMATORS)})
+    return {**base, "kernel": kernel, "metadata": meta, "variants": variants,
+            "points": [[_round(x, POINT_DIGITS) for x in p] for p in pts],
+            "truth": {k: [(_round(x, 4) if isinstance(x, float) else x) for x in vals] for k, vals in truth.items()},
+            "median_erel": [[_round(x, EREL_DIGITS) for x in row] for row in erel]}
+
+
+def extend_main(argv) -> int:
+    """``python -m curv.advisor_table extend``: add the options and the coarse meshes to a table."""
+    parser = argparse.ArgumentParser(prog="python -m curv.advisor_table extend", description=extend_main.__doc__)
+    parser.add_argument("--base", default=str(DEFAULT_OUT), help="table to extend; default the packaged one")
+    parser.add_argument("--out", default=str(DEFAULT_OUT))
+    parser.add_argument("--work", default="advisor-extension", help="keeps the computed meshes (resumes)")
+    parser.add_argument("--workers", type=int, default=None)
+    parser.add_argument("--samples", type=int, default=1, help="samples of each coarse setting")
+    parser.add_argument("--option-samples", type=int, default=1, help="base samples the options run on")
+    parser.add_argument("--dry-run", action="store_true", help="count the jobs and stop")
+    args = parser.parse_args(argv)
+    base = load_base(args.base)
+    jobs = extension_jobs(base, samples=args.samples, option_samples=args.option_samples)
+    if args.dry_run:
+        print(f"{len(jobs)} jobs, {sum(len(j[1]) for j in jobs)} estimates")
+        return 0
+    t0 = time.process_time()
+    done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
+    command = "python -m curv.advisor_table extend " + " ".join(argv)
+    table = extend_table(base, done, command=command, jobs=jobs)
+    table["metadata"]["extension_cpu_seconds_main_process"] = round(time.process_time() - t0, 1)
+    with open(args.out, "w") as fh:
+        json.dump(table, fh, separators=(",", ":"))
+    print(f"wrote {args.out}: {len(table['points'])} meshes x {len(table['variants'])} variants; bandwidth "
+          f"{table['kernel']['bandwidth']} (LOO mean regret {table['kernel']['loo_mean_regret']})", flush=True)
+    return 0
+
+
+def load_base(path) -> dict:
+    """The base table to extend (what ``python -m curv.advisor_table --out base.json`` writes); an
+    already extended table is refused (its option columns would be taken for base ones)."""
+    with open(path) as fh:
+        table = json.load(fh)
+    if set(option_variants()) & set(table["variants"]):
+        raise SystemExit(f"{path}: already extended; give the base table (python -m curv.advisor_table --out base.json)")
+    return table
+
+
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["extend"]:
+        return extend_main(argv[1:])
     parser = argparse.ArgumentParser(prog="python -m curv.advisor_table", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="table to write; default the packaged one")
     parser.add_argument("--work", default="advisor-study", help="study directory (resumes); default ./advisor-study")

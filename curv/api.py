@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 import time
+from dataclasses import dataclass
 from typing import Generator
 
 import numpy as np
@@ -13,6 +14,7 @@ from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
 from .jit import COMPILE_MESSAGE, Progress, compile_pending
 from .convert import as_mesh
 from .mesh import Mesh
+from .pointcloud import PointCloud
 from .ranges import ball_radii, parse_range, resolve
 from .features import feature_set
 from .normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
@@ -64,6 +66,8 @@ def iter_estimate(
     block_size: int | None = None,
     features=None,
     vertices=None,
+    knn: int | None = None,
+    orient="up",
     **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
@@ -73,9 +77,9 @@ def iter_estimate(
     Parameters as in :func:`estimate`.
     """
     spec = get_spec(method)
-    rng = resolve(spec, range, radius)
+    rng = resolve(spec, range, radius, knn)
     options = spec.check_options(options)
-    mesh = as_mesh(mesh)
+    mesh = mesh if isinstance(mesh, PointCloud) else as_mesh(mesh)
     why_not = refusal(spec, mesh)
     if why_not is not None:
         raise MeshError(why_not)
@@ -83,34 +87,20 @@ def iter_estimate(
     centres = _check_vertices(vertices, mesh.n_vertices)
     if centres is not None and smooth is Smoothing.VALUES:
         raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
+    if isinstance(mesh, PointCloud) and (features is not None or smooth is not Smoothing.NONE):
+        raise EstimatorError("features= and smooth= need a mesh's edges and faces; a point cloud takes neither")
     feats = None if features is None else feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
     t0 = time.perf_counter()
-    work_mesh = mesh
-    if smooth is Smoothing.MESH:
-        work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
-        if normals is not None and not _asks_for_fit(normals):
-            raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
-    # Where the faces around a vertex are not one consistently oriented fan, its normal averages
-    # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
-    meaningless = unusable_normal_vertices(mesh)
-    # an estimator that visits every corner anyway computes the default normals on the way
-    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
-    if fused:
-        used_normals = None
+    if isinstance(mesh, PointCloud):
+        work_mesh = mesh
+        used_normals, flags, normals_label = _point_setup(mesh, normals, orient=orient, fit_range=fit_range)
+        fused = False
     else:
-        if normals is None:
-            used_normals = _default_normals(work_mesh, normal_weighting, smoothed=work_mesh is not mesh)
-        elif _asks_for_fit(normals):
-            from .fitted_normals import fitted_normals
-
-            used_normals = fitted_normals(work_mesh, range=fit_range, features=feats)
-        else:
-            used_normals = _check_normals(normals, mesh.n_vertices)
-        if meaningless.any():
-            used_normals = used_normals.copy()
-            used_normals[meaningless] = np.nan
+        work_mesh, used_normals, flags, fused = _mesh_setup(mesh, spec, normals, normal_weighting, smooth,
+                                                            smooth_iterations, smooth_strength, fit_range, feats)
+        normals_label = _normals_label(normals, normal_weighting, fit_range)
     radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals) if spec.has_support else None
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
@@ -121,6 +111,10 @@ def iter_estimate(
         kernel_normals[feats.vertices] = np.nan
     raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=centres,
                                    features=feats if on_crease else None, **options)
+    for mask_of in flags.support_marks:
+        # checks of the supports themselves (points: a support along a line), on the estimated rows
+        mask, code = yield from mask_of(radii, centres)
+        flags = flags.marked(mask, code)
     if fused:
         used_normals = raw.normals
 
@@ -129,19 +123,17 @@ def iter_estimate(
         return flags if centres is None else flags[centres]
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
-    isolated = at(mesh.isolated_vertices)
-    # no face at all is the root cause, whatever the estimator saw (no support, no normal)
-    reason[isolated] = Reason.DEGENERATE
+    # root causes, whatever the estimator saw (no face or no other point at all; a normal whose
+    # orientation was left undecided): later codes win
+    for mask, code in flags.forced:
+        reason[at(mask)] = code
+    isolated = at(flags.isolated)
     if on_crease:
         # the smooth curvature is undefined on a crease; a large value there is the error to avoid
         reason[at(feats.vertices) & ~isolated] = Reason.FEATURE
-    # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
-    reason[(reason == Reason.OK) & at(mesh.nonmanifold_vertices)] = Reason.NONMANIFOLD
-    # faces of opposite orientation meet here: the vertex normal is meaningless
-    reason[(reason == Reason.OK) & at(meaningless)] = Reason.DEGENERATE
-    # on a border the normal and every fit see one side only: the values there are not estimates
-    # of the surface's curvature, whatever the estimator
-    reason[(reason == Reason.OK) & at(mesh.border_vertices)] = Reason.BORDER
+    # in the order of precedence: the first that applies to a vertex names it
+    for mask, code in flags.marks:
+        reason[(reason == Reason.OK) & at(mask)] = code
     reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
     # the estimators order k1 >= k2 already; repair in place (the arrays are this call's own) the
     # rare rows they did not
@@ -169,13 +161,119 @@ def iter_estimate(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8),
         method=spec.name, range=rng.value,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
-              "normals": _normals_label(normals, normal_weighting, fit_range), **options,
+              "normals": normals_label, **options,
               "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
               "feature_edges": 0 if feats is None else int(feats.edges.sum()),
-              "region": mesh.n_vertices if centres is None else int(centres.size)},
+              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info},
     )
+
+
+@dataclass(frozen=True)
+class _Flags:
+    """What the input says about its vertices, for the validity rules of :func:`iter_estimate`.
+
+    ``isolated`` (n,) bool: no face or no other point; ``forced``: ``(mask, Reason)`` pairs set
+    whatever the estimator found (later pairs win); ``marks``: pairs applied in order to the
+    vertices still OK; ``info``: extra entries of the result's info.
+    """
+
+    isolated: np.ndarray
+    marks: tuple
+    info: dict
+    forced: tuple = ()
+    support_marks: tuple = ()
+    """Generators ``(radii, centres) -> (mask, Reason)`` run after the estimate."""
+
+    def marked(self, mask: np.ndarray, code) -> "_Flags":
+        """These flags with one more ``(mask, code)`` mark, applied last."""
+        return _Flags(isolated=self.isolated, marks=self.marks + ((mask, code),), info=self.info,
+                      forced=self.forced)
+
+
+def _mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_iterations, smooth_strength,
+                fit_range, feats):
+    """The working mesh, its normals (None when the estimator computes them), flags, and whether fused."""
+    work_mesh = mesh
+    if smooth is Smoothing.MESH:
+        work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
+        if normals is not None and not _asks_for_fit(normals):
+            raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
+    # Where the faces around a vertex are not one consistently oriented fan, its normal averages
+    # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
+    meaningless = unusable_normal_vertices(mesh)
+    # an estimator that visits every corner anyway computes the default normals on the way
+    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
+    if fused:
+        used_normals = None
+    else:
+        if normals is None:
+            used_normals = _default_normals(work_mesh, normal_weighting, smoothed=work_mesh is not mesh)
+        elif _asks_for_fit(normals):
+            from .fitted_normals import fitted_normals
+
+            used_normals = fitted_normals(work_mesh, range=fit_range, features=feats)
+        else:
+            used_normals = _check_normals(normals, mesh.n_vertices)
+        if meaningless.any():
+            used_normals = used_normals.copy()
+            used_normals[meaningless] = np.nan
+    flags = _Flags(isolated=mesh.isolated_vertices, info={"points": False},
+                   forced=((mesh.isolated_vertices, Reason.DEGENERATE),), marks=(
+        # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
+        (mesh.nonmanifold_vertices, Reason.NONMANIFOLD),
+        # faces of opposite orientation meet here: the vertex normal is meaningless
+        (meaningless, Reason.DEGENERATE),
+        # on a border the normal and every fit see one side only: the values there are not
+        # estimates of the surface's curvature, whatever the estimator
+        (mesh.border_vertices, Reason.BORDER),
+    ))
+    return work_mesh, used_normals, flags, fused
+
+
+def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
+    """A point cloud's normals (given, the cloud's own, or estimated and oriented) and flags.
+
+    ``normals``: None (the cloud's if it has them, else jet fits), ``"fit"`` (jet), ``"pca"``, or
+    an (n, 3) array.
+    """
+    from .point_normals import border_points, point_normals
+
+    n = cloud.n_points
+    ambiguous = np.zeros(n, bool)
+    if normals is None and cloud.normals is not None:
+        used, label = normalize_rows(np.asarray(cloud.normals)), "file"
+    elif normals is None or (isinstance(normals, str) and normals in ("pca", "fit")):
+        method = "pca" if isinstance(normals, str) and normals == "pca" else "jet"
+        est = point_normals(cloud, method=method, range=fit_range, orient=orient)
+        used, ambiguous, label = est.normals, est.ambiguous, f"{method} {est.label}"
+    elif isinstance(normals, str):
+        raise EstimatorError(f"normals on a point cloud must be an (n, 3) array, 'pca' or 'fit'; got {normals!r}")
+    else:
+        used, label = _check_normals(normals, n), "given"
+    border = border_points(cloud)
+    coincident = cloud.coincident_points
+    flags = _Flags(isolated=cloud.isolated_vertices,
+                   forced=((cloud.isolated_vertices, Reason.DEGENERATE), (ambiguous, Reason.ORIENTATION)), marks=(
+        # a repeat of an earlier point: that one stands for it
+        (coincident, Reason.DEGENERATE),
+        # on the rim of an open scan the fits see one side only, as on a mesh border
+        (border, Reason.BORDER),
+    ), info={"points": True, "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
+             "ambiguous_normals": int(ambiguous.sum())}, support_marks=(_line_supports(cloud),))
+    return used, flags, label
+
+
+def _line_supports(cloud: PointCloud):
+    """A support check: points whose support lies along a line are SINGULAR (:data:`curv.point_normals.MIN_SPREAD`)."""
+    from .point_normals import MIN_SPREAD, support_spread
+
+    def check(radii, centres):
+        spread = yield from support_spread(cloud, radii, centres)
+        return ~(spread >= MIN_SPREAD), Reason.SINGULAR
+
+    return check
 
 
 def _check_vertices(vertices, n: int) -> np.ndarray | None:
@@ -247,14 +345,19 @@ def estimate(
     block_size: int | None = None,
     features=None,
     vertices=None,
+    knn: int | None = None,
+    orient="up",
     **options,
 ) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
-        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`.
+    mesh : Mesh, PointCloud, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
+        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`. On a
+        :class:`curv.PointCloud` the estimators with ``takes_points`` run (``nc``, ``qs``, ``an``,
+        ``mru``, ``jet``); the range unit is each point's spacing (:mod:`curv.ranges`), points on
+        the rim of an open scan are ``BORDER``, repeats of a point ``DEGENERATE``.
     method : str
         Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
     range : int, float or str, optional
@@ -266,7 +369,10 @@ def estimate(
     normals : (n, 3) array_like or "fit", optional
         Vertex normals to use (normalised here); ``"fit"``: each normal from a local jet fit at
         range ``fit_range`` (:func:`curv.fitted_normals.fitted_normals`); default Max-weighted
-        normals of the mesh (the paper's protocol).
+        normals of the mesh (the paper's protocol). On a point cloud the default is the cloud's
+        own normals (from the file), else ``"fit"``: jet fits oriented as ``orient`` says
+        (:mod:`curv.point_normals`; ``"pca"`` for plain PCA normals); points whose orientation
+        stays ambiguous are ``Reason.ORIENTATION``.
     normal_weighting : {"max", "area", "angle"}
         Weights of the default normals.
     smooth : {None, "mesh", "values"}
@@ -287,6 +393,12 @@ def estimate(
         Estimate only at these vertices (reading whatever their supports need): the arrays keep
         full length, the other vertices are NaN with ``Reason.NOT_COMPUTED``. The values equal the
         full run's at these vertices.
+    knn : int, optional
+        Point clouds only, instead of ``range``: each point's support is its ``knn`` nearest points.
+    orient : {"up", "outward"} or (3,) array_like
+        Point clouds whose normals are estimated: turn each connected part up (+z at its highest
+        point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
+        viewpoint (a scanner's position).
     **options
         Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for
         ``jet``.
@@ -307,7 +419,7 @@ def estimate(
     gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
                         smooth=smooth, smooth_iterations=smooth_iterations,
                         smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size,
-                        features=features, vertices=vertices, **options)
+                        features=features, vertices=vertices, knn=knn, orient=orient, **options)
     while True:
         try:
             next(gen)

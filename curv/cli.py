@@ -124,7 +124,7 @@ def _cmd_estimate(args) -> int:
     from .validity import describe_reasons
 
     if args.method == "auto":
-        args.method, args.range = _advised_method(args)
+        _apply_advice(args)
     spec = get_spec(args.method)
     rng = resolve(spec, args.range, args.radius)
     _check_colours(args)
@@ -145,13 +145,18 @@ def _cmd_estimate(args) -> int:
         _check_memory(args, mesh.n_vertices, mesh.n_faces, spec.name, rng)
     progress = Progress(f"{spec.name} {rng.label}", enabled=None if not args.quiet else False)
     normals = {"normals": "fit"} if args.normals == "fit" else {"normal_weighting": args.normals}
+    if args.fit_range is not None:
+        if args.normals != "fit":
+            raise CurvUsageError("--fit-range is the range of the fitted normals: give it with --normals fit")
+        normals["fit_range"] = args.fit_range
+    options = {} if args.degree is None else {"degree": args.degree}
     region = _region_vertices(args, mesh)
     if args.features is not None:
         from .features import check_angle
 
         args.features = check_angle(args.features)
     gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, smooth=args.smooth, features=args.features,
-                        vertices=region, **normals)
+                        vertices=region, **normals, **options)
     t1 = time.perf_counter()
     try:
         while True:
@@ -214,19 +219,39 @@ def _region_vertices(args, mesh):
     return None
 
 
-def _advised_method(args) -> tuple[str, str]:
-    """``--method auto``: the advisor's (method, range) for the input, announced on stdout."""
+def cli_arguments(kwargs: dict) -> str:
+    """The ``curv estimate`` flags of a call's keyword arguments: ``--method jet --range 4 --degree 4``."""
+    flags = {"method": "--method", "range": "--range", "degree": "--degree", "normals": "--normals",
+             "fit_range": "--fit-range", "features": "--features"}
+    return " ".join(f"{flag} {kwargs[k]:g}" if isinstance(kwargs[k], float) else f"{flag} {kwargs[k]}"
+                    for k, flag in flags.items() if k in kwargs)
+
+
+def _apply_advice(args) -> None:
+    """``--method auto``: put the advisor's whole call (method, range, options) into ``args``, announced
+    on stdout."""
     from .advisor import advise
     from .io import load
-    from .ranges import range_label
 
-    if args.range is not None or args.radius is not None:
-        raise CurvError("--method auto chooses the range too; drop --range/--radius")
+    given = [flag for flag, value in (("--range", args.range), ("--radius", args.radius), ("--degree", args.degree),
+                                      ("--fit-range", args.fit_range)) if value is not None]
+    if args.normals != "max":
+        given.append("--normals")
+    if given:
+        raise CurvError(f"--method auto chooses the range and the options too; drop {', '.join(given)}")
     mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
                 orient=args.orient, remove_unreferenced=args.remove_unreferenced)
     adv = advise(mesh)
-    print(f"auto: {adv.method} {range_label(adv.range)} ({adv.why})", flush=True)
-    return adv.method, str(adv.range)
+    kwargs = dict(adv.kwargs)
+    if args.features is not None:  # the user's own crease angle wins
+        kwargs.pop("features", None)
+    print(f"auto: {adv.label} ({adv.why}); the same as {cli_arguments(kwargs)}", flush=True)
+    args.method, args.range = kwargs["method"], str(kwargs["range"])
+    args.degree = kwargs.get("degree")
+    if kwargs.get("normals") == "fit":
+        args.normals, args.fit_range = "fit", kwargs.get("fit_range")
+    if "features" in kwargs:
+        args.features = kwargs["features"]
 
 
 def _cmd_advise(args) -> int:
@@ -248,12 +273,15 @@ def _cmd_advise(args) -> int:
     print(f"  irregularity {f.irregularity_deg:.1f} degrees RMS from 60")
     print(f"  density      {f.density:.4f} (mean edge x median |k1|+|k2|)")
     print(f"advice: {adv.why}")
+    print(f"  call: {adv.call}")
+    print(f"  or:   curv estimate {args.input} {cli_arguments(adv.kwargs)}")
     if adv.suggested_features is not None:
-        print(f"  sharp edges: try curv estimate {args.input} --features {adv.suggested_features:g}")
-    print(f"{'rank':>4}  {'variant':<9} predicted median e_rel")
+        print(f"  sharp edges: the call above estimates with features={adv.suggested_features:g}")
+    width = max(len(c.label) for c in adv.ranking[: args.top]) if adv.ranking else 7
+    print(f"{'rank':>4}  {'variant':<{width}}  valid  predicted median e_rel")
     shown = adv.ranking[: args.top]
-    for i, (method, k, erel) in enumerate(shown, 1):
-        print(f"{i:>4}  {method + ' R' + str(k):<9} {erel:.3g}")
+    for i, c in enumerate(shown, 1):
+        print(f"{i:>4}  {c.label:<{width}}  {100 * c.valid_share:4.0f}%  {c.expected_erel:.3g}")
     if len(adv.ranking) > len(shown):
         print(f"  ... {len(adv.ranking) - len(shown)} more (--top N, --json)")
     return 0
@@ -314,6 +342,9 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("--normals", choices=["max", "area", "angle", "fit"], default="max",
                        help="vertex normals: Max, area or angle weighted face normals, or a local jet fit "
                             "(R2); default max (the paper's protocol)")
+    p_est.add_argument("--fit-range", help="range k of the fitted normals (with --normals fit); "
+                       "default 2")
+    p_est.add_argument("--degree", type=int, choices=[2, 3, 4], help="jet degree (estimator jet); default 2")
     p_est.add_argument("--smooth", choices=["mesh", "values"], help="smooth the mesh before or the values after")
     p_est.add_argument("--merge-vertices", action="store_true", help="merge vertices at identical positions")
     p_est.add_argument("--remove-degenerate", action="store_true", help="drop zero-area / repeated-index faces")

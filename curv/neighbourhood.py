@@ -9,6 +9,12 @@ stamp per vertex, a queue), allocated once per kernel call and reused for every 
 
 The search expands along :func:`expansion_adjacency`: a support may contain a non-manifold vertex
 (a bow tie, the end of a fin) but does not continue through it onto another sheet.
+
+**The support provider.** On a :class:`curv.PointCloud`, :func:`expansion_adjacency` returns the
+cloud's grid (:func:`curv.knn.build_grid`, two tuples of arrays) instead of the CSR edges, and
+:func:`ball_support` answers with the exact ball through the grid (:func:`curv.knn.grid_ball`):
+numba picks the implementation by the argument types when it compiles a kernel, so every
+estimator kernel runs unchanged on meshes and points.
 """
 
 from __future__ import annotations
@@ -21,20 +27,52 @@ import weakref
 
 import numpy as np
 import scipy.sparse as sp
+from numba.core import types
+from numba.extending import overload
 
 from .jit import jit, jit_parallel, launch, prange, thread_slices, threads
+from .knn import grid_ball
 from .mesh import Mesh
+from .pointcloud import PointCloud
 from .ranges import Range, ball_radii
 
-__all__ = ["ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "Neighbourhood",
+__all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "supports", "support_sizes", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
 QUEUE_START = 0
 """Length of the queue a kernel starts with: :func:`ball_support` replaces it by a full-length one."""
 
 
-@jit
 def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
+    """The support of vertex ``p``: the mesh search (:func:`mesh_ball_support`) or a point cloud's ball.
+
+    Called inside numba kernels, where the implementation is chosen by the type of ``indptr``:
+    an array (mesh CSR edges) or a tuple (a point cloud's grid, :func:`expansion_adjacency`).
+    Same arguments and results as :func:`mesh_ball_support`.
+    """
+    if isinstance(indptr, tuple):
+        count = grid_ball(p, radius2, indptr, indices, x, y, z, queue)
+        return count, queue
+    return mesh_ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue)
+
+
+@overload(ball_support, jit_options={"cache": True, "nogil": True, "error_model": "numpy"})
+def _ball_support_for(p, radius2, indptr, indices, x, y, z, stamp, queue):
+    if isinstance(indptr, types.BaseTuple):
+        def on_points(p, radius2, indptr, indices, x, y, z, stamp, queue):
+            if queue.size < x.size:
+                queue = np.empty(x.size, np.int64)
+            count = grid_ball(p, radius2, indptr, indices, x, y, z, queue)
+            return count, queue
+        return on_points
+
+    def on_mesh(p, radius2, indptr, indices, x, y, z, stamp, queue):
+        return mesh_ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue)
+    return on_mesh
+
+
+@jit
+def mesh_ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     """The support of vertex ``p``: breadth-first search along edges, never leaving the ball.
 
     Parameters
@@ -113,7 +151,8 @@ def new_queues(n_vertices: int, parts: int) -> np.ndarray:
     return np.empty((parts, n_vertices), np.int64)
 
 
-def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np.ndarray | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """The edges a support search expands along, as CSR ``(indptr (n+1,), indices (a,))`` int64.
 
     The mesh adjacency with the rows of non-manifold vertices (and of ``blocked`` ones) emptied: a
@@ -129,8 +168,12 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None) -> tuple[
     Notes
     -----
     The plain form (no ``blocked``) is cached with the mesh, so that an estimate over a small
-    region does no O(n) work to build it again.
+    region does no O(n) work to build it again. On a point cloud: a grid, ``(cells, coords)``
+    (:func:`curv.knn.build_grid`), which :func:`ball_support` searches instead of edges; its
+    cells suit the balls of ``radii`` (:meth:`curv.PointCloud.ball_grid`) when they are given.
     """
+    if isinstance(mesh, PointCloud):
+        return mesh.grid if radii is None else mesh.ball_grid(radii)
     if blocked is None or not blocked.any():
         return cached_with_mesh(mesh, "expansion", lambda: _expansion(mesh, mesh.nonmanifold_vertices))
     return _expansion(mesh, mesh.nonmanifold_vertices | blocked)
@@ -207,6 +250,59 @@ def _support_fill(centres, radius2, indptr, indices, x, y, z, stamps, queues, st
                 out[start + j - 1] = queue[j]
 
 
+@jit_parallel
+def _support_sizes(centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops, counts, flagged):
+    for t in prange(starts.size):
+        queue = queues[t]
+        stamp = stamps[t]
+        for i in range(starts[t], stops[t]):
+            p = centres[i]
+            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
+            counts[i] = count - 1
+            hit = False
+            for j in range(count):
+                hit = hit or flags[queue[j]]
+            flagged[i] = hit
+
+
+def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None,
+                  flags: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """How many vertices each support holds, and whether it holds a flagged one, without storing it.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    radii : (n,) float64
+        Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
+    vertices : (c,) int, optional
+        Centres; default all.
+    flags : (n,) bool, optional
+        E.g. ``mesh.border_vertices``; default none flagged.
+
+    Returns
+    -------
+    counts : (c,) int64
+        Support size of each centre, itself excluded.
+    flagged : (c,) bool
+        The support (the centre included) holds a flagged vertex.
+    """
+    centres = np.arange(mesh.n_vertices, dtype=np.int64) if vertices is None else \
+        np.ascontiguousarray(vertices, dtype=np.int64)
+    flags = np.zeros(mesh.n_vertices, np.bool_) if flags is None else np.ascontiguousarray(flags, np.bool_)
+    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
+    indptr, indices = expansion_adjacency(mesh, None)
+    x, y, z = coordinate_columns(mesh)
+    parts = max(1, min(threads(), centres.size))
+    stamps = new_scratch(mesh.n_vertices, parts)
+    queues = new_queues(mesh.n_vertices, parts)
+    starts, stops = thread_slices(centres.size, parts)
+    counts = np.empty(centres.size, np.int64)
+    flagged = np.empty(centres.size, np.bool_)
+    launch(_support_sizes, centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops,
+           counts, flagged)
+    return counts, flagged
+
+
 def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, *,
              blocked: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The supports of some vertices as CSR rows (for tests, the study's exclusion zone, small jobs).
@@ -231,7 +327,7 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, 
     centres = np.arange(mesh.n_vertices, dtype=np.int64) if vertices is None else \
         np.ascontiguousarray(vertices, dtype=np.int64)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    indptr, indices = expansion_adjacency(mesh, blocked)
+    indptr, indices = expansion_adjacency(mesh, blocked, radii)
     x, y, z = coordinate_columns(mesh)
     parts = max(1, min(threads(), centres.size))
     stamps = new_scratch(mesh.n_vertices, parts)

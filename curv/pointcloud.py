@@ -1,10 +1,22 @@
-"""The point-cloud model: a surface sampled as points, with or without normals, and no faces."""
+"""The point-cloud model: a surface sampled as points, with or without normals, and no faces.
+
+A point cloud offers the estimators what a mesh offers them, so that one kernel per estimator
+serves both: positions (``vertices``), an ``adjacency`` (here the
+symmetric graph of each point's :data:`curv.knn.GRAPH_NEIGHBOURS` nearest, along which normals are
+oriented), a ``grid`` that gives every support exactly (the ball around the point, as the mesh's
+search gives the ball's connected vertices), and the per-vertex flags the API reads (``isolated_vertices``, ``nonmanifold_vertices``,
+``coincident_points``). What a point's range unit is (its spacing) is :mod:`curv.ranges`' rule.
+"""
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
+import scipy.sparse as sp
 
 from .errors import MeshError
+from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, symmetric_graph
 
 __all__ = ["PointCloud"]
 
@@ -76,6 +88,103 @@ class PointCloud:
     def n_vertices(self) -> int:
         """Same as :attr:`n_points`, for code that handles meshes and point clouds alike."""
         return self.n_points
+
+    @cached_property
+    def grid(self):
+        """The uniform grid over the points (:func:`curv.knn.build_grid`), made once: it answers the
+        nearest-neighbour queries and every ball support of an estimate."""
+        return build_grid(self._points, GRAPH_NEIGHBOURS)
+
+    def ball_grid(self, radii: np.ndarray):
+        """A grid whose cells suit balls of these radii (cell edge ~1.25 x their median), cached.
+
+        A ball then spans one ring of cells around its centre's cell for most points, so a
+        support is searched among about four times its own size. Cell edges are rounded to
+        steps of 2^(1/4), so that nearby radii share a grid.
+        """
+        r = float(np.median(radii))
+        if not (np.isfinite(r) and r > 0):
+            return self.grid
+        step = round(4.0 * np.log2(1.25 * r))
+        cache = self.__dict__.setdefault("_ball_grids", {})
+        if step not in cache:
+            if len(cache) >= 4:
+                cache.pop(next(iter(cache)))
+            cache[step] = build_grid(self._points, cell=2.0 ** (step / 4.0))
+        return cache[step]
+
+    @cached_property
+    def nearest(self) -> tuple[np.ndarray, np.ndarray]:
+        """The :data:`~curv.knn.GRAPH_NEIGHBOURS` nearest other points of every point (computed once).
+
+        Returns
+        -------
+        indices : (n, G) int64
+            Nearest first; -1 where the cloud has fewer than G other points.
+        distances : (n, G) float64
+            Ascending (inf with -1). Read-only.
+        """
+        indices, distances = nearest_neighbours(self._points, GRAPH_NEIGHBOURS, self.grid)
+        for arr in (indices, distances):
+            arr.setflags(write=False)
+        return indices, distances
+
+    def kth_distance(self, k: int) -> np.ndarray:
+        """(n,) float64 distance from every point to its k-th nearest other point (inf if none).
+
+        Cached per k (read-only); k up to :data:`~curv.knn.GRAPH_NEIGHBOURS` reads :attr:`nearest`.
+        """
+        k = int(k)
+        if k < 1:
+            raise ValueError(f"k must be >= 1, got {k}")
+        cache = self.__dict__.setdefault("_kth", {})
+        if k not in cache:
+            if k <= GRAPH_NEIGHBOURS:
+                out = np.ascontiguousarray(self.nearest[1][:, k - 1])
+            else:
+                out = np.ascontiguousarray(nearest_neighbours(self._points, k, self.grid)[1][:, -1])
+            out.setflags(write=False)
+            cache[k] = out
+        return cache[k]
+
+    @cached_property
+    def adjacency(self) -> sp.csr_matrix:
+        """(n, n) int8 CSR neighbour graph: p and q are joined if either is among the other's
+        :data:`~curv.knn.GRAPH_NEIGHBOURS` nearest (symmetric, sorted indices).
+
+        Normals are oriented along it (:mod:`curv.point_normals`); supports come from the grid.
+        """
+        indptr, neighbours = symmetric_graph(self.nearest[0])
+        n = self.n_points
+        return sp.csr_matrix((np.ones(neighbours.size, np.int8), neighbours, indptr), shape=(n, n))
+
+    @cached_property
+    def nonmanifold_vertices(self) -> np.ndarray:
+        """(n,) bool, all False: points have no faces to be non-manifold (for code shared with meshes)."""
+        out = np.zeros(self.n_points, bool)
+        out.setflags(write=False)
+        return out
+
+    @cached_property
+    def isolated_vertices(self) -> np.ndarray:
+        """(n,) bool: points without any other point (a cloud of one point)."""
+        out = self.nearest[0][:, 0] < 0
+        out.setflags(write=False)
+        return out
+
+    @cached_property
+    def coincident_points(self) -> np.ndarray:
+        """(n,) bool: points at exactly the position of a point with a smaller index.
+
+        The first of each group of coincident points stands for it; the repeats carry no
+        information of their own (``Reason.DEGENERATE`` in an estimate, and the fits skip them as
+        neighbours since their offset has no tangent part).
+        """
+        indices, distances = self.nearest
+        ahead = (distances == 0.0) & (indices >= 0) & (indices < np.arange(self.n_points)[:, None])
+        out = ahead.any(axis=1)
+        out.setflags(write=False)
+        return out
 
     def __repr__(self) -> str:
         with_normals = "with normals" if self._normals is not None else "without normals"

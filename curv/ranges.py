@@ -8,6 +8,16 @@ named range is accepted; ``radius=r`` instead gives every vertex the same ball o
 units (the ball the estimator collects in, whatever it is). Estimators without a support (``meyer``,
 ``ru``: fixed 1-ring formulas) accept only their one named range.
 
+On a point cloud (:class:`curv.PointCloud`) the unit is the point's **spacing**: the distance to
+its :data:`SPACING_NEIGHBOUR`-th nearest other point. On a regular triangle mesh the 1-ring is the
+six nearest vertices and its longest edge is the distance to the farthest of them, so the spacing
+is the same length there and Rk means the same support on a mesh and on its vertices as points
+(R1 about 6 neighbours, R2 about 20-25 on an even sample). The support is every point reachable
+from p through the cloud's neighbour graph inside the ball (the graph plays the mesh edges'
+part). ``an`` and ``mru`` keep their ``(k - 1)`` rule (R2: the six nearest and their normals,
+like the mesh's 1-ring). ``knn=K`` (points only) gives p the ball through its K-th nearest other
+point, so the support is the K nearest (more on exact ties), for every estimator alike.
+
 Everything else (the API, the CLI, the viewer, the memory model, the study) asks this module.
 """
 
@@ -19,10 +29,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import EstimatorError
+from .pointcloud import PointCloud
 
 __all__ = ["Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
            "default_range", "smallest_range", "takes_any_range", "canonical_k", "nearest_allowed",
-           "allowed_paper_ranges", "describe_ranges", "TIE_TOLERANCE", "PAPER_RANGES", "FORMS"]
+           "allowed_paper_ranges", "describe_ranges", "unit_lengths", "point_spacing", "TIE_TOLERANCE",
+           "PAPER_RANGES", "FORMS", "SPACING_NEIGHBOUR", "MIN_KNN"]
+
+SPACING_NEIGHBOUR = 6
+"""A point's spacing (its range unit) is the distance to its 6th nearest other point (module notes)."""
+
+MIN_KNN = 3
+"""The smallest ``knn=K``: the fits have three curvature unknowns."""
 
 TIE_TOLERANCE = 1e-9
 """Relative tolerance on every ball radius, so that vertices exactly at k edge lengths (regular
@@ -37,7 +55,7 @@ FORMS = "a number k >= 1 such as 2 or 2.5, a label such as 'R2', or radius=r in 
 
 @dataclass(frozen=True)
 class Range:
-    """A resolved range: either a multiple ``k`` of each vertex's longest 1-ring edge or a fixed ``radius``.
+    """A resolved range: a multiple ``k`` of each vertex's range unit, a fixed ``radius``, or ``knn``.
 
     Attributes
     ----------
@@ -49,12 +67,16 @@ class Range:
 
     k: float | None = None
     radius: float | None = None
+    knn: int | None = None
+    """The K of ``knn=K`` (points only): the ball through the K-th nearest other point."""
 
     @property
     def label(self) -> str:
-        """``'R2'``, ``'R2.5'`` or ``'r=0.3'``."""
+        """``'R2'``, ``'R2.5'``, ``'r=0.3'`` or ``'knn=20'``."""
         if self.radius is not None:
             return f"r={self.radius:g}"
+        if self.knn is not None:
+            return f"knn={self.knn}"
         return range_label(self.k)
 
     @property
@@ -152,7 +174,7 @@ def support_factor(k: float, *, uses_normals: bool) -> float:
     return k - 1.0 if uses_normals else float(k)
 
 
-def resolve(spec, range=None, radius=None) -> Range:
+def resolve(spec, range=None, radius=None, knn=None) -> Range:
     """Validate a range request for an estimator.
 
     Parameters
@@ -163,6 +185,8 @@ def resolve(spec, range=None, radius=None) -> Range:
         k of Rk; default the estimator's R2 if it has one, else its first named range.
     radius : float, optional
         Absolute ball radius (mutually exclusive with ``range``).
+    knn : int, optional
+        The K nearest points (point clouds; mutually exclusive with the others).
 
     Returns
     -------
@@ -173,6 +197,14 @@ def resolve(spec, range=None, radius=None) -> Range:
     EstimatorError
         Both or an invalid one given; the message names the allowed forms.
     """
+    if knn is not None:
+        if range is not None or radius is not None:
+            raise EstimatorError("give one of range=, radius= or knn=")
+        if not spec.has_support:
+            raise EstimatorError(f"estimator {spec.name!r} uses its fixed 1-ring and takes no knn")
+        if isinstance(knn, (bool, np.bool_)) or not isinstance(knn, (int, np.integer)) or knn < MIN_KNN:
+            raise EstimatorError(f"knn must be a whole number of neighbours >= {MIN_KNN}; got {knn!r}")
+        return Range(knn=int(knn))
     if radius is not None:
         if range is not None:
             raise EstimatorError("give either range= or radius=, not both")
@@ -203,17 +235,40 @@ def resolve(spec, range=None, radius=None) -> Range:
     return Range(k=k)
 
 
+def point_spacing(cloud: PointCloud) -> np.ndarray:
+    """(n,) float64 spacing of every point: the distance to its :data:`SPACING_NEIGHBOUR`-th nearest."""
+    return cloud.kth_distance(SPACING_NEIGHBOUR)
+
+
+def unit_lengths(shape) -> np.ndarray:
+    """(n,) float64 range unit of every vertex: the longest 1-ring edge of a mesh, a point's spacing."""
+    if isinstance(shape, PointCloud):
+        return point_spacing(shape)
+    return shape.longest_edge
+
+
 def ball_radii(mesh, rng: Range, *, uses_normals: bool) -> np.ndarray:
     """(n,) float64 radius of the ball each vertex collects its support in, tolerance included.
 
     Parameters
     ----------
-    mesh : Mesh
+    mesh : Mesh or PointCloud
     rng : Range
     uses_normals : bool
-        Whether the estimator also uses its neighbours' normals (support ``k - 1``).
+        Whether the estimator also uses its neighbours' normals (support ``k - 1``; not for knn).
+
+    Raises
+    ------
+    EstimatorError
+        ``knn`` on a mesh (its supports follow the mesh edges; use a range or a radius).
     """
     if rng.radius is not None:
         return np.full(mesh.n_vertices, rng.radius * (1.0 + TIE_TOLERANCE))
+    if rng.knn is not None:
+        if not isinstance(mesh, PointCloud):
+            raise EstimatorError("knn= is for point clouds; on a mesh give range= or radius=")
+        if rng.knn >= mesh.n_points:
+            raise EstimatorError(f"knn={rng.knn} needs more than {rng.knn} points; the cloud has {mesh.n_points}")
+        return (1.0 + TIE_TOLERANCE) * mesh.kth_distance(rng.knn)
     factor = support_factor(rng.k, uses_normals=uses_normals)
-    return (factor * (1.0 + TIE_TOLERANCE)) * mesh.longest_edge
+    return (factor * (1.0 + TIE_TOLERANCE)) * unit_lengths(mesh)

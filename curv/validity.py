@@ -33,6 +33,9 @@ class Reason(enum.IntEnum):
     FEATURE = 7
     """On a feature edge (a crease sharper than the ``features`` angle) or a corner of them: the
     smooth curvature is undefined there (:mod:`curv.features`)."""
+    ORIENTATION = 8
+    """A point-cloud normal whose orientation its neighbourhood cannot decide (a thin sheet, a fold,
+    a sparse spot; :mod:`curv.point_normals`): no sign is guessed, so there is no estimate."""
 
 
 def describe_reasons(reason: np.ndarray) -> dict[str, int]:

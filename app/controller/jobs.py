@@ -163,7 +163,7 @@ class Controller(QObject):
         """Show ``pane`` (a validated :class:`~app.model.Pane`) in pane ``i`` and compute it unless its
         result is known; an earlier failure or cancel of the same pair is retried, not shown again."""
         self.doc.retry(pane.key)
-        self.doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius)
+        self.doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, options=pane.options)
         self.request_missing()
 
     def _start_estimate(self, key) -> None:

@@ -52,7 +52,8 @@ class FeatureRow:
 
 @dataclass(frozen=True)
 class RankingRow:
-    """One ranked variant as shown: estimator, range label, predicted median e_rel and its text."""
+    """One ranked candidate as shown: estimator, range label, options, valid share, predicted median
+    e_rel and their texts."""
 
     method: str
     range: int
@@ -60,6 +61,25 @@ class RankingRow:
     expected_erel: float
     erel_text: str
     recommended: bool
+    options: tuple = ()
+    options_text: str = ""
+    valid_share: float = 1.0
+    valid_text: str = "100 %"
+
+    @property
+    def options_short(self) -> str:
+        """The options for a narrow table cell: ``deg 4``, ``fit R4`` (normals fitted at R4)."""
+        opts = dict(self.options)
+        parts = [f"deg {v}" if k == "degree" else f"{k} {v}" for k, v in opts.items()
+                 if k not in ("normals", "fit_range")]
+        if opts.get("normals") == "fit":
+            parts.append(f"fit {ranges.range_label(opts.get('fit_range', 2))}")
+        return ", ".join(parts)
+
+    @property
+    def label(self) -> str:
+        """``jet R4 degree 4``: the whole call for a person."""
+        return f"{self.method} {self.range_label}" + (f" {self.options_text}" if self.options_text else "")
 
 
 def percent_text(fraction: float) -> str:
@@ -128,9 +148,18 @@ def ranking_rows(advice) -> list[RankingRow]:
     Returns
     -------
     list of RankingRow
-        In the advisor's order (increasing predicted median e_rel); exactly the row of
-        ``advice.method`` / ``advice.range`` is ``recommended``.
+        In the advisor's order (the candidates that leave the fewest vertices invalid first, each
+        group by increasing predicted median e_rel); exactly the first row is ``recommended``.
     """
-    return [RankingRow(method, int(k), ranges.range_label(k), float(erel), f"{erel:.3g}",
-                       method == advice.method and k == advice.range)
-            for method, k, erel in advice.ranking]
+    return [RankingRow(c.method, int(c.range), ranges.range_label(c.range), float(c.expected_erel),
+                       f"{c.expected_erel:.3g}", i == 0, tuple(sorted(c.options.items())),
+                       c.variant.options_label, float(c.valid_share), valid_percent_text(c.valid_share))
+            for i, c in enumerate(advice.ranking)]
+
+
+def valid_percent_text(share: float) -> str:
+    """``1.0`` -> ``100 %``, ``0.871`` -> ``87 %``, ``0.996`` -> ``99.6 %`` (never rounds up to 100)."""
+    value = 100.0 * share
+    if value >= 100.0:
+        return "100 %"
+    return f"{value:.0f} %" if value < 99.5 else f"{min(value, 99.9):.1f} %"

@@ -8,7 +8,9 @@ import numpy as np
 from curv import ranges
 from curv.colors import diverges
 from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators
+from curv.errors import EstimatorError
 from curv.features import check_angle
+from curv.variants import Variant
 
 from .advice import AdviceRecord
 from .colors import LimitMode, colormap, compute_limits, map_colours
@@ -43,6 +45,10 @@ class Pane:
         Feature angle in degrees (``curv.estimate(..., features=)``), None for no features.
     region : Region or None
         Estimate only at these vertices (``vertices=``), None for the whole mesh.
+    options : tuple of (str, value)
+        More keyword arguments of ``curv.estimate``, sorted by name: an estimator option
+        (``("degree", 4)``) or fitted normals (``("fit_range", 4), ("normals", "fit")``); what the
+        advisor's Apply sets besides method and range. Empty: the defaults.
     """
 
     method: str
@@ -50,6 +56,10 @@ class Pane:
     radius: float | None = None
     features: float | None = None
     region: Region | None = None
+    options: tuple = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "options", tuple(sorted(dict(self.options).items())))
 
     @classmethod
     def default(cls, method: str = DEFAULT_ESTIMATOR) -> "Pane":
@@ -62,10 +72,16 @@ class Pane:
         return ranges.Range(radius=self.radius).label if self.radius is not None else ranges.range_label(self.range)
 
     @property
+    def options_label(self) -> str:
+        """``degree 4``, ``normals fit R4`` or empty (:attr:`curv.variants.Variant.options_label`)."""
+        return Variant(self.method, 2, options=self.options).options_label if self.options else ""
+
+    @property
     def setting(self) -> str:
-        """``R2``, ``R2 features 30°``, ``R2 features 30° region 0.5 around vertex 12 (...)``: the
-        range and whatever else changes the result."""
-        text = self.label + ("" if self.features is None else f" features {self.features:g}°")
+        """``R2``, ``R4 degree 4``, ``R2 features 30°``, ``R2 features 30° region 0.5 around vertex 12
+        (...)``: the range and whatever else changes the result."""
+        text = self.label + (f" {self.options_label}" if self.options else "")
+        text += "" if self.features is None else f" features {self.features:g}°"
         return text + ("" if self.region is None else f" {self.region.title}")
 
     @property
@@ -91,13 +107,20 @@ class Pane:
             kwargs["features"] = self.features
         if self.region is not None:
             kwargs["vertices"] = self.region.vertices
-        return kwargs
+        return {**kwargs, **dict(self.options)}
 
     def validated(self) -> "Pane":
         """This pane checked by :func:`curv.ranges.resolve` and :func:`curv.features.check_angle`
         (``EstimatorError`` naming the allowed forms)."""
         spec = ESTIMATORS[self.method]
         features = None if self.features is None else check_angle(self.features)
+        opts = dict(self.options)
+        if opts.pop("normals", "fit") != "fit":
+            raise EstimatorError("the only normals option of a pane is 'fit'")
+        if "fit_range" in opts:
+            opts.pop("fit_range")
+            ranges.resolve(ESTIMATORS["jet"], range=dict(self.options)["fit_range"])
+        spec.check_options(opts)
         if self.radius is not None:
             return replace(self, radius=ranges.resolve(spec, radius=self.radius).radius, features=features)
         return replace(self, range=ranges.resolve(spec, range=self.range).value, radius=None, features=features)

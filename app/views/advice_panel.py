@@ -32,9 +32,16 @@ INTRO = ("Advise measures the mesh (noise, irregularity, density, borders, polyg
          "estimator and range by the median relative error the paper's study predicts for such a mesh.")
 ERREL_TIP = ("Predicted median relative error e_rel (paper eq. 5.2) of this estimator and range on a mesh "
              "with the measured features, from the study's results on its test surfaces. Lower is better.")
+OPTIONS_TIP = ("Options of the call besides estimator and range: the jet's degree (deg 4), or normals from a "
+               "local jet fit at a range (fit R4: normals=\"fit\", fit_range=4). Apply sets them in the pane too.")
+VALID_TIP = ("Share of this mesh's vertices the call gives a value at: border vertices, supports with fewer "
+             "vertices than the fit's unknowns and, for the closed-ring estimators, supports that reach a border "
+             "are lost. Calls that lose more than 2 % more of the mesh than the best one rank after the rest.")
 COLUMNS = (("Estimator", "Registry name of the estimator (hover a row for its method)"),
            ("Range", RANGE_TIP),
-           ("Median e_rel", ERREL_TIP))
+           ("Options", OPTIONS_TIP),
+           ("Valid", VALID_TIP),
+           ("e_rel", ERREL_TIP))
 
 
 class AdvicePanel(QWidget):
@@ -100,7 +107,9 @@ class AdvicePanel(QWidget):
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(0, QHeaderView.ResizeMode.ResizeToContents)
         header.setSectionResizeMode(1, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(2, QHeaderView.ResizeMode.Stretch)
+        header.setSectionResizeMode(2, QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(3, QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(4, QHeaderView.ResizeMode.Stretch)
         self.table.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.table.setMinimumHeight(5 * (self.fontMetrics().height() + 6))  # the header and four rows
         # the table takes the height left over (its own scroll bar), never asks for more: the dock's
@@ -164,10 +173,10 @@ class AdvicePanel(QWidget):
             return
         chosen = self._rows[row]
         try:
-            pane = Pane(chosen.method, chosen.range).validated()
+            pane = Pane(chosen.method, chosen.range, options=chosen.options).validated()
         except (EstimatorError, KeyError) as exc:  # an estimator of the study this curv does not register
-            self.status.setText(f"<span style='color:{ERROR_COLOUR}'>Cannot apply {escape(chosen.method)} "
-                                f"{chosen.range_label}: {escape(str(exc))}</span>")
+            self.status.setText(f"<span style='color:{ERROR_COLOUR}'>Cannot apply {escape(chosen.label)}: "
+                                f"{escape(str(exc))}</span>")
             return
         self.apply_requested.emit(pane)
 
@@ -235,12 +244,14 @@ class AdvicePanel(QWidget):
         tint = QBrush(QColor(RECOMMENDED_BACKGROUND))
         for r, row in enumerate(self._rows):
             spec = ESTIMATORS.get(row.method)
-            cells = (row.method, row.range_label, row.erel_text)
-            tips = (estimator_tooltip(spec) if spec is not None else row.method, RANGE_TIP, ERREL_TIP)
+            cells = (row.method, row.range_label, row.options_short, row.valid_text, row.erel_text)
+            tips = (estimator_tooltip(spec) if spec is not None else row.method, RANGE_TIP, OPTIONS_TIP, VALID_TIP,
+                    ERREL_TIP)
             for c, (text, tip) in enumerate(zip(cells, tips)):
                 item = QTableWidgetItem(text)
-                item.setToolTip(("<b>Recommended</b><br>" if row.recommended else "") + tip)
-                if c == 2:
+                item.setToolTip(("<b>Recommended</b><br>" if row.recommended else "") + f"<b>{escape(row.label)}</b><br>"
+                                + tip)
+                if c >= 3:
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 if row.recommended:
                     item.setFont(bold)
@@ -261,11 +272,11 @@ class AdvicePanel(QWidget):
         usable = doc.advice_current and bool(self._rows)
         if usable:
             row = self._rows[self.selected_row()]
-            self.apply_button.setText(f"Apply {row.method} {row.range_label} to pane {letter}")
+            self.apply_button.setText(f"Apply {row.label} to pane {letter}")
         else:
             self.apply_button.setText(f"Apply to pane {letter}")
         self.apply_button.setEnabled(usable)
         self.apply_button.setToolTip(
-            f"Set pane {letter}'s estimator and range to the selected row (the recommendation unless you "
-            "select another) and compute it; double-clicking a row does the same"
+            f"Set pane {letter}'s estimator, range and options to the selected row (the recommendation unless "
+            "you select another) and compute it; double-clicking a row does the same"
             if usable else "Advise on the mesh shown now first: this advice is for another mesh")

@@ -260,7 +260,8 @@ class InspectPanel(QWidget):
         spec = ESTIMATORS[self.method.currentData()]
         pane = self.doc.panes[self.doc.active]
         radius = pane.radius if ranges.takes_any_range(spec) else None
-        self._set_pane(method=spec.name, range=ranges.nearest_allowed(spec, pane.range), radius=radius)
+        self._set_pane(method=spec.name, range=ranges.nearest_allowed(spec, pane.range), radius=radius,
+                       options=())  # another estimator starts from its defaults
 
     def _range_edited(self) -> None:
         try:

@@ -45,13 +45,15 @@ def restore_session(settings: QSettings, doc: Document) -> None:
     doc.display.update(**changes)
     try:
         saved = json.loads(str(settings.value("panes", "[]")))
-        panes = [Pane(p["method"], p["range"], p.get("radius"), p.get("features")).validated() for p in saved]
+        panes = [Pane(p["method"], p["range"], p.get("radius"), p.get("features"),
+                      options=tuple(tuple(o) for o in p.get("options", ()))).validated() for p in saved]
     except (ValueError, TypeError, KeyError, LookupError):
         return
     if panes:
         doc.set_pane_count(len(panes))
         for i, pane in enumerate(panes):
-            doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, features=pane.features)
+            doc.set_pane(i, method=pane.method, range=pane.range, radius=pane.radius, features=pane.features,
+                         options=pane.options)
     doc.set_difference(str(settings.value("panes/difference", "false")).lower() == "true")
 
 
@@ -64,7 +66,8 @@ def save_session(settings: QSettings, doc: Document) -> None:
     settings.setValue("cmap/diverging_cmap", st.diverging_cmap)
     settings.setValue("cmap/sequential_cmap", st.sequential_cmap)
     settings.setValue("panes", json.dumps([{"method": p.method, "range": p.range, "radius": p.radius,
-                                            "features": p.features} for p in doc.panes]))
+                                            "features": p.features, "options": [list(o) for o in p.options]}
+                                           for p in doc.panes]))
     settings.setValue("limits/mode", st.limit_mode.value)
     settings.setValue("limits/percentiles", json.dumps(list(st.percentiles)))
     settings.setValue("limits/manual", json.dumps(list(st.manual)))

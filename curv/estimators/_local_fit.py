@@ -261,7 +261,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     """
     n = mesh.n_vertices
     centres = all_centres(n, centres)
-    adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features))
+    adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
     radius = np.ascontiguousarray(radii, dtype=np.float64)

@@ -24,7 +24,7 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
+from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
                          solve_scaled, solve_sym3, tangent_frame)
 from .registry import EstimatorSpec, register
 
@@ -224,16 +224,16 @@ _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approxim
 
 register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
-    triangles_only=False, uses_normals=False, closed_ring=False, reference=_GI,
+    triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_nc_kernel,),
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
-    triangles_only=False, uses_normals=False, closed_ring=False, reference=_GI,
+    triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_qs_kernel,),
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
-    triangles_only=False, uses_normals=True, closed_ring=False, reference=_GI,
+    triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_an_kernel,),
 ))

@@ -125,7 +125,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
     h : float
         The coordinate scale: largest distance from p to a support vertex.
     """
-    nd = (degree + 1) * (degree + 2) // 2
+    nd = (degree + 1) * (degree + 2) // 2  # unknowns(degree); the registry's min_neighbours is nd - 1
     if count < nd:
         return _TOO_FEW, 0.0
     rx, ry, rz = normals[p, 0], normals[p, 1], normals[p, 2]
@@ -322,7 +322,7 @@ def check_degree(degree) -> int:
 
 
 def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, features):
-    indptr, indices = expansion_adjacency(mesh, blocked_vertices(features))
+    indptr, indices = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
     ref = np.ascontiguousarray(normals, dtype=np.float64)
@@ -416,9 +416,10 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
 
 register(EstimatorSpec(
     name="jet", in_paper=False, title="Osculating jet fitting", ranges=(1, 2, 3, 4), function=iter_jet,
-    triangles_only=False, uses_normals=False, closed_ring=False,
+    triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True,
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     options={"degree": DEGREES},
     kernels=(_jet_kernel,),
+    min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
 ))

@@ -16,7 +16,7 @@ import numpy as np
 from ..jit import jit, jit_parallel, prange
 from ..mesh import Mesh
 from ..neighbourhood import ball_support
-from ._local_fit import (MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
+from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit, slice_bounds,
                          solve_sym3, tangent_frame)
 from .registry import EstimatorSpec, register
 
@@ -76,7 +76,7 @@ def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
-    triangles_only=False, uses_normals=True, closed_ring=False,
+    triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
     summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel,),
 ))

@@ -12,10 +12,11 @@ from typing import Callable, Generator
 import numpy as np
 
 from ..errors import EstimatorError
+from ..pointcloud import PointCloud
 from ..result import Principal
 
 __all__ = ["EstimatorSpec", "ESTIMATORS", "DEFAULT_ESTIMATOR", "register", "get_spec", "EstimatorFunction",
-           "polygon_estimators", "refusal"]
+           "polygon_estimators", "point_estimators", "refusal"]
 
 DEFAULT_ESTIMATOR = "mru"
 """The estimator used when none is named (the API, the CLI, the viewer): the paper's own method."""
@@ -70,10 +71,18 @@ class EstimatorSpec:
         Can compute the default (Max-weighted) vertex normals in its own pass over the mesh: called
         with ``normals=None`` it returns them in :attr:`Principal.normals`, already NaN at
         :func:`curv.normals.unusable_normal_vertices`, saving a separate pass.
+    min_neighbours : int or callable
+        Fewest support vertices (the centre excluded) a vertex needs, else ``TOO_FEW_NEIGHBOURS``:
+        the fit's unknowns, or a function of the estimator options giving it (the jet's degree);
+        0 for the estimators without a fit. Read through :meth:`fewest_neighbours` (the advisor
+        counts the vertices a candidate can estimate with it).
     extra_bytes_per_unit : float
         Peak memory beyond the common per-vertex arrays, in bytes per size unit (vertices + faces / 2):
         whole-mesh per-edge and per-face arrays and stamps (``csm``, ``icc``); :mod:`curv.memory`
         adds it to its model.
+    takes_points : bool
+        Runs on a :class:`curv.PointCloud`: it needs only positions, normals and a support (no
+        faces, no edges). The face-based estimators refuse point clouds (:func:`refusal`).
     """
 
     name: str
@@ -91,6 +100,13 @@ class EstimatorSpec:
     options: dict = field(default_factory=dict, compare=False)
     kernels: tuple = field(default=(), repr=False, compare=False)
     extra_bytes_per_unit: float = 0.0
+    takes_points: bool = False
+    min_neighbours: object = field(default=0, compare=False)
+
+    def fewest_neighbours(self, options: dict | None = None) -> int:
+        """:attr:`min_neighbours` for these estimator options."""
+        m = self.min_neighbours
+        return int(m(dict(options or {})) if callable(m) else m)
 
     def check_options(self, options: dict) -> dict:
         """Validate estimator options; :class:`EstimatorError` names the allowed ones."""
@@ -133,12 +149,22 @@ def polygon_estimators() -> list[str]:
     return [name for name, spec in ESTIMATORS.items() if not spec.triangles_only]
 
 
-def refusal(spec: EstimatorSpec, mesh) -> str | None:
-    """Why ``spec`` cannot run on ``mesh``, in one sentence, or None if it can.
+def point_estimators() -> list[str]:
+    """Names of the estimators that run on point clouds, in registry order."""
+    return [name for name, spec in ESTIMATORS.items() if spec.takes_points]
 
-    The one place that decides which estimators a mesh rules out: the API raises it, the viewer
+
+def refusal(spec: EstimatorSpec, mesh) -> str | None:
+    """Why ``spec`` cannot run on ``mesh`` (a Mesh or a PointCloud), in one sentence, or None if it can.
+
+    The one place that decides which estimators an input rules out: the API raises it, the viewer
     greys the estimator out with it as the tooltip.
     """
+    if isinstance(mesh, PointCloud):
+        if spec.takes_points:
+            return None
+        return (f"estimator {spec.name!r} needs a mesh's faces and does not run on point clouds; "
+                f"use one of: {', '.join(point_estimators())}")
     if spec.triangles_only and not mesh.is_triangular:
         kinds = sorted(set(mesh.face_sizes.tolist()) - {3})
         return (f"estimator {spec.name!r} needs a triangle mesh, but the mesh has faces with {kinds} vertices; "

@@ -13,6 +13,7 @@ paper's hexagon (§5.1, :func:`hexagon_mesh`), normals up. ``sphere``, ``ellipso
 closed meshes with outward normals; ``cylinder`` is an open tube. ``capped_cylinder``, ``box``,
 ``hemisphere`` (on a disc) and ``cone`` are closed solids with sharp creases: exact curvature on their
 smooth parts, NaN with ``Reason.FEATURE`` on creases, corners and the apex (:mod:`.creased`).
+The smooth ones are also sampled as point clouds (uniform, blue noise, scan rows; :func:`sample_points`).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from .hexagon import (
     triangle_angles,
 )
 from .monge import EllipsoidPatch, MongePatch, QuadraticPatch, Saddle, TrigonometricPatch
+from .points import SAMPLINGS, SampledPoints, sample_points
 
 __all__ = [
     "Surface", "Param", "SampledSurface", "ImplicitSurface", "MongePatch",
@@ -36,7 +38,7 @@ __all__ = [
     "CreasedSurface", "CappedCylinder", "Box", "HemisphereOnDisc", "Cone", "crease_distance_rings",
     "SURFACES", "PAPER_SURFACES", "make_surface", "add_noise",
     "PlanarMesh", "PAPER_VERTEX_COUNTS", "hexagon_grid", "hexagon_mesh", "hexagon_subdivisions",
-    "angle_irregularity", "triangle_angles",
+    "angle_irregularity", "triangle_angles", "SampledPoints", "sample_points", "SAMPLINGS",
 ]
 
 SURFACES = MappingProxyType({

@@ -78,6 +78,11 @@ class Sphere(ImplicitSurface):
     def implicit_derivatives(self, points):
         return 2.0 * points, np.broadcast_to(2.0 * np.eye(3), (points.shape[0], 3, 3))
 
+    def project(self, points) -> np.ndarray:
+        """(n, 3) points moved along the ray from the centre onto the sphere."""
+        p = np.asarray(points, dtype=np.float64)
+        return self.radius * p / np.linalg.norm(p, axis=1, keepdims=True)
+
     def mesh(self, n_vertices: int | None = None, *, irregularity_deg: float = 0.0, rng=None) -> SampledSurface:
         """Geodesic sphere (subdivided icosahedron) with ``10 f^2 + 2`` vertices closest to ``n_vertices``.
 
@@ -107,6 +112,12 @@ class Ellipsoid(ImplicitSurface):
     def implicit_derivatives(self, points):
         inv2 = 1.0 / np.array([self.a, self.b, self.c]) ** 2
         return 2.0 * points * inv2, np.broadcast_to(np.diag(2.0 * inv2), (points.shape[0], 3, 3))
+
+    def project(self, points) -> np.ndarray:
+        """(n, 3) points moved along the ray from the centre onto the ellipsoid (exactly on it)."""
+        p = np.asarray(points, dtype=np.float64)
+        scale = np.sqrt(((p / np.array([self.a, self.b, self.c])) ** 2).sum(axis=1))
+        return p / scale[:, None]
 
     def mesh(self, n_vertices: int | None = None, *, irregularity_deg: float = 0.0, rng=None) -> SampledSurface:
         """Geodesic sphere of ``10 f^2 + 2`` vertices (closest to ``n_vertices``) scaled onto the ellipsoid.
@@ -153,6 +164,14 @@ class Torus(ImplicitSurface):
         hess[:, 2, 2] = 2.0
         return grad, hess
 
+    def project(self, points) -> np.ndarray:
+        """(n, 3) nearest points of the torus (off the z axis): onto the tube around the centre circle."""
+        p = np.asarray(points, dtype=np.float64)
+        rho = np.hypot(p[:, 0], p[:, 1])
+        centre = np.stack([self.major * p[:, 0] / rho, self.major * p[:, 1] / rho, np.zeros(len(p))], axis=1)
+        off = p - centre
+        return centre + self.minor * off / np.linalg.norm(off, axis=1, keepdims=True)
+
     def point(self, u, v) -> np.ndarray:
         """(n, 3) points at angles ``u`` (around z) and ``v`` (around the tube, 0 = outside equator)."""
         u, v = np.asarray(u, dtype=np.float64).reshape(-1), np.asarray(v, dtype=np.float64).reshape(-1)
@@ -195,6 +214,12 @@ class Cylinder(ImplicitSurface):
     def implicit_derivatives(self, points):
         grad = 2.0 * points * np.array([1.0, 1.0, 0.0])
         return grad, np.broadcast_to(np.diag([2.0, 2.0, 0.0]), (points.shape[0], 3, 3))
+
+    def project(self, points) -> np.ndarray:
+        """(n, 3) nearest points of the tube: moved radially in x, y (z kept)."""
+        p = np.array(points, dtype=np.float64)
+        p[:, :2] *= self.radius / np.hypot(p[:, 0], p[:, 1])[:, None]
+        return p
 
     def mesh(self, n_vertices: int | None = None, *, irregularity_deg: float = 0.0, rng=None) -> SampledSurface:
         """Grid of ``n_theta`` vertices around by ``n_z`` rings, about ``n_vertices`` in all.

@@ -73,6 +73,11 @@ class MongePatch(Surface):
         p = np.asarray(points, dtype=np.float64)
         return self.exact(p[:, 0], p[:, 1])
 
+    def project(self, points) -> np.ndarray:
+        """(n, 3) points of the patch above/below ``points`` (n, 2 or 3): ``(x, y, f(x, y))``."""
+        p = np.asarray(points, dtype=np.float64)
+        return np.column_stack([p[:, 0], p[:, 1], self.height(p[:, 0], p[:, 1])])
+
     def sample(self, planar: PlanarMesh | Mesh) -> SampledSurface:
         """Lift a planar mesh onto the patch.
 
