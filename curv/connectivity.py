@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .jit import jit, jit_parallel, launch, prange, threads
-from .normals import max_normal, unit
+from .corner_normals import max_normal, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
            "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
