@@ -204,6 +204,7 @@ def _cmd_estimate(args) -> int:
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
         t_write = time.perf_counter() - t2
+    t3 = time.perf_counter()
     if points:
         from .pointcli import report_lines
 
@@ -211,6 +212,7 @@ def _cmd_estimate(args) -> int:
             print(line)
     else:
         _print_mesh_report(args, mesh)
+    t_report = time.perf_counter() - t3
     reasons = describe_reasons(res.reason)
     n_isolated = 0 if points else int(mesh.isolated_vertices.sum())
     if n_isolated and reasons.get("DEGENERATE", 0) >= n_isolated:  # unreferenced vertices: say so
@@ -225,7 +227,7 @@ def _cmd_estimate(args) -> int:
     for name in EXPORTED:
         print(_stats_line(name, res.quantity(name)))
     written = f", write {t_write:.2f} s; wrote {args.output}" if args.output else ""
-    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s{written}")
+    print(f"time: load {t_load:.2f} s, estimate {t_est:.2f} s, report {t_report:.2f} s{written}")
     return 0
 
 

@@ -8,8 +8,10 @@ without hashing or sorting global keys:
   list by the other endpoint w and numbers the distinct w > u: edges come out in lexicographic order;
 - :func:`vertex_incidence` lists, per vertex, its edges in increasing edge order, which is also
   increasing neighbour order (all edges ``(q, p)`` with ``q < p`` precede the edges ``(p, r)``);
-- :func:`vertex_flags` finds border, non-manifold and inconsistently oriented vertices from the
-  same lists (counting the fans of faces around each vertex), without the edge table;
+- :func:`corner_pass` walks the corners around each vertex once, without the edge table, for the
+  border, non-manifold and inconsistently oriented vertices (counting the fans of faces around each
+  vertex), the edge neighbours, the longest 1-ring edge and the Max vertex normals: what a fresh
+  estimate needs;
 - :func:`triangle_geometry` gives the vector area, area and degeneracy of every triangle.
 
 The :class:`curv.Mesh` properties wrap them; their meaning is documented there.
@@ -18,13 +20,16 @@ The :class:`curv.Mesh` properties wrap them; their meaning is documented there.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from .jit import jit, jit_parallel, launch, prange, threads
+from .corner_normals import max_normal, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
-           "vertex_flags", "triangle_geometry", "KERNELS"]
+           "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
+           "corner_links", "component_labels", "edge_counts", "EDGE_COUNTS", "KERNELS"]
 
 SMALL_GROUP = 32
 """The halfedges around a vertex are sorted by insertion up to this many; more (a vertex with a
@@ -244,90 +249,6 @@ def edge_table(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, cor
 
 
 @jit
-def _ring_neighbours(u, corners_u, indices, corner_next, corner_prev, buf):
-    """The distinct edge neighbours of u, sorted, into ``buf``: the next and previous vertex of
-    each corner at u (not u itself: a face repeating an index has no edge there). Returns their count."""
-    k = 0
-    for c in corners_u:
-        a = indices[corner_next[c]]
-        b = indices[corner_prev[c]]
-        if a != u:
-            buf[k] = a
-            k += 1
-        if b != u:
-            buf[k] = b
-            k += 1
-    # insertion sort: a ring holds a dozen entries
-    for i in range(1, k):
-        value = buf[i]
-        j = i - 1
-        while j >= 0 and buf[j] > value:
-            buf[j + 1] = buf[j]
-            j -= 1
-        buf[j + 1] = value
-    count = 0
-    for i in range(k):
-        if i == 0 or buf[i] != buf[count - 1]:
-            buf[count] = buf[i]
-            count += 1
-    return count
-
-
-@jit_parallel
-def _count_neighbours(indptr, corners, indices, corner_next, corner_prev, width, parts, counts):
-    n = indptr.size - 1
-    for t in prange(parts):
-        buf = np.empty(width, np.int64)
-        lo, hi = _slice(n, t, parts)
-        for u in range(lo, hi):
-            counts[u] = _ring_neighbours(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next,
-                                         corner_prev, buf)
-
-
-@jit_parallel
-def _fill_neighbours(indptr, corners, indices, corner_next, corner_prev, width, parts, out_ptr, out):
-    n = indptr.size - 1
-    for t in prange(parts):
-        buf = np.empty(width, np.int64)
-        lo, hi = _slice(n, t, parts)
-        for u in range(lo, hi):
-            k = _ring_neighbours(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, buf)
-            start = out_ptr[u]
-            for i in range(k):
-                out[start + i] = buf[i]
-
-
-def ring_neighbours(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
-                    corner_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Edge neighbours of every vertex straight from the corners, without the edge table.
-
-    Parameters
-    ----------
-    indptr, corners : (n+1,), (h,) int64
-        Corners grouped by vertex (:func:`group_corners`).
-    indices, corner_next, corner_prev : (h,) int64
-        Vertex of each corner, next and previous corner in its face.
-
-    Returns
-    -------
-    out_ptr : (n+1,) int64
-    neighbours : (a,) int64
-        Sorted, distinct neighbours of vertex v in ``neighbours[out_ptr[v]:out_ptr[v+1]]``: the same
-        as the endpoints of the edge table's edges at v.
-    """
-    n = indptr.size - 1
-    width = _ring_width(indptr)
-    parts = max(1, min(threads(), n))
-    counts = np.empty(n, np.int64)
-    launch(_count_neighbours, indptr, corners, indices, corner_next, corner_prev, width, parts, counts)
-    out_ptr = np.zeros(n + 1, np.int64)
-    np.cumsum(counts, out=out_ptr[1:])
-    out = np.empty(out_ptr[-1], np.int64)
-    launch(_fill_neighbours, indptr, corners, indices, corner_next, corner_prev, width, parts, out_ptr, out)
-    return out_ptr, out
-
-
-@jit
 def vertex_incidence(edges, n):
     """The edges of each vertex, in increasing edge order (which is increasing neighbour order).
 
@@ -434,19 +355,21 @@ def _root(parent, i):
 
 
 @jit_parallel
-def _vertex_flags(indptr, corners, indices, corner_next, corner_prev, width, parts, nonmanifold, border,
-                  inconsistent):
+def _corner_pass(indptr, corners, indices, corner_next, corner_prev, x, width, parts, nonmanifold, border,
+                 inconsistent, counts, spread, longest, normals):
     n = indptr.size - 1
     for t in prange(parts):
-        other, corner, outgoing = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
-        parent = np.empty(width, np.int64)
+        other, corner, parent = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
         lo, hi = _slice(n, t, parts)
         for u in range(lo, hi):
+            first, last = indptr[u], indptr[u + 1]
+            sx, sy, sz = max_normal(u, first, last, corners, indices, corner_next, corner_prev, x)
+            normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
             # the halfedges at u (leaving or arriving at each of its corners), by other endpoint;
             # corner[k] = 2 (position of the corner at u) + (1 if the halfedge leaves u)
             k = 0
-            for i in range(indptr[u + 1] - indptr[u]):
-                c = corners[indptr[u] + i]
+            for i in range(last - first):
+                c = corners[first + i]
                 w = indices[corner_next[c]]
                 if w != u:
                     other[k], corner[k] = w, 2 * i + 1
@@ -457,13 +380,25 @@ def _vertex_flags(indptr, corners, indices, corner_next, corner_prev, width, par
                     k += 1
                 parent[i] = i
             _sort_pairs(other, corner, k)
-            fans = indptr[u + 1] - indptr[u]
+            fans = last - first
             on_border = on_nonmanifold_edge = on_inconsistent_edge = False
+            distinct = 0
+            far = 0.0
             start = 0
             for i in range(1, k + 1):
                 if i < k and other[i] == other[start]:
                     continue
-                # halfedges start .. i-1 are those of edge (u, other[start]): one per face
+                # halfedges start .. i-1 are those of edge (u, w): one per face
+                w = other[start]
+                spread[2 * first + distinct] = w
+                distinct += 1
+                # squares do not see the sign: the same length as Mesh.edge_lengths, to the bit
+                dx = x[w, 0] - x[u, 0]
+                dy = x[w, 1] - x[u, 1]
+                dz = x[w, 2] - x[u, 2]
+                length = math.sqrt(dx * dx + dy * dy + dz * dz)
+                if length > far:
+                    far = length
                 faces = i - start
                 if faces == 2:
                     # the two faces are one fan at u; opposite orientation if both run the same way
@@ -481,29 +416,75 @@ def _vertex_flags(indptr, corners, indices, corner_next, corner_prev, width, par
             nonmanifold[u] = fans > 1 or on_nonmanifold_edge
             border[u] = on_border or on_nonmanifold_edge
             inconsistent[u] = on_inconsistent_edge
+            counts[u] = distinct
+            longest[u] = far
 
 
-def vertex_flags(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
-                 corner_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-vertex topology flags from the halfedges around each vertex (no edge table needed).
+@jit_parallel
+def _gather_neighbours(indptr, spread, out_ptr, out):
+    for u in prange(indptr.size - 1):
+        source = 2 * indptr[u]
+        for i in range(out_ptr[u + 1] - out_ptr[u]):
+            out[out_ptr[u] + i] = spread[source + i]
 
-    The halfedges at u, grouped by their other endpoint w, are exactly those of the edges (u, w),
-    one per face; everything below is local to u, so vertices run in parallel.
+
+class CornerPass(NamedTuple):
+    """What one walk over the corners around each vertex gives (:func:`corner_pass`)."""
+
+    nonmanifold: np.ndarray
+    """(n,) bool: on an edge with more than two faces, or the faces around the vertex form several fans
+    (two corners are in one fan when their faces share an edge at the vertex that has exactly two faces)."""
+    border: np.ndarray
+    """(n,) bool: on an edge with one face or more than two."""
+    inconsistent: np.ndarray
+    """(n,) bool: on an edge with two faces that run it the same way (faces of opposite orientation)."""
+    neighbour_ptr: np.ndarray
+    """(n + 1,) int64 row pointers of ``neighbours``."""
+    neighbours: np.ndarray
+    """(a,) int64 the distinct edge neighbours of each vertex, sorted: the endpoints of its edges."""
+    longest_edge: np.ndarray
+    """(n,) float64 the longest edge at each vertex (0 without one)."""
+    max_normals: np.ndarray
+    """(n, 3) float64, column-major: unit Max (1999) vertex normals (:func:`curv.normals.max_normal`); NaN rows where
+    the corner terms cancel or there is no corner."""
+
+
+def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+                corner_prev: np.ndarray, vertices: np.ndarray) -> CornerPass:
+    """Vertex flags, edge neighbours, longest 1-ring edge and Max normals in one walk over the corners.
+
+    The halfedges at u (leaving or arriving at one of its corners), sorted by their other endpoint w,
+    are exactly those of the edges (u, w), one per face: their distinct w are the neighbours, their
+    group sizes give border and non-manifold edges, and linking the corners whose faces share an edge
+    counts the fans. Everything is local to u (no edge table), so vertices run in parallel.
+
+    Parameters
+    ----------
+    indptr, corners : (n + 1,), (h,) int64
+        Corners grouped by vertex (:func:`group_corners`).
+    indices, corner_next, corner_prev : (h,) int64
+        Vertex of each corner, next and previous corner in its face.
+    vertices : (n, 3) float64
 
     Returns
     -------
-    nonmanifold : (n,) bool
-        On an edge with more than two faces, or the faces around u form several fans (two corners
-        at u are in one fan when their faces share an edge at u that has exactly two faces).
-    border : (n,) bool
-        On an edge with one face or more than two.
-    inconsistent : (n,) bool
-        On an edge with two faces that run it the same way (faces of opposite orientation).
+    CornerPass
     """
     n = indptr.size - 1
-    out = np.empty(n, np.bool_), np.empty(n, np.bool_), np.empty(n, np.bool_)
-    launch(_vertex_flags, indptr, corners, indices, corner_next, corner_prev, _ring_width(indptr), threads(), *out)
-    return out
+    h = indices.size
+    nonmanifold, border, inconsistent = np.empty(n, np.bool_), np.empty(n, np.bool_), np.empty(n, np.bool_)
+    counts = np.empty(n, np.int64)
+    # a vertex has at most two neighbours per corner: each writes into its own slot of this
+    spread = np.empty(2 * h, np.int32 if n < 2**31 else np.int64)
+    # column-major: the fit kernels read each coordinate as a contiguous column (curv.normals.cached_max_normals)
+    longest, normals = np.empty(n), np.empty((n, 3), order="F")
+    launch(_corner_pass, indptr, corners, indices, corner_next, corner_prev, vertices, _ring_width(indptr),
+           max(1, min(threads(), n)), nonmanifold, border, inconsistent, counts, spread, longest, normals)
+    out_ptr = np.zeros(n + 1, np.int64)
+    np.cumsum(counts, out=out_ptr[1:])
+    out = np.empty(out_ptr[-1], np.int64)
+    launch(_gather_neighbours, indptr, spread, out_ptr, out)
+    return CornerPass(nonmanifold, border, inconsistent, out_ptr, out, longest, normals)
 
 
 @jit_parallel
@@ -533,6 +514,213 @@ def triangle_geometry(tri, vertices, vector_area, area, degenerate):
         degenerate[f] = i == j or j == k or i == k or a <= 1e-12 * longest2
 
 
+@jit
+def _mix(h, bits):
+    """Fold 64 bits into the hash h (multiply-xorshift: nearby coordinates spread over the table)."""
+    h = (h ^ bits) * np.uint64(0x9E3779B97F4A7C15)
+    return h ^ (h >> np.uint64(31))
+
+
+@jit
+def duplicate_positions(vertices, bits, out):
+    """``out[v]`` = True where vertex v sits at exactly the position of a vertex with a lower index.
+
+    One pass in index order with an open-addressing hash table of the positions seen (linear time;
+    a sort would be n log n).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite positions (``0.0`` and ``-0.0`` are the same position, as for ``==``).
+    bits : (n, 3) uint64
+        The same memory as ``vertices`` seen as integers (``vertices.view(np.uint64)``), to hash.
+    out : (n,) bool
+    """
+    n = vertices.shape[0]
+    size = 1
+    while size < 2 * n:
+        size *= 2
+    table = np.full(size, -1, np.int64)
+    mask = np.uint64(size - 1)
+    for v in range(n):
+        x, y, z = vertices[v, 0], vertices[v, 1], vertices[v, 2]
+        h = np.uint64(0)
+        for c in range(3):
+            # -0.0 == 0.0: both hash as 0
+            h = _mix(h, bits[v, c] if vertices[v, c] != 0.0 else np.uint64(0))
+        slot = h & mask
+        out[v] = False
+        while True:
+            w = table[slot]
+            if w < 0:
+                table[slot] = v
+                break
+            if vertices[w, 0] == x and vertices[w, 1] == y and vertices[w, 2] == z:
+                out[v] = True
+                break
+            slot = (slot + np.uint64(1)) & mask
+
+
+@jit
+def _angle_between(a, b):
+    """Degrees between unit vectors a and b (3-tuples): ``atan2(|a x b|, a . b)``, accurate at small and
+    large angles alike."""
+    ax, ay, az = a
+    bx, by, bz = b
+    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * (180.0 / math.pi)
+
+
+@jit
+def _dihedral(face_normals, f, g):
+    """Degrees between the unit normals of faces f and g (rows of ``face_normals``)."""
+    return _angle_between((face_normals[f, 0], face_normals[f, 1], face_normals[f, 2]),
+                          (face_normals[g, 0], face_normals[g, 1], face_normals[g, 2]))
+
+
+@jit_parallel
+def dihedral_angles(edge_faces, face_count, face_normals, out):
+    """``out[e]``: degrees between the unit normals of edge e's two faces; NaN unless it has exactly two.
+
+    ``atan2(|n0 x n1|, n0 . n1)``: accurate at small and large angles alike. NaN normals (degenerate
+    faces) give NaN.
+
+    Parameters
+    ----------
+    edge_faces : (e, 2) int64
+    face_count : (e,) int64
+    face_normals : (m, 3) float64
+    out : (e,) float64
+    """
+    for e in prange(edge_faces.shape[0]):
+        f, g = edge_faces[e, 0], edge_faces[e, 1]
+        if face_count[e] != 2 or f < 0 or g < 0:
+            out[e] = math.nan
+            continue
+        out[e] = _dihedral(face_normals, f, g)
+
+
+@jit_parallel
+def corner_links(offsets, corner_next, corner_prev):
+    """The next and previous corner of every corner within its face (faces are contiguous runs).
+
+    Parameters
+    ----------
+    offsets : (m + 1,) int64
+        Face f's corners are ``offsets[f] .. offsets[f + 1] - 1``.
+    corner_next, corner_prev : (h,) int64
+        Filled.
+    """
+    for f in prange(offsets.size - 1):
+        first, last = offsets[f], offsets[f + 1] - 1
+        for c in range(first, last + 1):
+            corner_next[c] = first if c == last else c + 1
+            corner_prev[c] = last if c == first else c - 1
+
+
+@jit
+def component_labels(indptr, neighbours, labels):
+    """Connected components of a graph given as neighbour lists; returns their count.
+
+    Union-find over the edges, then labels numbered in order of each component's lowest vertex (as
+    :func:`scipy.sparse.csgraph.connected_components` numbers them).
+
+    Parameters
+    ----------
+    indptr, neighbours : (n + 1,), (a,) int64
+        Symmetric neighbour lists.
+    labels : (n,) int64
+        Filled with the component of each vertex, ``0 .. count - 1``.
+    """
+    n = indptr.size - 1
+    parent = np.arange(n)
+    for u in range(n):
+        for i in range(indptr[u], indptr[u + 1]):
+            a, b = _root(parent, u), _root(parent, neighbours[i])
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+    count = 0
+    for u in range(n):
+        r = _root(parent, u)
+        if r == u:  # the root is the lowest vertex of its component, so it comes first
+            labels[u] = count
+            count += 1
+        else:
+            labels[u] = labels[r]
+    return count
+
+
+EDGE_COUNTS = ("edges", "border", "nonmanifold", "inconsistent", "sharp")
+"""The columns of :func:`edge_counts`."""
+
+
+@jit_parallel
+def _edge_counts(indptr, corners, indices, corner_next, corner_prev, corner_face, vector_area, area, degenerate,
+                 sharp_angle, width, parts, totals):
+    n = indptr.size - 1
+    for t in prange(parts):
+        key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            k = _upper_halfedges(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, key,
+                                 halfedge)
+            start = 0
+            for i in range(1, k + 1):
+                if i < k and key[i] >> 1 == key[start] >> 1:
+                    continue
+                # halfedges start .. i-1 are those of the edge (u, w), w > u: one per face
+                faces = i - start
+                totals[t, 0] += 1
+                if faces == 1:
+                    totals[t, 1] += 1
+                elif faces > 2:
+                    totals[t, 2] += 1
+                else:
+                    if (key[start] & 1) == (key[start + 1] & 1):  # both run the same way
+                        totals[t, 3] += 1
+                    f, g = corner_face[halfedge[start]], corner_face[halfedge[start + 1]]
+                    if not (degenerate[f] or degenerate[g]):
+                        # the unit normals as Mesh.face_normals divides them, without that (m, 3) array
+                        af, ag = area[f], area[g]
+                        nf = (vector_area[f, 0] / af, vector_area[f, 1] / af, vector_area[f, 2] / af)
+                        ng = (vector_area[g, 0] / ag, vector_area[g, 1] / ag, vector_area[g, 2] / ag)
+                        if _angle_between(nf, ng) > sharp_angle:
+                            totals[t, 4] += 1
+                start = i
+
+
+def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+                corner_prev: np.ndarray, corner_face: np.ndarray, vector_area: np.ndarray, area: np.ndarray,
+                degenerate: np.ndarray, sharp_angle: float) -> dict[str, int]:
+    """How many edges, border, non-manifold, inconsistent and sharp edges, without the edge table.
+
+    The same counts as :func:`edge_table` and :func:`dihedral_angles` give (an edge (u, w) is seen
+    at u < w, from the halfedges around u), for a mesh report that needs no per-edge array.
+
+    Parameters
+    ----------
+    indptr, corners : (n + 1,), (h,) int64
+        Corners grouped by vertex.
+    indices, corner_next, corner_prev, corner_face : (h,) int64
+    vector_area, area, degenerate : (m, 3) float64, (m,) float64, (m,) bool
+        :attr:`Mesh.face_vector_areas`, :attr:`Mesh.face_areas`, :attr:`Mesh.degenerate_faces`: the unit
+        normal is their quotient, none at a degenerate face (as :attr:`Mesh.face_normals`).
+    sharp_angle : float
+        Edges with two faces whose dihedral angle is above this (degrees) are sharp.
+
+    Returns
+    -------
+    dict
+        ``{name: count}`` for the names of :data:`EDGE_COUNTS`.
+    """
+    parts = max(1, min(threads(), indptr.size - 1))
+    totals = np.zeros((parts, len(EDGE_COUNTS)), np.int64)
+    launch(_edge_counts, indptr, corners, indices, corner_next, corner_prev, corner_face, vector_area, area,
+           degenerate, float(sharp_angle), _ring_width(indptr), parts, totals)
+    return dict(zip(EDGE_COUNTS, (int(c) for c in totals.sum(axis=0))))
+
+
 KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
-           vertex_face_incidence, _vertex_flags, triangle_geometry)
+           vertex_face_incidence, _corner_pass, _gather_neighbours, triangle_geometry, duplicate_positions,
+           dihedral_angles, corner_links, component_labels, _edge_counts)
 """The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""

@@ -129,7 +129,7 @@ def _read_ply(path: Path):
             raise LoadError(f"{path}: PLY faces have no vertex_indices list")
         column = face[key]
         if column.dtype != object:
-            return vertices, np.array(column, dtype=np.int64)
+            return vertices, np.asarray(column)  # Mesh converts to int64 once, copying
         sizes = np.fromiter((len(p) for p in column), dtype=np.int64, count=len(column))
         if np.all(sizes == sizes[0]) and sizes[0] > 0:
             return vertices, np.stack(column).astype(np.int64)
@@ -282,21 +282,30 @@ _FLOAT_PROPS = EXPORTED + STANDARD_ERRORS
 _DIR_PROPS = tuple(f"d{i}{c}" for i in (1, 2) for c in "xyz")
 
 
-def _face_list_bytes(mesh: Mesh) -> bytes:
-    """The faces as binary little-endian PLY list records: a uchar count, then that many int32 indices.
+_WRITE_BLOCK = 1 << 18
+"""Vertex or face records per block written."""
 
-    Built in one go with numpy: face f's count byte sits at ``f + 4 * offset[f]`` and corner c's
-    four index bytes right after the counts and corners before it, at ``corner_face[c] + 1 + 4 c``.
+
+def _write_face_lists(fh, mesh: Mesh) -> None:
+    """Write the faces as binary little-endian PLY list records: a uchar count, then that many int32 indices.
+
+    Triangles go as packed (count, 3 indices) records a block at a time. Other polygons are built in
+    one go with numpy: face f's count byte sits at ``f + 4 * offset[f]`` and corner c's four index
+    bytes right after the counts and corners before it, at ``corner_face[c] + 1 + 4 c``.
     """
     sizes = mesh.face_sizes
     if sizes.size and sizes.max() > 255:
         raise MeshError(f"a face has {int(sizes.max())} vertices; PLY lists here hold at most 255")
     if mesh.is_triangular:
         # one packed record per face (numpy's structured dtypes have no padding unless asked)
-        records = np.empty(mesh.n_faces, dtype=[("count", "u1"), ("corners", "<i4", (3,))])
-        records["count"] = 3
-        records["corners"] = mesh.face_indices.reshape(-1, 3)
-        return records.tobytes()
+        triangles = mesh.face_indices.reshape(-1, 3)
+        block = np.empty(min(mesh.n_faces, _WRITE_BLOCK), dtype=[("count", "u1"), ("corners", "<i4", (3,))])
+        block["count"] = 3
+        for lo in range(0, mesh.n_faces, _WRITE_BLOCK):
+            rows = block[:min(mesh.n_faces - lo, _WRITE_BLOCK)]
+            rows["corners"] = triangles[lo:lo + rows.size]
+            fh.write(memoryview(rows).cast("B"))
+        return
     offsets = mesh.face_offsets[:-1]
     h = mesh.face_indices.size
     out = np.empty(mesh.n_faces + 4 * h, np.uint8)
@@ -304,7 +313,7 @@ def _face_list_bytes(mesh: Mesh) -> bytes:
     index_bytes = mesh.face_indices.astype("<i4").view(np.uint8).reshape(h, 4)
     first = mesh.corner_face + 1 + 4 * np.arange(h)
     out[first[:, None] + np.arange(4)] = index_bytes
-    return out.tobytes()
+    fh.write(memoryview(out))
 
 
 def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: str = "mean", cmap: str | None = None,
@@ -367,41 +376,42 @@ def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: s
     fields = [(c, "f8") for c in "xyz"] + [(c, "u1") for c in ("red", "green", "blue", "alpha")]
     fields += [(c, "f4") for c in _FLOAT_PROPS + _DIR_PROPS] + [("valid", "u1"), ("reason", "u1")]
     fields += [(name, "f4") for name in extra]
+    columns = {c: mesh.vertices[:, i] for i, c in enumerate("xyz")}
+    columns.update({c: colors[:, i] for i, c in enumerate(("red", "green", "blue", "alpha"))})
+    columns.update({name: getattr(curvature, name) for name in _FLOAT_PROPS})
+    for i, c in enumerate("xyz"):
+        columns[f"d1{c}"] = curvature.d1[:, i]
+        columns[f"d2{c}"] = curvature.d2[:, i]
+    columns["valid"] = curvature.valid
+    columns["reason"] = np.asarray(curvature.reason)
+    columns.update({name: np.asarray(values) for name, values in extra.items()})
     points_only = isinstance(mesh, PointCloud)
-    if points_only:
+    if points_only:  # the normals the estimate used, so that the file reads back with them
         fields += [(f"n{c}", "f4") for c in "xyz"]
-    vert = np.empty(n, dtype=fields)
-    for i, c in enumerate("xyz"):
-        vert[c] = mesh.vertices[:, i]
-    for i, c in enumerate(("red", "green", "blue", "alpha")):
-        vert[c] = colors[:, i]
-    for name in _FLOAT_PROPS:
-        vert[name] = getattr(curvature, name)
-    for i, c in enumerate("xyz"):
-        vert[f"d1{c}"] = curvature.d1[:, i]
-        vert[f"d2{c}"] = curvature.d2[:, i]
-    vert["valid"] = curvature.valid.astype(np.uint8)
-    vert["reason"] = np.asarray(curvature.reason, np.uint8)
-    for name, values in extra.items():
-        vert[name] = np.asarray(values, dtype=np.float64)
-    if points_only:
-        for i, c in enumerate("xyz"):
-            vert[f"n{c}"] = curvature.normals[:, i]
-    # plyfile describes both elements (the header); an empty face element of the right kind
-    # stands in, because plyfile writes list properties one face at a time (20 s at 1M faces)
+        columns.update({f"n{c}": curvature.normals[:, i] for i, c in enumerate("xyz")})
+    # plyfile describes both elements (the header); empty elements of the right kinds stand in,
+    # because plyfile writes list properties one face at a time (20 s at 1M faces)
     face_kind = PlyElement.describe(np.empty(0, dtype=[("vertex_indices", "i4", (3,))]), "face",
                                     len_types={"vertex_indices": "u1"}, val_types={"vertex_indices": "i4"})
     face_kind.data = np.empty(0 if points_only else mesh.n_faces, dtype=[("vertex_indices", "i4", (3,))])
-    vertex_element = PlyElement.describe(vert, "vertex")
-    ply = PlyData([vertex_element] if points_only else [vertex_element, face_kind], text=False, byte_order="<",
+    vertex_kind = PlyElement.describe(np.empty(0, dtype=fields), "vertex")
+    vertex_kind.data = np.empty(n, dtype=fields)  # only its length and dtype are read: no memory is touched
+    ply = PlyData([vertex_kind] if points_only else [vertex_kind, face_kind], text=False, byte_order="<",
                   comments=[" ".join(comment.split()), reason_legend()])
     header = ply.header.encode("ascii", errors="replace") + b"\n"
+    record = np.dtype([(name, np.dtype(kind).newbyteorder("<")) for name, kind in fields])
 
     def write(fh):
         fh.write(header)
-        fh.write(vert.astype(vertex_element.dtype("<"), copy=False).view(np.uint8))  # no bytes copy
+        # the vertex records a block at a time: a 10M-vertex file never holds all of them at once
+        block = np.empty(min(n, _WRITE_BLOCK), dtype=record)
+        for lo in range(0, n, _WRITE_BLOCK):
+            rows = block[:min(n - lo, _WRITE_BLOCK)]
+            for name, values in columns.items():
+                rows[name] = values[lo:lo + rows.size]
+            fh.write(memoryview(rows).cast("B"))
         if not points_only:
-            fh.write(_face_list_bytes(mesh))
+            _write_face_lists(fh, mesh)
 
     return _atomic_write(path, write)
 

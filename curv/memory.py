@@ -18,12 +18,15 @@ __all__ = ["estimate_peak_bytes", "available_bytes", "format_bytes", "MemoryEsti
 BASE_BYTES = 170 * 2**20
 """Interpreter, numpy, scipy and plyfile loaded, before any mesh data."""
 
-PER_UNIT_BYTES = 580.0
+PER_UNIT_BYTES = 360.0
 """Mesh, connectivity, validity masks, normals, report and result arrays per size unit.
 
-Measured with ``/usr/bin/time -v curv estimate`` on a 10M-vertex torus (20M faces, 20M units) with
-the numba kernels: mru R2 peaked at 9.2 GB resident (about 450 B per unit above the base), meyer
-at 8.7 GB; rounded up by about 25 %."""
+Measured with ``/usr/bin/time -v curv estimate torus.ply -m mru -r 2 -o out.ply`` on the torus of
+``benchmarks/bench_large.py`` after the one corner pass, the int32 corner links, the report without
+the edge table and the streaming PLY writer (docs/BENCHMARKS.md): 5.51 GB at 10M vertices (20M
+units), 1.29 GB at 2M, about 260 B per unit above the base and the stamps; rounded up by about 35 %. The
+peak is at the end of the command: the mesh report's face geometry on top of the mesh's cached
+connectivity and the result."""
 
 PER_POINT_BYTES = 1000.0
 """Point cloud, its neighbour search (the 10 nearest, the grid), spacing, normals and their

@@ -111,11 +111,15 @@ def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
             if not np.all(np.mod(f, 1) == 0):
                 raise MeshError("face indices must be integers")
         f = f.astype(np.int64)
-        # A padded array marks unused trailing slots with -1.
-        pad = f == -1
-        trailing = np.flip(np.cumprod(np.flip(pad, axis=1), axis=1), axis=1).astype(bool)
-        sizes = (~trailing).sum(axis=1)
-        indices = f[~trailing]
+        if f.size and f.min() >= 0:  # no padding: every row is a whole polygon (no mask to build)
+            sizes = np.full(f.shape[0], f.shape[1], np.int64)
+            indices = f.reshape(-1)
+        else:
+            # A padded array marks unused trailing slots with -1.
+            pad = f == -1
+            trailing = np.flip(np.cumprod(np.flip(pad, axis=1), axis=1), axis=1).astype(bool)
+            sizes = (~trailing).sum(axis=1)
+            indices = f[~trailing]
     else:
         try:
             polys = [np.asarray(p).reshape(-1) for p in faces]
@@ -134,14 +138,16 @@ def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
         raise MeshError(f"face {small[0]} has {sizes[small[0]]} vertices; a face needs at least 3")
     offsets = np.zeros(sizes.size + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
-    face_of = np.repeat(np.arange(sizes.size), sizes)
-    neg = np.flatnonzero(indices < 0)
-    if neg.size:
-        raise MeshError(f"face {face_of[neg[0]]} has a negative vertex index {indices[neg[0]]}")
-    high = np.flatnonzero(indices >= n_vertices)
-    if high.size:
+    if indices.size and (indices.min() < 0 or indices.max() >= n_vertices):
+        def face_of(corner: int) -> int:
+            return int(np.searchsorted(offsets, corner, side="right")) - 1
+
+        neg = np.flatnonzero(indices < 0)
+        if neg.size:
+            raise MeshError(f"face {face_of(neg[0])} has a negative vertex index {indices[neg[0]]}")
+        high = np.flatnonzero(indices >= n_vertices)
         raise MeshError(
-            f"face {face_of[high[0]]} refers to vertex {indices[high[0]]}, "
+            f"face {face_of(high[0])} refers to vertex {indices[high[0]]}, "
             f"but the mesh has only {n_vertices} vertices"
         )
     return indices, offsets
@@ -238,20 +244,23 @@ class Mesh:
         return np.repeat(np.arange(self.n_faces, dtype=np.int64), self.face_sizes)
 
     @cached_property
-    def corner_next(self) -> np.ndarray:
-        """(h,) int64 index (into ``face_indices``) of the next corner in the same face."""
-        h = np.arange(self._indices.size, dtype=np.int64)
-        nxt = h + 1
-        last = self._offsets[1:] - 1
-        nxt[last] = self._offsets[:-1]
-        return nxt
+    def _corner_links(self) -> tuple[np.ndarray, np.ndarray]:
+        h = self._indices.size
+        # int32 where it fits: two (h,) arrays kept for the mesh's life (960 MB as int64 at 10M vertices)
+        kind = np.int32 if h < 2**31 else np.int64
+        nxt, prev = np.empty(h, kind), np.empty(h, kind)
+        launch(_kernels.corner_links, self._offsets, nxt, prev)
+        return nxt, prev
 
-    @cached_property
+    @property
+    def corner_next(self) -> np.ndarray:
+        """(h,) int32 (int64 beyond 2**31 corners) index (into ``face_indices``) of the next corner in the same face."""
+        return self._corner_links[0]
+
+    @property
     def corner_prev(self) -> np.ndarray:
-        """(h,) int64 index of the previous corner in the same face."""
-        prev = np.empty_like(self.corner_next)
-        prev[self.corner_next] = np.arange(self.corner_next.size)
-        return prev
+        """(h,) int32 (int64 beyond 2**31 corners) index of the previous corner in the same face."""
+        return self._corner_links[1]
 
     @cached_property
     def vertex_corners(self) -> tuple[np.ndarray, np.ndarray]:
@@ -321,11 +330,22 @@ class Mesh:
         return _kernels.vertex_incidence(self.edges, self.n_vertices)
 
     @cached_property
-    def _neighbours(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(indptr (n+1,), neighbours (a,))`` int64: each vertex's edge neighbours, sorted, found
-        from its corners (no edge table: a fresh estimate that needs only the 1-ring never builds it)."""
+    def corner_pass(self) -> _kernels.CornerPass:
+        """The vertex flags, edge neighbours, longest 1-ring edge and Max normals, from one walk over
+        the corners around each vertex (:func:`curv.connectivity.corner_pass`; no edge table, so a
+        fresh estimate never builds it). The arrays are read-only; the properties below expose them."""
         indptr, corners = self.vertex_corners
-        return _kernels.ring_neighbours(indptr, corners, self._indices, self.corner_next, self.corner_prev)
+        out = _kernels.corner_pass(indptr, corners, self._indices, self.corner_next, self.corner_prev,
+                                   self._vertices)
+        for arr in out:
+            arr.setflags(write=False)
+        return out
+
+    @property
+    def neighbour_lists(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(indptr (n+1,), neighbours (a,))`` int64, read-only: each vertex's edge neighbours, sorted
+        (the rows of :attr:`adjacency`)."""
+        return self.corner_pass.neighbour_ptr, self.corner_pass.neighbours
 
     @cached_property
     def adjacency(self) -> sp.csr_matrix:
@@ -333,14 +353,14 @@ class Mesh:
 
         Indices are sorted within each row.
         """
-        indptr, neighbours = self._neighbours
+        indptr, neighbours = self.neighbour_lists
         n = self.n_vertices
         return _csr(np.ones(neighbours.size, np.int8), neighbours, indptr, (n, n))
 
     @cached_property
     def valence(self) -> np.ndarray:
         """(n,) int64 number of edge neighbours of each vertex."""
-        return np.diff(self._neighbours[0])
+        return np.diff(self.neighbour_lists[0])
 
     @cached_property
     def vertex_faces(self) -> sp.csr_matrix:
@@ -361,10 +381,7 @@ class Mesh:
 
         This is the unit of the estimation range (paper §4.1). 0 for a vertex with no edge.
         """
-        indptr, neighbours = self._neighbours
-        out = np.empty(self.n_vertices)
-        launch(_kernels.longest_incident_edges, indptr, neighbours, self._vertices, out)
-        return out
+        return self.corner_pass.longest_edge
 
     # ------------------------------------------------------------------ faces geometry
     @cached_property
@@ -418,14 +435,8 @@ class Mesh:
         and non-manifold edges and next to a degenerate face. Which of them are creases is
         :mod:`curv.features`' rule.
         """
-        faces = self.edge_faces
-        interior = (self.edge_face_count == 2) & (faces[:, 0] >= 0) & (faces[:, 1] >= 0)
-        out = np.full(faces.shape[0], np.nan)
-        idx = np.flatnonzero(interior)
-        n0 = self.face_normals[faces[idx, 0]]
-        n1 = self.face_normals[faces[idx, 1]]
-        # atan2 of |cross| and dot: accurate at small and large angles alike
-        out[idx] = np.degrees(np.arctan2(np.linalg.norm(np.cross(n0, n1), axis=1), np.einsum("ij,ij->i", n0, n1)))
+        out = np.empty(self.edge_faces.shape[0])
+        launch(_kernels.dihedral_angles, self.edge_faces, self.edge_face_count, self.face_normals, out)
         out.setflags(write=False)
         return out
 
@@ -477,18 +488,8 @@ class Mesh:
     @cached_property
     def duplicate_vertices(self) -> np.ndarray:
         """(n,) bool: vertices at exactly the position of a vertex with a lower index."""
-        v = self._vertices
-        order = np.lexsort(v.T[::-1])
-        same = np.all(v[order[1:]] == v[order[:-1]], axis=1)
-        out = np.zeros(self.n_vertices, bool)
-        out[order[1:][same]] = True
-        # within a run of equal rows the lowest index must stay unmarked
-        first = np.ones(self.n_vertices, bool)
-        first[1:] = ~same
-        run = np.cumsum(first) - 1
-        lowest = np.full(run[-1] + 1, self.n_vertices)
-        np.minimum.at(lowest, run, order)
-        out[lowest[run]] = False
+        out = np.empty(self.n_vertices, bool)
+        _kernels.duplicate_positions(self._vertices, self._vertices.view(np.uint64), out)
         return out
 
     @cached_property
@@ -510,7 +511,7 @@ class Mesh:
         group. Vertices on non-manifold edges are included too.
         """
         # two corners at v are linked when their faces share an edge at v with exactly two faces;
-        # the linked groups are the fans (curv.connectivity.vertex_flags)
+        # the linked groups are the fans (curv.connectivity.corner_pass)
         return self._vertex_flags[0]
 
     @cached_property
@@ -518,48 +519,55 @@ class Mesh:
         """(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of opposite orientation meet there)."""
         return self._vertex_flags[2]
 
-    @cached_property
+    @property
     def _vertex_flags(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(nonmanifold, border, inconsistent)`` vertex flags in one pass over the corners, without
-        the edge table (:func:`curv.connectivity.vertex_flags`)."""
-        indptr, corners = self.vertex_corners
-        return _kernels.vertex_flags(indptr, corners, self._indices, self.corner_next, self.corner_prev)
+        """``(nonmanifold, border, inconsistent)`` vertex flags (:attr:`corner_pass`)."""
+        return self.corner_pass[:3]
 
     @cached_property
     def components(self) -> tuple[int, np.ndarray]:
         """``(count, labels)``: connected components of the vertex graph; labels is (n,) int."""
-        ncomp, labels = sp.csgraph.connected_components(self.adjacency, directed=False)
-        return int(ncomp), labels
+        labels = np.empty(self.n_vertices, np.int64)
+        count = _kernels.component_labels(*self.neighbour_lists, labels)
+        return int(count), labels
 
     def report(self) -> MeshReport:
         """Summarise the mesh: sizes, polygon kinds, components, borders and defects."""
-        sizes, counts = np.unique(self.face_sizes, return_counts=True)
+        sizes, face_counts = np.unique(self.face_sizes, return_counts=True)
         iso = self.isolated_vertices
         ncomp, labels = self.components
-        ncomp_faces = len(np.unique(labels[~iso])) if (~iso).any() else 0
-        border = self.border_edges
+        ncomp_faces = int(np.count_nonzero(np.bincount(labels[~iso], minlength=ncomp)))
+        from .features import SHARP_DEGREES
+
+        indptr, corners = self.vertex_corners
+        counts = _kernels.edge_counts(indptr, corners, self._indices, self.corner_next, self.corner_prev,
+                                      self.corner_face, self.face_vector_areas, self.face_areas,
+                                      self.degenerate_faces, SHARP_DEGREES)
         loops = 0
-        if border.any():
-            be = self.edges[border]
+        if counts["border"]:
+            be = self.edges[self.border_edges]
             verts = np.unique(be)
             remap = np.searchsorted(verts, be)
             g = sp.csr_matrix((np.ones(len(be)), (remap[:, 0], remap[:, 1])), shape=(verts.size,) * 2)
             loops = int(sp.csgraph.connected_components(g, directed=False)[0])
+        # the crease rule (its threshold suggestion) needs every dihedral angle, so the edge table:
+        # only when there is a sharp edge at all
+        sharp = _sharp_edge_facts(self) if counts["sharp"] else {"sharp_edges": 0, "suggested_features": None}
         return MeshReport(
             vertices=self.n_vertices,
             faces=self.n_faces,
-            edges=int(self.edges.shape[0]),
-            polygon_kinds={int(s): int(c) for s, c in zip(sizes, counts)},
+            edges=counts["edges"],
+            polygon_kinds={int(s): int(c) for s, c in zip(sizes, face_counts)},
             components=ncomp_faces,
-            border_edges=int(border.sum()),
+            border_edges=counts["border"],
             border_loops=loops,
-            nonmanifold_edges=int(self.nonmanifold_edges.sum()),
+            nonmanifold_edges=counts["nonmanifold"],
             nonmanifold_vertices=int(self.nonmanifold_vertices.sum()),
             degenerate_faces=int(self.degenerate_faces.sum()),
             isolated_vertices=int(iso.sum()),
-            inconsistent_edges=int(self.inconsistent_edges.sum()),
+            inconsistent_edges=counts["inconsistent"],
             duplicate_vertices=int(self.duplicate_vertices.sum()),
-            **_sharp_edge_facts(self),
+            **sharp,
         )
 
     # ------------------------------------------------------------------ derived meshes

@@ -169,17 +169,15 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np
 
 
 def _expansion(mesh: Mesh, bad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    adjacency = mesh.adjacency
-    indptr = adjacency.indptr.astype(np.int64)
-    indices = adjacency.indices.astype(np.int64)
+    indptr, indices = mesh.neighbour_lists
     if bad.any():
         keep = np.repeat(~bad, np.diff(indptr))
         counts = np.where(bad, 0, np.diff(indptr))
         indptr = np.zeros(mesh.n_vertices + 1, np.int64)
         np.cumsum(counts, out=indptr[1:])
         indices = indices[keep]
-    for arr in (indptr, indices):
-        arr.setflags(write=False)
+        for arr in (indptr, indices):
+            arr.setflags(write=False)
     return indptr, indices
 
 
@@ -402,9 +400,7 @@ class Neighbourhood:
 
     def any(self, flags: np.ndarray) -> np.ndarray:
         """(c,) bool: whether any support vertex has ``flags[vertex]`` set; ``flags`` is (n,) bool."""
-        hits = np.zeros(self.size, np.int64)
-        np.add.at(hits, self.rows, flags[self.indices])
-        return hits > 0
+        return np.bincount(self.rows, weights=flags[self.indices], minlength=self.size) > 0
 
 
 def iter_neighbourhoods(mesh: Mesh, factor: float, *, block_size: int | None = None,

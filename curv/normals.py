@@ -10,10 +10,15 @@ from __future__ import annotations
 import enum
 import math
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from .jit import jit, jit_parallel, launch, prange
-from .mesh import Mesh
+from .corner_normals import max_normal, max_weight, unit
+from .jit import jit_parallel, launch, prange
+
+if TYPE_CHECKING:  # the mesh's corner pass uses this module's kernels: no import at run time
+    from .mesh import Mesh
 
 __all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "unusable_normal_vertices", "max_normal",
            "max_weight", "unit", "KERNELS", "cached_max_normals"]
@@ -52,53 +57,6 @@ def unusable_normal_vertices(mesh: Mesh) -> np.ndarray:
         return flags
 
     return cached_with_mesh(mesh, "unusable_normals", build)
-
-
-@jit
-def max_normal(p, lo, hi, corners, indices, corner_next, corner_prev, x):
-    """Max (1999) normal of vertex p, unnormalised: sum over its corners of ``(a x b) / (|a|^2 |b|^2)``.
-
-    a and b are the edges from p to the next and to the previous vertex of the corner's face; a
-    corner with a zero-length edge gives nothing. ``corners[lo:hi]`` are the corners at p.
-
-    Returns
-    -------
-    sx, sy, sz : float
-    """
-    sx, sy, sz = 0.0, 0.0, 0.0
-    for i in range(lo, hi):
-        c = corners[i]
-        b, q = indices[corner_next[c]], indices[corner_prev[c]]
-        ax, ay, az = x[b, 0] - x[p, 0], x[b, 1] - x[p, 1], x[b, 2] - x[p, 2]
-        bx, by, bz = x[q, 0] - x[p, 0], x[q, 1] - x[p, 1], x[q, 2] - x[p, 2]
-        wx, wy, wz = max_weight(ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx,
-                                ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
-        sx += wx
-        sy += wy
-        sz += wz
-    return sx, sy, sz
-
-
-@jit
-def max_weight(cx, cy, cz, a2, b2):
-    """One corner's term of the Max normal: ``(a x b) / (|a|^2 |b|^2)`` from ``c = a x b``, ``|a|^2``,
-    ``|b|^2``; 0 where an edge has (almost) zero length."""
-    denominator = a2 * b2
-    if denominator == 0.0:
-        return 0.0, 0.0, 0.0
-    inv = 1.0 / denominator
-    if not math.isfinite(inv):
-        return 0.0, 0.0, 0.0
-    return cx * inv, cy * inv, cz * inv
-
-
-@jit
-def unit(sx, sy, sz):
-    """``s / |s|``; NaN when ``|s|`` is (near) zero (as :func:`normalize_rows`)."""
-    norm = math.sqrt(sx * sx + sy * sy + sz * sz)
-    if not norm > 1e-300:
-        return math.nan, math.nan, math.nan
-    return sx / norm, sy / norm, sz / norm
 
 
 MAX, AREA, ANGLE = 0, 1, 2
@@ -171,14 +129,9 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
 def cached_max_normals(mesh: Mesh) -> np.ndarray:
     """(n, 3) Max-weighted :func:`vertex_normals` of ``mesh``, computed once per mesh (read-only).
 
-    Column-major, so that a kernel's per-coordinate columns (``normals[:, 0]``) are views: an
-    estimate over a small region copies nothing of the whole mesh's size.
+    They come from the mesh's one walk over its corners (:attr:`curv.Mesh.corner_pass`), which a fresh
+    estimate makes anyway for the vertex flags and the neighbours. Column-major, so that a kernel's
+    per-coordinate columns (``normals[:, 0]``) are views: an estimate over a small region copies
+    nothing of the whole mesh's size.
     """
-    from .neighbourhood import cached_with_mesh
-
-    def build():
-        out = vertex_normals(mesh, order="F")
-        out.setflags(write=False)
-        return out
-
-    return cached_with_mesh(mesh, "max_normals", build)
+    return mesh.corner_pass.max_normals

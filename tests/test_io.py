@@ -86,11 +86,11 @@ def test_save_ply_is_atomic_on_failure(tmp_path, sphere_result, monkeypatch):
     target = tmp_path / "out.ply"
     target.write_bytes(b"old")
 
-    def fail_after_header_and_vertices(mesh):
+    def fail_after_header_and_vertices(fh, mesh):
         # by now the header and the vertex records are in the temporary file
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(curv.io, "_face_list_bytes", fail_after_header_and_vertices)
+    monkeypatch.setattr(curv.io, "_write_face_lists", fail_after_header_and_vertices)
     with pytest.raises(KeyboardInterrupt):
         save_ply(target, mesh, res)
     assert target.read_bytes() == b"old"
@@ -132,3 +132,17 @@ def test_repairs_report_their_counts():
     assert fixed.report().inconsistent_edges == 0
     assert np.sum(fixed.face_vector_areas * fixed.vertices[fixed.faces].mean(1)) > 0   # outward
     assert repair(fixed, merge_vertices=True, remove_degenerate=True, orient=True)[1] == []
+
+
+def test_save_ply_written_in_blocks_is_the_same_file(tmp_path, sphere_result, monkeypatch):
+    mesh, res = sphere_result
+    polygons = curv.Mesh(mesh.vertices, [list(f) for f in mesh.faces[:-2]] + [[*mesh.faces[-2], mesh.faces[-1][2]]])
+    for m in (mesh, polygons):
+        r = curv.estimate(m, "mru", 2)
+        whole = save_ply(tmp_path / "whole.ply", m, r, extra={"e": np.arange(m.n_vertices) * 0.5})
+        monkeypatch.setattr(curv.io, "_WRITE_BLOCK", 7)  # many blocks, the last one short
+        blocks = save_ply(tmp_path / "blocks.ply", m, r, extra={"e": np.arange(m.n_vertices) * 0.5})
+        monkeypatch.undo()
+        assert blocks.read_bytes() == whole.read_bytes()
+        back = PlyData.read(str(blocks))
+        assert np.array_equal(back["vertex"]["e"], np.arange(m.n_vertices) * np.float32(0.5))

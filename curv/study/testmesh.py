@@ -10,6 +10,7 @@ evaluates are fixed on the noise-free mesh: those with no border vertex within r
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -94,10 +95,33 @@ def build_test_mesh(task: Task) -> TestMesh:
     """
     from ..surfaces import add_noise
 
-    surface = random_surface(task.function, task.surface_rng())
-    clean = surface.mesh(task.density, irregularity_deg=task.irregularity, rng=task.mesh_rng())
-    evaluated = evaluated_vertices(clean.mesh)
+    clean, evaluated = _clean_mesh(task.seed, task.function, task.density, task.irregularity, task.sample)
     noisy = add_noise(clean, task.noise * NOISE_FRACTION, task.noise_rng())
     sigma = task.noise * NOISE_FRACTION * clean.mesh.mean_edge_length
     return TestMesh(sampled=noisy, evaluated=evaluated, irregularity=float(clean.irregularity_deg),
                     noise_sigma=float(sigma))
+
+
+# Consecutive tasks share their meshes: the planar hexagon (with its Delaunay calibration of the
+# irregularity) depends on (seed, density, irregularity, sample) only, so the 3 functions x 4 noise
+# levels of a random surface reuse one; the clean lifted mesh and its evaluated vertices only lack
+# the noise. A few of each are kept per worker process; the results are the same as building anew.
+_KEPT = 8
+
+
+@lru_cache(maxsize=_KEPT)
+def _planar_mesh(seed: int, density: int, irregularity: float, sample: int):
+    from ..surfaces import hexagon_mesh
+
+    task = Task(seed, "", density, irregularity, 0.0, sample)
+    return hexagon_mesh(density, irregularity_deg=irregularity, rng=task.mesh_rng())
+
+
+@lru_cache(maxsize=_KEPT)
+def _clean_mesh(seed: int, function: str, density: int, irregularity: float, sample: int):
+    """The noise-free sampled surface of a task and the vertices the study evaluates on it."""
+    task = Task(seed, function, density, irregularity, 0.0, sample)
+    clean = random_surface(function, task.surface_rng()).sample(_planar_mesh(seed, density, irregularity, sample))
+    evaluated = evaluated_vertices(clean.mesh)
+    evaluated.setflags(write=False)
+    return clean, evaluated

@@ -80,3 +80,25 @@ def test_evaluated_vertices_have_no_border_vertex_in_their_r4_support():
     assert tm.evaluated.any()
     assert not np.any(tm.evaluated & (touches | mesh.border_vertices))
     assert np.all(tm.evaluated | touches | mesh.border_vertices)
+
+
+def test_kept_meshes_equal_a_fresh_build():
+    """The planar mesh and the clean mesh are kept for the tasks that share them: a task built after
+    its neighbours equals the same task built from scratch through the surface's own ``mesh``."""
+    from curv.study import testmesh
+    from curv.study.testmesh import random_surface
+
+    task = Task(2, "quadratic", 217, 25.0, 0.66, 1)
+    for noise in (0.0, 1.0):  # fills the caches with this mesh
+        build_test_mesh(Task(2, "quadratic", 217, 25.0, noise, 1))
+    kept = build_test_mesh(task)
+    testmesh._planar_mesh.cache_clear()
+    testmesh._clean_mesh.cache_clear()
+    clean = random_surface(task.function, task.surface_rng()).mesh(
+        task.density, irregularity_deg=task.irregularity, rng=task.mesh_rng())
+    assert np.array_equal(kept.evaluated, evaluated_vertices(clean.mesh))
+    assert kept.irregularity == clean.irregularity_deg
+    fresh = build_test_mesh(task)
+    assert np.array_equal(kept.mesh.vertices, fresh.mesh.vertices)
+    assert np.array_equal(kept.mesh.face_indices, clean.mesh.face_indices)
+    assert np.array_equal(kept.truth.k1, fresh.truth.k1, equal_nan=True)
