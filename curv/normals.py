@@ -92,8 +92,7 @@ KERNELS = (_vertex_normals,)
 """The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""
 
 
-def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX,
-                   order: str = "C") -> np.ndarray:
+def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX) -> np.ndarray:
     """Unit vertex normals.
 
     Parameters
@@ -102,9 +101,6 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
         Triangle or polygon mesh; orientation of the faces gives the side of the normal.
     weighting : {"max", "area", "angle"}
         Face weights: Max (1999), face area, or corner angle.
-    order : {"C", "F"}
-        Memory layout of the result: "F" keeps each coordinate contiguous (what the fit kernels
-        read, :func:`cached_max_normals`).
 
     Returns
     -------
@@ -120,7 +116,7 @@ def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeigh
     else:
         code, face_weight = MAX, np.zeros((0, 3))
     indptr, corners = mesh.vertex_corners
-    out = np.empty((mesh.n_vertices, 3), order=order)
+    out = np.empty((mesh.n_vertices, 3))
     launch(_vertex_normals, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev,
            mesh.corner_face, mesh.vertices, code, face_weight, out)
     return out
