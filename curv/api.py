@@ -246,13 +246,13 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
     from .point_normals import border_points, point_normals
 
     n = cloud.n_points
-    ambiguous = np.zeros(n, bool)
+    ambiguous = one_sided = np.zeros(n, bool)
     if normals is None and cloud.normals is not None:
         used, label = normalize_rows(np.asarray(cloud.normals)), "file"
     elif normals is None or (isinstance(normals, str) and normals in ("pca", "fit")):
         method = "pca" if isinstance(normals, str) and normals == "pca" else "jet"
         est = point_normals(cloud, method=method, range=fit_range, orient=orient)
-        used, ambiguous, label = est.normals, est.ambiguous, f"{method} {est.label}"
+        used, ambiguous, one_sided, label = est.normals, est.ambiguous, est.one_sided, f"{method} {est.label}"
     elif isinstance(normals, str):
         raise EstimatorError(f"normals on a point cloud must be an (n, 3) array, 'pca' or 'fit'; got {normals!r}")
     else:
@@ -260,13 +260,16 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
     border = border_points(cloud)
     coincident = cloud.coincident_points
     flags = _Flags(isolated=cloud.isolated_vertices,
-                   forced=((cloud.isolated_vertices, Reason.DEGENERATE), (ambiguous, Reason.ORIENTATION)), marks=(
+                   # a normal fitted across an empty side is not trusted
+                   forced=((cloud.isolated_vertices, Reason.DEGENERATE), (one_sided, Reason.SINGULAR),
+                           (ambiguous, Reason.ORIENTATION)), marks=(
         # a repeat of an earlier point: that one stands for it
         (coincident, Reason.DEGENERATE),
         # on the rim of an open scan the fits see one side only, as on a mesh border
         (border, Reason.BORDER),
     ), info={"points": True, "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
-             "ambiguous_normals": int(ambiguous.sum())}, support_marks=(_line_supports(cloud),))
+             "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum())},
+                   support_marks=(_line_supports(cloud),))
     return used, flags, label
 
 

@@ -31,7 +31,8 @@ def test_the_registry_names_the_point_estimators():
 @pytest.mark.parametrize("method", POINT_METHODS)
 def test_sign_and_scale_with_estimated_normals(sphere2, method):
     res = curv.estimate(sphere2.cloud, method, 2)
-    assert res.valid.mean() > 0.995
+    # a few random spots leave a normal fit one-sided (curv.point_normals.ONE_SIDED_GAP): not trusted
+    assert res.valid.mean() > 0.99
     assert (res.k1[res.valid] >= res.k2[res.valid]).all()
     np.testing.assert_allclose(np.median(res.mean[res.valid]), 0.5, rtol=0.01)
     np.testing.assert_allclose(np.median(res.gaussian[res.valid]), 0.25, rtol=0.02)
@@ -179,8 +180,8 @@ def test_edge_on_points_towards_a_viewpoint_are_ambiguous(sphere2):
     assert np.isnan(res.normals[est.ambiguous]).all() and np.isnan(res.k1[est.ambiguous]).all()
     pts = sphere2.cloud.points
     ray = (view - pts) / np.linalg.norm(view - pts, axis=1, keepdims=True)
-    # every other point faces the viewpoint
-    seen = ~est.ambiguous
+    # every other point with a trusted normal faces the viewpoint
+    seen = ~est.ambiguous & ~est.one_sided
     assert (np.einsum("ij,ij->i", est.normals[seen], ray[seen]) > 0).all()
     assert res.info["ambiguous_normals"] == est.ambiguous.sum()
 
@@ -211,19 +212,40 @@ def test_coincident_points_are_degenerate_and_isolated_ones_too():
     assert lone.reason[0] == curv.Reason.DEGENERATE and np.isnan(lone.k1[0])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "not met: on scan rows 4:1 apart an R2 support can hold only two rows; the jet normal and the "
-    "fits there pass their singularity tests with wrong values (99th percentile |H error| at R2 on "
-    "this patch: nc 9.9, qs 22.7, jet 3.0, mru 23.7, an 4731, against max |H| 0.56)"))
-def test_scan_rows_give_no_made_up_values():
+ROWS_MISSES = {
+    # R2 support of mru and an: the (k-1) rule gives them the 6 nearest points, mostly one row,
+    # with one or two points of a neighbouring row deciding the curvature across the rows
+    "mru": "99th percentile |H error| 12.6 against max |H| 0.56 (one-sided normals left out)",
+    "an": "99th percentile |H error| 4460 against max |H| 0.56 (one-sided normals left out)",
+    # nc's one equation per neighbour weights the few far rows' normal curvatures like the near row's
+    "nc": "99th percentile |H error| 0.43 against max |H| 0.56 (one-sided normals left out)",
+}
+
+
+@pytest.mark.parametrize("method", [pytest.param(m, marks=[pytest.mark.xfail(strict=True, reason=ROWS_MISSES[m])]
+                                                 if m in ROWS_MISSES else []) for m in POINT_METHODS])
+def test_scan_rows_give_no_made_up_values(method):
     sampled = sample_points(QuadraticPatch(), 4000, sampling="rows", ratio=4, rng=12)
-    for method in POINT_METHODS:
-        res = curv.estimate(sampled.cloud, method, 2)
-        t = sampled.truth
-        err = np.abs(res.mean - t.mean)[res.valid]
-        assert res.valid.sum() > 200, method
-        # what is valid is an estimate: within 10 % of the largest |H| of the patch
-        assert np.percentile(err, 99) < 0.1 * np.abs(t.mean).max(), method
+    res = curv.estimate(sampled.cloud, method, 2)
+    t = sampled.truth
+    err = np.abs(res.mean - t.mean)[res.valid]
+    assert res.valid.sum() > 200
+    # what is valid is an estimate: within 10 % of the largest |H| of the patch
+    assert np.percentile(err, 99) < 0.1 * np.abs(t.mean).max()
+
+
+def test_a_one_sided_normal_support_is_singular_not_a_number():
+    """On scan rows, points whose normal fit sees one side only have no normal and no estimate."""
+    sampled = sample_points(QuadraticPatch(), 4000, sampling="rows", ratio=4, rng=12)
+    res = curv.estimate(sampled.cloud, "qs", 2)
+    one_sided = res.info["one_sided_normals"]
+    assert one_sided > 0
+    singular = (res.reason == curv.Reason.SINGULAR) & np.isnan(res.normals).any(axis=1)
+    assert singular.sum() >= one_sided - res.info["border_points"]
+    # the same rule leaves a uniform random sphere almost whole
+    sphere = curv.estimate(sample_points(Sphere(), 3000, rng=1).cloud, "qs", 2)
+    assert sphere.info["one_sided_normals"] < 0.01 * 3000
+    assert sphere.valid.mean() > 0.99
 
 
 def test_samplings_lie_on_the_surface_with_their_truth():
