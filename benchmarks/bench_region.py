@@ -1,7 +1,7 @@
 """What an estimate over a region costs on a large mesh: it should follow the region, not the mesh.
 
     .venv/bin/python benchmarks/bench_region.py 1000000
-    flock /work/wt/bigmem.lock .venv/bin/python benchmarks/bench_region.py 10000000
+    .venv/bin/python benchmarks/bench_region.py 10000000
 
 On the torus of ``benchmarks/bench_large.py`` with n vertices: the mesh is *prepared* once (its
 connectivity, cached normals and flags, the expansion adjacency, compiled kernels: what the first
