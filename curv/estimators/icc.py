@@ -210,10 +210,11 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
                 store_principal(p, e, f_, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2)
                 if from_measures:
                     # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
-                    # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8
+                    # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8.
+                    # H and K are sums of a few hundred clipped terms, rounded to tens of EPS.
                     h, kk = mean[p], gaussian[p]
                     disc = h * h - kk
-                    if disc <= 8.0 * EPS * (h * h + abs(kk)):
+                    if disc <= 64.0 * EPS * (h * h + abs(kk)):
                         disc = 0.0
                     rad = math.sqrt(disc)
                     k1[p] = mean[p] + rad
