@@ -77,15 +77,9 @@ def estimate_keywords(args, cloud) -> dict:
 
 def report_lines(args, cloud, res) -> list[str]:
     """The point cloud's part of the summary: points, spacing, normals, coincident and border points."""
-    from .ranges import point_spacing
+    from .ranges import describe_spacing
 
-    spacing = point_spacing(cloud)
-    finite = spacing[np.isfinite(spacing)]
-    if finite.size:
-        lo, med, hi = np.percentile(finite, [5, 50, 95])
-        spaced = f"spacing {med:.4g} (median; 5-95 %: {lo:.4g} .. {hi:.4g})"
-    else:
-        spaced = "no spacing (a single point)"
+    spaced = describe_spacing(cloud)
     label = res.info.get("normals", "")
     if label == "file":
         normals = "normals from the file"
@@ -99,4 +93,6 @@ def report_lines(args, cloud, res) -> list[str]:
              f"  border points {info.get('border_points', 0):,} (on the rim of an open scan)"]
     if info.get("ambiguous_normals"):
         lines.append(f"  ambiguous normals {info['ambiguous_normals']:,} (orientation undecided: no estimate there)")
+    if info.get("one_sided_normals"):
+        lines.append(f"  one-sided normals {info['one_sided_normals']:,} (fitted across an empty side: no estimate there)")
     return lines

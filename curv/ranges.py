@@ -32,7 +32,7 @@ from .errors import EstimatorError
 from .filled import filled
 from .pointcloud import PointCloud
 
-__all__ = ["Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
+__all__ = ["describe_spacing", "Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
            "default_range", "smallest_range", "takes_any_range", "canonical_k", "nearest_allowed",
            "allowed_paper_ranges", "describe_ranges", "unit_lengths", "point_spacing", "TIE_TOLERANCE",
            "PAPER_RANGES", "FORMS", "SPACING_NEIGHBOUR", "MIN_KNN"]
@@ -239,6 +239,16 @@ def resolve(spec, range=None, radius=None, knn=None) -> Range:
 def point_spacing(cloud: PointCloud) -> np.ndarray:
     """(n,) float64 spacing of every point: the distance to its :data:`SPACING_NEIGHBOUR`-th nearest."""
     return cloud.kth_distance(SPACING_NEIGHBOUR)
+
+
+def describe_spacing(cloud: PointCloud) -> str:
+    """``spacing 0.0123 (median; 5-95 %: 0.0101 .. 0.0150)``: the range unit of a cloud, in words."""
+    spacing = point_spacing(cloud)
+    finite = spacing[np.isfinite(spacing)]
+    if not finite.size:
+        return "no spacing (a single point)"
+    lo, med, hi = np.percentile(finite, [5, 50, 95])
+    return f"spacing {med:.4g} (median; 5-95 %: {lo:.4g} .. {hi:.4g})"
 
 
 def unit_lengths(shape) -> np.ndarray:

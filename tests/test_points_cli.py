@@ -207,3 +207,14 @@ def test_a_cloud_too_big_for_memory_is_refused_from_its_header(tmp_path, capsys)
     assert code == 2 and "qs R2 on 1,000,000,000 points needs about" in err and "refusing to start" in err
     code, _, err = _run(capsys, path, "-m", "qs", "--no-memory-check")
     assert code == 2 and "refusing" not in err and str(path) in err  # now the reader finds no data
+
+
+def test_summary_counts_the_one_sided_normals(tmp_path, capsys):
+    from curv.surfaces import QuadraticPatch, sample_points
+
+    rows = sample_points(QuadraticPatch(), 4000, sampling="rows", ratio=4, rng=12).cloud
+    path = _write_ply(tmp_path / "rows.ply", rows.points)
+    code, out, _ = _run(capsys, path, "-m", "qs", "-r", "2", "-q")
+    assert code == 0
+    line = next(line for line in out.splitlines() if "one-sided normals" in line)
+    assert int(line.split()[2].replace(",", "")) == curv.estimate(rows, "qs", 2).info["one_sided_normals"] > 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 from curv import PointCloud
-from curv.ranges import point_spacing
+from curv.ranges import describe_spacing, point_spacing
 from curv.surfaces import SAMPLINGS
 
 __all__ = ["is_points", "unit_length", "item_word", "items_word", "samplings", "can_sample_points", "cloud_report",
@@ -54,13 +54,8 @@ def can_sample_points(surface_class) -> bool:
 
 def cloud_report(cloud) -> list[str]:
     """The point-cloud report's lines before any estimate: points, spacing, normals, coincident points
-    (the facts are the library's: :func:`curv.ranges.point_spacing`, ``PointCloud.coincident_points``)."""
-    spacing = point_spacing(cloud)
-    finite = spacing[np.isfinite(spacing)]
-    lines = [f"{cloud.n_points:,} points, no faces"]
-    if finite.size:
-        lo, med, hi = np.percentile(finite, [5, 50, 95])
-        lines.append(f"spacing {med:.4g} (median; 5-95 %: {lo:.4g} .. {hi:.4g})")
+    (the facts are the library's: :func:`curv.ranges.describe_spacing`, ``PointCloud.coincident_points``)."""
+    lines = [f"{cloud.n_points:,} points, no faces", describe_spacing(cloud)]
     lines.append("normals from the file" if cloud.normals is not None else
                  "no normals in the file: each estimate fits and orients its own")
     lines.append(f"coincident points {int(cloud.coincident_points.sum()):,}")
@@ -78,6 +73,8 @@ def result_report(result) -> list[str]:
     lines = [said, f"border points {info.get('border_points', 0):,} (on the rim of an open scan)"]
     if info.get("ambiguous_normals"):
         lines.append(f"ambiguous normals {info['ambiguous_normals']:,} (orientation undecided: no estimate there)")
+    if info.get("one_sided_normals"):
+        lines.append(f"one-sided normals {info['one_sided_normals']:,} (fitted across an empty side: no estimate there)")
     return [line for line in lines if line]
 
 
