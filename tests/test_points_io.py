@@ -364,3 +364,15 @@ def test_mesh_vtp_export_keeps_the_faces(tmp_path):
     grid = pv.read(curv.save_result(tmp_path / "m.vtp", mesh, res))
     np.testing.assert_array_equal(grid.faces.reshape(-1, 4)[:, 1:], mesh.triangles)
     np.testing.assert_array_equal(grid["k2"], res.k2)
+
+
+def test_the_viewer_reads_a_point_file_whatever_mesh_repairs_are_ticked(tmp_path):
+    from app.controller.sources import load_source
+    from app.model.sources import FileSource
+
+    path = tmp_path / "cloud.xyz"
+    np.savetxt(path, np.random.default_rng(0).normal(size=(50, 3)))
+    with pytest.raises(curv.MeshError, match="repair"):
+        curv.load(path, merge_vertices=True)  # the library refuses a repair of a point cloud ...
+    _, cloud, truth = load_source(FileSource(str(path), repairs=("merge_vertices", "orient")))
+    assert isinstance(cloud, curv.PointCloud) and cloud.n_points == 50 and truth is None  # ... the viewer asks for none

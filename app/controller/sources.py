@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from curv.io import load
+from curv.io import is_point_file, load
 from curv.surfaces import SURFACES, make_surface, sample_points
 
 from app.model.inputs import cloud_report, is_points
@@ -66,6 +66,9 @@ def load_source(source):
     curv.CurvError or ValueError
         With a one-line message (unreadable file, bad parameters, ...).
     """
+    if isinstance(source, FileSource) and is_point_file(source.path):
+        # the opt-in repairs are a mesh's (the Mesh report's checkboxes): a point file is read as it is
+        return source, load(source.path), None
     if isinstance(source, FileSource):
         # STL stores every triangle with its own corners: merge them, or nothing is connected
         flags = {name: True for name in source.repairs}
