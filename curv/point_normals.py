@@ -79,6 +79,33 @@ the point is ``SINGULAR`` (:func:`support_spread`). On scan rows 4:1 apart, ``mr
 R2 passed the fits' own singularity test there with median errors in H of 1.0 and 320."""
 
 
+@jit
+def offset_moments(p, queue, count, x, y, z, centred, cov):
+    """Second moments of the offsets ``q - p`` over the support ``queue[:count]`` (p included), into
+    ``cov`` (3, 3): about their mean (the covariance) when ``centred``, else about p."""
+    sx = sy = sz = sxx = sxy = sxz = syy = syz = szz = 0.0
+    for j in range(count):
+        q = queue[j]
+        dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
+        sx += dx
+        sy += dy
+        sz += dz
+        sxx += dx * dx
+        sxy += dx * dy
+        sxz += dx * dz
+        syy += dy * dy
+        syz += dy * dz
+        szz += dz * dz
+    m = float(count)
+    mx, my, mz = (sx / m, sy / m, sz / m) if centred else (0.0, 0.0, 0.0)
+    cov[0, 0] = sxx / m - mx * mx
+    cov[0, 1] = cov[1, 0] = sxy / m - mx * my
+    cov[0, 2] = cov[2, 0] = sxz / m - mx * mz
+    cov[1, 1] = syy / m - my * my
+    cov[1, 2] = cov[2, 1] = syz / m - my * mz
+    cov[2, 2] = szz / m - mz * mz
+
+
 @jit_parallel
 def _frame_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues, angles, normal, gap, count_out):
     parts = stamps.shape[0]
@@ -97,27 +124,8 @@ def _frame_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues
                 normal[p, 0] = normal[p, 1] = normal[p, 2] = math.nan
                 gap[p] = 2.0 * math.pi
                 continue
-            # covariance about the centroid of the support (p included), in offsets from p
-            sx = sy = sz = sxx = sxy = sxz = syy = syz = szz = 0.0
-            for j in range(count):
-                q = queue[j]
-                dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
-                sx += dx
-                sy += dy
-                sz += dz
-                sxx += dx * dx
-                sxy += dx * dy
-                sxz += dx * dz
-                syy += dy * dy
-                syz += dy * dz
-                szz += dz * dz
-            m = float(count)
-            cov[0, 0] = sxx / m - sx * sx / (m * m)
-            cov[0, 1] = cov[1, 0] = sxy / m - sx * sy / (m * m)
-            cov[0, 2] = cov[2, 0] = sxz / m - sx * sz / (m * m)
-            cov[1, 1] = syy / m - sy * sy / (m * m)
-            cov[1, 2] = cov[2, 1] = syz / m - sy * sz / (m * m)
-            cov[2, 2] = szz / m - sz * sz / (m * m)
+            # covariance about the centroid of the support (p included)
+            offset_moments(p, queue, count, x, y, z, True, cov)
             sym3_eigen(cov, vecs)
             # smallest eigenvalue first: its vector is the normal; the largest spans the plane
             normal[p, 0], normal[p, 1], normal[p, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
@@ -161,19 +169,8 @@ def _spread_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queue
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            cov[:, :] = 0.0
-            for j in range(1, count):
-                q = queue[j]
-                d0, d1, d2 = x[q] - x[p], y[q] - y[p], z[q] - z[p]
-                cov[0, 0] += d0 * d0
-                cov[0, 1] += d0 * d1
-                cov[0, 2] += d0 * d2
-                cov[1, 1] += d1 * d1
-                cov[1, 2] += d1 * d2
-                cov[2, 2] += d2 * d2
-            cov[1, 0] = cov[0, 1]
-            cov[2, 0] = cov[0, 2]
-            cov[2, 1] = cov[1, 2]
+            # second moments about p itself: a support along a line through p has one direction only
+            offset_moments(p, queue, count, x, y, z, False, cov)
             sym3_eigen(cov, vecs)
             spread[p] = math.sqrt(max(vecs[3, 1], 0.0) / vecs[3, 2]) if vecs[3, 2] > 0.0 else 0.0
 
