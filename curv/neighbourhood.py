@@ -279,6 +279,18 @@ def _support_sizes(centres, radius2, indptr, indices, x, y, z, flags, stamps, qu
             flagged[i] = hit
 
 
+def _search_setup(mesh, radii, vertices, blocked=None):
+    """What a support search over some centres needs: the centres (c,), squared radii (n,), the
+    expansion CSR, the coordinate columns, per-thread stamps and queues, and each thread's slice."""
+    centres = all_centres(mesh.n_vertices, vertices)
+    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
+    indptr, indices = expansion_adjacency(mesh, blocked, radii)
+    parts = max(1, min(threads(), centres.size))
+    starts, stops = thread_slices(centres.size, parts)
+    return (centres, radius2, indptr, indices, coordinate_columns(mesh), new_scratch(mesh.n_vertices, parts),
+            new_queues(mesh.n_vertices, parts), starts, stops)
+
+
 def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None,
                   flags: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """How many vertices each support holds, and whether it holds a flagged one, without storing it.
@@ -300,16 +312,8 @@ def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = N
     flagged : (c,) bool
         The support (the centre included) holds a flagged vertex.
     """
-    centres = np.arange(mesh.n_vertices, dtype=np.int64) if vertices is None else \
-        np.ascontiguousarray(vertices, dtype=np.int64)
     flags = np.zeros(mesh.n_vertices, np.bool_) if flags is None else np.ascontiguousarray(flags, np.bool_)
-    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    indptr, indices = expansion_adjacency(mesh, None)
-    x, y, z = coordinate_columns(mesh)
-    parts = max(1, min(threads(), centres.size))
-    stamps = new_scratch(mesh.n_vertices, parts)
-    queues = new_queues(mesh.n_vertices, parts)
-    starts, stops = thread_slices(centres.size, parts)
+    centres, radius2, indptr, indices, (x, y, z), stamps, queues, starts, stops = _search_setup(mesh, radii, vertices)
     counts = np.empty(centres.size, np.int64)
     flagged = np.empty(centres.size, np.bool_)
     launch(_support_sizes, centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops,
@@ -338,15 +342,8 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, 
     indices : (nnz,) int64
         Support of centre i (itself excluded) in ``indices[indptr[i]:indptr[i+1]]``, in BFS order.
     """
-    centres = np.arange(mesh.n_vertices, dtype=np.int64) if vertices is None else \
-        np.ascontiguousarray(vertices, dtype=np.int64)
-    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
-    indptr, indices = expansion_adjacency(mesh, blocked, radii)
-    x, y, z = coordinate_columns(mesh)
-    parts = max(1, min(threads(), centres.size))
-    stamps = new_scratch(mesh.n_vertices, parts)
-    queues = new_queues(mesh.n_vertices, parts)
-    starts, stops = thread_slices(centres.size, parts)
+    centres, radius2, indptr, indices, (x, y, z), stamps, queues, starts, stops = _search_setup(
+        mesh, radii, vertices, blocked)
     counts = np.empty(centres.size, np.int64)
     launch(_support_counts, centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, counts)
     out_ptr = np.zeros(centres.size + 1, np.int64)
