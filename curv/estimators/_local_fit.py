@@ -26,6 +26,7 @@ from typing import Generator
 
 import numpy as np
 
+from ..filled import filled
 from ..jit import iter_chunks, jit, launch, threads
 from ..mesh import Mesh
 from ..neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
@@ -441,7 +442,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
-    k1_se, k2_se = np.full(n, np.nan), np.full(n, np.nan)
+    k1_se, k2_se = filled(n, np.nan), filled(n, np.nan)
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,

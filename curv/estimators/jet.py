@@ -36,6 +36,7 @@ import math
 import numpy as np
 
 from ..errors import EstimatorError
+from ..filled import filled
 from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..mesh import Mesh
 from ..neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch
@@ -356,7 +357,7 @@ def jet_se(vec, m, h, count, nd, ww, grads, out_se, row):
 
 
 @jit_parallel
-def _jet_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason,
+def _jet_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason,
                 k_se):
     parts = stamps.shape[0]
     nd = (degree + 1) * (degree + 2) // 2
@@ -368,7 +369,7 @@ def _jet_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, norm
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
-            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
+            count, queue = ball_support(p, radius[p] ** 2, indptr, indices, x, y, z, stamp, queue)
             code, h, ww = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
                 code = jet_principal(vec, frame, h, normals, k, d1, d2, p)
@@ -377,7 +378,7 @@ def _jet_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, norm
 
 
 @jit_parallel
-def _jet_normal_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, z, normals, stamps, queues, out, reason):
+def _jet_normal_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z, normals, stamps, queues, out, reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         stamp = stamps[t]
@@ -386,7 +387,7 @@ def _jet_normal_kernel(centres, lo, hi, degree, radius2, indptr, indices, x, y, 
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
-            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
+            count, queue = ball_support(p, radius[p] ** 2, indptr, indices, x, y, z, stamp, queue)
             code, _, _ = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             if code == _OK:
                 jet_normal(vec, frame, out, p)
@@ -403,14 +404,14 @@ def check_degree(degree) -> int:
 def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, features):
     indptr, indices = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
-    radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
+    radius = np.ascontiguousarray(radii, dtype=np.float64)
     # any layout: the cached normals are column-major, and a copy would cost the whole mesh per region
     ref = np.asarray(normals, dtype=np.float64)
     parts = max(1, min(threads(), centres.size))
     # A queue as long as the mesh per thread: ball_support never has to grow it. Growing it inside
     # the prange body (reassigning the array there) returned garbage supports on large balls.
     queues = np.empty((parts, mesh.n_vertices), np.int64)
-    return radius2, indptr, indices, x, y, z, ref, new_scratch(mesh.n_vertices, parts), queues
+    return radius, indptr, indices, x, y, z, ref, new_scratch(mesh.n_vertices, parts), queues
 
 
 def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
@@ -449,12 +450,12 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     n = mesh.n_vertices
     centres = all_centres(n, centres)
     out = empty_principal(n)
-    k = np.full((2, n), np.nan) if centres.size == n else np.empty((2, n))
-    k_se = np.full((2, n), np.nan)
-    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii, centres, features)
+    k = filled((2, n), np.nan)
+    k_se = filled((2, n), np.nan)
+    radius, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii, centres, features)
 
     def run(lo, hi):
-        launch(_jet_kernel, centres, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues,
+        launch(_jet_kernel, centres, lo, hi, degree, radius, indptr, indices, x, y, z, ref, stamps, queues,
                k, out.d1, out.d2, out.reason, k_se)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
@@ -488,10 +489,10 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
     out = np.full((n, 3), np.nan)
     reason = np.zeros(n, np.uint8)
     centres = all_centres(n, None)
-    radius2, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, reference, radii, centres, features)
+    radius, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, reference, radii, centres, features)
 
     def run(lo, hi):
-        launch(_jet_normal_kernel, centres, lo, hi, degree, radius2, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
+        launch(_jet_normal_kernel, centres, lo, hi, degree, radius, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
 
     yield from iter_chunks(n, run, chunk=chunk)
     out[reason != _OK] = np.nan

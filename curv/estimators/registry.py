@@ -12,6 +12,7 @@ from typing import Callable, Generator
 import numpy as np
 
 from ..errors import EstimatorError
+from ..filled import filled
 from ..pointcloud import PointCloud
 from ..result import Principal
 
@@ -178,9 +179,13 @@ def all_variants() -> list[tuple[str, int]]:
 
 
 def empty_principal(n: int) -> Principal:
-    """A :class:`Principal` of NaNs with every reason ``OK`` (to be filled by an estimator)."""
+    """A :class:`Principal` of NaNs with every reason ``OK`` (to be filled by an estimator).
+
+    The NaN arrays cost only the rows an estimator writes (:func:`curv.filled.filled`), so an
+    estimate over a small region of a large mesh does not pay for filling the whole mesh.
+    """
     return Principal(
-        k1=np.full(n, np.nan), k2=np.full(n, np.nan),
-        d1=np.full((n, 3), np.nan), d2=np.full((n, 3), np.nan),
+        k1=filled(n, np.nan), k2=filled(n, np.nan),
+        d1=filled((n, 3), np.nan), d2=filled((n, 3), np.nan),
         reason=np.zeros(n, np.uint8),
     )
