@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .jit import jit_parallel, prange
 from .quantities import QUANTITIES
 
 __all__ = ["INVALID_RGBA", "SIGNED", "CLIP_SHADE", "CLIP_MARGIN", "auto_limits", "diverges", "widen", "check_cmap",
@@ -177,24 +178,36 @@ def apply_table(values: np.ndarray, clim: tuple[float, float], table: np.ndarray
     -------
     (n, 4) uint8
     """
-    v = np.asarray(values, dtype=np.float64)
-    lo, hi = clim
-    k = table.shape[0]
-    bad = ~np.isfinite(v)
-    if valid is not None:
-        bad |= ~np.asarray(valid, bool)
-    t = np.where(bad, 0.0, (v - lo) * ((k - 1) / (hi - lo)))
-    idx = np.clip(np.rint(t), 0, k - 1).astype(np.intp)
+    v = np.ascontiguousarray(values, dtype=np.float64)
+    lo, hi = float(clim[0]), float(clim[1])
     if out is None:
         out = np.empty((v.shape[0], 4), dtype=np.uint8)
-    out[:, :3] = table[idx]
-    out[:, 3] = 255
-    if clip_shade is not None:
-        margin = CLIP_MARGIN * (hi - lo)
-        beyond = ~bad & ((v < lo - margin) | (v > hi + margin))
-        out[beyond, :3] = (table[idx[beyond]] * clip_shade).astype(np.uint8)
-    out[bad] = INVALID_RGBA
+    mask = np.ones(0, np.bool_) if valid is None else np.ascontiguousarray(valid, dtype=np.bool_)
+    shade = -1.0 if clip_shade is None else float(clip_shade)
+    _apply_table_kernel(v, mask, lo, hi, np.ascontiguousarray(table, dtype=np.uint8), shade, CLIP_MARGIN * (hi - lo),
+                        np.asarray(INVALID_RGBA, np.uint8), out)
     return out
+
+
+@jit_parallel
+def _apply_table_kernel(v, valid, lo, hi, table, shade, margin, invalid, out):
+    """Per vertex: the nearest table entry of its value (ends beyond the limits, shaded when
+    ``shade >= 0`` and beyond by more than ``margin``), or ``invalid`` (empty ``valid``: all valid)."""
+    k = table.shape[0]
+    scale = (k - 1) / (hi - lo)
+    check = valid.shape[0] > 0
+    for i in prange(v.shape[0]):
+        value = v[i]
+        if not np.isfinite(value) or (check and not valid[i]):
+            for c in range(4):
+                out[i, c] = invalid[c]
+            continue
+        t = (value - lo) * scale
+        j = 0 if t <= 0.0 else (k - 1 if t >= k - 1 else int(np.rint(t)))
+        factor = shade if shade >= 0.0 and (value < lo - margin or value > hi + margin) else 1.0
+        for c in range(3):
+            out[i, c] = table[j, c] if factor == 1.0 else np.uint8(int(table[j, c] * factor))
+        out[i, 3] = 255
 
 
 def map_colors(values: np.ndarray, *, cmap: str = "coolwarm", clim: tuple[float, float] | None = None,
