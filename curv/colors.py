@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .jit import jit_parallel, prange
+from .jit import jit
 from .quantities import QUANTITIES
 
 __all__ = ["INVALID_RGBA", "SIGNED", "CLIP_SHADE", "CLIP_MARGIN", "auto_limits", "diverges", "widen", "check_cmap",
@@ -189,14 +189,19 @@ def apply_table(values: np.ndarray, clim: tuple[float, float], table: np.ndarray
     return out
 
 
-@jit_parallel
+@jit
 def _apply_table_kernel(v, valid, lo, hi, table, shade, margin, invalid, out):
     """Per vertex: the nearest table entry of its value (ends beyond the limits, shaded when
-    ``shade >= 0`` and beyond by more than ``margin``), or ``invalid`` (empty ``valid``: all valid)."""
+    ``shade >= 0`` and beyond by more than ``margin``), or ``invalid`` (empty ``valid``: all valid).
+
+    Serial on purpose: the viewer colours on its GUI thread while a worker runs the estimators'
+    parallel kernels, and numba's thread pool takes one parallel launch at a time
+    (:func:`curv.jit.launch`); a serial loop neither waits for that nor disturbs it.
+    """
     k = table.shape[0]
     scale = (k - 1) / (hi - lo)
     check = valid.shape[0] > 0
-    for i in prange(v.shape[0]):
+    for i in range(v.shape[0]):
         value = v[i]
         if not np.isfinite(value) or (check and not valid[i]):
             for c in range(4):

@@ -83,3 +83,36 @@ def test_fork_while_another_thread_runs_a_kernel(torus):
     expected = curv.estimate(mesh, "qs", 2)
     for k1, _, _ in out:
         np.testing.assert_array_equal(k1, expected.k1)
+
+
+def test_colouring_on_one_thread_while_another_estimates():
+    """The viewer colours on its GUI thread while a worker estimates: neither may take down the process.
+
+    In a child process, because a clash in numba's thread pool aborts the interpreter.
+    """
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent("""
+        import threading
+        import numpy as np
+        import curv
+        from curv.colors import apply_table, colour_table
+        from tests.meshes import torus_grid
+
+        mesh = torus_grid(300, 150)[0]
+        done = threading.Event()
+        worker = threading.Thread(target=lambda: ([curv.estimate(mesh, "qs", 3) for _ in range(3)], done.set()))
+        worker.start()
+        values, table, count = np.random.default_rng(0).normal(size=200_000), colour_table("coolwarm"), 0
+        while not done.is_set():
+            apply_table(values, (-1.0, 1.0), table, clip_shade=0.6)
+            count += 1
+        worker.join()
+        print("coloured", count)
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
+                         cwd=str(__import__("pathlib").Path(__file__).resolve().parents[1]))
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert int(out.stdout.split()[-1]) > 0
