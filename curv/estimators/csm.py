@@ -47,7 +47,8 @@ from ..neighbourhood import (all_centres, ball_support, blocked_vertices, coordi
 from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements,
                              vertex_bits)
 from ._small_linalg import sym3_eigen
-from .registry import EstimatorSpec, empty_principal, register
+from ._triangle_corners import unset_principal
+from .registry import EstimatorSpec, register
 
 __all__ = ["iter_csm", "segment_in_ball", "edge_beta_scale"]
 
@@ -238,6 +239,10 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, hal
                     d2[p, c] = res[5 + c]
                 if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
                     singular = True
+            else:
+                k1[p] = k2[p] = math.nan
+                for c in range(3):
+                    d1[p, c] = d2[p, c] = math.nan
             reason[p] = support_reason(singular, hit, normal_ok)
 
 
@@ -294,14 +299,14 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     beta_scale = edge_beta_scale(mesh, touched)
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
-    normals = np.ascontiguousarray(normals, dtype=np.float64)
+    normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
     edges = mesh.edges
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
     queues = new_queues(n, parts)
     estamps = np.zeros((parts, edges.shape[0]), np.int32)  # vertex ids fit; half the cache lines
     fstamps = np.zeros((parts, tri.shape[0]), np.int32)
-    out = empty_principal(n)
+    out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
 
     def run(lo: int, hi: int) -> None:
         launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge, edges,

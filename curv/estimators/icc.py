@@ -60,7 +60,8 @@ from ..validity import Reason
 from ._local_fit import store_principal, tangent_frame
 from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
                              vertex_bits)
-from .registry import EstimatorSpec, empty_principal, register
+from ._triangle_corners import unset_principal
+from .registry import EstimatorSpec, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures"]
 
@@ -136,7 +137,7 @@ def face_measures(mesh: Mesh, normals: np.ndarray, ids: np.ndarray | None = None
     x, y, z = coordinate_columns(mesh)
     out = np.empty((tri.shape[0], MEASURES))
     launch(_face_measures, element_list(tri.shape[0], ids), tri, x, y, z,
-           np.ascontiguousarray(normals, dtype=np.float64), mesh.degenerate_faces, out)
+           np.asarray(normals, dtype=np.float64), mesh.degenerate_faces, out)
     return out
 
 
@@ -221,6 +222,10 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
                     k2[p] = mean[p] - rad
                 if not (math.isfinite(k1[p]) and math.isfinite(k2[p])):
                     singular = True
+            else:
+                k1[p] = k2[p] = math.nan
+                for c in range(3):
+                    d1[p, c] = d2[p, c] = math.nan
             reason[p] = support_reason(singular, hit, normal_ok)
 
 
@@ -236,7 +241,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
                  "nonmanifold_vertices"):
         getattr(mesh, name)
         yield 0.0
-    normals = np.ascontiguousarray(normals, dtype=np.float64)
+    normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
     x, y, z = coordinate_columns(mesh)
     blocked = blocked_vertices(features)
     indptr, indices = expansion_adjacency(mesh, blocked)
@@ -250,7 +255,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     vstamps = new_scratch(n, parts)
     queues = new_queues(n, parts)
     fstamps = np.zeros((parts, tri.shape[0]), np.int32)
-    out = empty_principal(n)
+    out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
     mean = np.empty(n)  # NaN at each centre before its sums (a region touches only its own pages)
     gaussian = np.empty(n)
 
