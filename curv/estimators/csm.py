@@ -157,22 +157,19 @@ def edge_beta_scale(mesh: Mesh, ids: np.ndarray | None = None) -> np.ndarray:
 
 # ---------------------------------------------------------------------------- the kernel
 @jit
-def _edge_term(e, edges, x, y, z, px, py, pz, r2, scale, tensor):
-    """Add ``beta(e) |e ∩ B| ê êᵀ`` (upper triangle, as ``scale * frac * d dᵀ``) to ``tensor[:6]``."""
-    a, b = edges[e, 0], edges[e, 1]
-    ax, ay, az = x[a] - px, y[a] - py, z[a] - pz
-    dx, dy, dz = x[b] - x[a], y[b] - y[a], z[b] - z[a]
-    bx, by, bz = ax + dx, ay + dy, az + dz
+def _edge_term(ax, ay, az, bx, by, bz, r2, scale):
+    """``beta(e) |e ∩ B| ê êᵀ`` (upper triangle, ``scale * frac * d dᵀ``) of the edge a -> b.
+
+    ``a`` and ``b`` are the ends' offsets from the ball's centre, ``a`` inside the ball; ``scale``
+    is ``beta(e) / |e|``. Returns the six terms xx, xy, xz, yy, yz, zz.
+    """
+    dx, dy, dz = bx - ax, by - ay, bz - az
     frac = 1.0  # both ends in the (convex) ball: all of e
-    if ax * ax + ay * ay + az * az > r2 or bx * bx + by * by + bz * bz > r2:
+    if bx * bx + by * by + bz * bz > r2:
         frac = segment_in_ball(ax, ay, az, dx, dy, dz, r2)
     w = scale * frac
-    tensor[0] += w * dx * dx
-    tensor[1] += w * dx * dy
-    tensor[2] += w * dx * dz
-    tensor[3] += w * dy * dy
-    tensor[4] += w * dy * dz
-    tensor[5] += w * dz * dz
+    wx, wy = w * dx, w * dy
+    return wx * dx, wx * dy, wx * dz, wy * dy, wy * dz, w * dz * dz
 
 
 @jit
@@ -190,14 +187,13 @@ def _kept_share(e, edge_faces, crease, tri):
 
 
 @jit_parallel
-def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, halfedge_edge, edges, beta_scale,
+def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale,
                edge_faces, tri, vector_area, face_area, degenerate, border, nonmanifold, cut, crease, normals,
                vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
         vectors = np.empty((4, 3))
         tensor = np.empty((3, 3))
-        sums = np.empty(6)
         res = np.empty(8)
         queue, vstamp, estamp, fstamp = queues[t], vstamps[t], estamps[t], fstamps[t]
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
@@ -209,11 +205,12 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, hal
             hit = 0
             # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle); area(B ∩ mesh). Faces touching a
             # crease vertex are left out, and with them their halves of their edges' terms
-            sums[:] = 0.0
+            t00 = t01 = t02 = t11 = t12 = t22 = 0.0  # in registers, not in a scratch array
             area = 0.0
             for i in range(count):
                 v = queue[i]
                 hit |= vertex_bits(v, border, nonmanifold)
+                vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
                 for j in range(vc_ptr[v], vc_ptr[v + 1]):
                     h = vc[j]
                     f = h // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
@@ -237,16 +234,24 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, hal
                     if cut and s != 0.0:
                         s *= _kept_share(e, edge_faces, crease, tri)
                     if s != 0.0:
-                        _edge_term(e, edges, x, y, z, px, py, pz, r2, s, sums)
+                        w = tri[f, (h - 3 * f + 1) % 3]  # the edge runs from v to the next corner of f
+                        a00, a01, a02, a11, a12, a22 = _edge_term(vx, vy, vz, x[w] - px, y[w] - py, z[w] - pz,
+                                                                  r2, s)
+                        t00 += a00
+                        t01 += a01
+                        t02 += a02
+                        t11 += a11
+                        t12 += a12
+                        t22 += a22
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
-            singular = not (area > 0.0 and math.isfinite(sums[0] + sums[1] + sums[2] + sums[3] + sums[4] + sums[5]))
+            singular = not (area > 0.0 and math.isfinite(t00 + t01 + t02 + t11 + t12 + t22))
             if not singular and normal_ok:
                 inv = 1.0 / area
-                tensor[0, 0], tensor[1, 1], tensor[2, 2] = sums[0] * inv, sums[3] * inv, sums[5] * inv
-                tensor[0, 1] = tensor[1, 0] = sums[1] * inv
-                tensor[0, 2] = tensor[2, 0] = sums[2] * inv
-                tensor[1, 2] = tensor[2, 1] = sums[4] * inv
+                tensor[0, 0], tensor[1, 1], tensor[2, 2] = t00 * inv, t11 * inv, t22 * inv
+                tensor[0, 1] = tensor[1, 0] = t01 * inv
+                tensor[0, 2] = tensor[2, 0] = t02 * inv
+                tensor[1, 2] = tensor[2, 1] = t12 * inv
                 _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, res)
                 k1[p], k2[p] = res[0], res[1]
                 for c in range(3):
@@ -329,8 +334,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
 
     def run(lo: int, hi: int) -> None:
-        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge, edges,
-               beta_scale, mesh.edge_faces, tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices,
+        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge, beta_scale,
+               mesh.edge_faces, tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices,
                mesh.nonmanifold_vertices, blocked is not None, crease, normals, vstamps, queues, estamps, fstamps,
                out.k1, out.k2, out.d1, out.d2, out.reason)
 

@@ -156,7 +156,6 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
     parts = vstamps.shape[0]
     for t in prange(parts):
         queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
-        total = np.empty((1, MEASURES))
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
             mark = p + 1  # the stamps start zeroed
@@ -164,7 +163,8 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
-            total[0, :] = 0.0
+            # the sums of the nine measures, in registers
+            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
             mean[p] = gaussian[p] = math.nan
             for i in range(count):
                 v = queue[i]
@@ -186,19 +186,25 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
                     inside = face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
                     w = min(inside / face_area[f], 1.0)
                     if w > 0.0:
-                        for c in range(MEASURES):
-                            total[0, c] += w * measures[f, c]
+                        s0 += w * measures[f, 0]
+                        s1 += w * measures[f, 1]
+                        s2 += w * measures[f, 2]
+                        s3 += w * measures[f, 3]
+                        s4 += w * measures[f, 4]
+                        s5 += w * measures[f, 5]
+                        s6 += w * measures[f, 6]
+                        s7 += w * measures[f, 7]
+                        s8 += w * measures[f, 8]
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
-            mu0 = total[0, 0]
-            singular = not (mu0 > 0.0 and _row_is_finite(total, 0))
+            mu0 = s0
+            singular = not (mu0 > 0.0 and math.isfinite(s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7 + s8))
             if not singular and normal_ok:
-                mean[p] = 0.5 * total[0, 1] / mu0
-                gaussian[p] = total[0, 2] / mu0
+                mean[p] = 0.5 * s1 / mu0
+                gaussian[p] = s2 / mu0
                 # W = M / mu0 in the tangent frame (U, V) of the vertex normal
                 ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
-                m00, m01, m02, m11, m12, m22 = (total[0, 3], total[0, 4], total[0, 5], total[0, 6],
-                                                total[0, 7], total[0, 8])
+                m00, m01, m02, m11, m12, m22 = s3, s4, s5, s6, s7, s8
                 mux = m00 * ux + m01 * uy + m02 * uz
                 muy = m01 * ux + m11 * uy + m12 * uz
                 muz = m02 * ux + m12 * uy + m22 * uz
