@@ -336,8 +336,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     def run(lo: int, hi: int) -> None:
         launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge,
                beta_scale, mesh.edge_faces, tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces,
-               mesh.border_vertices, mesh.nonmanifold_vertices, blocked is not None, crease, normals, vstamps, queues, estamps, fstamps,
-               out.k1, out.k2, out.d1, out.d2, out.reason)
+               mesh.border_vertices, mesh.nonmanifold_vertices, blocked is not None, crease, normals, vstamps, queues,
+               estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return out
