@@ -8,9 +8,11 @@ Run by hand (not part of the test suite)::
 Each measurement runs in a fresh subprocess. The vertex and face arrays are built first; then, as a
 new user would call it, a fresh ``curv.Mesh`` is made and estimated inside the timed region, so
 the connectivity every first estimate pays is included ("seconds"); the connectivity alone is
-reported as well ("conn s", on another fresh Mesh). Before timing, each child calls the same
-estimator once on a tiny mesh, so numba's kernels are loaded from the on-disk cache (the first-run
-compile and the cold start are reported by ``--compile``). Resident memory is sampled during the
+reported as well ("conn s", on another fresh Mesh), and the CPU seconds of the timed call ("cpu s":
+on a machine shared with other jobs their ratios vary less than those of wall time; in brackets, the
+peers' CPU seconds over the variant's). Before timing, each child calls the same estimator once on
+a tiny mesh, so numba's kernels are loaded from the on-disk cache (the first-run compile and the
+cold start are reported by ``--compile``). Resident memory is sampled during the
 call, so "peak MB" is what the estimate adds above the vertex and face arrays. Times are
 wall-clock on all cores (``CURV_THREADS`` limits the kernels' threads).
 
@@ -221,9 +223,9 @@ def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
         del conn_mesh
         gc.collect()
         with PeakRSS() as mem:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             res = curv.estimate(curv.Mesh(v, f), name, k)
-            seconds = time.perf_counter() - t0
+            seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
         extra["valid"] = float(res.valid.mean())
     elif kind == "trueform":
         import trueform as tf
@@ -233,34 +235,34 @@ def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
         tf.principal_curvatures((tf_.astype(np.int32), tv), k=int(k), directions=True)
         gc.collect()
         with PeakRSS() as mem:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             tf.principal_curvatures((faces, v), k=int(k), directions=True)
-            seconds = time.perf_counter() - t0
+            seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     elif kind == "igl":
         import igl
 
         gc.collect()
         with PeakRSS() as mem:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             igl.principal_curvature(v, f.astype(np.int64), radius=int(k))
-            seconds = time.perf_counter() - t0
+            seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     elif kind == "vtk":
         import pyvista as pv
         import vtk
 
         gc.collect()
         with PeakRSS() as mem:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             poly = pv.PolyData.from_regular_faces(v, f)
             for mode in ("SetCurvatureTypeToMean", "SetCurvatureTypeToGaussian"):
                 flt = vtk.vtkCurvatures()
                 flt.SetInputData(poly)
                 getattr(flt, mode)()
                 flt.Update()
-            seconds = time.perf_counter() - t0
+            seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     else:
         raise ValueError(kind)
-    return {"seconds": seconds, "peak_above_mesh_mb": mem.above_base_mb, **extra}
+    return {"seconds": seconds, "cpu_seconds": cpu, "peak_above_mesh_mb": mem.above_base_mb, **extra}
 
 
 def compile_times(variants) -> None:
@@ -303,7 +305,8 @@ def run_one(kind: str, name: str, k: float, n: int, mesh_kind: str, repeat: int 
             return {"error": (out.stderr.strip().splitlines() or ["failed"])[-1]}
         runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
     best = min(runs, key=lambda r: r["seconds"])
-    return {**best, "peak_above_mesh_mb": max(r["peak_above_mesh_mb"] for r in runs)}
+    return {**best, "peak_above_mesh_mb": max(r["peak_above_mesh_mb"] for r in runs),
+            "cpu_seconds": min(r.get("cpu_seconds", float("nan")) for r in runs)}
 
 
 def main(argv=None) -> int:
@@ -347,8 +350,8 @@ def main(argv=None) -> int:
                 peers[f"trueform k={k}"] = run_one("trueform", "principal_curvatures", k, n, args.mesh, args.repeat)
             peers["libigl r=2"] = run_one("igl", "principal_curvature", 2, n, args.mesh, args.repeat)
             peers["VTK H+K"] = run_one("vtk", "curvatures", 0, n, args.mesh, args.repeat)
-        print(f"{'variant':<14} {'seconds':>8} {'conn s':>7} {'peak MB':>8} {'valid':>6}  vs tf k=2  vs tf k=4"
-              f"  vs VTK")
+        print(f"{'variant':<14} {'seconds':>8} {'cpu s':>7} {'conn s':>7} {'peak MB':>8} {'valid':>6}  vs tf k=2"
+              f"  vs tf k=4  vs VTK  (cpu: tf k=2, tf k=4)")
         for m, k in variants:
             r = run_one("curv", m, k, n, args.mesh, args.repeat)
             label = f"{m} R{k:g}"
@@ -358,10 +361,14 @@ def main(argv=None) -> int:
             ratios = "  ".join(
                 f"{peers[p]['seconds'] / r['seconds']:8.2f}x" if "seconds" in peers.get(p, {}) else "       -"
                 for p in ("trueform k=2", "trueform k=4", "VTK H+K"))
-            print(f"{label:<14} {r['seconds']:8.2f} {r['conn_seconds']:7.2f} {r['peak_above_mesh_mb']:8.0f} "
-                  f"{r['valid']:6.3f}  {ratios}", flush=True)
+            cpu_ratios = ", ".join(
+                f"{peers[p]['cpu_seconds'] / r['cpu_seconds']:.2f}x" if "seconds" in peers.get(p, {}) else "-"
+                for p in ("trueform k=2", "trueform k=4"))
+            print(f"{label:<14} {r['seconds']:8.2f} {r['cpu_seconds']:7.2f} {r['conn_seconds']:7.2f} "
+                  f"{r['peak_above_mesh_mb']:8.0f} {r['valid']:6.3f}  {ratios}  ({cpu_ratios})", flush=True)
         for p, r in peers.items():
-            text = f"{r['seconds']:8.2f} {'':>7} {r['peak_above_mesh_mb']:8.0f}" if "seconds" in r else f"error: {r['error']}"
+            text = (f"{r['seconds']:8.2f} {r['cpu_seconds']:7.2f} {'':>7} {r['peak_above_mesh_mb']:8.0f}"
+                    if "seconds" in r else f"error: {r['error']}")
             print(f"{p:<14} {text}")
     return 0
 

@@ -77,6 +77,43 @@ def test_triangle_in_ball_area_matches_sampling():
     assert triangle_in_ball_area(a, b, c, a + n * 2.0, 1.0) == 0.0
 
 
+def _in_frame(a, b, c, centre, radius):
+    """The same area through ``disc_triangle_area`` in a frame of the triangle's plane (the general clip)."""
+    n = np.cross(b - a, c - a)
+    n /= np.linalg.norm(n)
+    u = (b - a) / np.linalg.norm(b - a)
+    v = np.cross(n, u)
+    h = np.dot(a - centre, n)
+    flat = [float(np.dot(p - centre, w)) for p in (a, b, c) for w in (u, v)]
+    return disc_triangle_area(*flat, radius ** 2 - h ** 2)
+
+
+@pytest.mark.parametrize("inside", [1, 2])
+def test_one_or_two_corners_inside_agree_with_the_general_clip(inside):
+    """The 3-D clip of a face with one or two corners in the ball (chords and arcs from which
+    corners are in, no frame) equals the general clip in the face's frame; with one corner inside
+    the far edge sometimes passes through the disc too (a second chord, two arcs)."""
+    rng = np.random.default_rng(7 + inside)
+    dips = checked = 0
+    while checked < 3000:
+        a, b, c = rng.normal(size=(3, 3))
+        centre = rng.normal(size=3) * 0.5
+        d = np.linalg.norm(np.array([a, b, c]) - centre, axis=1)
+        radius = rng.uniform(0.05, 2.0)
+        if int((d <= radius).sum()) != inside:
+            continue
+        checked += 1
+        area = 0.5 * np.linalg.norm(np.cross(b - a, c - a))
+        want = _in_frame(a, b, c, centre, radius)
+        assert triangle_in_ball_area(a, b, c, centre, radius) == pytest.approx(want, abs=1e-12 * area)
+        if inside == 1:
+            # the far edge (both ends outside) passes through the ball between its ends
+            j, k = [p for p, dist in zip((a, b, c), d) if dist > radius]
+            t = np.clip(np.dot(centre - j, k - j) / np.dot(k - j, k - j), 0.0, 1.0)
+            dips += np.linalg.norm(j + t * (k - j) - centre) < radius
+    assert inside == 2 or dips > 20
+
+
 # ---------------------------------------------------------------------------- the estimator
 def test_chunks_do_not_change_the_result():
     mesh = icosphere(3)

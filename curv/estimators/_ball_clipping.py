@@ -160,6 +160,105 @@ def disc_triangle_area(p0x, p0y, p1x, p1y, p2x, p2y, rho2):
 
 
 @jit
+def _dot(ax, ay, az, bx, by, bz):
+    return ax * bx + ay * by + az * bz
+
+
+@jit
+def _triple(nx, ny, nz, ax, ay, az, bx, by, bz):
+    """``n . (a x b)``: for points a, b of a plane with unit normal n, offsets from any point off it,
+    the 2-D cross product of their in-plane parts (the offset along n drops out)."""
+    return nx * (ay * bz - az * by) + ny * (az * bx - ax * bz) + nz * (ax * by - ay * bx)
+
+
+@jit
+def _exit(ax, ay, az, qa_in, bx, by, bz, radius2):
+    """Parameter t in [0, 1] where the segment a -> b (a inside the ball around 0, b outside) leaves it.
+
+    ``qa_in`` is ``|a|^2``. The same root as :func:`disc_triangle_area`'s, in 3-D (the offset of the
+    plane drops out of it).
+    """
+    dx, dy, dz = bx - ax, by - ay, bz - az
+    qa = dx * dx + dy * dy + dz * dz
+    qb = dx * ax + dy * ay + dz * az
+    disc = max(qb * qb - qa * (qa_in - radius2), 0.0)
+    return min(max((-qb + math.sqrt(disc)) / qa, 0.0), 1.0)
+
+
+@jit
+def _arc3(ex, ey, ez, fx, fy, fz, nx, ny, nz, h2, cx, cy, cz, gx, gy, gz, corners):
+    """Angle in (0, 2 pi) of the counter-clockwise arc from the exit point e to the entry point f.
+
+    :func:`_arc` for 3-D offsets from the ball centre of points of a plane with unit normal n at
+    squared distance ``h2``: the in-plane dot product is ``e . f - h2``, the cross product
+    ``n . (e x f)``. Where one ``atan2`` cannot tell an angle near 0 from one near 2 pi, the fan over
+    the outside corners between them (``corners`` of them: c, then g) is summed instead.
+    """
+    cross = _triple(nx, ny, nz, ex, ey, ez, fx, fy, fz)
+    dot = _dot(ex, ey, ez, fx, fy, fz) - h2
+    if dot <= 0.0 or abs(cross) > ARC_SPLIT * dot:
+        angle = math.atan2(cross, dot)
+        return angle if angle > 0.0 else angle + 2.0 * math.pi
+    angle = math.atan2(_triple(nx, ny, nz, ex, ey, ez, cx, cy, cz), _dot(ex, ey, ez, cx, cy, cz) - h2)
+    if corners == 2:
+        angle += math.atan2(_triple(nx, ny, nz, cx, cy, cz, gx, gy, gz), _dot(cx, cy, cz, gx, gy, gz) - h2)
+        cx, cy, cz = gx, gy, gz
+    return angle + math.atan2(_triple(nx, ny, nz, cx, cy, cz, fx, fy, fz), _dot(cx, cy, cz, fx, fy, fz) - h2)
+
+
+@jit
+def _two_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radius2, twice_area):
+    """Twice the area inside the ball of a triangle (i, j, k), counter-clockwise about n, whose
+    corners i and j are inside (offsets from the centre; ``qi``, ``qj`` their squared lengths).
+
+    The boundary inside is i -> j -> p (where j -> k leaves) and q -> i (where k -> i comes back),
+    closed by the arc p -> q: the whole triangle's fan less the parts of the two edges beyond the
+    circle, plus the sector of the arc.
+    """
+    tp = _exit(jx, jy, jz, qj, kx, ky, kz, radius2)
+    tq = 1.0 - _exit(ix, iy, iz, qi, kx, ky, kz, radius2)  # k -> i enters where i -> k leaves
+    px, py, pz = jx + tp * (kx - jx), jy + tp * (ky - jy), jz + tp * (kz - jz)
+    qx, qy, qz = kx + tq * (ix - kx), ky + tq * (iy - ky), kz + tq * (iz - kz)
+    straight = (twice_area - (1.0 - tp) * _triple(nx, ny, nz, jx, jy, jz, kx, ky, kz)
+                - tq * _triple(nx, ny, nz, kx, ky, kz, ix, iy, iz))
+    rho2 = radius2 - h2
+    return straight + rho2 * _arc3(px, py, pz, qx, qy, qz, nx, ny, nz, h2, kx, ky, kz, kx, ky, kz, 1)
+
+
+@jit
+def _one_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, qk, nx, ny, nz, h2, radius2):
+    """Twice the area inside the ball of a triangle (i, j, k), counter-clockwise about n, whose
+    only corner inside is i.
+
+    The boundary inside leaves along i -> j at p and comes back along k -> i at q; the edge j -> k,
+    both ends outside, may pass through the disc between them (a second chord, two arcs).
+    """
+    tp = _exit(ix, iy, iz, qi, jx, jy, jz, radius2)
+    tq = 1.0 - _exit(ix, iy, iz, qi, kx, ky, kz, radius2)
+    px, py, pz = ix + tp * (jx - ix), iy + tp * (jy - iy), iz + tp * (jz - iz)
+    qx, qy, qz = kx + tq * (ix - kx), ky + tq * (iy - ky), kz + tq * (iz - kz)
+    straight = tp * _triple(nx, ny, nz, ix, iy, iz, jx, jy, jz) + (1.0 - tq) * _triple(nx, ny, nz, kx, ky, kz,
+                                                                                        ix, iy, iz)
+    rho2 = radius2 - h2
+    dx, dy, dz = kx - jx, ky - jy, kz - jz
+    qa = dx * dx + dy * dy + dz * dz
+    qb = dx * jx + dy * jy + dz * jz
+    disc = qb * qb - qa * (qj - radius2)
+    if disc > 0.0:
+        sq = math.sqrt(disc)
+        t1 = min(max((-qb - sq) / qa, 0.0), 1.0)
+        t2 = min(max((-qb + sq) / qa, 0.0), 1.0)
+        if 0.0 < t1 < t2 < 1.0:  # j -> k enters at t1 and leaves at t2
+            ex, ey, ez = jx + t1 * dx, jy + t1 * dy, jz + t1 * dz
+            fx, fy, fz = jx + t2 * dx, jy + t2 * dy, jz + t2 * dz
+            straight += (t2 - t1) * _triple(nx, ny, nz, jx, jy, jz, kx, ky, kz)
+            sectors = (_arc3(px, py, pz, ex, ey, ez, nx, ny, nz, h2, jx, jy, jz, jx, jy, jz, 1)
+                       + _arc3(fx, fy, fz, qx, qy, qz, nx, ny, nz, h2, kx, ky, kz, kx, ky, kz, 1))
+            return straight + rho2 * sectors
+    return straight + rho2 * _arc3(px, py, pz, qx, qy, qz, nx, ny, nz, h2, jx, jy, jz, kx, ky, kz, 2)
+
+
+@jit
 def face_in_ball_area(tri, f, x, y, z, vector_area, area, px, py, pz, radius2):
     """Exact area of triangle f inside the ball of squared radius ``radius2`` around ``(px, py, pz)``.
 
@@ -178,31 +277,56 @@ def face_in_ball_area(tri, f, x, y, z, vector_area, area, px, py, pz, radius2):
     -----
     One test decides most faces: all three corners inside the (convex) ball, the whole area.
     Otherwise the face crosses the sphere, and its part inside is the triangle clipped to the disc
-    where the ball meets its plane (:func:`disc_triangle_area`, in a frame of the face made here:
-    nothing per face is stored between centres).
+    where the ball meets its plane. With one or two corners inside (every face a support reaches:
+    it has a corner in the support) the boundary inside is known from which corners are in, and
+    it is summed directly in 3-D, with offsets from the centre (the fan of
+    :func:`disc_triangle_area`: chords and arcs; no frame of the face, one ``atan2`` per arc).
+    A face with no corner inside is clipped by :func:`disc_triangle_area` in a frame of the face.
     """
     c0, c1, c2 = tri[f, 0], tri[f, 1], tri[f, 2]
     a0x, a0y, a0z = x[c0] - px, y[c0] - py, z[c0] - pz
     a1x, a1y, a1z = x[c1] - px, y[c1] - py, z[c1] - pz
     a2x, a2y, a2z = x[c2] - px, y[c2] - py, z[c2] - pz
-    if (a0x * a0x + a0y * a0y + a0z * a0z <= radius2 and a1x * a1x + a1y * a1y + a1z * a1z <= radius2
-            and a2x * a2x + a2y * a2y + a2z * a2z <= radius2):
+    q0 = a0x * a0x + a0y * a0y + a0z * a0z
+    q1 = a1x * a1x + a1y * a1y + a1z * a1z
+    q2 = a2x * a2x + a2y * a2y + a2z * a2z
+    in0, in1, in2 = q0 <= radius2, q1 <= radius2, q2 <= radius2
+    if in0 and in1 and in2:
         return area[f]
     inv = 1.0 / area[f]
     nx, ny, nz = vector_area[f, 0] * inv, vector_area[f, 1] * inv, vector_area[f, 2] * inv
     h = a0x * nx + a0y * ny + a0z * nz
-    rho2 = radius2 - h * h  # squared radius of the disc B ∩ plane, around the foot of the centre
-    if not rho2 > 0.0:
-        return 0.0
-    # frame of the face: u along corner 0 -> 1, v = n x u; the corners' in-plane coordinates
-    # relative to the foot are their offsets from the centre dotted with u and v
-    ux, uy, uz = a1x - a0x, a1y - a0y, a1z - a0z
-    inv = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
-    ux, uy, uz = ux * inv, uy * inv, uz * inv
-    vx, vy, vz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux
-    part = disc_triangle_area(a0x * ux + a0y * uy + a0z * uz, a0x * vx + a0y * vy + a0z * vz,
-                              a1x * ux + a1y * uy + a1z * uz, a1x * vx + a1y * vy + a1z * vz,
-                              a2x * ux + a2y * uy + a2z * uz, a2x * vx + a2y * vy + a2z * vz, rho2)
+    h2 = h * h
+    if not radius2 - h2 > 0.0:
+        return 0.0  # the plane misses the ball (or touches it)
+    inside = int(in0) + int(in1) + int(in2)
+    if inside == 2:
+        twice = 2.0 * area[f]
+        if not in0:
+            part = _two_inside(a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, a0x, a0y, a0z, nx, ny, nz, h2, radius2, twice)
+        elif not in1:
+            part = _two_inside(a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, a1x, a1y, a1z, nx, ny, nz, h2, radius2, twice)
+        else:
+            part = _two_inside(a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, a2x, a2y, a2z, nx, ny, nz, h2, radius2, twice)
+        part *= 0.5
+    elif inside == 1:
+        if in0:
+            part = _one_inside(a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, nx, ny, nz, h2, radius2)
+        elif in1:
+            part = _one_inside(a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, nx, ny, nz, h2, radius2)
+        else:
+            part = _one_inside(a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, nx, ny, nz, h2, radius2)
+        part *= 0.5
+    else:
+        # frame of the face: u along corner 0 -> 1, v = n x u; the corners' in-plane coordinates
+        # relative to the foot are their offsets from the centre dotted with u and v
+        ux, uy, uz = a1x - a0x, a1y - a0y, a1z - a0z
+        inv = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+        ux, uy, uz = ux * inv, uy * inv, uz * inv
+        vx, vy, vz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux
+        part = disc_triangle_area(a0x * ux + a0y * uy + a0z * uz, a0x * vx + a0y * vy + a0z * vz,
+                                  a1x * ux + a1y * uy + a1z * uz, a1x * vx + a1y * vy + a1z * vz,
+                                  a2x * ux + a2y * uy + a2z * uz, a2x * vx + a2y * vy + a2z * vz, radius2 - h2)
     return part if math.isfinite(part) else 0.0
 
 

@@ -60,7 +60,8 @@ from ..validity import Reason
 from ._local_fit import store_principal, tangent_frame
 from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
                              vertex_bits)
-from .registry import EstimatorSpec, empty_principal, register
+from ._triangle_corners import unset_principal
+from .registry import EstimatorSpec, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures"]
 
@@ -136,7 +137,7 @@ def face_measures(mesh: Mesh, normals: np.ndarray, ids: np.ndarray | None = None
     x, y, z = coordinate_columns(mesh)
     out = np.empty((tri.shape[0], MEASURES))
     launch(_face_measures, element_list(tri.shape[0], ids), tri, x, y, z,
-           np.ascontiguousarray(normals, dtype=np.float64), mesh.degenerate_faces, out)
+           np.asarray(normals, dtype=np.float64), mesh.degenerate_faces, out)
     return out
 
 
@@ -155,7 +156,6 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
     parts = vstamps.shape[0]
     for t in prange(parts):
         queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
-        total = np.empty((1, MEASURES))
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
             mark = p + 1  # the stamps start zeroed
@@ -163,7 +163,8 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
-            total[0, :] = 0.0
+            # the sums of the nine measures, in registers
+            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
             mean[p] = gaussian[p] = math.nan
             for i in range(count):
                 v = queue[i]
@@ -185,19 +186,25 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
                     inside = face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
                     w = min(inside / face_area[f], 1.0)
                     if w > 0.0:
-                        for c in range(MEASURES):
-                            total[0, c] += w * measures[f, c]
+                        s0 += w * measures[f, 0]
+                        s1 += w * measures[f, 1]
+                        s2 += w * measures[f, 2]
+                        s3 += w * measures[f, 3]
+                        s4 += w * measures[f, 4]
+                        s5 += w * measures[f, 5]
+                        s6 += w * measures[f, 6]
+                        s7 += w * measures[f, 7]
+                        s8 += w * measures[f, 8]
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
-            mu0 = total[0, 0]
-            singular = not (mu0 > 0.0 and _row_is_finite(total, 0))
+            mu0 = s0
+            singular = not (mu0 > 0.0 and math.isfinite(s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7 + s8))
             if not singular and normal_ok:
-                mean[p] = 0.5 * total[0, 1] / mu0
-                gaussian[p] = total[0, 2] / mu0
+                mean[p] = 0.5 * s1 / mu0
+                gaussian[p] = s2 / mu0
                 # W = M / mu0 in the tangent frame (U, V) of the vertex normal
                 ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
-                m00, m01, m02, m11, m12, m22 = (total[0, 3], total[0, 4], total[0, 5], total[0, 6],
-                                                total[0, 7], total[0, 8])
+                m00, m01, m02, m11, m12, m22 = s3, s4, s5, s6, s7, s8
                 mux = m00 * ux + m01 * uy + m02 * uz
                 muy = m01 * ux + m11 * uy + m12 * uz
                 muz = m02 * ux + m12 * uy + m22 * uz
@@ -221,6 +228,10 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri
                     k2[p] = mean[p] - rad
                 if not (math.isfinite(k1[p]) and math.isfinite(k2[p])):
                     singular = True
+            else:
+                k1[p] = k2[p] = math.nan
+                for c in range(3):
+                    d1[p, c] = d2[p, c] = math.nan
             reason[p] = support_reason(singular, hit, normal_ok)
 
 
@@ -236,7 +247,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
                  "nonmanifold_vertices"):
         getattr(mesh, name)
         yield 0.0
-    normals = np.ascontiguousarray(normals, dtype=np.float64)
+    normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
     x, y, z = coordinate_columns(mesh)
     blocked = blocked_vertices(features)
     indptr, indices = expansion_adjacency(mesh, blocked)
@@ -250,7 +261,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     vstamps = new_scratch(n, parts)
     queues = new_queues(n, parts)
     fstamps = np.zeros((parts, tri.shape[0]), np.int32)
-    out = empty_principal(n)
+    out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
     mean = np.empty(n)  # NaN at each centre before its sums (a region touches only its own pages)
     gaussian = np.empty(n)
 
