@@ -26,7 +26,7 @@ from ..mesh import Mesh
 from ..neighbourhood import ball_support
 from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, cholesky_scaled, factor_whiten, finish_fit, mark_degenerate,
                          noise_variance, offset_in_frame, principal_gradients, row_dot, run_fit, slice_bounds,
-                         solve_scaled, solve_sym3, store_se3, tangent_frame)
+                         solve_scaled, solve_sym3, store_se3, tangent_frame, deviator_gradients, eigen_bias)
 from .registry import EstimatorSpec, register
 
 MIN_NORMAL_Z = 0.1
@@ -159,7 +159,8 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     """Adjacent-normal cubic fit at vertex p.
 
     Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
-    normal equations the solve overwrites; ``grads`` (5, 7).
+    normal equations the solve overwrites; ``grads`` (7, 7): the k1, k2 gradients, the three shared
+    columns, the deviator's two components (the eigen step's bias, as in ``store_se3``).
 
     Heights and slopes enter the fit (and its noise variance) with equal weight in the
     radius-scaled coordinates: ``sigma²`` pools the two kinds of residual. p's own height error is
@@ -234,19 +235,31 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         grads[0, j] = 0.0
         grads[1, j] = 0.0
     grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
+    # the deviator's two components (the eigen step's bias, store_se3), on the quadratic terms too
+    for j in range(7):
+        grads[5, j] = 0.0
+        grads[6, j] = 0.0
+    grads[5, 0], grads[5, 1], grads[5, 2], grads[6, 0], grads[6, 1], grads[6, 2] = deviator_gradients(e, f, g)
     if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
         factor_whiten(ata0, ata0, 7, 7, grads)
         dof = (equations - 7 + used - row_dot(grads, 2, 2, 7)
                + sloped - row_dot(grads, 3, 3, 7) + sloped - row_dot(grads, 4, 4, 7))
         sigma2 = noise_variance(bb, xatb, dof)
+        var_dev = 0.0
+        for i in range(5, 7):
+            var_dev += row_dot(grads, i, i, 7)
+            for shared in range(2, 5):
+                var_dev += row_dot(grads, i, shared, 7) ** 2
+        bias = eigen_bias(e, f, g, sigma2 * var_dev * inv_r * inv_r)
         for i in range(2):
             var = row_dot(grads, i, i, 7)
             for shared in range(2, 5):
                 var += row_dot(grads, i, shared, 7) ** 2
+            se = math.sqrt(sigma2 * var * inv_r * inv_r + bias * bias)
             if i == 0:
-                k1_se[p] = math.sqrt(sigma2 * var) * inv_r
+                k1_se[p] = se
             else:
-                k2_se[p] = math.sqrt(sigma2 * var) * inv_r
+                k2_se[p] = se
 
 
 @jit_parallel
@@ -288,7 +301,7 @@ def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         stamp = stamps[t]
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)
-        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((5, 7))
+        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
