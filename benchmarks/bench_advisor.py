@@ -101,7 +101,7 @@ def _mesh(setting: dict, noise_level: float):
 def evaluate(setting: dict) -> dict:
     """Every candidate's median e_rel on one held-out mesh, and the advisor's answer."""
     from curv import advise
-    from curv.advisor import angle_deviation_deg, fan_triangles, load_table, valid_shares
+    from curv.advisor import SHAPE_MEASURES, angle_deviation_deg, fan_triangles, load_table, valid_shares
     from curv.advisor_table import option_variants, variant_errors
 
     mesh, truth, evaluated, irr_true = _mesh(setting, setting["noise_level"])
@@ -112,7 +112,8 @@ def evaluate(setting: dict) -> dict:
     adv = advise(mesh, table=table)
     t_adv = time.perf_counter() - t0
     erel = variant_errors(mesh, truth, evaluated, variants)  # a failing candidate (NaN) cannot be the best one
-    raw = {k: getattr(adv.features, k) for k in ("noise_raw", "irregularity_raw_deg", "density", "border_share")}
+    raw = {k: getattr(adv.features, k) for k in ("noise_raw", "irregularity_raw_deg", "density", "border_share",
+                                                 *SHAPE_MEASURES)}
     return {**setting, "erel": erel, "advised": adv.best.variant.id, "expected": adv.expected_erel, "raw": raw,
             "shares": valid_shares(mesh, variants), "n_evaluated": int(evaluated.sum()),
             "noise_est": adv.features.noise, "irr_est": adv.features.irregularity_deg,
@@ -241,7 +242,8 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
 def readvise(runs: list[dict], table: dict) -> list[dict]:
     """The runs with the advice of another table, from their stored raw measures (no estimator runs
     again): the same calibration, prediction and candidates as :func:`curv.advise`."""
-    from curv.advisor import MeshFeatures, calibrate_irregularity, calibrate_noise, candidates, predict, rank
+    from curv.advisor import (SHAPE_MEASURES, MeshFeatures, calibrate_irregularity, calibrate_noise, candidates,
+                              predict, rank)
 
     cal = table["calibration"]
     out = []
@@ -249,7 +251,8 @@ def readvise(runs: list[dict], table: dict) -> list[dict]:
         noise = calibrate_noise(r["raw"]["noise_raw"], cal, r["raw"]["density"])
         feats = MeshFeatures(irregularity_deg=calibrate_irregularity(r["raw"]["irregularity_raw_deg"], noise, cal),
                              noise=noise, density=r["raw"]["density"], border_share=r["raw"]["border_share"],
-                             polygon_kinds={3: 1})
+                             polygon_kinds={3: 1},
+                             **{k: r["raw"].get(k, float("nan")) for k in SHAPE_MEASURES})
         pred = predict(table, feats)
         ok = [v for v in candidates(table, feats) if np.isfinite(pred[v])]
         choice = rank({v: pred[v] for v in ok}, r.get("shares", {}))[0]

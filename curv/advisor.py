@@ -4,16 +4,18 @@
 >>> adv.method, adv.range, adv.expected_erel, adv.why
 ('mru', 4, 0.12, 'noise about 0.6 of the paper's level, irregular (22 degrees): mru R4, expected median e_rel 0.12')
 
-The advisor measures the three features the paper's study varies (density, noise, irregularity,
-see :class:`MeshFeatures`) and predicts the median e_rel of every candidate variant from a table
+The advisor measures the three features the paper's study varies (density, noise, irregularity)
+and the mesh's shape and tessellation (valence and edge spread, curvature spread, anisotropy, saddle
+share, border share; see :class:`MeshFeatures`) and predicts the median e_rel of every candidate variant from a table
 of study results (``curv/data/advisor_table.json``, built by :mod:`curv.advisor_table`; the module is not named ``advise`` so that importing it cannot shadow the function ``curv.advise``). The
 table holds one point per mesh of a study run (the paper's Monge patches on the hexagon, plus
 noisy closed analytic surfaces, which widen the range of densities and tessellations): the
 advisor's own features measured on that mesh, and the median e_rel every variant reached on it
 against the exact curvature. A prediction is the
-Gaussian-kernel weighted mean of ``log(e_rel)`` over the table's meshes in the scaled feature space
-``(log density, noise level or its square root, irregularity)``; axis transform, scales and
-bandwidth are the table's (chosen by leave-one-out regret when the table is built). Because the table's coordinates are
+Gaussian-kernel weighted mean of ``log(e_rel)`` (floored at the table's ``erel_floor``) over the
+table's meshes in the scaled feature space ``(log density, noise level or its square root,
+irregularity)`` and the further axes the table chose (``kernel["axes"]``); axes, transforms, scales
+and bandwidth are the table's (chosen by grouped leave-one-out regret when the table is built). Because the table's coordinates are
 measured exactly as on the user's mesh, a bias of a measure cancels instead of misplacing the
 mesh; far outside the table the nearest meshes decide (the grid's edge acts as a clip). There is
 no hand-written rule: a different table gives different advice.
@@ -32,7 +34,8 @@ from .errors import MeshError
 from .mesh import Mesh
 
 __all__ = ["Advice", "Candidate", "MeshFeatures", "advise", "measure_features", "load_table", "valid_shares",
-           "TABLE_RESOURCE", "FIT_METHOD", "FIT_RANGE", "VALID_SHARE_SLACK", "VALID_SAMPLE"]
+           "TABLE_RESOURCE", "FIT_METHOD", "FIT_RANGE", "VALID_SHARE_SLACK", "VALID_SAMPLE", "SHAPE_MEASURES",
+           "BASE_COLUMNS", "kernel_axes", "table_coordinates", "feature_values", "shape_measures"]
 
 TABLE_RESOURCE = "data/advisor_table.json"
 """The table inside the ``curv`` package (see :mod:`curv.advisor_table`)."""
@@ -99,6 +102,24 @@ class MeshFeatures:
         The uncalibrated noise measure (``raw`` above).
     irregularity_raw_deg : float
         The uncorrected RMS angle deviation.
+    edge_cv : float
+        Coefficient of variation of the edge lengths (standard deviation over mean): the
+        tessellation's regularity in size, 0 for equal edges.
+    valence_sd : float
+        Standard deviation of the valence over the vertices off the border: 0 for a regular grid, a
+        little above for a geodesic sphere (12 vertices of valence 5), larger for a scan.
+    anisotropy : float
+        Median of ``(k1 - k2) / (|k1| + |k2|)`` over the validly fitted vertices of the R3 fit: 0
+        where the surface is umbilic (a sphere), up to 1 where it bends one way only (a cylinder).
+    curvature_spread : float
+        Interquartile range of ``log(|k1| + |k2|)`` over the same vertices: how unevenly the
+        curvature is spread over the surface (0 on a sphere).
+    hyperbolic_share : float
+        Share of the same vertices with ``k1 k2 < 0`` (saddle-shaped).
+
+    The last five are shape and tessellation measures the table's kernel may use as further axes
+    (which, and how wide, is chosen when the table is built: ``kernel["axes"]``); the open/closed
+    distinction is :attr:`border_share`.
     """
 
     irregularity_deg: float
@@ -110,6 +131,11 @@ class MeshFeatures:
     mean_edge: float = float("nan")
     noise_raw: float = float("nan")
     irregularity_raw_deg: float = float("nan")
+    edge_cv: float = float("nan")
+    valence_sd: float = float("nan")
+    anisotropy: float = float("nan")
+    curvature_spread: float = float("nan")
+    hyperbolic_share: float = float("nan")
 
     @property
     def noise_level(self) -> float:
@@ -312,7 +338,8 @@ def raw_measures(mesh: Mesh, *, normals=None) -> dict:
     -------
     dict
         Keys ``noise_raw``, ``irregularity_raw_deg``, ``density``, ``border_share``,
-        ``polygon_kinds``, ``n_vertices``, ``mean_edge``.
+        ``polygon_kinds``, ``n_vertices``, ``mean_edge`` and the shape and tessellation measures
+        :data:`SHAPE_MEASURES` (see :class:`MeshFeatures`).
 
     Raises
     ------
@@ -330,7 +357,8 @@ def raw_measures(mesh: Mesh, *, normals=None) -> dict:
     r = _fit_residuals(mesh, res)
     r = r[np.isfinite(r)]
     mad = float(np.median(np.abs(r - np.median(r)))) if r.size else float("nan")
-    scale = np.abs(res.k1[res.valid]) + np.abs(res.k2[res.valid])
+    k1, k2 = res.k1[res.valid], res.k2[res.valid]
+    scale = np.abs(k1) + np.abs(k2)
     return {
         "noise_raw": _MAD_TO_SIGMA * mad / edge,
         "irregularity_raw_deg": angle_deviation_deg(mesh.vertices, fan_triangles(mesh)),
@@ -339,6 +367,41 @@ def raw_measures(mesh: Mesh, *, normals=None) -> dict:
         "polygon_kinds": polygon_kinds(mesh),
         "n_vertices": int(mesh.n_vertices),
         "mean_edge": edge,
+        **shape_measures(mesh, k1, k2),
+    }
+
+
+SHAPE_MEASURES = ("edge_cv", "valence_sd", "anisotropy", "curvature_spread", "hyperbolic_share")
+"""The shape and tessellation measures of :class:`MeshFeatures` (raw: no calibration)."""
+
+
+def shape_measures(mesh: Mesh, k1: np.ndarray, k2: np.ndarray) -> dict:
+    """The tessellation's regularity and the curvature's shape (see :class:`MeshFeatures`).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    k1, k2 : (m,) float64
+        Principal curvatures of the validly fitted vertices (k1 >= k2).
+
+    Returns
+    -------
+    dict
+        :data:`SHAPE_MEASURES` -> float.
+    """
+    lengths = mesh.edge_lengths
+    interior = ~mesh.border_vertices
+    valence = mesh.valence[interior]
+    scale = np.abs(k1) + np.abs(k2)
+    ok = scale > 0
+    log_scale = np.log(scale[ok])
+    nan = float("nan")
+    return {
+        "edge_cv": float(np.std(lengths) / np.mean(lengths)) if lengths.size else nan,
+        "valence_sd": float(np.std(valence)) if valence.size else nan,
+        "anisotropy": float(np.median((k1[ok] - k2[ok]) / scale[ok])) if ok.any() else nan,
+        "curvature_spread": float(np.subtract(*np.percentile(log_scale, [75, 25]))) if ok.any() else nan,
+        "hyperbolic_share": float(np.mean(k1 * k2 < 0)) if k1.size else nan,
     }
 
 
@@ -381,17 +444,59 @@ def load_table(path=None) -> dict:
         return json.load(fh)
 
 
-def table_coordinates(table: dict, density, noise_level, irregularity_deg) -> np.ndarray:
-    """Feature-space coordinates of the table's kernel: ``(log density, noise level, irregularity)``
-    each divided by the table's scale for that axis; the noise level enters as its square root when
-    the table's ``kernel["noise_axis"]`` is ``"sqrt"`` (errors change fastest near zero noise).
-    Arrays broadcast; returns (..., 3)."""
+BASE_COLUMNS = ("density", "noise_level", "irregularity_deg")
+"""The table's first three point columns, always kernel axes (log, square root or linear, linear)."""
+
+
+def kernel_axes(table: dict) -> list:
+    """The kernel's axes as ``[column, transform, scale]`` (transform ``"log"``, ``"sqrt"`` or
+    ``"linear"``); a table without ``kernel["axes"]`` has the three base axes of its ``noise_axis``
+    and ``scales``."""
     kernel = table["kernel"]
-    scales = np.asarray(kernel["scales"], float)
-    level = np.maximum(noise_level, 0.0)
-    noise = np.sqrt(level) if kernel.get("noise_axis", "linear") == "sqrt" else level
-    x = np.stack(np.broadcast_arrays(np.log(np.maximum(density, 1e-12)), noise, irregularity_deg), axis=-1)
-    return x / scales
+    if "axes" in kernel:
+        return [list(a) for a in kernel["axes"]]
+    scales = kernel["scales"]
+    return [["density", "log", scales[0]], ["noise_level", kernel.get("noise_axis", "linear"), scales[1]],
+            ["irregularity_deg", "linear", scales[2]]]
+
+
+def _transform(values, how: str) -> np.ndarray:
+    values = np.asarray(values, float)
+    if how == "log":
+        return np.log(np.maximum(values, 1e-12))
+    if how == "sqrt":
+        return np.sqrt(np.maximum(values, 0.0))
+    return values
+
+
+def table_coordinates(table: dict, *columns) -> np.ndarray:
+    """Feature-space coordinates of the table's kernel.
+
+    Parameters
+    ----------
+    table : dict
+        Its ``kernel`` (:func:`kernel_axes`) and ``columns`` (the names of the point columns;
+        default the three :data:`BASE_COLUMNS`).
+    *columns : array_like
+        One value or array per point column, in ``table["columns"]`` order (arrays broadcast).
+
+    Returns
+    -------
+    (..., a) float64
+        Each axis's column, transformed (log density; the noise level or its square root, as the
+        errors change fastest near zero noise; the rest as they are or their square root) and
+        divided by the axis's scale.
+    """
+    names = list(table.get("columns", BASE_COLUMNS))
+    values = np.broadcast_arrays(*[np.asarray(c, float) for c in columns])
+    axes = [_transform(values[names.index(col)], how) / scale for col, how, scale in kernel_axes(table)]
+    return np.stack(axes, axis=-1)
+
+
+def feature_values(features: MeshFeatures, columns) -> list:
+    """The values of ``columns`` (the table's point columns) measured on a mesh: the calibrated
+    base features and the raw shape and tessellation measures (:class:`MeshFeatures`)."""
+    return [features.noise_level if c == "noise_level" else getattr(features, c) for c in columns]
 
 
 def kernel_predict(points: np.ndarray, log_values: np.ndarray, query: np.ndarray, bandwidth: float) -> np.ndarray:
@@ -425,12 +530,21 @@ def kernel_predict(points: np.ndarray, log_values: np.ndarray, query: np.ndarray
     return np.exp(mean)
 
 
+def log_erel(table: dict) -> np.ndarray:
+    """(p, v) log of the table's median e_rel, floored at the table's ``kernel["erel_floor"]`` (NaN
+    where missing). Below the floor an error is rounding (nc R1 on a noise-free sphere reads 1e-15):
+    in a mean of logs one such mesh would outweigh every other neighbour, and all such calls are
+    equally good."""
+    erel = np.asarray(table["median_erel"], float)
+    floor = table["kernel"].get("erel_floor", 0.0)
+    return np.log(np.maximum(erel, floor) if floor > 0 else erel)
+
+
 def predict(table: dict, features: MeshFeatures) -> dict:
     """Predicted median e_rel of every variant of the table at ``features`` (NaN where it has none)."""
     points = np.asarray(table["points"], float)
-    q = table_coordinates(table, features.density, features.noise_level, features.irregularity_deg)
-    pred = kernel_predict(table_coordinates(table, *points.T), np.log(np.asarray(table["median_erel"], float)),
-                          q, table["kernel"]["bandwidth"])
+    q = table_coordinates(table, *feature_values(features, table.get("columns", BASE_COLUMNS)))
+    pred = kernel_predict(table_coordinates(table, *points.T), log_erel(table), q, table["kernel"]["bandwidth"])
     return dict(zip(table["variants"], pred.tolist()))
 
 

@@ -40,7 +40,20 @@ each::
 
     python -m curv.advisor_table extend --base base.json --work /tmp/advisor-ext --workers 2
 
-(``base.json``: the base table the first command writes, ``--out base.json``). The coarse rows are
+Then the option candidates are run on the closed surfaces of the other two samples too (the closed
+surfaces are few beside the patches; their option columns were empty there), and every mesh is
+measured again for the shape and tessellation columns (:data:`EXTRA_COLUMNS`: border share, edge
+length spread, valence spread, anisotropy, curvature spread, saddle share; the meshes are rebuilt
+from their keys, only the measuring fit runs), which a forward selection by grouped leave-one-out
+regret turns into further kernel axes (:func:`select_axes`)::
+
+    python -m curv.advisor_table fill --table extended.json --out filled.json --work /tmp/advisor-fill --workers 2
+    python -m curv.advisor_table refeature --table filled.json --work /tmp/advisor-refeature --workers 1
+
+(``base.json``: the base table the first command writes, ``--out base.json``; ``extended.json``
+the second's ``--out``). The fill ran 150 meshes (5036 estimates) in 151 s wall with 2 workers,
+the refeature measured the 1764 meshes in 192 s wall (102 CPU-s) with 1 worker and chose the axes
+in about 2 minutes more (a rerun over the same ``--work`` only chooses). The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
@@ -63,7 +76,8 @@ from .variants import NOISE_FRACTION
 
 __all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "random_closed_params", "closed_mesh_point",
            "measure_rows", "fit_calibration", "table_points", "choose_bandwidth", "fit_kernel", "make_table",
-           "build_table", "main"]
+           "build_table", "main", "table_mesh", "fill_jobs", "fill_table", "feature_row", "noise_groups",
+           "select_axes", "refeature_table", "loo_regret", "EXTRA_COLUMNS", "EREL_FLOOR"]
 
 DEFAULT_OUT = Path(__file__).parent / "data" / "advisor_table.json"
 BANDWIDTHS = (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
@@ -250,14 +264,47 @@ def _regret(log_values: np.ndarray, chosen: np.ndarray) -> np.ndarray:
     return np.exp(log_values[np.arange(len(chosen)), chosen] - best)
 
 
-def loo_regret(coords: np.ndarray, log_values: np.ndarray, bandwidth: float) -> np.ndarray:
-    """(p,) regret of advising each mesh from all the other meshes of the table."""
-    chosen = np.empty(len(coords), np.int64)
-    for i in range(len(coords)):  # p is a few hundred table meshes, not vertices
-        rest = np.arange(len(coords)) != i
-        pred = kernel_predict(coords[rest], log_values[rest], coords[i], bandwidth)
-        pred = np.where(np.isfinite(pred) & np.isfinite(log_values[i]), pred, np.inf)
-        chosen[i] = int(np.argmin(pred))
+def loo_regret(coords: np.ndarray, log_values: np.ndarray, bandwidth: float, groups=None) -> np.ndarray:
+    """(p,) regret of advising each mesh from the other meshes of the table.
+
+    Parameters
+    ----------
+    coords : (p, a) float64
+        Scaled kernel coordinates of the table's meshes.
+    log_values : (p, v) float64
+        log median e_rel (NaN where missing).
+    bandwidth : float
+    groups : (p,) array_like, optional
+        Meshes of one group are left out together (e.g. one surface at every noise level: its
+        twins would otherwise stand next to it on every axis but noise); default each mesh alone.
+
+    Returns
+    -------
+    (p,) float64
+        The chosen variant's median e_rel over the best one's, per mesh: the same prediction as
+        :func:`curv.advisor.kernel_predict` (weights shifted per row by the nearest other mesh, and
+        exactly per variant where that leaves a variant no weight).
+    """
+    p = len(coords)
+    d2 = np.sum((coords[:, None, :] - coords[None, :, :]) ** 2, axis=2) / bandwidth**2
+    np.fill_diagonal(d2, np.inf)
+    if groups is not None:
+        g = np.asarray(groups)
+        d2[g[:, None] == g[None, :]] = np.inf
+    have = np.isfinite(log_values)
+    values = np.where(have, log_values, 0.0)
+    w = np.exp(-0.5 * (d2 - d2.min(axis=1, keepdims=True)))
+    total = w @ have.astype(np.float64)
+    pred = (w @ values) / np.where(total > 0, total, 1.0)
+    for i, j in zip(*np.nonzero(~(total > 1e-200) & have.any(axis=0)[None, :])):  # a few (row, variant) pairs
+        dist = np.where(have[:, j], d2[i], np.inf)
+        if np.isfinite(dist.min()):
+            wij = np.exp(-0.5 * (dist - dist.min()))
+            pred[i, j] = wij @ values[:, j] / wij.sum()
+        else:
+            pred[i, j] = np.inf
+    pred = np.where(have & np.isfinite(pred), pred, np.inf)  # a mesh is advised among the variants it has
+    chosen = np.argmin(pred, axis=1)
     return _regret(log_values, chosen)
 
 
@@ -522,6 +569,26 @@ def variant_errors(mesh, truth, evaluated, variant_ids) -> dict:
     return erel
 
 
+def table_mesh(key) -> tuple:
+    """(mesh, truth, planar irregularity) of a table key: a study key ``[seed, function, density,
+    irregularity, noise, sample]`` (a Monge patch) or a closed-surface key ``[seed, name,
+    n_vertices, 0.0, noise, sample]`` (:func:`closed_mesh_point`'s shapes and noise draws)."""
+    import zlib
+
+    from .study.protocol import Task
+    from .study.testmesh import build_test_mesh
+    from .surfaces import make_surface
+
+    seed, name, n, irr, level, sample = key
+    if name in DEFAULT_CLOSED:
+        params = random_closed_params(name, np.random.default_rng([seed, 8, zlib.crc32(name.encode()), sample]))
+        rng = np.random.default_rng([seed, 7, zlib.crc32(name.encode()), n, sample])
+        s = make_surface(name, n_vertices=n, noise=level * NOISE_FRACTION, seed=rng, **params)
+        return s.mesh, s.truth, float("nan")
+    tm = build_test_mesh(Task(int(seed), name, int(n), float(irr), float(level), int(sample)))
+    return tm.mesh, tm.truth, tm.irregularity
+
+
 def candidate_point(args: tuple) -> tuple[dict, dict]:
     """Raw measures and the median e_rel of ``variant_ids`` on one table mesh.
 
@@ -530,22 +597,9 @@ def candidate_point(args: tuple) -> tuple[dict, dict]:
     closed-surface key ``[seed, name, n_vertices, 0.0, noise, sample]`` (as
     :func:`closed_mesh_point`, every vertex evaluated).
     """
-    import zlib
-
-    from .study.protocol import Task
-    from .study.testmesh import build_test_mesh
-    from .surfaces import make_surface
-
     key, variant_ids = args
-    seed, name, n, irr, level, sample = key
-    if name in DEFAULT_CLOSED:
-        params = random_closed_params(name, np.random.default_rng([seed, 8, zlib.crc32(name.encode()), sample]))
-        rng = np.random.default_rng([seed, 7, zlib.crc32(name.encode()), n, sample])
-        s = make_surface(name, n_vertices=n, noise=level * NOISE_FRACTION, seed=rng, **params)
-        mesh, truth, planar = s.mesh, s.truth, float("nan")
-    else:
-        tm = build_test_mesh(Task(int(seed), name, int(n), float(irr), float(level), int(sample)))
-        mesh, truth, planar = tm.mesh, tm.truth, tm.irregularity
+    level = key[4]
+    mesh, truth, planar = table_mesh(key)
     evaluated = evaluated_for_table(mesh)
     raw = raw_measures(mesh)
     scale = np.abs(truth.k1[evaluated]) + np.abs(truth.k2[evaluated])
@@ -707,10 +761,252 @@ def load_base(path) -> dict:
     return table
 
 
+# ---------------------------------------------------------------------------- filling a table's empty cells
+def fill_jobs(table: dict, *, kinds=DEFAULT_CLOSED) -> list[tuple]:
+    """Jobs (:func:`candidate_point`) for the empty cells of ``table``'s meshes of ``kinds`` (closed
+    surface names or Monge functions): each such mesh with the variants it has no value for. Largest
+    meshes first (load balance)."""
+    variants = table["variants"]
+    jobs = []
+    for key, row in zip(table["truth"]["key"], table["median_erel"]):
+        missing = tuple(v for v, x in zip(variants, row) if x is None)
+        if key[1] in kinds and missing:
+            jobs.append((list(key), missing))
+    jobs.sort(key=lambda j: -j[0][2] * len(j[1]))
+    return jobs
+
+
+def fill_table(table: dict, done: dict, *, command: str = "") -> dict:
+    """``table`` with the values of ``done`` (:func:`run_extension`'s results) in its empty cells;
+    points, calibration and kernel unchanged (refit with ``refeature``)."""
+    col = {v: j for j, v in enumerate(table["variants"])}
+    erel = [list(row) for row in table["median_erel"]]
+    filled = 0
+    for i, key in enumerate(table["truth"]["key"]):
+        got = done.get(_key_text(key))
+        if got is None:
+            continue
+        for vid, x in got[1].items():
+            j = col.get(vid)
+            if j is not None and erel[i][j] is None and x is not None and np.isfinite(x) and x > 0:
+                erel[i][j] = _round(x, EREL_DIGITS)
+                filled += 1
+    meta = dict(table["metadata"])
+    meta.update(fill_command=command, filled_cells=filled)
+    return {**table, "median_erel": erel, "metadata": meta}
+
+
+def fill_main(argv) -> int:
+    """``python -m curv.advisor_table fill``: run the variants a table's meshes of some kinds have no
+    value for (by default the option candidates on the closed surfaces of samples 1 and 2)."""
+    parser = argparse.ArgumentParser(prog="python -m curv.advisor_table fill", description=fill_main.__doc__)
+    parser.add_argument("--table", default=str(DEFAULT_OUT))
+    parser.add_argument("--out", default=str(DEFAULT_OUT))
+    parser.add_argument("--work", default="advisor-fill", help="keeps the computed meshes (resumes)")
+    parser.add_argument("--workers", type=int, default=None)
+    parser.add_argument("--kinds", nargs="+", default=list(DEFAULT_CLOSED))
+    parser.add_argument("--dry-run", action="store_true", help="count the jobs and stop")
+    args = parser.parse_args(argv)
+    with open(args.table) as fh:
+        table = json.load(fh)
+    jobs = fill_jobs(table, kinds=tuple(args.kinds))
+    if args.dry_run:
+        print(f"{len(jobs)} jobs, {sum(len(j[1]) for j in jobs)} estimates")
+        return 0
+    done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
+    out = fill_table(table, done, command="python -m curv.advisor_table fill " + " ".join(argv))
+    with open(args.out, "w") as fh:
+        json.dump(out, fh, separators=(",", ":"))
+    print(f"wrote {args.out}: {out['metadata']['filled_cells']} cells filled", flush=True)
+    return 0
+
+
+# ---------------------------------------------------------------------------- further axes: shape and tessellation
+EXTRA_COLUMNS = ("border_share", "edge_cv", "valence_sd", "anisotropy", "curvature_spread", "hyperbolic_share")
+"""Point columns beyond the base three: the open/closed distinction and the shape and tessellation
+measures of :class:`curv.advisor.MeshFeatures`, candidates for further kernel axes."""
+EXTRA_TRANSFORMS = {"border_share": "sqrt"}
+"""Axis transforms of the extra columns (default linear): a border share spans 0 (closed) to a
+fifth (the coarsest patch), and its square root separates the small shares of dense patches from
+a closed surface."""
+AXIS_WEIGHTS = (0.5, 1.0, 2.0)
+"""Weights tried for an extra axis (its scale is its standard deviation over the table divided by
+the weight: 2 makes it count twice as much as a base axis)."""
+SELECTION_BANDWIDTHS = (0.25, 0.35, 0.5)
+"""Bandwidths tried for each set of axes during the selection. Not below 0.25: the table's meshes
+sit on a grid whose steps are 0.3-0.7 scaled units along the noise axis (and come in families of
+one surface at every noise level), so a narrower kernel turns into the nearest grid point, which
+leave-one-out over the grid rewards and a mesh between the grid's points does not."""
+EREL_FLOOR = 1e-6
+"""Median e_rel below this counts as this (rounding: nc R1 on a noise-free sphere reads 1e-15), in
+the prediction (:func:`curv.advisor.log_erel`) and in the regret the selection scores."""
+MIN_GAIN = 0.02
+"""A further axis is taken only when it lowers the grouped leave-one-out mean regret by more (each
+axis thins the table around a mesh: an axis must pay for it)."""
+
+
+def feature_row(key) -> dict:
+    """Every raw measure (:func:`curv.advisor.raw_measures`) of the table mesh of ``key``."""
+    mesh, _, _ = table_mesh(key)
+    raw = raw_measures(mesh)
+    raw.pop("polygon_kinds")
+    return {"key": list(key), **raw}
+
+
+def noise_groups(keys) -> np.ndarray:
+    """(p,) int64: one group per table surface (its key without the noise level), so that a mesh is
+    left out with its twins at the other noise levels."""
+    index: dict = {}
+    return np.array([index.setdefault(_key_text(list(k[:4]) + list(k[5:])), len(index)) for k in keys], np.int64)
+
+
+def select_axes(points: np.ndarray, columns, erel: np.ndarray, groups, *, progress=None) -> dict:
+    """The kernel: the base axes of :func:`fit_kernel`'s noise transform and, by forward selection,
+    the extra columns that lower the grouped leave-one-out mean regret by more than :data:`MIN_GAIN`.
+
+    Parameters
+    ----------
+    points : (p, c) float64
+        The table's point columns (``columns`` order; the first three the base ones).
+    columns : sequence of str
+    erel : (p, v) float64
+        Median e_rel (NaN where missing).
+    groups : (p,) array_like
+        :func:`noise_groups`.
+    progress : callable, optional
+
+    Returns
+    -------
+    dict
+        ``axes`` (``[column, transform, scale]``), ``bandwidth``, ``loo_mean_regret`` (per
+        bandwidth of the chosen axes, grouped), ``loo_p90_regret``, ``selection`` (each step:
+        the axes added and the score) and ``loo_note``.
+    """
+    from .advisor import table_coordinates
+
+    say = progress or (lambda text: None)
+    log_values = np.log(np.maximum(erel, EREL_FLOOR))
+    columns = list(columns)
+
+    def axis(col, how, weight=1.0):
+        x = points[:, columns.index(col)]
+        x = np.log(np.maximum(x, 1e-12)) if how == "log" else (np.sqrt(np.maximum(x, 0)) if how == "sqrt" else x)
+        sd = float(np.std(x))
+        return [col, how, (sd if sd > 0 else 1.0) / weight]
+
+    def score(axes):
+        coords = table_coordinates({"kernel": {"axes": axes}, "columns": columns}, *points.T)
+        per = {h: loo_regret(coords, log_values, h, groups) for h in SELECTION_BANDWIDTHS}
+        h = min(per, key=lambda b: per[b].mean())
+        return float(per[h].mean()), h, per
+
+    best_axes, best = None, None
+    for noise_axis in NOISE_AXES:
+        axes = [axis("density", "log"), axis("noise_level", noise_axis), axis("irregularity_deg", "linear")]
+        sc = score(axes)
+        if best is None or sc[0] < best[0]:
+            best_axes, best = axes, sc
+    steps = [{"axes": [a[0] for a in best_axes], "loo_mean_regret": round(best[0], 4), "bandwidth": best[1]}]
+    say(f"base axes: grouped LOO mean regret {best[0]:.4f} (bandwidth {best[1]})")
+    while True:
+        used = {a[0] for a in best_axes}
+        trials = []
+        for col in columns[3:]:
+            if col in used or not np.isfinite(points[:, columns.index(col)]).all():
+                continue
+            for weight in AXIS_WEIGHTS:
+                axes = best_axes + [axis(col, EXTRA_TRANSFORMS.get(col, "linear"), weight)]
+                trials.append((score(axes), axes, weight))
+        if not trials:
+            break
+        sc, axes, weight = min(trials, key=lambda t: t[0][0])
+        say(f"+ {axes[-1][0]} (weight {weight}): {sc[0]:.4f} (bandwidth {sc[1]})")
+        if sc[0] > best[0] - MIN_GAIN:
+            break
+        best_axes, best = axes, sc
+        steps.append({"added": axes[-1][0], "weight": weight, "loo_mean_regret": round(sc[0], 4),
+                      "bandwidth": sc[1]})
+    _, h, per = best
+    return {"axes": best_axes, "bandwidth": h, "erel_floor": EREL_FLOOR,
+            "loo_mean_regret": {str(b): round(float(r.mean()), 4) for b, r in per.items()},
+            "loo_p90_regret": {str(b): round(float(np.percentile(r, 90)), 4) for b, r in per.items()},
+            "selection": steps,
+            "loo_note": "grouped: each mesh advised from the others, its twins at the other noise levels left out"}
+
+
+def refeature_table(table: dict, rows: dict, *, command: str = "", progress=None) -> dict:
+    """``table`` with the extra columns (:data:`EXTRA_COLUMNS`) measured on its meshes and the
+    kernel chosen again (:func:`select_axes`). The base columns are recomputed from the same raw
+    measures with the table's calibration (they equal the stored ones to their rounding)."""
+    from .advisor import calibrate_irregularity, calibrate_noise
+
+    cal = table["calibration"]
+    keys = table["truth"]["key"]
+    columns = ["density", "noise_level", "irregularity_deg", *EXTRA_COLUMNS]
+    pts = []
+    for k in keys:
+        r = rows[_key_text(k)]
+        noise = calibrate_noise(r["noise_raw"], cal, r["density"])
+        pts.append([r["density"], noise / NOISE_FRACTION, calibrate_irregularity(r["irregularity_raw_deg"], noise, cal),
+                    *(r[c] for c in EXTRA_COLUMNS)])
+    pts = np.array(pts, float)
+    erel = np.array(table["median_erel"], float)
+    kernel = select_axes(pts, columns, erel, noise_groups(keys), progress=progress)
+    meta = dict(table["metadata"])
+    meta.update(refeature_command=command, created=time.strftime("%Y-%m-%d %H:%M:%S %Z"))
+    return {**table, "kernel": kernel, "metadata": meta, "columns": columns,
+            "points": [[_round(x, POINT_DIGITS) for x in p] for p in pts]}
+
+
+def refeature_main(argv) -> int:
+    """``python -m curv.advisor_table refeature``: measure the extra columns on a table's meshes
+    (rebuilt from their keys; no estimator runs but the measuring fit) and choose the kernel's axes."""
+    parser = argparse.ArgumentParser(prog="python -m curv.advisor_table refeature",
+                                     description=refeature_main.__doc__)
+    parser.add_argument("--table", default=str(DEFAULT_OUT), help="table to refeature; default the packaged one")
+    parser.add_argument("--out", default=str(DEFAULT_OUT))
+    parser.add_argument("--work", default="advisor-refeature", help="keeps the measured rows (resumes)")
+    parser.add_argument("--workers", type=int, default=None)
+    args = parser.parse_args(argv)
+    from .study.executors import open_executor
+
+    with open(args.table) as fh:
+        table = json.load(fh)
+    work = Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    path = work / "features.json"
+    rows = json.loads(path.read_text()) if path.exists() else {}
+    if rows.get("measures") != MEASURES + ", shape v1":
+        rows = {"measures": MEASURES + ", shape v1"}
+    todo = [k for k in table["truth"]["key"] if _key_text(k) not in rows]
+    t0, c0 = time.perf_counter(), time.process_time()
+    with open_executor(workers=args.workers) as ex:
+        for b in range(0, len(todo), 64):
+            part = todo[b:b + 64]
+            for k, row in zip(part, ex.map(feature_row, part)):
+                rows[_key_text(k)] = row
+            path.write_text(json.dumps(rows))
+            print(f"{min(b + 64, len(todo))}/{len(todo)} meshes measured, {time.perf_counter() - t0:.0f} s", flush=True)
+    command = "python -m curv.advisor_table refeature " + " ".join(argv)
+    out = refeature_table(table, rows, command=command, progress=lambda t: print(t, flush=True))
+    out["metadata"]["refeature_seconds"] = round(time.perf_counter() - t0, 1)
+    out["metadata"]["refeature_cpu_seconds_main_process"] = round(time.process_time() - c0, 1)
+    with open(args.out, "w") as fh:
+        json.dump(out, fh, separators=(",", ":"))
+    k = out["kernel"]
+    print(f"wrote {args.out}: axes {[a[0] for a in k['axes']]}, bandwidth {k['bandwidth']} "
+          f"(grouped LOO mean regret {k['loo_mean_regret'][str(k['bandwidth'])]})", flush=True)
+    return 0
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["extend"]:
         return extend_main(argv[1:])
+    if argv[:1] == ["fill"]:
+        return fill_main(argv[1:])
+    if argv[:1] == ["refeature"]:
+        return refeature_main(argv[1:])
     parser = argparse.ArgumentParser(prog="python -m curv.advisor_table", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="table to write; default the packaged one")
     parser.add_argument("--work", default="advisor-study", help="study directory (resumes); default ./advisor-study")

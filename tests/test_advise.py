@@ -513,3 +513,109 @@ def test_estimate_takes_the_options_as_flags(tmp_path, capsys, noisy):
     assert "--normals fit" in capsys.readouterr().err
     assert main(["estimate", path, "-m", "mru", "--degree", "4"]) == 2
     assert "degree" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ shape and tessellation axes
+def test_shape_measures_tell_a_sphere_a_torus_and_a_patch_apart():
+    from curv.advisor import SHAPE_MEASURES
+
+    sphere = measure_features(make_surface("sphere", n_vertices=2562, radius=1.3).mesh)
+    torus = measure_features(make_surface("torus", n_vertices=2562, major=1.0, minor=0.4).mesh)
+    patch = measure_features(build_test_mesh(Task(0, "quadratic", 817, 0.0, 0.0, 0)).mesh)
+    irregular = measure_features(build_test_mesh(Task(0, "quadratic", 817, 16.0, 0.0, 0)).mesh)
+    assert all(np.isfinite(getattr(f, k)) for f in (sphere, torus, patch) for k in SHAPE_MEASURES)
+    # an umbilic surface of one curvature everywhere, no saddles
+    assert sphere.anisotropy < 0.01 and sphere.curvature_spread < 0.01 and sphere.hyperbolic_share == 0
+    # a torus bends one way only at its top and bottom circles and is a saddle on its inner half
+    assert torus.anisotropy > 0.5 and 0.3 < torus.hyperbolic_share < 0.7
+    # a geodesic sphere has 12 vertices of valence 5, a regular grid none; an irregular hexagon more
+    assert 12 * (1 - 12 / 2562) ** 2 / 2562 == pytest.approx(sphere.valence_sd**2, rel=0.01)
+    assert torus.valence_sd == 0 and patch.valence_sd == 0 and irregular.valence_sd > 0.2
+    assert sphere.border_share == 0 and patch.border_share > 0
+    # a regular hexagon lifted onto a steep patch: its edges spread more than the sphere's
+    assert patch.edge_cv > sphere.edge_cv > 0
+
+
+def test_table_coordinates_follow_the_kernels_axes():
+    from curv.advisor import table_coordinates
+
+    old = {"kernel": {"noise_axis": "sqrt", "scales": [2.0, 0.5, 10.0]}}
+    assert table_coordinates(old, np.e, 0.25, 5.0) == pytest.approx([0.5, 1.0, 0.5])
+    new = {"columns": ["density", "noise_level", "irregularity_deg", "border_share", "anisotropy"],
+           "kernel": {"axes": [["density", "log", 2.0], ["border_share", "sqrt", 0.1], ["anisotropy", "linear", 0.5]]}}
+    c = table_coordinates(new, np.array([1.0, np.e]), 0.3, 7.0, np.array([0.04, 0.0]), 0.25)
+    assert c.shape == (2, 3)
+    assert c[0] == pytest.approx([0.0, 2.0, 0.5]) and c[1] == pytest.approx([0.5, 0.0, 0.5])
+
+
+def test_errors_below_the_floor_do_not_outweigh_the_other_neighbours():
+    """A call exact to rounding on one neighbour (nc R1 on a noise-free sphere: 1e-15) must not win
+    over a call that is better on every other neighbour: the mean of logs is taken above the floor."""
+    from curv.advisor import MeshFeatures
+
+    table = {"columns": ["density", "noise_level", "irregularity_deg"], "variants": ["a", "b"],
+             "kernel": {"noise_axis": "linear", "scales": [1.0, 1.0, 1.0], "bandwidth": 100.0, "erel_floor": 1e-6},
+             "points": [[0.1, 0.0, 5.0], [0.1, 0.0, 5.0], [0.1, 0.0, 5.0]],
+             "median_erel": [[1e-15, 1e-4], [1e-2, 1e-4], [1e-2, 1e-4]]}
+    f = MeshFeatures(irregularity_deg=5.0, noise=0.0, density=0.1, border_share=0.0)
+    pred = predict(table, f)
+    assert pred["b"] < pred["a"] == pytest.approx((1e-6 * 1e-2 * 1e-2) ** (1 / 3))
+    table["kernel"]["erel_floor"] = 0.0
+    assert predict(table, f)["a"] < 1e-6  # without the floor the rounding would win
+
+
+def test_leave_one_out_regret_is_the_kernel_prediction_of_the_others():
+    from curv.advisor_table import _regret, loo_regret
+
+    rng = np.random.default_rng(3)
+    coords = rng.normal(size=(40, 3))
+    logv = rng.normal(size=(40, 5))
+    logv[rng.random((40, 5)) < 0.2] = np.nan
+    logv[:, 0] = np.where(np.isfinite(logv[:, 0]), logv[:, 0], 0.0)
+    for h in (0.05, 0.5):  # 0.05: most weights underflow, the exact per-variant shift decides
+        chosen = []
+        for i in range(40):
+            rest = np.arange(40) != i
+            pred = kernel_predict(coords[rest], logv[rest], coords[i], h)
+            chosen.append(int(np.argmin(np.where(np.isfinite(pred) & np.isfinite(logv[i]), pred, np.inf))))
+        assert loo_regret(coords, logv, h) == pytest.approx(_regret(logv, np.array(chosen)))
+    # a group is left out together: two exact twins then cannot advise each other
+    twins = np.concatenate([coords[:1], coords[:1]])
+    values = np.log(np.array([[0.1, 1.0], [0.1, 1.0]]))
+    far = np.concatenate([twins, coords[1:2] + 10])
+    vals = np.concatenate([values, np.log([[1.0, 0.1]])])
+    assert loo_regret(far, vals, 0.5)[:2] == pytest.approx([1.0, 1.0])
+    assert loo_regret(far, vals, 0.5, groups=[0, 0, 1])[:2] == pytest.approx([10.0, 10.0])
+
+
+def test_the_selection_takes_an_axis_that_decides_and_leaves_a_random_one_out():
+    from curv.advisor_table import select_axes
+
+    rng = np.random.default_rng(0)
+    p = 240
+    kind = rng.random(p) < 0.5  # closed or open: which variant wins depends on it only
+    points = np.c_[np.exp(rng.uniform(-4, -1, p)), rng.uniform(0, 1, p), rng.uniform(0, 30, p),
+                   np.where(kind, 0.0, rng.uniform(0.02, 0.2, p)), rng.random(p)]
+    erel = np.where(kind[:, None], [0.01, 0.05], [0.05, 0.01]) * np.exp(rng.normal(0, 0.1, (p, 2)))
+    kernel = select_axes(points, ["density", "noise_level", "irregularity_deg", "border_share", "edge_cv"], erel,
+                         np.arange(p))
+    names = [a[0] for a in kernel["axes"]]
+    assert "border_share" in names and "edge_cv" not in names
+    assert kernel["loo_mean_regret"][str(kernel["bandwidth"])] < kernel["selection"][0]["loo_mean_regret"]
+
+
+def test_the_packaged_table_has_the_selected_axes_and_the_floor():
+    import curv.advisor_table as at
+    from curv.advisor import BASE_COLUMNS, kernel_axes
+
+    table = load_table()
+    assert table["columns"] == [*BASE_COLUMNS, *at.EXTRA_COLUMNS]
+    assert all(len(p) == len(table["columns"]) for p in table["points"])
+    axes = kernel_axes(table)
+    assert [a[0] for a in axes[:3]] == list(BASE_COLUMNS) and {a[0] for a in axes} <= set(table["columns"])
+    assert table["kernel"]["erel_floor"] == at.EREL_FLOOR
+    doc = " ".join(at.__doc__.replace("\\\n", " ").split())
+    for step in ("fill", "refeature"):
+        cmd = table["metadata"][f"{step}_command"].split()
+        assert cmd[:4] == ["python", "-m", "curv.advisor_table", step]
+        assert f"python -m curv.advisor_table {step}" in doc

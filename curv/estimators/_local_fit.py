@@ -16,7 +16,9 @@ nc, qs and an they are not: every height is measured from the centre's own noisy
 (:func:`store_se3` models that shared part). A principal curvature is ``k_i = d_iᵀ W d_i``
 with d_i = (c, s) its unit direction in (U, V); to first order ``dk_i = d_iᵀ dW d_i``, so its
 gradient over (e, f, g) is ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2, and
-``se(k_i)² = sigma² gᵀ (AᵀA)⁻¹ g``.
+``se(k_i)² = sigma² gᵀ (AᵀA)⁻¹ g``. nc and qs read sigma² from the residuals of the fit with the
+frame's tilt as two more unknowns (:func:`tilt_residual`), and the 3-unknown fits add the eigen
+step's bias (:func:`eigen_bias`) in quadrature.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from ..validity import Reason
 
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
-           "cholesky_scaled", "factor_whiten", "row_dot", "store_se3",
+           "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 MIN_TANGENT_LENGTH = 1e-9
@@ -230,6 +232,44 @@ def principal_gradients(e, f, g):
 
 
 @jit
+def deviator_gradients(e, f, g):
+    """Gradients over (e, f, g) of the two components of W's deviator ``((e - g) / 2, f)``: along
+    its estimate (``rad``'s first-order gradient, ``(cos 2theta / 2, sin 2theta, -cos 2theta / 2)``)
+    and perpendicular to it (``(-sin 2theta / 2, cos 2theta, sin 2theta / 2)``): see
+    :func:`eigen_bias`.
+
+    Returns
+    -------
+    a0, a1, a2, h0, h1, h2 : float
+    """
+    half = 0.5 * (e - g)
+    rad = math.hypot(half, f)
+    if rad > 0.0:
+        cos2, sin2 = half / rad, f / rad
+    else:
+        cos2, sin2 = 1.0, 0.0
+    return 0.5 * cos2, sin2, -0.5 * cos2, -0.5 * sin2, cos2, 0.5 * sin2
+
+
+@jit
+def eigen_bias(e, f, g, var_deviator):
+    """The bias of k1 (+) and k2 (-) that the eigen step adds to a noisy W, estimated from W itself.
+
+    ``k1, k2 = (e + g) / 2 ± rad`` with ``rad = |((e - g) / 2, f)|``, the length of W's deviator.
+    Noise in the deviator (total variance ``var_deviator`` of its two components,
+    :func:`deviator_gradients`) lengthens it on average: ``E[rad²] = rad_true² + var_deviator``, so
+    the larger of two noisy eigenvalues is biased up and the smaller down, by about
+    ``var_deviator / (2 rad)`` for a well-separated pair and by about the noise's standard deviation
+    where the true principal curvatures are (nearly) equal. The first-order propagation has no term
+    for it; where the noise in W is as large as k1 - k2 (a small support on a noisy mesh) it is as
+    large as the standard error itself. Estimated as ``rad - sqrt(max(rad² - var_deviator, 0))``
+    (the debiased length of a noisy vector).
+    """
+    rad = math.hypot(0.5 * (e - g), f)
+    return rad - math.sqrt(max(rad * rad - var_deviator, 0.0))
+
+
+@jit
 def noise_variance(bb, xatb, dof):
     """``sigma² = RSS / dof`` with ``RSS = bᵀb - xᵀAᵀb`` (clipped at 0 against rounding); NaN if dof <= 0."""
     if not dof > 0.0:
@@ -258,7 +298,66 @@ def sym3_bilinear(i00, i01, i02, i11, i12, i22, g0, g1, g2, h0, h1, h2):
 
 
 @jit
-def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, e, f, g, k1_se, k2_se):
+def tilt_residual(i00, i01, i02, i11, i12, i22, x0, x1, x2, s0, s1, s2, tilt):
+    """What fitting the frame's tilt as well takes from the residual sum of squares and the spare
+    equations, by the Schur complement of the 3-unknown fit.
+
+    The frame's normal is itself an estimate: a tilt t adds ``t · (column u, column v)`` to every
+    equation (``u`` and ``v`` for a height, ``u / l²`` and ``v / l²`` for a normal curvature), which
+    a model without linear terms leaves in the residuals. A normal made from the same 1-ring (the
+    default) has already taken the linear part of the ring's noise out of them (2 of the 3 spare
+    equations of a 6-neighbour ring); a normal from elsewhere leaves its tilt in them, which inflates
+    them. Both are right when the noise variance is read from the residuals of the fit *with* the
+    two linear terms: ``RSS₅ = RSS₃ - r_Lᵀ S⁻¹ r_L`` over ``m - 5`` spare equations, with L the two
+    linear columns, ``r_L = Lᵀb - LᵀQ x``, ``S = LᵀL - LᵀQ M⁻¹ QᵀL`` (M = QᵀQ, x the 3-unknown
+    solution). The curvatures stay those of the 3-unknown fit.
+
+    Parameters
+    ----------
+    i00 .. i22 : float
+        M⁻¹.
+    x0, x1, x2 : float
+        The 3-unknown solution.
+    s0, s1, s2 : float
+        Row sum of Q (the shared centre error's column; zeros without one).
+    tilt : (13,) float64
+        ``LᵀL`` (l00, l01, l11), ``LᵀQ`` (row u: 3, row v: 3), ``Lᵀb`` (2), ``Σ L rows`` (2).
+
+    Returns
+    -------
+    drop : float
+        ``r_Lᵀ S⁻¹ r_L`` (NaN when S is singular).
+    shared_extra : float
+        ``d_Lᵀ S⁻¹ d_L`` with ``d_L = Σ L rows - LᵀQ M⁻¹ s``: the linear terms' share of the centre's
+        common error (add it to ``sᵀM⁻¹s``).
+    """
+    l00, l01, l11 = tilt[0], tilt[1], tilt[2]
+    qu0, qu1, qu2, qv0, qv1, qv2 = tilt[3], tilt[4], tilt[5], tilt[6], tilt[7], tilt[8]
+    # T = LQ M⁻¹ (2 x 3)
+    tu0 = qu0 * i00 + qu1 * i01 + qu2 * i02
+    tu1 = qu0 * i01 + qu1 * i11 + qu2 * i12
+    tu2 = qu0 * i02 + qu1 * i12 + qu2 * i22
+    tv0 = qv0 * i00 + qv1 * i01 + qv2 * i02
+    tv1 = qv0 * i01 + qv1 * i11 + qv2 * i12
+    tv2 = qv0 * i02 + qv1 * i12 + qv2 * i22
+    s_uu = l00 - (tu0 * qu0 + tu1 * qu1 + tu2 * qu2)
+    s_uv = l01 - (tu0 * qv0 + tu1 * qv1 + tu2 * qv2)
+    s_vv = l11 - (tv0 * qv0 + tv1 * qv1 + tv2 * qv2)
+    det = s_uu * s_vv - s_uv * s_uv
+    if not det > RCOND * max(s_uu * s_vv, 1e-300):
+        return math.nan, math.nan
+    ru = tilt[9] - (qu0 * x0 + qu1 * x1 + qu2 * x2)
+    rv = tilt[10] - (qv0 * x0 + qv1 * x1 + qv2 * x2)
+    drop = (s_vv * ru * ru - 2.0 * s_uv * ru * rv + s_uu * rv * rv) / det
+    du = tilt[11] - (tu0 * s0 + tu1 * s1 + tu2 * s2)
+    dv = tilt[12] - (tv0 * s0 + tv1 * s1 + tv2 * s2)
+    extra = (s_vv * du * du - 2.0 * s_uv * du * dv + s_uu * dv * dv) / det
+    return drop, extra
+
+
+@jit
+def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, e, f, g, k1_se, k2_se,
+              x0=0.0, x1=0.0, x2=0.0, tilt=None):
     """Row p of the standard errors of a 3-unknown fit of W = [[e, f], [f, g]].
 
     With ``shared`` > 0, the centre's own height error enters every equation alike: the errors
@@ -270,6 +369,10 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
       sign does not change a variance).
 
     With ``shared`` = 0 the errors are independent: ``sigma² = RSS / (m - 3)``, ``var(k) = sigma² gᵀM⁻¹g``.
+
+    With ``tilt`` (the linear columns' sums, :func:`tilt_residual`), sigma² is read from the
+    residuals of the fit with the frame's tilt as two more unknowns: ``RSS₅ / (m - 5 + shared -
+    s₅ᵀM₅⁻¹s₅)``. Both add the eigen step's bias (:func:`eigen_bias`) to the variance.
 
     Parameters
     ----------
@@ -283,21 +386,38 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
         Equations sharing the centre's error (m or 0).
     s0, s1, s2 : float
         Their row sum (ignored when ``shared`` is 0).
+    x0, x1, x2 : float
+        The solution (with ``tilt`` only).
+    tilt : (13,) float64, optional
+        ``LᵀL`` (3), ``LᵀQ`` (6), ``Lᵀb`` (2), ``Σ L rows`` (2) of the two linear columns.
     """
     i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
+    a0, a1, a2, h0, h1, h2 = deviator_gradients(e, f, g)
     var1 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g10, g11, g12, g10, g11, g12)
     var2 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g20, g21, g22, g20, g21, g22)
+    vard = (sym3_bilinear(i00, i01, i02, i11, i12, i22, a0, a1, a2, a0, a1, a2)
+            + sym3_bilinear(i00, i01, i02, i11, i12, i22, h0, h1, h2, h0, h1, h2))
     dof = m - 3.0
     if shared > 0:
         dof += shared - sym3_bilinear(i00, i01, i02, i11, i12, i22, s0, s1, s2, s0, s1, s2)
         gs1 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g10, g11, g12, s0, s1, s2)
         gs2 = sym3_bilinear(i00, i01, i02, i11, i12, i22, g20, g21, g22, s0, s1, s2)
+        as_ = sym3_bilinear(i00, i01, i02, i11, i12, i22, a0, a1, a2, s0, s1, s2)
+        hs = sym3_bilinear(i00, i01, i02, i11, i12, i22, h0, h1, h2, s0, s1, s2)
         var1 += gs1 * gs1
         var2 += gs2 * gs2
-    sigma2 = noise_variance(bb, xatb, dof if m > 3 else 0.0)
-    k1_se[p] = math.sqrt(sigma2 * var1)
-    k2_se[p] = math.sqrt(sigma2 * var2)
+        vard += as_ * as_ + hs * hs
+    rss = bb - xatb
+    if tilt is not None:
+        drop, extra = tilt_residual(i00, i01, i02, i11, i12, i22, x0, x1, x2, s0, s1, s2, tilt)
+        rss -= drop
+        dof -= 2.0 + (extra if shared > 0 else 0.0)
+        m -= 2
+    sigma2 = noise_variance(rss, 0.0, dof if m > 3 else 0.0)
+    bias = eigen_bias(e, f, g, sigma2 * vard)
+    k1_se[p] = math.sqrt(sigma2 * var1 + bias * bias)
+    k2_se[p] = math.sqrt(sigma2 * var2 + bias * bias)
 
 
 @jit

@@ -26,7 +26,7 @@ from ..mesh import Mesh
 from ..neighbourhood import ball_support
 from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, cholesky_scaled, factor_whiten, finish_fit, mark_degenerate,
                          noise_variance, offset_in_frame, principal_gradients, row_dot, run_fit, slice_bounds,
-                         solve_scaled, solve_sym3, store_se3, tangent_frame)
+                         solve_scaled, solve_sym3, store_se3, tangent_frame, deviator_gradients, eigen_bias)
 from .registry import EstimatorSpec, register
 
 MIN_NORMAL_Z = 0.1
@@ -34,8 +34,28 @@ MIN_NORMAL_Z = 0.1
 
 
 @jit
-def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se):
-    """Normal-curvature least squares at vertex p over its support ``queue[1:count]``."""
+def _add_tilt(tilt, lu, lv, c0, c1, c2, rhs):
+    """Add one equation's linear columns (lu, lv) to the tilt sums of :func:`store_se3`: ``LᵀL``,
+    ``LᵀQ`` against the quadratic row (c0, c1, c2), ``Lᵀb`` and the row sums."""
+    tilt[0] += lu * lu
+    tilt[1] += lu * lv
+    tilt[2] += lv * lv
+    tilt[3] += lu * c0
+    tilt[4] += lu * c1
+    tilt[5] += lu * c2
+    tilt[6] += lv * c0
+    tilt[7] += lv * c1
+    tilt[8] += lv * c2
+    tilt[9] += lu * rhs
+    tilt[10] += lv * rhs
+    tilt[11] += lu
+    tilt[12] += lv
+
+
+@jit
+def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt):
+    """Normal-curvature least squares at vertex p over its support ``queue[1:count]``; ``tilt``
+    (13,) is scratch for the frame-tilt columns of the standard error (:func:`store_se3`)."""
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
         mark_degenerate(p, k1, k2, d1, d2, reason)
@@ -43,6 +63,7 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     frame = tangent_frame(n0, n1, n2)
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
+    tilt[:] = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -54,6 +75,8 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         kn = -2.0 * w / (l2 + w * w)
         # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
         c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
+        # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
+        _add_tilt(tilt, u / l2, v / l2, c0, c1, c2, kn)
         a00 += c0 * c0
         a01 += c0 * c1
         a02 += c0 * c2
@@ -71,12 +94,13 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
     # p's own height error enters every kn (as if with equal weight: see docs/UNCERTAINTY.md)
     store_se3(p, a00, a01, a02, a11, a12, a22, bb, e * b0 + f * b1 + g * b2, used, used, s0, s1, s2,
-              e, f, g, k1_se, k2_se)
+              e, f, g, k1_se, k2_se, e, f, g, tilt)
 
 
 @jit
-def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se):
-    """Quadratic height fit at vertex p over its support ``queue[1:count]``."""
+def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt):
+    """Quadratic height fit at vertex p over its support ``queue[1:count]``; ``tilt`` (13,) is
+    scratch for the frame-tilt columns of the standard error (:func:`store_se3`)."""
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
         mark_degenerate(p, k1, k2, d1, d2, reason)
@@ -84,6 +108,7 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     frame = tangent_frame(n0, n1, n2)
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
+    tilt[:] = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -93,6 +118,8 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         used += 1
         # w = A/2 u^2 + B uv + C/2 v^2
         c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
+        # a tilt of the frame adds a linear term to w (the standard error's columns)
+        _add_tilt(tilt, u, v, c0, c1, c2, w)
         a00 += c0 * c0
         a01 += c0 * c1
         a02 += c0 * c2
@@ -111,7 +138,7 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     finish_fit(p, -A, -B, -C, singular, used, frame, k1, k2, d1, d2, reason)
     # every height is measured from p, so p's own height error is shared by all equations
     store_se3(p, a00, a01, a02, a11, a12, a22, bb, A * b0 + B * b1 + C * b2, used, used, s0, s1, s2,
-              -A, -B, -C, k1_se, k2_se)
+              -A, -B, -C, k1_se, k2_se, A, B, C, tilt)
 
 
 @jit
@@ -132,7 +159,8 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     """Adjacent-normal cubic fit at vertex p.
 
     Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
-    normal equations the solve overwrites; ``grads`` (5, 7).
+    normal equations the solve overwrites; ``grads`` (7, 7): the k1, k2 gradients, the three shared
+    columns, the deviator's two components (the eigen step's bias, as in ``store_se3``).
 
     Heights and slopes enter the fit (and its noise variance) with equal weight in the
     radius-scaled coordinates: ``sigma²`` pools the two kinds of residual. p's own height error is
@@ -207,19 +235,31 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         grads[0, j] = 0.0
         grads[1, j] = 0.0
     grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
+    # the deviator's two components (the eigen step's bias, store_se3), on the quadratic terms too
+    for j in range(7):
+        grads[5, j] = 0.0
+        grads[6, j] = 0.0
+    grads[5, 0], grads[5, 1], grads[5, 2], grads[6, 0], grads[6, 1], grads[6, 2] = deviator_gradients(e, f, g)
     if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
         factor_whiten(ata0, ata0, 7, 7, grads)
         dof = (equations - 7 + used - row_dot(grads, 2, 2, 7)
                + sloped - row_dot(grads, 3, 3, 7) + sloped - row_dot(grads, 4, 4, 7))
         sigma2 = noise_variance(bb, xatb, dof)
+        var_dev = 0.0
+        for i in range(5, 7):
+            var_dev += row_dot(grads, i, i, 7)
+            for shared in range(2, 5):
+                var_dev += row_dot(grads, i, shared, 7) ** 2
+        bias = eigen_bias(e, f, g, sigma2 * var_dev * inv_r * inv_r)
         for i in range(2):
             var = row_dot(grads, i, i, 7)
             for shared in range(2, 5):
                 var += row_dot(grads, i, shared, 7) ** 2
+            se = math.sqrt(sigma2 * var * inv_r * inv_r + bias * bias)
             if i == 0:
-                k1_se[p] = math.sqrt(sigma2 * var) * inv_r
+                k1_se[p] = se
             else:
-                k2_se[p] = math.sqrt(sigma2 * var) * inv_r
+                k2_se[p] = se
 
 
 @jit_parallel
@@ -229,11 +269,12 @@ def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
+        tilt = np.empty(13)
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se)
+            _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt)
 
 
 @jit_parallel
@@ -243,11 +284,12 @@ def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
+        tilt = np.empty(13)
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se)
+            _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt)
 
 
 @jit_parallel
@@ -259,7 +301,7 @@ def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         stamp = stamps[t]
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)
-        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((5, 7))
+        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
