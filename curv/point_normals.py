@@ -18,7 +18,15 @@
    (``|cos| <`` :data:`GRAZING_COSINE`). Such points get a NaN normal and ``Reason.ORIENTATION``
    in an estimate: no guess.
 4. ``method="jet"`` (the default): the PCA normals, oriented, then refined by the jet fit that
-   :func:`curv.fitted_normals.fitted_normals` uses on meshes (:func:`curv.estimators.jet.jet_normals`).
+   :func:`curv.fitted_normals.fitted_normals` uses on meshes (:func:`curv.estimators.jet.fit_jet`).
+5. **One pass.** Steps 1 and 4 and the line check of an estimate (:func:`support_spread`) read
+   nested supports of the same point (R2 inside R3), so one kernel (:func:`_one_pass`) searches
+   each point's ball once, at the largest radius, and takes every support from it. It walks the
+   points in the grid's cell order and reads their coordinates there (:func:`curv.knn.grid_gather`),
+   so that neighbours are near in memory; in the cloud's own order (random for a scan saved
+   unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
+   as its reference: a fit turned the other way is the same fit with its sign changed exactly,
+   so the normal is turned afterwards, once the orientation is known.
 """
 
 from __future__ import annotations
@@ -34,11 +42,17 @@ from .errors import EstimatorError
 from .estimators import get_spec
 from .estimators._local_fit import slice_bounds
 from .estimators._small_linalg import sym3_eigen
-from .estimators.jet import DEFAULT_DEGREE, jet_normals
+from .estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
+from .estimators.jet import _scratch as jet_scratch
 from .jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from .neighbourhood import all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency, new_queues, new_scratch
+from .knn import grid_gather
+from .neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
+                            latest_with_mesh, new_queues, new_scratch)
 from .pointcloud import PointCloud
 from .ranges import ball_radii, resolve
+from .validity import Reason
+
+_FIT_OK = int(Reason.OK)
 
 __all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "support_spread",
            "MIN_SPREAD", "ONE_SIDED_GAP", "BORDER_RANGE",
@@ -106,55 +120,257 @@ def offset_moments(p, queue, count, x, y, z, centred, cov):
     cov[2, 2] = szz / m - mz * mz
 
 
+GAP_BINS = 64
+"""Bins of the gap test (:func:`_widest_gap`): each keeps the least and greatest angle that falls
+in it, so the widest gap is the largest step from one occupied bin's greatest angle to the next
+one's least (no sort, and ``atan2`` only at the few candidate steps). Exact whenever the widest gap
+is at least two bins' width (7.2 degrees), far below the tests' thresholds; a support crowding every
+bin would report the largest step between bins instead."""
+
+
+@jit
+def _within(queue, dist2, count, radius2, out):
+    """``out[:m]``: the centre ``queue[0]`` and the points of ``queue[1:count]`` within ``sqrt(radius2)``."""
+    out[0] = queue[0]
+    m = 1
+    for j in range(1, count):
+        if dist2[j] <= radius2:
+            out[m] = queue[j]
+            m += 1
+    return m
+
+
+@jit
+def _pseudo_angle(u, v):
+    """A value that increases with ``atan2(v, u)`` over (-pi, pi] (signed zeros as atan2 reads them),
+    in [-2, 2] (one unit a quadrant), without a trigonometric call: its rate is between 1/2 and 1
+    of the angle's, so an angle step is between 1 and 2 times the value's step."""
+    if v > 0.0 or (v == 0.0 and math.copysign(1.0, v) > 0.0):
+        if u >= 0.0:
+            return v / (u + v)
+        return 1.0 - u / (v - u)
+    if u >= 0.0:
+        return v / (u - v)
+    return -1.0 + u / (-u - v)
+
+
+@jit
+def _widest_gap(i, queue, count, x, y, z, vecs, bins):
+    """Widest angle between consecutive offsets ``q - i`` projected on the plane of ``vecs``'s
+    last two eigenvectors (2 pi with fewer than two); ``bins``: (6, GAP_BINS) scratch.
+
+    The offsets fall in :data:`GAP_BINS` bins of their pseudo-angle (:func:`_pseudo_angle`); each
+    bin keeps its least and greatest. Between consecutive occupied bins the step of the
+    pseudo-angle bounds the angle within a factor 2, so only the steps within a factor 2 of the
+    largest are measured with ``atan2`` (as the difference of the two ends' angles).
+    """
+    e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
+    e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
+    # rows: least key, its u, v; greatest key, its u, v
+    for b in range(GAP_BINS):
+        bins[0, b] = math.inf
+        bins[3, b] = -math.inf
+    scale = GAP_BINS / 4.0
+    used = 0
+    for j in range(1, count):
+        q = queue[j]
+        dx, dy, dz = x[q] - x[i], y[q] - y[i], z[q] - z[i]
+        u = dx * e1x + dy * e1y + dz * e1z
+        v = dx * e2x + dy * e2y + dz * e2z
+        if u * u + v * v > 0.0:
+            key = _pseudo_angle(u, v)
+            b = min(max(int((key + 2.0) * scale), 0), GAP_BINS - 1)
+            if key < bins[0, b]:
+                bins[0, b], bins[1, b], bins[2, b] = key, u, v
+            if key > bins[3, b]:
+                bins[3, b], bins[4, b], bins[5, b] = key, u, v
+            used += 1
+    if used < 2:
+        return 2.0 * math.pi
+    # the largest step of the key between consecutive occupied bins (the last to the first round the circle)
+    first = last = -1
+    largest = 0.0
+    for b in range(GAP_BINS):
+        if bins[3, b] >= bins[0, b]:
+            if last >= 0:
+                largest = max(largest, bins[0, b] - bins[3, last])
+            else:
+                first = b
+            last = b
+    largest = max(largest, bins[0, first] + 4.0 - bins[3, last])
+    # every step whose angle may beat the largest step's angle (at least its key step)
+    bound = 0.5 * largest * (1.0 - 1e-9)
+    widest = 0.0
+    prev = -1
+    for b in range(GAP_BINS):
+        if bins[3, b] >= bins[0, b]:
+            if prev >= 0 and bins[0, b] - bins[3, prev] >= bound:
+                step = math.atan2(bins[2, b], bins[1, b]) - math.atan2(bins[5, prev], bins[4, prev])
+                widest = max(widest, step)
+            prev = b
+    if bins[0, first] + 4.0 - bins[3, last] >= bound:
+        step = math.atan2(bins[2, first], bins[1, first]) + 2.0 * math.pi - math.atan2(bins[5, last], bins[4, last])
+        widest = max(widest, step)
+    return widest
+
+
+@jit
+def _frame(i, sub, count, x, y, z, cov, vecs, bins):
+    """PCA normal (``vecs[:3, 0]``) and widest gap of the support ``sub[:count]``; the gap, or -1
+    when the support is too small (fewer than 3 points) for a plane."""
+    if count < 3:
+        return -1.0
+    offset_moments(i, sub, count, x, y, z, True, cov)
+    sym3_eigen(cov, vecs)
+    return _widest_gap(i, sub, count, x, y, z, vecs, bins)
+
+
+@jit
+def _spread(i, sub, count, x, y, z, cov, vecs):
+    """sqrt(second / largest eigenvalue) of the second moments about point i (:func:`support_spread`)."""
+    offset_moments(i, sub, count, x, y, z, False, cov)
+    sym3_eigen(cov, vecs)
+    return math.sqrt(max(vecs[3, 1], 0.0) / vecs[3, 2]) if vecs[3, 2] > 0.0 else 0.0
+
+
 @jit_parallel
-def _frame_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues, angles, normal, gap, count_out):
-    parts = stamps.shape[0]
+def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, dists, subs,
+                 normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread):
+    """One walk over the points in grid order (module notes, "One pass"): each point's ball at
+    ``outer2``, and from it the supports at the radii of ``radii2``'s rows (nested in the ball).
+
+    ``radii2`` (4, n) squared radii, original order: row 0 the frame A (PCA normal into
+    ``normal_a``, sorted order, gap and count), row 1 the frame B (PCA normal, gap; and the jet
+    normal fitted over it, oriented by frame A's normal, when ``wanted[2]``), rows 2 and 3 two
+    spreads. ``wanted[r]`` (5,) says which parts run (0: A, 1: B, 2: jet, 3, 4: spreads).
+    """
+    order = cells[3]
+    x, y, z = coords[1], coords[2], coords[3]
+    parts = queues.shape[0]
     for t in prange(parts):
         queue = queues[t]
-        stamp = stamps[t]
-        angle = angles[t]
+        dist2 = dists[t]
+        sub = subs[t]
         cov = np.empty((3, 3))
         vecs = np.empty((4, 3))
+        bins = np.empty((6, GAP_BINS))
+        m, vec, cov_jet, frame, evec = jet_scratch()
+        keep_b = normal_b.shape[0] > 1
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
-            p = centres[i]
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            count_out[p] = count - 1
-            if count < 3:
-                normal[p, 0] = normal[p, 1] = normal[p, 2] = math.nan
-                gap[p] = 2.0 * math.pi
-                continue
-            # covariance about the centroid of the support (p included)
-            offset_moments(p, queue, count, x, y, z, True, cov)
-            sym3_eigen(cov, vecs)
-            # smallest eigenvalue first: its vector is the normal; the largest spans the plane
-            normal[p, 0], normal[p, 1], normal[p, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
-            e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
-            e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
-            used = 0
-            for j in range(1, count):
-                q = queue[j]
-                dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
-                u = dx * e1x + dy * e1y + dz * e1z
-                v = dx * e2x + dy * e2y + dz * e2z
-                if u * u + v * v > 0.0:
-                    angle[used] = math.atan2(v, u)
-                    used += 1
-            if used < 2:
-                gap[p] = 2.0 * math.pi
-                continue
-            # insertion sort of the few angles, then the widest step around the circle
-            for a in range(1, used):
-                value = angle[a]
-                b = a - 1
-                while b >= 0 and angle[b] > value:
-                    angle[b + 1] = angle[b]
-                    b -= 1
-                angle[b + 1] = value
-            widest = angle[0] + 2.0 * math.pi - angle[used - 1]
-            for a in range(1, used):
-                widest = max(widest, angle[a] - angle[a - 1])
-            gap[p] = widest
+            p = order[i]
+            count = grid_gather(i, outer2[p], cells, coords, queue, dist2)
+            if wanted[0]:
+                c = _within(queue, dist2, count, radii2[0, p], sub)
+                count_a[p] = c - 1
+                g = _frame(i, sub, c, x, y, z, cov, vecs, bins)
+                if g < 0.0:
+                    normal_a[i, 0] = normal_a[i, 1] = normal_a[i, 2] = math.nan
+                    gap_a[p] = 2.0 * math.pi
+                else:
+                    normal_a[i, 0], normal_a[i, 1], normal_a[i, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
+                    gap_a[p] = g
+            if wanted[1]:
+                c = _within(queue, dist2, count, radii2[1, p], sub)
+                g = -2.0
+                if wanted[2]:
+                    evec[3, 0] = math.nan
+                    code, _, _ = fit_jet(i, c, sub, x, y, z, normal_a, degree, m, vec, cov_jet, frame, evec)
+                    reason[p] = code
+                    if code == _FIT_OK:
+                        jet_normal(vec, frame, fitted, p)
+                    else:
+                        fitted[p, 0] = fitted[p, 1] = fitted[p, 2] = math.nan
+                    if c >= 3 and math.isfinite(evec[3, 0]):
+                        # the fit's own PCA of this support (its frame): the plane of the gap
+                        g = _widest_gap(i, sub, c, x, y, z, evec, bins)
+                if g == -2.0 or keep_b:
+                    g = _frame(i, sub, c, x, y, z, cov, vecs, bins)
+                    if keep_b:
+                        if g < 0.0:
+                            normal_b[p, 0] = normal_b[p, 1] = normal_b[p, 2] = math.nan
+                        else:
+                            normal_b[p, 0], normal_b[p, 1], normal_b[p, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
+                gap_b[p] = 2.0 * math.pi if g < 0.0 else g
+            for r in range(2):
+                if wanted[3 + r]:
+                    c = _within(queue, dist2, count, radii2[2 + r, p], sub)
+                    spread[r, p] = _spread(i, sub, c, x, y, z, cov, vecs)
+
+
+@dataclass(frozen=True, eq=False)
+class _Pass:
+    """What one :func:`_one_pass` found; None for the parts it was not asked."""
+
+    normal_a: np.ndarray | None
+    gap_a: np.ndarray | None
+    count_a: np.ndarray | None
+    normal_b: np.ndarray | None
+    gap_b: np.ndarray | None
+    fitted: np.ndarray | None
+    spreads: tuple
+
+
+def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = False, normals_b: bool = False,
+              spreads=(), chunk: int | None = None):
+    """Frames, jet normals and spreads of every point from one ball search per point (a generator).
+
+    Parameters
+    ----------
+    cloud : PointCloud
+    frame_a, frame_b : (n,) float64, optional
+        Radii of the two PCA frames (normal, angular gap); the jet normals (``jet``) are fitted
+        over frame B's supports and oriented by frame A's normals (either sign: the caller orients).
+    normals_b : bool
+        Keep frame B's normals (else only its gaps).
+    spreads : sequence of (n,) float64
+        Up to two radii of :func:`support_spread`.
+
+    Returns
+    -------
+    _Pass
+        Unit PCA normals (n, 3) (NaN under 3 points), gaps (n,), frame A's support sizes (n,)
+        int64, jet normals (n, 3) (NaN without a fit), and the spreads (n,) each.
+    """
+    n = cloud.n_points
+    rows = [frame_a, frame_b] + list(spreads) + [None] * (2 - len(spreads))
+    wanted = np.array([r is not None for r in rows[:2]] + [jet and frame_b is not None and frame_a is not None]
+                      + [r is not None for r in rows[2:]], np.bool_)
+    radii2 = np.zeros((4, n))
+    for r, radii in enumerate(rows):
+        if radii is not None:
+            np.square(np.asarray(radii, np.float64), out=radii2[r])
+    outer = np.sqrt(radii2.max(axis=0))
+    cells, coords = cloud.ball_grid(outer)
+    outer2 = radii2.max(axis=0)
+    parts = max(1, min(threads(), n))
+    queues = new_queues(n, parts)
+    dists = np.empty((parts, n))
+    subs = new_queues(n, parts)
+    normal_a = np.empty((n, 3)) if wanted[0] else np.empty((1, 3))
+    gap_a = np.empty(n) if wanted[0] else np.empty(1)
+    count_a = np.empty(n, np.int64) if wanted[0] else np.empty(1, np.int64)
+    normal_b = np.empty((n, 3)) if wanted[1] and normals_b else np.empty((1, 3))
+    gap_b = np.empty(n) if wanted[1] else np.empty(1)
+    fitted = np.empty((n, 3)) if wanted[2] else np.empty((1, 3))
+    reason = np.empty(n if wanted[2] else 1, np.uint8)
+    spread = np.empty((2, n if len(spreads) else 1))
+
+    def run(lo: int, hi: int) -> None:
+        launch(_pass_kernel, lo, hi, cells, coords, outer2, radii2, wanted, DEFAULT_DEGREE, queues, dists, subs,
+               normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread)
+
+    yield from iter_chunks(n, run, chunk=chunk)
+    del queues, dists, subs, radii2, outer2
+    if wanted[0]:
+        # frame A's normals were kept in grid order (the jet fits read them there)
+        unsorted = np.empty_like(normal_a)
+        unsorted[cells[3]] = normal_a
+        normal_a = unsorted
+    return _Pass(normal_a=normal_a if wanted[0] else None, gap_a=gap_a if wanted[0] else None,
+                 count_a=count_a if wanted[0] else None, normal_b=normal_b if wanted[1] and normals_b else None,
+                 gap_b=gap_b if wanted[1] else None, fitted=fitted if wanted[2] else None,
+                 spreads=tuple(spread[r] for r in range(len(spreads))))
 
 
 @jit_parallel
@@ -181,9 +397,19 @@ def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | N
 
     The square root of the ratio of the second to the largest eigenvalue of ``sum (q - p)(q - p)^T``
     over the support of p (1 for an even disc, 0 for points on a line through p); compared with
-    :data:`MIN_SPREAD`. Rows outside ``centres`` are left unset.
+    :data:`MIN_SPREAD`. Rows outside ``centres`` are left unset. The pass that found the cloud's
+    normals and borders measured the spreads at the default range (:func:`_frames`): radii equal to
+    those are answered from it.
     """
     n = cloud.n_points
+    for known, spread in cached_with_mesh(cloud, "spreads", list):
+        if known.shape == np.shape(radii) and np.array_equal(known, radii):
+            yield 1.0
+            return spread
+    if centres is None:
+        found = yield from _one_pass(cloud, spreads=(np.asarray(radii, np.float64),), chunk=chunk)
+        return found.spreads[0]
+    # a region: its own centres through the ball search, at the cost of the region
     centres = all_centres(n, centres)
     adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
     x, y, z = coordinate_columns(cloud)
@@ -225,24 +451,8 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
     count : (n,) int64
         Support size, the point excluded.
     """
-    n = cloud.n_points
-    centres = all_centres(n, None)
-    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
-    x, y, z = coordinate_columns(cloud)
-    radius = np.ascontiguousarray(radii, dtype=np.float64)
-    parts = max(1, min(threads(), n))
-    stamps = new_scratch(n, parts)
-    queues = new_queues(n, parts)
-    angles = np.empty((parts, n))
-    normal = np.empty((n, 3))
-    gap = np.empty(n)
-    count = np.empty(n, np.int64)
-
-    def run(lo: int, hi: int) -> None:
-        launch(_frame_kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues, angles, normal, gap, count)
-
-    yield from iter_chunks(n, run, chunk=chunk)
-    return normal, gap, count
+    found = yield from _one_pass(cloud, np.asarray(radii, np.float64), chunk=chunk)
+    return found.normal_a, found.gap_a, found.count_a
 
 
 @jit
@@ -395,14 +605,37 @@ def _run(gen):
             return stop.value
 
 
+def _radii(cloud: PointCloud, k, *, uses_normals: bool = False, knn=None) -> np.ndarray:
+    rng = resolve(get_spec("jet"), None if knn is not None else k, None, knn)
+    return ball_radii(cloud, rng, uses_normals=uses_normals)
+
+
+def _keep(cloud: PointCloud, found: _Pass, spread_radii) -> None:
+    """Keep a pass's frames at :data:`BORDER_RANGE` and its spreads with the cloud (read-only)."""
+    for arr in (found.normal_a, found.gap_a, *found.spreads):
+        arr.setflags(write=False)
+    entry = cached_with_mesh(cloud, "frames", lambda: (found.normal_a, found.gap_a))
+    del entry
+    known = cached_with_mesh(cloud, "spreads", list)
+    for radii, spread in zip(spread_radii, found.spreads):
+        if not any(held is spread for _, held in known):
+            known.append((radii, spread))
+    del known[:-4]
+
+
+def _default_spreads(cloud: PointCloud) -> list:
+    """The radii of the line check of an estimate at the default range, with and without the
+    neighbours' normals (``mru``, ``an``: ``k - 1``): the pass measures those on the way."""
+    return [_radii(cloud, NORMAL_RANGE), _radii(cloud, NORMAL_RANGE, uses_normals=True)]
+
+
 def _frames(cloud: PointCloud):
     """PCA normals and angular gaps at :data:`BORDER_RANGE`, computed once per cloud (read-only)."""
     def build():
-        radii = ball_radii(cloud, resolve(get_spec("jet"), BORDER_RANGE), uses_normals=False)
-        normal, gap, _ = _run(local_frames(cloud, radii))
-        for arr in (normal, gap):
-            arr.setflags(write=False)
-        return normal, gap
+        spread_radii = _default_spreads(cloud)
+        found = _run(_one_pass(cloud, _radii(cloud, BORDER_RANGE), spreads=spread_radii))
+        _keep(cloud, found, spread_radii)
+        return found.normal_a, found.gap_a
 
     return cached_with_mesh(cloud, "frames", build)
 
@@ -433,17 +666,26 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         range = None
     rng = resolve(get_spec("jet"), range, radius, knn)
     radii = ball_radii(cloud, rng, uses_normals=False)
+    # one pass: the frames at BORDER_RANGE (borders; the PCA normals that orient), the frame and
+    # the jet normals at the fits' range (module notes, "One pass"), the default line checks
+    spread_radii = _default_spreads(cloud)
+    found = latest_with_mesh(cloud, "normals pass", (rng.label, method),
+                             lambda: _run(_one_pass(cloud, _radii(cloud, BORDER_RANGE), radii,
+                                                    jet=method == "jet", normals_b=method == "pca",
+                                                    spreads=spread_radii)))
+    _keep(cloud, found, spread_radii)
     pca, gap = _frames(cloud)
     if method == "pca" and rng.label != resolve(get_spec("jet"), BORDER_RANGE).label:
-        pca, _, _ = _run(local_frames(cloud, radii))
+        pca = found.normal_b
     oriented, ambiguous = orient_normals(cloud, pca, orient=orient)
     one_sided = np.zeros(cloud.n_points, bool)
     if method == "jet":
-        fitted, _ = _run(jet_normals(cloud, oriented, radii, degree=DEFAULT_DEGREE))
+        fitted = found.fitted.copy()
+        # fitted with the unoriented PCA normal as reference: the same fit up to its sign
         fitted[np.einsum("ij,ij->i", fitted, oriented) < 0] *= -1.0
-        _, fit_gap, _ = _run(local_frames(cloud, radii))
+        fitted[~np.isfinite(oriented).all(axis=1)] = np.nan
         # on the border of the scan every fit is one-sided: those points are BORDER, and keep their normal
-        one_sided = (fit_gap > ONE_SIDED_GAP) & ~(gap > BORDER_GAP) & np.isfinite(fitted).all(axis=1)
+        one_sided = (found.gap_b > ONE_SIDED_GAP) & ~(gap > BORDER_GAP) & np.isfinite(fitted).all(axis=1)
         fitted[one_sided] = np.nan
         oriented = fitted
     return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
