@@ -8,7 +8,9 @@
 2. **Orientation** (:func:`orient_normals`): Hoppe et al. 1992 (Surface reconstruction from
    unorganized points, §3.3): a minimum spanning tree of the neighbour graph with weights
    ``1 - |n_p . n_q|`` (so that the propagation crosses nearly parallel normals first), walked from
-   one root per connected part, flipping each normal to agree with its parent. The root of a part
+   one root per connected part, flipping each normal to agree with its parent. Kruskal's
+   algorithm in numba (the edges in the order of a stable sort of their weights, a union-find
+   forest) and a breadth-first walk of each part's tree: no sparse matrices are built. The root of a part
    is its highest point, its normal turned up (+z), as in Hoppe; ``"outward"`` turns it away from
    the part's centroid instead (closed scans), and a viewpoint orients every normal towards it
    (a scanner's position) without propagation.
@@ -35,8 +37,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
 from .errors import EstimatorError
 from .estimators import get_spec
@@ -456,19 +456,110 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
 
 
 @jit
-def _propagate(order, parent, normal, root_sign):
-    """Flip each normal to agree with its tree parent, in breadth-first order (roots first)."""
-    for i in range(order.size):
-        p = order[i]
-        q = parent[p]
-        if q < 0:
-            s = root_sign[p]
-        else:
-            s = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-        if s < 0.0:
-            normal[p, 0] = -normal[p, 0]
-            normal[p, 1] = -normal[p, 1]
-            normal[p, 2] = -normal[p, 2]
+def _tree_edges(indptr, neighbours, normal, finite):
+    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
+    n = indptr.size - 1
+    m = 0
+    for p in range(n):
+        if finite[p]:
+            for j in range(indptr[p], indptr[p + 1]):
+                q = neighbours[j]
+                if q > p and finite[q]:
+                    m += 1
+    rows = np.empty(m, np.int64)
+    cols = np.empty(m, np.int64)
+    weight = np.empty(m)
+    m = 0
+    for p in range(n):
+        if finite[p]:
+            for j in range(indptr[p], indptr[p + 1]):
+                q = neighbours[j]
+                if q > p and finite[q]:
+                    rows[m] = p
+                    cols[m] = q
+                    c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+                    # a zero weight would be read as no edge by a sparse MST: keep every weight positive
+                    weight[m] = 1.0 - abs(c) + 1e-9
+                    m += 1
+    return rows, cols, weight
+
+
+@jit
+def _find(parent, p):
+    while parent[p] != p:
+        parent[p] = parent[parent[p]]
+        p = parent[p]
+    return p
+
+
+@jit
+def _spanning_forest(n, rank, rows, cols):
+    """Kruskal: the edges of the minimum spanning forest, lightest first (``rank`` sorts the
+    weights), as a CSR adjacency ``(ptr (n+1,), adj)``, and each point's part (a representative)."""
+    parent = np.arange(n)
+    take = np.zeros(rank.size, np.bool_)
+    degree = np.zeros(n + 1, np.int64)
+    for e in rank:
+        a = _find(parent, rows[e])
+        b = _find(parent, cols[e])
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+            take[e] = True
+            degree[rows[e] + 1] += 1
+            degree[cols[e] + 1] += 1
+    ptr = np.cumsum(degree)
+    adj = np.empty(ptr[n], np.int64)
+    fill = ptr[:n].copy()
+    for e in range(rank.size):
+        if take[e]:
+            adj[fill[rows[e]]] = cols[e]
+            fill[rows[e]] += 1
+            adj[fill[cols[e]]] = rows[e]
+            fill[cols[e]] += 1
+    part = np.empty(n, np.int64)
+    for p in range(n):
+        part[p] = _find(parent, p)
+    return ptr, adj, part
+
+
+@jit
+def _propagate(ptr, adj, part, key, root_sign, normal):
+    """Walk each part's tree breadth first from its root (the greatest ``key``, the smallest index
+    on ties), turning the root by ``root_sign`` (its value < 0: flip) and every other normal to
+    agree with its tree parent."""
+    n = part.size
+    root = np.full(n, -1, np.int64)
+    for p in range(n):
+        r = part[p]
+        if root[r] < 0 or key[p] > key[root[r]]:
+            root[r] = p
+    seen = np.zeros(n, np.bool_)
+    queue = np.empty(n, np.int64)
+    for r in range(n):
+        s = root[r]
+        if s < 0:
+            continue
+        if root_sign[s] < 0.0:
+            normal[s, 0] = -normal[s, 0]
+            normal[s, 1] = -normal[s, 1]
+            normal[s, 2] = -normal[s, 2]
+        seen[s] = True
+        queue[0] = s
+        head, tail = 0, 1
+        while head < tail:
+            p = queue[head]
+            head += 1
+            for j in range(ptr[p], ptr[p + 1]):
+                q = adj[j]
+                if seen[q]:
+                    continue
+                seen[q] = True
+                if normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2] < 0.0:
+                    normal[q, 0] = -normal[q, 0]
+                    normal[q, 1] = -normal[q, 1]
+                    normal[q, 2] = -normal[q, 2]
+                queue[tail] = q
+                tail += 1
 
 
 @jit_parallel
@@ -521,43 +612,27 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tu
     if orient not in ("up", "outward"):
         raise EstimatorError(f"orient must be 'up', 'outward' or a viewpoint (x, y, z); got {orient!r}")
     graph = cloud.adjacency
-    rows = np.repeat(np.arange(n), np.diff(graph.indptr))
-    cols = graph.indices
-    keep = (rows < cols) & finite[rows] & finite[cols]
-    rows, cols = rows[keep], cols[keep]
-    cosine = np.abs(np.einsum("ij,ij->i", out[rows], out[cols]))
-    # a zero weight would be read as no edge: keep every weight positive
-    weight = 1.0 - cosine + 1e-9
-    tree = minimum_spanning_tree(sp.csr_matrix((weight, (rows, cols)), shape=(n, n)))
-    tree = (tree + tree.T).tocsr()
-    n_parts, labels = connected_components(tree, directed=False)
-    # one root per part: its highest point, or the point farthest from its centroid
-    if orient == "up":
-        key = cloud.points[:, 2]
-    else:
-        centroid = np.stack([np.bincount(labels, cloud.points[:, c], n_parts) for c in range(3)], axis=1)
-        centroid /= np.bincount(labels, minlength=n_parts)[:, None]
-        key = np.linalg.norm(cloud.points - centroid[labels], axis=1)
-    key = np.where(finite, key, -np.inf)
-    by_part = np.lexsort((-key, labels))
-    roots = by_part[np.flatnonzero(np.r_[True, np.diff(labels[by_part]) != 0])]
-    root_sign = np.zeros(n)
-    if orient == "up":
-        root_sign[roots] = out[roots, 2]
-    else:
-        root_sign[roots] = np.einsum("ij,ij->i", out[roots], cloud.points[roots] - centroid[labels[roots]])
-    # one walk from a virtual node joined to every root gives each point its tree parent
-    joined = sp.bmat([[tree, sp.csr_matrix((np.ones(roots.size), (roots, np.zeros(roots.size, int))), shape=(n, 1))],
-                      [None, sp.csr_matrix((1, 1))]]).tocsr()
-    joined = (joined + joined.T).tocsr()
-    order, parent = breadth_first_order(joined, n, directed=False, return_predecessors=True)
-    order = order[1:].astype(np.int64)
-    parent = parent[:n].astype(np.int64)
-    parent[parent == n] = -1
-    _propagate(order, parent, out, root_sign)
-    ambiguous = np.zeros(n, bool)
     indptr = graph.indptr.astype(np.int64)
     neighbours = graph.indices.astype(np.int64)
+    safe = np.where(finite[:, None], out, 0.0)
+    rows, cols, weight = _tree_edges(indptr, neighbours, safe, finite)
+    # Kruskal in the order of the weights (stable: ties keep the edges' order)
+    ptr, adj, part = _spanning_forest(n, np.argsort(weight, kind="stable"), rows, cols)
+    del rows, cols, weight
+    # one root per part: its highest point (turned up), or the point farthest from its centroid (turned away)
+    if orient == "up":
+        key = cloud.points[:, 2].copy()
+        root_sign = out[:, 2].copy()
+    else:
+        centroid = np.stack([np.bincount(part, cloud.points[:, c], n) for c in range(3)], axis=1)
+        centroid /= np.maximum(np.bincount(part, minlength=n), 1)[:, None]
+        away = cloud.points - centroid[part]
+        key = np.linalg.norm(away, axis=1)
+        root_sign = np.einsum("ij,ij->i", out, away)
+    key[~finite] = -np.inf
+    root_sign[~finite] = 0.0
+    _propagate(ptr, adj, part, key, root_sign, out)
+    ambiguous = np.zeros(n, bool)
     safe = np.where(finite[:, None], out, 0.0)
     launch(_agreement, indptr, neighbours, safe, AGREE_COSINE, ambiguous)
     ambiguous &= finite
