@@ -466,8 +466,8 @@ def _tree_edges(indptr, neighbours, normal, finite):
                 q = neighbours[j]
                 if q > p and finite[q]:
                     m += 1
-    rows = np.empty(m, np.int64)
-    cols = np.empty(m, np.int64)
+    rows = np.empty(m, np.int32)
+    cols = np.empty(m, np.int32)
     weight = np.empty(m)
     m = 0
     for p in range(n):
@@ -612,8 +612,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tu
     if orient not in ("up", "outward"):
         raise EstimatorError(f"orient must be 'up', 'outward' or a viewpoint (x, y, z); got {orient!r}")
     graph = cloud.adjacency
-    indptr = graph.indptr.astype(np.int64)
-    neighbours = graph.indices.astype(np.int64)
+    indptr, neighbours = graph.indptr, graph.indices
     safe = np.where(finite[:, None], out, 0.0)
     rows, cols, weight = _tree_edges(indptr, neighbours, safe, finite)
     # Kruskal in the order of the weights (stable: ties keep the edges' order)
