@@ -49,12 +49,13 @@ from .knn import grid_gather
 from .neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                             latest_with_mesh, new_queues, new_scratch)
 from .pointcloud import PointCloud
-from .ranges import ball_radii, resolve
+from .ranges import ball_radii, point_spacing, resolve
 from .validity import Reason
 
 _FIT_OK = int(Reason.OK)
 
-__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "support_spread",
+__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "border_radii",
+           "support_spread",
            "MIN_SPREAD", "ONE_SIDED_GAP", "BORDER_RANGE",
            "NORMAL_RANGE", "BORDER_GAP", "AGREE_COSINE", "GRAZING_COSINE", "NORMAL_METHODS"]
 
@@ -64,7 +65,9 @@ NORMAL_RANGE = 2
 BORDER_RANGE = 3
 """Range Rk of the border test and of the PCA that orients the jet normals (~50 points). At R2
 (~23 points) a uniform random sample of a closed sphere had 1.2 % of its points over
-:data:`BORDER_GAP`; at R3 0.02 % (20,000 points), and 0.1 % of a disc's interior points."""
+:data:`BORDER_GAP`; at R3 0.02 % (20,000 points), and 0.1 % of a disc's interior points. The unit
+is the larger of the point's spacing and its neighbours' (:func:`border_radii`): 62 of 200,000
+uniform random points of a sphere read as borders with the point's own, 10 with this."""
 
 BORDER_GAP = 0.75 * math.pi
 """A point is on the border of an open scan when its projected neighbours leave an angular gap
@@ -684,6 +687,53 @@ def _radii(cloud: PointCloud, k, *, uses_normals: bool = False, knn=None) -> np.
     return ball_radii(cloud, rng, uses_normals=uses_normals)
 
 
+@jit_parallel
+def _calm_spacing(spacing, nearest, out):
+    """``out[p]``: the larger of p's spacing and the median spacing of its nearest points."""
+    n, k = nearest.shape
+    parts = max(1, min(n, 64))
+    for t in prange(parts):
+        values = np.empty(k)
+        start, stop = slice_bounds(0, n, t, parts)
+        for p in range(start, stop):
+            m = 0
+            for j in range(k):
+                q = nearest[p, j]
+                if q >= 0:
+                    # insertion into the sorted few
+                    v = spacing[q]
+                    b = m
+                    while b > 0 and values[b - 1] > v:
+                        values[b] = values[b - 1]
+                        b -= 1
+                    values[b] = v
+                    m += 1
+            if m == 0:
+                out[p] = spacing[p]
+            else:
+                middle = values[m // 2] if m % 2 else 0.5 * (values[m // 2 - 1] + values[m // 2])
+                out[p] = max(spacing[p], middle)
+
+
+def border_radii(cloud: PointCloud) -> np.ndarray:
+    """(n,) float64 radius of the border test (and of the PCA that orients the fits) at each point.
+
+    :data:`BORDER_RANGE` times the larger of the point's spacing and the median spacing of its
+    :data:`curv.knn.GRAPH_NEIGHBOURS` nearest. A point whose own six nearest sit in a tight clump
+    has a spacing far below its surroundings'; at R3 of its own spacing its ball held only the
+    clump (15 points against 51, median), all on one side, and read as a border: 62 of 200,000
+    uniform random points of a closed sphere (0.03 %, the false borders of closed scans). With the
+    neighbours' median spacing: none, while the rim of an open scan keeps its one-sided ball.
+    """
+    spacing = point_spacing(cloud)
+    calm = np.empty_like(spacing)
+    launch(_calm_spacing, spacing, cloud.nearest[0], calm)
+    radii = _radii(cloud, BORDER_RANGE)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(spacing > 0, calm / spacing, 1.0)
+    return np.where(np.isfinite(scale), radii * scale, radii)
+
+
 def _keep(cloud: PointCloud, found: _Pass, spread_radii) -> None:
     """Keep a pass's frames at :data:`BORDER_RANGE` and its spreads with the cloud (read-only)."""
     for arr in (found.normal_a, found.gap_a, *found.spreads):
@@ -707,7 +757,7 @@ def _frames(cloud: PointCloud):
     """PCA normals and angular gaps at :data:`BORDER_RANGE`, computed once per cloud (read-only)."""
     def build():
         spread_radii = _default_spreads(cloud)
-        found = _run(_one_pass(cloud, _radii(cloud, BORDER_RANGE), spreads=spread_radii))
+        found = _run(_one_pass(cloud, border_radii(cloud), spreads=spread_radii))
         _keep(cloud, found, spread_radii)
         return found.normal_a, found.gap_a
 
@@ -744,7 +794,7 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     # the jet normals at the fits' range (module notes, "One pass"), the default line checks
     spread_radii = _default_spreads(cloud)
     found = latest_with_mesh(cloud, "normals pass", (rng.label, method),
-                             lambda: _run(_one_pass(cloud, _radii(cloud, BORDER_RANGE), radii,
+                             lambda: _run(_one_pass(cloud, border_radii(cloud), radii,
                                                     jet=method == "jet", normals_b=method == "pca",
                                                     spreads=spread_radii)))
     _keep(cloud, found, spread_radii)
