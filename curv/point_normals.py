@@ -723,7 +723,9 @@ def border_radii(cloud: PointCloud) -> np.ndarray:
     has a spacing far below its surroundings'; at R3 of its own spacing its ball held only the
     clump (15 points against 51, median), all on one side, and read as a border: 62 of 200,000
     uniform random points of a closed sphere (0.03 %, the false borders of closed scans). With the
-    neighbours' median spacing: none, while the rim of an open scan keeps its one-sided ball.
+    neighbours' median spacing: 10, while the rim of an open scan keeps its one-sided ball (an open
+    patch's 241 border points became 240). On scan rows 4:1 apart, 651 points are borders
+    instead of 820 and 1 orientation is ambiguous instead of 19 (the balls reach the next rows).
     """
     spacing = point_spacing(cloud)
     calm = np.empty_like(spacing)
