@@ -657,7 +657,8 @@ class PointNormals:
         border: NaN, not trusted (``Reason.SINGULAR``); all False for PCA normals (the PCA plane
         does not extrapolate).
     gap : (n,) float64
-        Widest angular gap of the projected support (radians).
+        Widest angular gap of the projected support (radians); exact whenever at least
+        7.2 degrees (:data:`GAP_BINS`).
     border : (n,) bool
         ``gap > BORDER_GAP``: on the border of an open scan.
     (``gap`` and ``border`` are measured at :data:`BORDER_RANGE` whatever the normals' range.)
