@@ -23,7 +23,7 @@ import numpy as np
 from .errors import MeshError
 from .jit import jit, jit_parallel, launch, prange
 
-__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "symmetric_graph", "GRAPH_NEIGHBOURS"]
+__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "grid_gather", "symmetric_graph", "GRAPH_NEIGHBOURS"]
 
 GRAPH_NEIGHBOURS = 10
 """Neighbours per point of a point cloud's neighbour graph (made symmetric: about 13 edges a
@@ -281,6 +281,63 @@ def grid_ball(p, radius2, cells, coords, x, y, z, queue):
                     if q != p:
                         queue[count] = q
                         count += 1
+    return count
+
+
+@jit
+def grid_gather(i, radius2, cells, coords, queue, dist2):
+    """The ball of sorted point ``i`` in sorted positions, with the squared distances.
+
+    The same ball as :func:`grid_ball`, found in the same order, but named by positions in the
+    grid's sorted order (``coords``' columns), so that a kernel walking the points cell by cell
+    reads its neighbours' coordinates from nearby memory instead of from random places.
+
+    Parameters
+    ----------
+    i : int
+        The centre's sorted position (``cells[3][i]`` is its index in the cloud).
+    radius2 : float
+        Squared radius.
+    cells, coords : tuples
+        :func:`build_grid`.
+    queue : (n,) int64
+        Receives ``i`` at 0 and the ball's sorted positions after it.
+    dist2 : (n,) float64
+        Receives 0 at 0 and the squared distance of each ball point after it.
+
+    Returns
+    -------
+    count : int
+        ``queue[1:count]`` is the ball (the centre excluded).
+    """
+    cell_keys, cell_start, dims, order = cells
+    origin, xs, ys, zs = coords
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    h = origin[3]
+    px, py, pz = xs[i], ys[i], zs[i]
+    cx = min(max(int(math.floor((px - origin[0]) / h)), 0), nx - 1)
+    cy = min(max(int(math.floor((py - origin[1]) / h)), 0), ny - 1)
+    cz = min(max(int(math.floor((pz - origin[2]) / h)), 0), nz - 1)
+    widest = max(nx, max(ny, nz))
+    reach = math.sqrt(radius2) / h
+    ring = widest if not reach < widest else int(math.ceil(reach))
+    z0 = max(cz - ring, 0)
+    z1 = min(cz + ring, nz - 1)
+    queue[0] = i
+    dist2[0] = 0.0
+    count = 1
+    for ix in range(max(cx - ring, 0), min(cx + ring, nx - 1) + 1):
+        for iy in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
+            base = (ix * ny + iy) * nz
+            a = _first_at_least(cell_keys, base + z0)
+            b = _first_at_least(cell_keys, base + z1 + 1)
+            for j in range(cell_start[a], cell_start[b]):
+                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+                d2 = dx * dx + dy * dy + dz * dz
+                if d2 <= radius2 and j != i:
+                    queue[count] = j
+                    dist2[count] = d2
+                    count += 1
     return count
 
 

@@ -8,7 +8,9 @@
 2. **Orientation** (:func:`orient_normals`): Hoppe et al. 1992 (Surface reconstruction from
    unorganized points, §3.3): a minimum spanning tree of the neighbour graph with weights
    ``1 - |n_p . n_q|`` (so that the propagation crosses nearly parallel normals first), walked from
-   one root per connected part, flipping each normal to agree with its parent. The root of a part
+   one root per connected part, flipping each normal to agree with its parent. Kruskal's
+   algorithm in numba (the edges in the order of a stable sort of their weights, a union-find
+   forest) and a breadth-first walk of each part's tree: no sparse matrices are built. The root of a part
    is its highest point, its normal turned up (+z), as in Hoppe; ``"outward"`` turns it away from
    the part's centroid instead (closed scans), and a viewpoint orients every normal towards it
    (a scanner's position) without propagation.
@@ -18,7 +20,15 @@
    (``|cos| <`` :data:`GRAZING_COSINE`). Such points get a NaN normal and ``Reason.ORIENTATION``
    in an estimate: no guess.
 4. ``method="jet"`` (the default): the PCA normals, oriented, then refined by the jet fit that
-   :func:`curv.fitted_normals.fitted_normals` uses on meshes (:func:`curv.estimators.jet.jet_normals`).
+   :func:`curv.fitted_normals.fitted_normals` uses on meshes (:func:`curv.estimators.jet.fit_jet`).
+5. **One pass.** Steps 1 and 4 and the line check of an estimate (:func:`support_spread`) read
+   nested supports of the same point (R2 inside R3), so one kernel (:func:`_one_pass`) searches
+   each point's ball once, at the largest radius, and takes every support from it. It walks the
+   points in the grid's cell order and reads their coordinates there (:func:`curv.knn.grid_gather`),
+   so that neighbours are near in memory; in the cloud's own order (random for a scan saved
+   unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
+   as its reference: a fit turned the other way is the same fit with its sign changed exactly,
+   so the normal is turned afterwards, once the orientation is known.
 """
 
 from __future__ import annotations
@@ -27,20 +37,25 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
 from .errors import EstimatorError
 from .estimators import get_spec
 from .estimators._local_fit import slice_bounds
 from .estimators._small_linalg import sym3_eigen
-from .estimators.jet import DEFAULT_DEGREE, jet_normals
+from .estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
+from .estimators.jet import _scratch as jet_scratch
 from .jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from .neighbourhood import all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency, new_queues, new_scratch
+from .knn import grid_gather
+from .neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
+                            latest_with_mesh, new_queues, new_scratch)
 from .pointcloud import PointCloud
-from .ranges import ball_radii, resolve
+from .ranges import ball_radii, point_spacing, resolve
+from .validity import Reason
 
-__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "support_spread",
+_FIT_OK = int(Reason.OK)
+
+__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "border_radii",
+           "support_spread",
            "MIN_SPREAD", "ONE_SIDED_GAP", "BORDER_RANGE",
            "NORMAL_RANGE", "BORDER_GAP", "AGREE_COSINE", "GRAZING_COSINE", "NORMAL_METHODS"]
 
@@ -50,7 +65,9 @@ NORMAL_RANGE = 2
 BORDER_RANGE = 3
 """Range Rk of the border test and of the PCA that orients the jet normals (~50 points). At R2
 (~23 points) a uniform random sample of a closed sphere had 1.2 % of its points over
-:data:`BORDER_GAP`; at R3 0.02 % (20,000 points), and 0.1 % of a disc's interior points."""
+:data:`BORDER_GAP`; at R3 0.02 % (20,000 points), and 0.1 % of a disc's interior points. The unit
+is the larger of the point's spacing and its neighbours' (:func:`border_radii`): 62 of 200,000
+uniform random points of a sphere read as borders with the point's own, 10 with this."""
 
 BORDER_GAP = 0.75 * math.pi
 """A point is on the border of an open scan when its projected neighbours leave an angular gap
@@ -106,55 +123,257 @@ def offset_moments(p, queue, count, x, y, z, centred, cov):
     cov[2, 2] = szz / m - mz * mz
 
 
+GAP_BINS = 64
+"""Bins of the gap test (:func:`_widest_gap`): each keeps the least and greatest angle that falls
+in it, so the widest gap is the largest step from one occupied bin's greatest angle to the next
+one's least (no sort, and ``atan2`` only at the few candidate steps). Exact whenever the widest gap
+is at least two bins' width (7.2 degrees), far below the tests' thresholds; a support crowding every
+bin would report the largest step between bins instead."""
+
+
+@jit
+def _within(queue, dist2, count, radius2, out):
+    """``out[:m]``: the centre ``queue[0]`` and the points of ``queue[1:count]`` within ``sqrt(radius2)``."""
+    out[0] = queue[0]
+    m = 1
+    for j in range(1, count):
+        if dist2[j] <= radius2:
+            out[m] = queue[j]
+            m += 1
+    return m
+
+
+@jit
+def _pseudo_angle(u, v):
+    """A value that increases with ``atan2(v, u)`` over (-pi, pi] (signed zeros as atan2 reads them),
+    in [-2, 2] (one unit a quadrant), without a trigonometric call: its rate is between 1/2 and 1
+    of the angle's, so an angle step is between 1 and 2 times the value's step."""
+    if v > 0.0 or (v == 0.0 and math.copysign(1.0, v) > 0.0):
+        if u >= 0.0:
+            return v / (u + v)
+        return 1.0 - u / (v - u)
+    if u >= 0.0:
+        return v / (u - v)
+    return -1.0 + u / (-u - v)
+
+
+@jit
+def _widest_gap(i, queue, count, x, y, z, vecs, bins):
+    """Widest angle between consecutive offsets ``q - i`` projected on the plane of ``vecs``'s
+    last two eigenvectors (2 pi with fewer than two); ``bins``: (6, GAP_BINS) scratch.
+
+    The offsets fall in :data:`GAP_BINS` bins of their pseudo-angle (:func:`_pseudo_angle`); each
+    bin keeps its least and greatest. Between consecutive occupied bins the step of the
+    pseudo-angle bounds the angle within a factor 2, so only the steps within a factor 2 of the
+    largest are measured with ``atan2`` (as the difference of the two ends' angles).
+    """
+    e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
+    e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
+    # rows: least key, its u, v; greatest key, its u, v
+    for b in range(GAP_BINS):
+        bins[0, b] = math.inf
+        bins[3, b] = -math.inf
+    scale = GAP_BINS / 4.0
+    used = 0
+    for j in range(1, count):
+        q = queue[j]
+        dx, dy, dz = x[q] - x[i], y[q] - y[i], z[q] - z[i]
+        u = dx * e1x + dy * e1y + dz * e1z
+        v = dx * e2x + dy * e2y + dz * e2z
+        if u * u + v * v > 0.0:
+            key = _pseudo_angle(u, v)
+            b = min(max(int((key + 2.0) * scale), 0), GAP_BINS - 1)
+            if key < bins[0, b]:
+                bins[0, b], bins[1, b], bins[2, b] = key, u, v
+            if key > bins[3, b]:
+                bins[3, b], bins[4, b], bins[5, b] = key, u, v
+            used += 1
+    if used < 2:
+        return 2.0 * math.pi
+    # the largest step of the key between consecutive occupied bins (the last to the first round the circle)
+    first = last = -1
+    largest = 0.0
+    for b in range(GAP_BINS):
+        if bins[3, b] >= bins[0, b]:
+            if last >= 0:
+                largest = max(largest, bins[0, b] - bins[3, last])
+            else:
+                first = b
+            last = b
+    largest = max(largest, bins[0, first] + 4.0 - bins[3, last])
+    # every step whose angle may beat the largest step's angle (at least its key step)
+    bound = 0.5 * largest * (1.0 - 1e-9)
+    widest = 0.0
+    prev = -1
+    for b in range(GAP_BINS):
+        if bins[3, b] >= bins[0, b]:
+            if prev >= 0 and bins[0, b] - bins[3, prev] >= bound:
+                step = math.atan2(bins[2, b], bins[1, b]) - math.atan2(bins[5, prev], bins[4, prev])
+                widest = max(widest, step)
+            prev = b
+    if bins[0, first] + 4.0 - bins[3, last] >= bound:
+        step = math.atan2(bins[2, first], bins[1, first]) + 2.0 * math.pi - math.atan2(bins[5, last], bins[4, last])
+        widest = max(widest, step)
+    return widest
+
+
+@jit
+def _frame(i, sub, count, x, y, z, cov, vecs, bins):
+    """PCA normal (``vecs[:3, 0]``) and widest gap of the support ``sub[:count]``; the gap, or -1
+    when the support is too small (fewer than 3 points) for a plane."""
+    if count < 3:
+        return -1.0
+    offset_moments(i, sub, count, x, y, z, True, cov)
+    sym3_eigen(cov, vecs)
+    return _widest_gap(i, sub, count, x, y, z, vecs, bins)
+
+
+@jit
+def _spread(i, sub, count, x, y, z, cov, vecs):
+    """sqrt(second / largest eigenvalue) of the second moments about point i (:func:`support_spread`)."""
+    offset_moments(i, sub, count, x, y, z, False, cov)
+    sym3_eigen(cov, vecs)
+    return math.sqrt(max(vecs[3, 1], 0.0) / vecs[3, 2]) if vecs[3, 2] > 0.0 else 0.0
+
+
 @jit_parallel
-def _frame_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues, angles, normal, gap, count_out):
-    parts = stamps.shape[0]
+def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, dists, subs,
+                 normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread):
+    """One walk over the points in grid order (module notes, "One pass"): each point's ball at
+    ``outer2``, and from it the supports at the radii of ``radii2``'s rows (nested in the ball).
+
+    ``radii2`` (4, n) squared radii, original order: row 0 the frame A (PCA normal into
+    ``normal_a``, sorted order, gap and count), row 1 the frame B (PCA normal, gap; and the jet
+    normal fitted over it, oriented by frame A's normal, when ``wanted[2]``), rows 2 and 3 two
+    spreads. ``wanted[r]`` (5,) says which parts run (0: A, 1: B, 2: jet, 3, 4: spreads).
+    """
+    order = cells[3]
+    x, y, z = coords[1], coords[2], coords[3]
+    parts = queues.shape[0]
     for t in prange(parts):
         queue = queues[t]
-        stamp = stamps[t]
-        angle = angles[t]
+        dist2 = dists[t]
+        sub = subs[t]
         cov = np.empty((3, 3))
         vecs = np.empty((4, 3))
+        bins = np.empty((6, GAP_BINS))
+        m, vec, cov_jet, frame, evec = jet_scratch()
+        keep_b = normal_b.shape[0] > 1
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
-            p = centres[i]
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            count_out[p] = count - 1
-            if count < 3:
-                normal[p, 0] = normal[p, 1] = normal[p, 2] = math.nan
-                gap[p] = 2.0 * math.pi
-                continue
-            # covariance about the centroid of the support (p included)
-            offset_moments(p, queue, count, x, y, z, True, cov)
-            sym3_eigen(cov, vecs)
-            # smallest eigenvalue first: its vector is the normal; the largest spans the plane
-            normal[p, 0], normal[p, 1], normal[p, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
-            e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
-            e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
-            used = 0
-            for j in range(1, count):
-                q = queue[j]
-                dx, dy, dz = x[q] - x[p], y[q] - y[p], z[q] - z[p]
-                u = dx * e1x + dy * e1y + dz * e1z
-                v = dx * e2x + dy * e2y + dz * e2z
-                if u * u + v * v > 0.0:
-                    angle[used] = math.atan2(v, u)
-                    used += 1
-            if used < 2:
-                gap[p] = 2.0 * math.pi
-                continue
-            # insertion sort of the few angles, then the widest step around the circle
-            for a in range(1, used):
-                value = angle[a]
-                b = a - 1
-                while b >= 0 and angle[b] > value:
-                    angle[b + 1] = angle[b]
-                    b -= 1
-                angle[b + 1] = value
-            widest = angle[0] + 2.0 * math.pi - angle[used - 1]
-            for a in range(1, used):
-                widest = max(widest, angle[a] - angle[a - 1])
-            gap[p] = widest
+            p = order[i]
+            count = grid_gather(i, outer2[p], cells, coords, queue, dist2)
+            if wanted[0]:
+                c = _within(queue, dist2, count, radii2[0, p], sub)
+                count_a[p] = c - 1
+                g = _frame(i, sub, c, x, y, z, cov, vecs, bins)
+                if g < 0.0:
+                    normal_a[i, 0] = normal_a[i, 1] = normal_a[i, 2] = math.nan
+                    gap_a[p] = 2.0 * math.pi
+                else:
+                    normal_a[i, 0], normal_a[i, 1], normal_a[i, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
+                    gap_a[p] = g
+            if wanted[1]:
+                c = _within(queue, dist2, count, radii2[1, p], sub)
+                g = -2.0
+                if wanted[2]:
+                    evec[3, 0] = math.nan
+                    code, _, _ = fit_jet(i, c, sub, x, y, z, normal_a, degree, m, vec, cov_jet, frame, evec)
+                    reason[p] = code
+                    if code == _FIT_OK:
+                        jet_normal(vec, frame, fitted, p)
+                    else:
+                        fitted[p, 0] = fitted[p, 1] = fitted[p, 2] = math.nan
+                    if c >= 3 and math.isfinite(evec[3, 0]):
+                        # the fit's own PCA of this support (its frame): the plane of the gap
+                        g = _widest_gap(i, sub, c, x, y, z, evec, bins)
+                if g == -2.0 or keep_b:
+                    g = _frame(i, sub, c, x, y, z, cov, vecs, bins)
+                    if keep_b:
+                        if g < 0.0:
+                            normal_b[p, 0] = normal_b[p, 1] = normal_b[p, 2] = math.nan
+                        else:
+                            normal_b[p, 0], normal_b[p, 1], normal_b[p, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
+                gap_b[p] = 2.0 * math.pi if g < 0.0 else g
+            for r in range(2):
+                if wanted[3 + r]:
+                    c = _within(queue, dist2, count, radii2[2 + r, p], sub)
+                    spread[r, p] = _spread(i, sub, c, x, y, z, cov, vecs)
+
+
+@dataclass(frozen=True, eq=False)
+class _Pass:
+    """What one :func:`_one_pass` found; None for the parts it was not asked."""
+
+    normal_a: np.ndarray | None
+    gap_a: np.ndarray | None
+    count_a: np.ndarray | None
+    normal_b: np.ndarray | None
+    gap_b: np.ndarray | None
+    fitted: np.ndarray | None
+    spreads: tuple
+
+
+def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = False, normals_b: bool = False,
+              spreads=(), chunk: int | None = None):
+    """Frames, jet normals and spreads of every point from one ball search per point (a generator).
+
+    Parameters
+    ----------
+    cloud : PointCloud
+    frame_a, frame_b : (n,) float64, optional
+        Radii of the two PCA frames (normal, angular gap); the jet normals (``jet``) are fitted
+        over frame B's supports and oriented by frame A's normals (either sign: the caller orients).
+    normals_b : bool
+        Keep frame B's normals (else only its gaps).
+    spreads : sequence of (n,) float64
+        Up to two radii of :func:`support_spread`.
+
+    Returns
+    -------
+    _Pass
+        Unit PCA normals (n, 3) (NaN under 3 points), gaps (n,), frame A's support sizes (n,)
+        int64, jet normals (n, 3) (NaN without a fit), and the spreads (n,) each.
+    """
+    n = cloud.n_points
+    rows = [frame_a, frame_b] + list(spreads) + [None] * (2 - len(spreads))
+    wanted = np.array([r is not None for r in rows[:2]] + [jet and frame_b is not None and frame_a is not None]
+                      + [r is not None for r in rows[2:]], np.bool_)
+    radii2 = np.zeros((4, n))
+    for r, radii in enumerate(rows):
+        if radii is not None:
+            np.square(np.asarray(radii, np.float64), out=radii2[r])
+    outer = np.sqrt(radii2.max(axis=0))
+    cells, coords = cloud.ball_grid(outer)
+    outer2 = radii2.max(axis=0)
+    parts = max(1, min(threads(), n))
+    queues = new_queues(n, parts)
+    dists = np.empty((parts, n))
+    subs = new_queues(n, parts)
+    normal_a = np.empty((n, 3)) if wanted[0] else np.empty((1, 3))
+    gap_a = np.empty(n) if wanted[0] else np.empty(1)
+    count_a = np.empty(n, np.int64) if wanted[0] else np.empty(1, np.int64)
+    normal_b = np.empty((n, 3)) if wanted[1] and normals_b else np.empty((1, 3))
+    gap_b = np.empty(n) if wanted[1] else np.empty(1)
+    fitted = np.empty((n, 3)) if wanted[2] else np.empty((1, 3))
+    reason = np.empty(n if wanted[2] else 1, np.uint8)
+    spread = np.empty((2, n if len(spreads) else 1))
+
+    def run(lo: int, hi: int) -> None:
+        launch(_pass_kernel, lo, hi, cells, coords, outer2, radii2, wanted, DEFAULT_DEGREE, queues, dists, subs,
+               normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread)
+
+    yield from iter_chunks(n, run, chunk=chunk)
+    del queues, dists, subs, radii2, outer2
+    if wanted[0]:
+        # frame A's normals were kept in grid order (the jet fits read them there)
+        unsorted = np.empty_like(normal_a)
+        unsorted[cells[3]] = normal_a
+        normal_a = unsorted
+    return _Pass(normal_a=normal_a if wanted[0] else None, gap_a=gap_a if wanted[0] else None,
+                 count_a=count_a if wanted[0] else None, normal_b=normal_b if wanted[1] and normals_b else None,
+                 gap_b=gap_b if wanted[1] else None, fitted=fitted if wanted[2] else None,
+                 spreads=tuple(spread[r] for r in range(len(spreads))))
 
 
 @jit_parallel
@@ -181,9 +400,19 @@ def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | N
 
     The square root of the ratio of the second to the largest eigenvalue of ``sum (q - p)(q - p)^T``
     over the support of p (1 for an even disc, 0 for points on a line through p); compared with
-    :data:`MIN_SPREAD`. Rows outside ``centres`` are left unset.
+    :data:`MIN_SPREAD`. Rows outside ``centres`` are left unset. The pass that found the cloud's
+    normals and borders measured the spreads at the default range (:func:`_frames`): radii equal to
+    those are answered from it.
     """
     n = cloud.n_points
+    for known, spread in cached_with_mesh(cloud, "spreads", list):
+        if known.shape == np.shape(radii) and np.array_equal(known, radii):
+            yield 1.0
+            return spread
+    if centres is None:
+        found = yield from _one_pass(cloud, spreads=(np.asarray(radii, np.float64),), chunk=chunk)
+        return found.spreads[0]
+    # a region: its own centres through the ball search, at the cost of the region
     centres = all_centres(n, centres)
     adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
     x, y, z = coordinate_columns(cloud)
@@ -225,40 +454,115 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
     count : (n,) int64
         Support size, the point excluded.
     """
-    n = cloud.n_points
-    centres = all_centres(n, None)
-    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
-    x, y, z = coordinate_columns(cloud)
-    radius = np.ascontiguousarray(radii, dtype=np.float64)
-    parts = max(1, min(threads(), n))
-    stamps = new_scratch(n, parts)
-    queues = new_queues(n, parts)
-    angles = np.empty((parts, n))
-    normal = np.empty((n, 3))
-    gap = np.empty(n)
-    count = np.empty(n, np.int64)
-
-    def run(lo: int, hi: int) -> None:
-        launch(_frame_kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, stamps, queues, angles, normal, gap, count)
-
-    yield from iter_chunks(n, run, chunk=chunk)
-    return normal, gap, count
+    found = yield from _one_pass(cloud, np.asarray(radii, np.float64), chunk=chunk)
+    return found.normal_a, found.gap_a, found.count_a
 
 
 @jit
-def _propagate(order, parent, normal, root_sign):
-    """Flip each normal to agree with its tree parent, in breadth-first order (roots first)."""
-    for i in range(order.size):
-        p = order[i]
-        q = parent[p]
-        if q < 0:
-            s = root_sign[p]
-        else:
-            s = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-        if s < 0.0:
-            normal[p, 0] = -normal[p, 0]
-            normal[p, 1] = -normal[p, 1]
-            normal[p, 2] = -normal[p, 2]
+def _tree_edges(indptr, neighbours, normal, finite):
+    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
+    n = indptr.size - 1
+    m = 0
+    for p in range(n):
+        if finite[p]:
+            for j in range(indptr[p], indptr[p + 1]):
+                q = neighbours[j]
+                if q > p and finite[q]:
+                    m += 1
+    rows = np.empty(m, np.int32)
+    cols = np.empty(m, np.int32)
+    weight = np.empty(m)
+    m = 0
+    for p in range(n):
+        if finite[p]:
+            for j in range(indptr[p], indptr[p + 1]):
+                q = neighbours[j]
+                if q > p and finite[q]:
+                    rows[m] = p
+                    cols[m] = q
+                    c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+                    # a zero weight would be read as no edge by a sparse MST: keep every weight positive
+                    weight[m] = 1.0 - abs(c) + 1e-9
+                    m += 1
+    return rows, cols, weight
+
+
+@jit
+def _find(parent, p):
+    while parent[p] != p:
+        parent[p] = parent[parent[p]]
+        p = parent[p]
+    return p
+
+
+@jit
+def _spanning_forest(n, rank, rows, cols):
+    """Kruskal: the edges of the minimum spanning forest, lightest first (``rank`` sorts the
+    weights), as a CSR adjacency ``(ptr (n+1,), adj)``, and each point's part (a representative)."""
+    parent = np.arange(n)
+    take = np.zeros(rank.size, np.bool_)
+    degree = np.zeros(n + 1, np.int64)
+    for e in rank:
+        a = _find(parent, rows[e])
+        b = _find(parent, cols[e])
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+            take[e] = True
+            degree[rows[e] + 1] += 1
+            degree[cols[e] + 1] += 1
+    ptr = np.cumsum(degree)
+    adj = np.empty(ptr[n], np.int64)
+    fill = ptr[:n].copy()
+    for e in range(rank.size):
+        if take[e]:
+            adj[fill[rows[e]]] = cols[e]
+            fill[rows[e]] += 1
+            adj[fill[cols[e]]] = rows[e]
+            fill[cols[e]] += 1
+    part = np.empty(n, np.int64)
+    for p in range(n):
+        part[p] = _find(parent, p)
+    return ptr, adj, part
+
+
+@jit
+def _propagate(ptr, adj, part, key, root_sign, normal):
+    """Walk each part's tree breadth first from its root (the greatest ``key``, the smallest index
+    on ties), turning the root by ``root_sign`` (its value < 0: flip) and every other normal to
+    agree with its tree parent."""
+    n = part.size
+    root = np.full(n, -1, np.int64)
+    for p in range(n):
+        r = part[p]
+        if root[r] < 0 or key[p] > key[root[r]]:
+            root[r] = p
+    seen = np.zeros(n, np.bool_)
+    queue = np.empty(n, np.int64)
+    for r in range(n):
+        s = root[r]
+        if s < 0:
+            continue
+        if root_sign[s] < 0.0:
+            normal[s, 0] = -normal[s, 0]
+            normal[s, 1] = -normal[s, 1]
+            normal[s, 2] = -normal[s, 2]
+        seen[s] = True
+        queue[0] = s
+        head, tail = 0, 1
+        while head < tail:
+            p = queue[head]
+            head += 1
+            for j in range(ptr[p], ptr[p + 1]):
+                q = adj[j]
+                if seen[q]:
+                    continue
+                seen[q] = True
+                if normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2] < 0.0:
+                    normal[q, 0] = -normal[q, 0]
+                    normal[q, 1] = -normal[q, 1]
+                    normal[q, 2] = -normal[q, 2]
+                queue[tail] = q
+                tail += 1
 
 
 @jit_parallel
@@ -311,43 +615,26 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tu
     if orient not in ("up", "outward"):
         raise EstimatorError(f"orient must be 'up', 'outward' or a viewpoint (x, y, z); got {orient!r}")
     graph = cloud.adjacency
-    rows = np.repeat(np.arange(n), np.diff(graph.indptr))
-    cols = graph.indices
-    keep = (rows < cols) & finite[rows] & finite[cols]
-    rows, cols = rows[keep], cols[keep]
-    cosine = np.abs(np.einsum("ij,ij->i", out[rows], out[cols]))
-    # a zero weight would be read as no edge: keep every weight positive
-    weight = 1.0 - cosine + 1e-9
-    tree = minimum_spanning_tree(sp.csr_matrix((weight, (rows, cols)), shape=(n, n)))
-    tree = (tree + tree.T).tocsr()
-    n_parts, labels = connected_components(tree, directed=False)
-    # one root per part: its highest point, or the point farthest from its centroid
+    indptr, neighbours = graph.indptr, graph.indices
+    safe = np.where(finite[:, None], out, 0.0)
+    rows, cols, weight = _tree_edges(indptr, neighbours, safe, finite)
+    # Kruskal in the order of the weights (stable: ties keep the edges' order)
+    ptr, adj, part = _spanning_forest(n, np.argsort(weight, kind="stable"), rows, cols)
+    del rows, cols, weight
+    # one root per part: its highest point (turned up), or the point farthest from its centroid (turned away)
     if orient == "up":
-        key = cloud.points[:, 2]
+        key = cloud.points[:, 2].copy()
+        root_sign = out[:, 2].copy()
     else:
-        centroid = np.stack([np.bincount(labels, cloud.points[:, c], n_parts) for c in range(3)], axis=1)
-        centroid /= np.bincount(labels, minlength=n_parts)[:, None]
-        key = np.linalg.norm(cloud.points - centroid[labels], axis=1)
-    key = np.where(finite, key, -np.inf)
-    by_part = np.lexsort((-key, labels))
-    roots = by_part[np.flatnonzero(np.r_[True, np.diff(labels[by_part]) != 0])]
-    root_sign = np.zeros(n)
-    if orient == "up":
-        root_sign[roots] = out[roots, 2]
-    else:
-        root_sign[roots] = np.einsum("ij,ij->i", out[roots], cloud.points[roots] - centroid[labels[roots]])
-    # one walk from a virtual node joined to every root gives each point its tree parent
-    joined = sp.bmat([[tree, sp.csr_matrix((np.ones(roots.size), (roots, np.zeros(roots.size, int))), shape=(n, 1))],
-                      [None, sp.csr_matrix((1, 1))]]).tocsr()
-    joined = (joined + joined.T).tocsr()
-    order, parent = breadth_first_order(joined, n, directed=False, return_predecessors=True)
-    order = order[1:].astype(np.int64)
-    parent = parent[:n].astype(np.int64)
-    parent[parent == n] = -1
-    _propagate(order, parent, out, root_sign)
+        centroid = np.stack([np.bincount(part, cloud.points[:, c], n) for c in range(3)], axis=1)
+        centroid /= np.maximum(np.bincount(part, minlength=n), 1)[:, None]
+        away = cloud.points - centroid[part]
+        key = np.linalg.norm(away, axis=1)
+        root_sign = np.einsum("ij,ij->i", out, away)
+    key[~finite] = -np.inf
+    root_sign[~finite] = 0.0
+    _propagate(ptr, adj, part, key, root_sign, out)
     ambiguous = np.zeros(n, bool)
-    indptr = graph.indptr.astype(np.int64)
-    neighbours = graph.indices.astype(np.int64)
     safe = np.where(finite[:, None], out, 0.0)
     launch(_agreement, indptr, neighbours, safe, AGREE_COSINE, ambiguous)
     ambiguous &= finite
@@ -370,7 +657,8 @@ class PointNormals:
         border: NaN, not trusted (``Reason.SINGULAR``); all False for PCA normals (the PCA plane
         does not extrapolate).
     gap : (n,) float64
-        Widest angular gap of the projected support (radians).
+        Widest angular gap of the projected support (radians); exact whenever at least
+        7.2 degrees (:data:`GAP_BINS`).
     border : (n,) bool
         ``gap > BORDER_GAP``: on the border of an open scan.
     (``gap`` and ``border`` are measured at :data:`BORDER_RANGE` whatever the normals' range.)
@@ -395,14 +683,86 @@ def _run(gen):
             return stop.value
 
 
+def _radii(cloud: PointCloud, k, *, uses_normals: bool = False, knn=None) -> np.ndarray:
+    rng = resolve(get_spec("jet"), None if knn is not None else k, None, knn)
+    return ball_radii(cloud, rng, uses_normals=uses_normals)
+
+
+@jit_parallel
+def _calm_spacing(spacing, nearest, out):
+    """``out[p]``: the larger of p's spacing and the median spacing of its nearest points."""
+    n, k = nearest.shape
+    parts = max(1, min(n, 64))
+    for t in prange(parts):
+        values = np.empty(k)
+        start, stop = slice_bounds(0, n, t, parts)
+        for p in range(start, stop):
+            m = 0
+            for j in range(k):
+                q = nearest[p, j]
+                if q >= 0:
+                    # insertion into the sorted few
+                    v = spacing[q]
+                    b = m
+                    while b > 0 and values[b - 1] > v:
+                        values[b] = values[b - 1]
+                        b -= 1
+                    values[b] = v
+                    m += 1
+            if m == 0:
+                out[p] = spacing[p]
+            else:
+                middle = values[m // 2] if m % 2 else 0.5 * (values[m // 2 - 1] + values[m // 2])
+                out[p] = max(spacing[p], middle)
+
+
+def border_radii(cloud: PointCloud) -> np.ndarray:
+    """(n,) float64 radius of the border test (and of the PCA that orients the fits) at each point.
+
+    :data:`BORDER_RANGE` times the larger of the point's spacing and the median spacing of its
+    :data:`curv.knn.GRAPH_NEIGHBOURS` nearest. A point whose own six nearest sit in a tight clump
+    has a spacing far below its surroundings'; at R3 of its own spacing its ball held only the
+    clump (15 points against 51, median), all on one side, and read as a border: 62 of 200,000
+    uniform random points of a closed sphere (0.03 %, the false borders of closed scans). With the
+    neighbours' median spacing: 10, while the rim of an open scan keeps its one-sided ball (an open
+    patch's 241 border points became 240). On scan rows 4:1 apart, 651 points are borders
+    instead of 820 and 1 orientation is ambiguous instead of 19 (the balls reach the next rows).
+    """
+    spacing = point_spacing(cloud)
+    calm = np.empty_like(spacing)
+    launch(_calm_spacing, spacing, cloud.nearest[0], calm)
+    radii = _radii(cloud, BORDER_RANGE)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(spacing > 0, calm / spacing, 1.0)
+    return np.where(np.isfinite(scale), radii * scale, radii)
+
+
+def _keep(cloud: PointCloud, found: _Pass, spread_radii) -> None:
+    """Keep a pass's frames at :data:`BORDER_RANGE` and its spreads with the cloud (read-only)."""
+    for arr in (found.normal_a, found.gap_a, *found.spreads):
+        arr.setflags(write=False)
+    entry = cached_with_mesh(cloud, "frames", lambda: (found.normal_a, found.gap_a))
+    del entry
+    known = cached_with_mesh(cloud, "spreads", list)
+    for radii, spread in zip(spread_radii, found.spreads):
+        if not any(held is spread for _, held in known):
+            known.append((radii, spread))
+    del known[:-4]
+
+
+def _default_spreads(cloud: PointCloud) -> list:
+    """The radii of the line check of an estimate at the default range, with and without the
+    neighbours' normals (``mru``, ``an``: ``k - 1``): the pass measures those on the way."""
+    return [_radii(cloud, NORMAL_RANGE), _radii(cloud, NORMAL_RANGE, uses_normals=True)]
+
+
 def _frames(cloud: PointCloud):
     """PCA normals and angular gaps at :data:`BORDER_RANGE`, computed once per cloud (read-only)."""
     def build():
-        radii = ball_radii(cloud, resolve(get_spec("jet"), BORDER_RANGE), uses_normals=False)
-        normal, gap, _ = _run(local_frames(cloud, radii))
-        for arr in (normal, gap):
-            arr.setflags(write=False)
-        return normal, gap
+        spread_radii = _default_spreads(cloud)
+        found = _run(_one_pass(cloud, border_radii(cloud), spreads=spread_radii))
+        _keep(cloud, found, spread_radii)
+        return found.normal_a, found.gap_a
 
     return cached_with_mesh(cloud, "frames", build)
 
@@ -433,17 +793,26 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         range = None
     rng = resolve(get_spec("jet"), range, radius, knn)
     radii = ball_radii(cloud, rng, uses_normals=False)
+    # one pass: the frames at BORDER_RANGE (borders; the PCA normals that orient), the frame and
+    # the jet normals at the fits' range (module notes, "One pass"), the default line checks
+    spread_radii = _default_spreads(cloud)
+    found = latest_with_mesh(cloud, "normals pass", (rng.label, method),
+                             lambda: _run(_one_pass(cloud, border_radii(cloud), radii,
+                                                    jet=method == "jet", normals_b=method == "pca",
+                                                    spreads=spread_radii)))
+    _keep(cloud, found, spread_radii)
     pca, gap = _frames(cloud)
     if method == "pca" and rng.label != resolve(get_spec("jet"), BORDER_RANGE).label:
-        pca, _, _ = _run(local_frames(cloud, radii))
+        pca = found.normal_b
     oriented, ambiguous = orient_normals(cloud, pca, orient=orient)
     one_sided = np.zeros(cloud.n_points, bool)
     if method == "jet":
-        fitted, _ = _run(jet_normals(cloud, oriented, radii, degree=DEFAULT_DEGREE))
+        fitted = found.fitted.copy()
+        # fitted with the unoriented PCA normal as reference: the same fit up to its sign
         fitted[np.einsum("ij,ij->i", fitted, oriented) < 0] *= -1.0
-        _, fit_gap, _ = _run(local_frames(cloud, radii))
+        fitted[~np.isfinite(oriented).all(axis=1)] = np.nan
         # on the border of the scan every fit is one-sided: those points are BORDER, and keep their normal
-        one_sided = (fit_gap > ONE_SIDED_GAP) & ~(gap > BORDER_GAP) & np.isfinite(fitted).all(axis=1)
+        one_sided = (found.gap_b > ONE_SIDED_GAP) & ~(gap > BORDER_GAP) & np.isfinite(fitted).all(axis=1)
         fitted[one_sided] = np.nan
         oriented = fitted
     return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,

@@ -113,6 +113,16 @@ def test_closed_blue_noise_sphere_has_no_border():
     assert not (res.reason == curv.Reason.BORDER).any()
 
 
+def test_closed_uniform_random_torus_has_no_border():
+    """A point whose six nearest sit in a clump has a small spacing of its own; the border test's
+    ball takes its neighbours' spacing there (curv.point_normals.border_radii), or the clump alone
+    reads as a rim (7 of these 20,000 points with the point's own spacing)."""
+    from curv.point_normals import border_points
+
+    cloud = sample_points(Torus(1.0, 0.4), 20000, rng=5).cloud
+    assert not border_points(cloud).any()
+
+
 @pytest.mark.parametrize("method", ["meyer", "csm", "ru", "icc"])
 def test_face_based_estimators_refuse_points(sphere2, method):
     with pytest.raises(MeshError, match="point clouds; use one of: nc, qs, an, mru, jet"):

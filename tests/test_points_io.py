@@ -376,3 +376,25 @@ def test_the_viewer_reads_a_point_file_whatever_mesh_repairs_are_ticked(tmp_path
         curv.load(path, merge_vertices=True)  # the library refuses a repair of a point cloud ...
     _, cloud, truth = load_source(FileSource(str(path), repairs=("merge_vertices", "orient")))
     assert isinstance(cloud, curv.PointCloud) and cloud.n_points == 50 and truth is None  # ... the viewer asks for none
+
+
+@pytest.mark.parametrize("style", ["spaces", "tabs and CRLF", "commas", "blank lines and header"])
+def test_text_layouts_read_back_to_the_last_bit(tmp_path, style):
+    """Tabs, CRLF, commas, blank lines and a header line: the numbers read back exactly."""
+    rng = np.random.default_rng(7)
+    values = rng.normal(size=(500, 6)) * 10.0 ** rng.integers(-8, 8, size=(500, 6))
+    values[:, 3:] /= np.linalg.norm(values[:, 3:], axis=1, keepdims=True)
+    rows = [" ".join(repr(float(v)) for v in row) for row in values]
+    if style == "tabs and CRLF":
+        text = "\r\n".join(r.replace(" ", "\t") for r in rows) + "\r\n"
+    elif style == "commas":
+        text = "\n".join(r.replace(" ", ", ") for r in rows)
+    elif style == "blank lines and header":
+        text = "x y z nx ny nz\n" + "\n\n".join(rows) + "\n  \n"
+    else:
+        text = "\n".join("  " + r + "  " for r in rows) + "\n"
+    path = tmp_path / "a.xyz"
+    path.write_text(text)
+    cloud = curv.load(path)
+    np.testing.assert_array_equal(cloud.points, values[:, :3])
+    np.testing.assert_array_equal(cloud.normals, values[:, 3:])

@@ -88,3 +88,77 @@ def test_spacing_is_the_sixth_neighbour_and_matches_the_mesh_edge_on_a_lattice()
     inner = (i.ravel() > 1) & (i.ravel() < 28) & (j.ravel() > 1) & (j.ravel() < 28)
     np.testing.assert_allclose(point_spacing(cloud)[inner], 1.0)
     assert GRAPH_NEIGHBOURS >= 6
+
+
+def _sorted_gaps(cloud, radii, normals):
+    """The widest angular gap of every ball by brute force: atan2 of the projected offsets, sorted."""
+    gaps = np.full(cloud.n_points, 2 * np.pi)
+    for i, ball in enumerate(cKDTree(cloud.points).query_ball_point(cloud.points, radii)):
+        n = normals[i]
+        if not np.isfinite(n).all():
+            continue
+        e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(n, e1)
+        d = cloud.points[[j for j in ball if j != i]] - cloud.points[i]
+        u, v = d @ e1, d @ e2
+        keep = u * u + v * v > 0
+        if keep.sum() < 2:
+            continue
+        a = np.sort(np.arctan2(v[keep], u[keep]))
+        gaps[i] = max(a[0] + 2 * np.pi - a[-1], np.diff(a).max())
+    return gaps
+
+
+def _gap_clouds():
+    yield "blue patch", sample_points(QuadraticPatch(), 2000, sampling="blue", rng=1).cloud
+    yield "rows 5:1", sample_points(QuadraticPatch(), 2000, sampling="rows", ratio=5, rng=2).cloud
+    # an axis-aligned flat grid: projections with exact (and signed) zeros, ties on the bins' edges
+    i, j = np.meshgrid(np.arange(25), np.arange(25))
+    yield "flat grid", curv.PointCloud(np.column_stack([i.ravel(), j.ravel(), np.zeros(i.size)]).astype(float))
+
+
+@pytest.mark.parametrize("name,cloud", list(_gap_clouds()), ids=[c[0] for c in _gap_clouds()])
+@pytest.mark.parametrize("k", [2, 3])
+def test_binned_gap_is_the_sorted_gap(name, cloud, k):
+    from curv.point_normals import local_frames
+
+    radii = ball_radii(cloud, Range(k=k), uses_normals=False)
+    normals, gap, count = _run_gen(local_frames(cloud, radii))
+    want = _sorted_gaps(cloud, radii, normals)
+    # exact down to rounding wherever the widest gap spans two bins (7.2 degrees) or more
+    np.testing.assert_allclose(gap, want, rtol=0, atol=1e-9)
+    assert (gap > np.radians(135)).any() and (gap < np.radians(90)).any()
+    np.testing.assert_array_equal(count, [len(b) - 1 for b in cKDTree(cloud.points).query_ball_point(cloud.points, radii)])
+
+
+def _run_gen(gen):
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+
+def test_one_pass_gives_the_jet_normals_and_spreads_of_the_separate_kernels():
+    """The fused pass (frames, jet normals, line checks from one ball search per point) agrees with
+    the estimator's own jet normal kernel and with a separate spread pass, to rounding."""
+    from curv.estimators.jet import jet_normals
+    from curv.point_normals import local_frames, point_normals, support_spread
+
+    cloud = sample_points(QuadraticPatch(), 3000, sampling="blue", rng=4).cloud
+    est = point_normals(cloud)
+    pca, _, _ = _run_gen(local_frames(cloud, ball_radii(cloud, Range(k=3), uses_normals=False)))
+    oriented = np.where(np.einsum("ij,ij->i", pca, est.normals)[:, None] < 0, -pca, pca)
+    r2 = ball_radii(cloud, Range(k=2), uses_normals=False)
+    fitted, _ = _run_gen(jet_normals(cloud, oriented, r2))
+    ok = np.isfinite(est.normals).all(axis=1)
+    assert ok.mean() > 0.9
+    np.testing.assert_allclose(est.normals[ok], fitted[ok], atol=1e-9)
+    # the line check of an estimate at R2 comes from the pass, else from its own walk, or a region's
+    cached = _run_gen(support_spread(cloud, r2))
+    fresh = _run_gen(support_spread(curv.PointCloud(cloud.points), r2))
+    np.testing.assert_allclose(cached, fresh, rtol=0, atol=1e-12)
+    centres = np.arange(0, cloud.n_points, 7)
+    region = _run_gen(support_spread(curv.PointCloud(cloud.points), r2, centres))
+    np.testing.assert_allclose(region[centres], fresh[centres], rtol=0, atol=1e-12)

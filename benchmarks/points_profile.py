@@ -1,0 +1,65 @@
+"""Where the time of one point-cloud estimate goes, phase by phase (wall and CPU seconds).
+
+Run by hand from the repository root::
+
+    PYTHONPATH=. .venv/bin/python benchmarks/points_profile.py 1000000 qs
+
+N uniform random points of the unit sphere (seed 0), no normals, as ``bench_estimators.py
+--points``. The phases are those of ``curv.estimate(curv.PointCloud(points), method, 2)``, run one
+by one on one cloud: the grid and the 10 nearest (the spacing), the one pass per point (PCA and
+gap at the border test's radius, the jet normals and their gap at R2, the line checks at R2 and
+R1), the neighbour graph, the orientation, the coincident points; then the whole call on a fresh
+cloud, whose remainder over the phases is the estimator's own kernel. CPU seconds are the
+process's over all threads: on a shared machine they move much less with the load than the wall.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+
+def sphere_points(n: int) -> np.ndarray:
+    p = np.random.default_rng(0).normal(size=(n, 3))
+    return p / np.linalg.norm(p, axis=1, keepdims=True)
+
+
+def main() -> None:
+    import curv
+    from curv import point_normals as pn
+
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
+    method = sys.argv[2] if len(sys.argv) > 2 else "qs"
+    curv.estimate(curv.PointCloud(sphere_points(2000)), method, 2)  # kernels from the cache
+    points = sphere_points(n)
+    total_wall = total_cpu = 0.0
+
+    def phase(label, work):
+        nonlocal total_wall, total_cpu
+        t, c = time.perf_counter(), time.process_time()
+        out = work()
+        wall, cpu = time.perf_counter() - t, time.process_time() - c
+        total_wall, total_cpu = total_wall + wall, total_cpu + cpu
+        print(f"{label:<34} wall {wall:7.2f}  cpu {cpu:7.2f}", flush=True)
+        return out
+
+    cloud = phase("point cloud", lambda: curv.PointCloud(points))
+    phase("grid + 10 nearest", lambda: cloud.nearest)
+    border = phase("border radii", lambda: pn.border_radii(cloud))
+    r2, spreads = pn._radii(cloud, 2), pn._default_spreads(cloud)
+    found = phase("one pass (frames, jet, line checks)",
+                  lambda: pn._run(pn._one_pass(cloud, border, r2, jet=True, spreads=spreads)))
+    phase("neighbour graph", lambda: cloud.adjacency)
+    phase("orientation", lambda: pn.orient_normals(cloud, found.normal_a))
+    phase("coincident points", lambda: cloud.coincident_points)
+    print(f"{'phases':<34} wall {total_wall:7.2f}  cpu {total_cpu:7.2f}")
+    t, c = time.perf_counter(), time.process_time()
+    res = curv.estimate(curv.PointCloud(points), method, 2)
+    print(f"{'whole ' + method + ' R2 call':<34} wall {time.perf_counter() - t:7.2f}  "
+          f"cpu {time.process_time() - c:7.2f}  (valid {res.valid.mean():.4f})")
+
+
+if __name__ == "__main__":
+    main()
