@@ -10,7 +10,7 @@ import numpy as np
 from curv.estimators import ESTIMATORS
 from curv.features import feature_edges
 from curv.io import save_ply, save_vtu
-from PySide6.QtCore import QSettings, Qt, Signal
+from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QGuiApplication, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QDialog, QDialogButtonBox, QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton,
@@ -50,6 +50,10 @@ ADVISE_POINTS_TIP = "The advisor ranks estimators for meshes (its table comes fr
 MAX_RECENT = 8
 GLYPH_PIXELS = 900
 """One direction glyph per this many pixels of a pane at most, so glyphs never bury the colours."""
+GREY_FRAME_DELAY_MS = 1000
+"""A new mesh is first drawn grey only if its estimates have not arrived this long after it: a
+frame of a large mesh takes seconds of the GUI thread under software GL, and the coloured frame
+replaces it anyway."""
 
 
 class MainWindow(QMainWindow):
@@ -82,6 +86,12 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(self.grid)
         self._geometry = None
         self._drawn = None  # what the viewports show (see _scene): unchanged scenes are not re-rendered
+        self.grey_frames = True
+        """Whether a new mesh is drawn grey while its estimates run (after GREY_FRAME_DELAY_MS);
+        a scripted snapshot needs only the coloured frame."""
+        self._first_frame_due = False
+        self._grey_timer = QTimer(self, singleShot=True, interval=GREY_FRAME_DELAY_MS)
+        self._grey_timer.timeout.connect(self._grey_frame)
 
         self.source_panel = SourcePanel()
         self.inspect = InspectPanel(self.doc)
@@ -292,9 +302,9 @@ class MainWindow(QMainWindow):
             self._add_recent(str(Path(change.source.path).resolve()))
         self._geometry = change.geometry if change.geometry is not None else prepare_geometry(change.mesh)
         self.grid.set_point_size(doc.display.state.point_size)
-        self.grid.set_geometry(self._geometry.base, edge_length=self._geometry.edge_length,
-                               points=self._geometry.points_only)
+        self.grid.set_geometry(self._geometry.base, points=self._geometry.points_only)
         self._drawn = None
+        self._first_frame_due = True
         self._feature_lines = {}
         self.setWindowTitle(f"curvlab — {change.source.label}")
         points = doc.is_points
@@ -361,6 +371,15 @@ class MainWindow(QMainWindow):
         doc = self.doc
         if doc.mesh is None:
             return
+        if self._first_frame_due and not force and self.controller.running_keys() \
+                and all(doc.result(i) is None for i in range(len(doc.panes))):
+            # a new mesh whose estimates run: the coloured frame is its first, unless they take long
+            if self.grey_frames and not self._grey_timer.isActive():
+                self._grey_timer.start()
+            self.update_titles()
+            return
+        self._first_frame_due = False
+        self._grey_timer.stop()
         scene = self._scene()
         if not force and scene == self._drawn:
             self.update_titles()
@@ -406,6 +425,11 @@ class MainWindow(QMainWindow):
         self.inspect.show_values(active, table=(active[2] if active else doc.cmap(doc.active)).table,
                                  n_invalid=None if invalid is None else int(invalid.sum()),
                                  n_vertices=doc.mesh.n_vertices)
+
+    def _grey_frame(self) -> None:
+        if self._first_frame_due:
+            self._first_frame_due = False
+            self.redraw()
 
     def feature_lines(self, i: int):
         """The feature edges of view ``i``'s feature angle as lines, or None (no angle, difference pane)."""
