@@ -124,3 +124,27 @@ def test_the_mesh_report_follows_the_estimates_and_fills_the_mesh_panel(qtbot, w
     assert order[0][1] is None and order[1][1] is None  # a mesh's report comes after its estimate
     assert order[2][1] == tuple(doc.mesh.report().lines())
     assert doc.report[0] in window.mesh_panel.text.text() and "Checking" not in window.mesh_panel.text.text()
+
+
+def test_the_busy_indicator_repaints_a_few_times_a_second(qtbot, window):
+    from PySide6.QtCore import QEvent, QObject
+
+    from app.views.main_window import BUSY_FRAMES_PER_S
+
+    class Count(QObject):
+        paints = 0
+
+        def eventFilter(self, obj, event):  # noqa: N802 (Qt API)
+            if event.type() == QEvent.Type.Paint:
+                Count.paints += 1
+            return False
+
+    counter = Count()
+    window.progress.installEventFilter(counter)
+    window._set_busy(True)
+    window._on_progress("Loading", -1.0)  # unknown progress: the animated busy bar
+    assert window.progress.isVisible() and window.progress.maximum() == 0
+    qtbot.wait(300)
+    Count.paints = 0
+    qtbot.wait(2000)
+    assert 1 <= Count.paints <= 2 * BUSY_FRAMES_PER_S + 2 <= 10, Count.paints  # the style draws ~35 a second
