@@ -49,7 +49,7 @@ class Snapshot(QObject):
             return
         self._timer.stop()
         self.window.redraw()
-        QTimer.singleShot(300, self._save)  # let the window lay out and paint
+        QTimer.singleShot(50, self._save)  # let the window lay out and paint (the save processes the events)
 
     def _save(self) -> None:
         if self._done:

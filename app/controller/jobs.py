@@ -114,15 +114,18 @@ class Controller(QObject):
             self.progress.emit(f"Advising on {label}{note}", -1.0)
 
     # -- sources --------------------------------------------------------------------------------
-    def open_source(self, source) -> None:
-        """Load a file or mesh a surface; supersedes every running job."""
+    def open_source(self, source, *, loaded=None) -> None:
+        """Load a file or mesh a surface; supersedes every running job.
+
+        ``loaded``: the :func:`~app.controller.sources.preload` of this very source, already under way.
+        """
         if self._closed:
             return
         self._stop_all()
         self._generation += 1
         gen = self._generation
         # errored must be connected at creation, or superqt re-raises the error in the GUI thread
-        worker = create_worker(prepare_source, source, self.prepare, _start_thread=False, _connect={
+        worker = create_worker(prepare_source, source, self.prepare, loaded, _start_thread=False, _connect={
             "returned": lambda out, gen=gen: self._source_done(gen, out),
             "errored": lambda exc, gen=gen, src=source: self._source_failed(gen, src, exc)})
         self._source_job = (worker, source)

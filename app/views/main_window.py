@@ -246,21 +246,22 @@ class MainWindow(QMainWindow):
         self.grid.vertex_picked.connect(doc.set_picked)
 
     # -- sources --------------------------------------------------------------------------------
-    def open_path(self, path, *, repairs: tuple = ()) -> None:
-        """Load a mesh file in the background (the current scene stays until it succeeds)."""
+    def open_path(self, path, *, repairs: tuple = (), loaded=None) -> None:
+        """Load a mesh file in the background (the current scene stays until it succeeds); ``loaded``:
+        its :func:`~app.controller.sources.preload`, already under way."""
         path = str(Path(path).expanduser())
         self.settings.setValue("last_dir", str(Path(path).resolve().parent))
-        self.controller.open_source(FileSource(path, tuple(repairs)))
+        self.controller.open_source(FileSource(path, tuple(repairs)), loaded=loaded)
 
     def open_surface(self, source: SurfaceSource) -> None:
         """Mesh an analytic surface in the background and show it in the source panel."""
         self.source_panel.set_source(source)
         self.controller.open_source(source)
 
-    def open_source_then(self, source) -> None:
-        """Open a :class:`FileSource` or :class:`SurfaceSource`."""
+    def open_source_then(self, source, *, loaded=None) -> None:
+        """Open a :class:`FileSource` (``loaded``: its preload, if started) or :class:`SurfaceSource`."""
         if isinstance(source, FileSource):
-            self.open_path(source.path, repairs=source.repairs)
+            self.open_path(source.path, repairs=source.repairs, loaded=loaded)
         else:
             self.open_surface(source)
 

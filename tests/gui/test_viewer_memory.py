@@ -148,3 +148,21 @@ def test_the_busy_indicator_repaints_a_few_times_a_second(qtbot, window):
     Count.paints = 0
     qtbot.wait(2000)
     assert 1 <= Count.paints <= 2 * BUSY_FRAMES_PER_S + 2 <= 10, Count.paints  # the style draws ~35 a second
+
+
+def test_a_file_read_while_the_window_is_built_is_the_mesh_shown(qtbot, window, ui, monkeypatch):
+    import app.controller.sources as sources
+    from app.model import FileSource
+    from app.packaged import resource
+
+    source = FileSource(str(resource("samples/torus.ply")))
+    future = sources.preload(source)  # as curvlab FILE starts it, before the window exists
+    future.result(timeout=30)
+    reads = []
+    monkeypatch.setattr(sources, "load_source", lambda s: reads.append(s) or None)  # a second read would fail
+    window.open_path(source.path, loaded=future)
+    qtbot.waitUntil(lambda: window.doc.mesh is not None and window.doc.source == source, timeout=30_000)
+    ui.wait_ready()
+    mesh = window.doc.mesh
+    assert reads == [] and mesh is future.result()[1]
+    assert window.doc.result(0).normals is cached_max_normals(mesh)  # computed in the preload, used by all
