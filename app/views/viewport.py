@@ -51,7 +51,8 @@ class _Interactor(QtInteractor):
         """Frames VTK rendered in this widget (for tests and benchmarks)."""
         self._stamp = vtkObject()  # Modified() at the end of each frame: its MTime is the frame's time
         self._frame_size = None
-        self.ren_win.AddObserver("EndEvent", self._frame_ended)
+        # listed with pyvistaqt's own observers: removed when the widget closes (VTK pins the method)
+        self._vtk_observers.append((self.ren_win, self.ren_win.AddObserver("EndEvent", self._frame_ended)))
 
     def _frame_ended(self, *_):
         self.frames += 1
