@@ -244,8 +244,10 @@ class Controller(QObject):
         if not self._current(worker, gen, key):
             return
         self._forget(key)
-        self._start_report_when_due()  # beside the coloured frame the result's arrival draws
         self.doc.set_result(key, result)
+        # after the coloured frame, not beside it: VTK holds the GIL while it draws, so the report
+        # gained no time there, and its temporaries piled onto the frame's buffers (0.9 GB at 10M)
+        self._start_report_when_due()
         computed = result.info.get("region", result.n)  # a region's result: the rest is NOT_COMPUTED, not invalid
         n_bad = int((~result.valid).sum()) - (result.n - computed)
         secs = result.info.get("seconds")
