@@ -71,18 +71,20 @@ def measure(path, method: str, k: int, curv_exe: str) -> dict:
 
 
 def _time_v(cmd: list[str], env=None) -> dict:
-    """Run ``cmd`` (whose first words may wrap ``/usr/bin/time -v``); wall seconds and peak RSS of the
-    timed process from time's report, and the exit status."""
+    """Run ``cmd`` (whose first words may wrap ``/usr/bin/time -v``); wall seconds, CPU seconds (user +
+    system) and peak RSS of the timed process from time's report, and the exit status."""
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
     out = proc.stderr
     wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([\d:.]+)", out)
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", out)
+    cpu = [float(x) for x in re.findall(r"(?:User|System) time \(seconds\): ([\d.]+)", out)]
     secs = None
     if wall:
         secs = 0.0
         for part in wall.group(1).split(":"):
             secs = 60.0 * secs + float(part)
-    return {"seconds": secs, "peak_bytes": int(rss.group(1)) * 1024 if rss else None, "status": proc.returncode}
+    return {"seconds": secs, "cpu_seconds": round(sum(cpu), 2) if cpu else None,
+            "peak_bytes": int(rss.group(1)) * 1024 if rss else None, "status": proc.returncode}
 
 
 def viewer_against_cli(path, method: str, k: int, rounds: int, python: str, screenshot: str) -> list[dict]:
@@ -111,8 +113,9 @@ def viewer_against_cli(path, method: str, k: int, rounds: int, python: str, scre
         runs = [x for x in rows if x["tool"] == tool and x["status"] == 0]
         if runs:
             secs = float(np.median([x["seconds"] for x in runs]))
+            cpu = float(np.median([x["cpu_seconds"] for x in runs]))
             peak = float(np.median([x["peak_bytes"] for x in runs])) / 1e9
-            print(f"{tool:>6}: median wall {secs:.1f} s, peak RSS {peak:.2f} GB over {len(runs)} runs")
+            print(f"{tool:>6}: median wall {secs:.1f} s, CPU {cpu:.1f} s, peak RSS {peak:.2f} GB over {len(runs)} runs")
     return rows
 
 
