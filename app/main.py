@@ -178,6 +178,7 @@ def main(argv: list[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    preloaded = _preload(args)
     try:
         from PySide6.QtCore import QSettings
         from PySide6.QtWidgets import QApplication
@@ -207,17 +208,34 @@ def main(argv: list[str] | None = None) -> int:
         window.resize(int(w), int(h))
         snapshot = Snapshot(window, args.screenshot, timeout_s=args.timeout, wait_for_advice=args.advise)
         window.show()
-        window.open_source_then(source)
+        window.open_source_then(source, loaded=_matching(preloaded, source))
         if args.advise:
             window.advise()  # runs once the source has loaded
         snapshot.start()
         app.exec()
         return snapshot.status
     window.show()
-    window.open_source_then(source)
+    window.open_source_then(source, loaded=_matching(preloaded, source))
     if args.advise:
         window.advise()
     return app.exec()
+
+
+def _preload(args):
+    """``(FileSource, future)``: the mesh file of ``args`` read (and its normals computed) in a thread
+    while the window is built, or None without a file."""
+    if not args.mesh or args.surface:
+        return None
+    from app.controller.sources import preload
+    from app.model.sources import FileSource
+
+    source = FileSource(str(Path(args.mesh).expanduser()))
+    return source, preload(source)
+
+
+def _matching(preloaded, source):
+    """The preload's future if it is of ``source``, else None (``source`` loads as usual)."""
+    return preloaded[1] if preloaded is not None and preloaded[0] == source else None
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ class Snapshot(QObject):
         self.wait_for_advice = wait_for_advice
         self.status = 1
         self.window.quiet = True  # no dialogs: failures go to stderr
+        self.window.grey_frames = False  # one frame: the picture saved
         self._timer = QTimer(self, interval=100)
         self._timer.timeout.connect(self._poll)
         self._deadline = QTimer(self, singleShot=True, interval=int(timeout_s * 1000))
@@ -36,9 +37,11 @@ class Snapshot(QObject):
         self._deadline.start()
 
     def ready(self) -> bool:
-        """True when a mesh is shown and every pane has its result (and the advice, if waited for)."""
+        """True when a mesh and its report are shown and every pane has its result (and the advice, if
+        waited for)."""
         doc, ctl = self.window.doc, self.window.controller
-        return (doc.mesh is not None and not ctl.busy and all(p.key in doc.results for p in doc.panes)
+        return (doc.mesh is not None and doc.report is not None and not ctl.busy
+                and all(p.key in doc.results for p in doc.panes)
                 and (not self.wait_for_advice or doc.advice_current))
 
     def _poll(self) -> None:
@@ -46,7 +49,7 @@ class Snapshot(QObject):
             return
         self._timer.stop()
         self.window.redraw()
-        QTimer.singleShot(300, self._save)  # let the window lay out and paint
+        QTimer.singleShot(50, self._save)  # let the window lay out and paint (the save processes the events)
 
     def _save(self) -> None:
         if self._done:

@@ -5,6 +5,8 @@ Usage::
     python benchmarks/bench_large.py write --vertices 10000000 --out /tmp/torus10M.ply
     nice /usr/bin/time -v curv estimate /tmp/torus10M.ply -m mru -r 2 -q
     python benchmarks/bench_large.py calibrate     # peak RSS of `curv estimate` at a few sizes
+    python benchmarks/bench_large.py viewer --ply /tmp/torus10M.ply --rounds 2
+        # the viewer's time to first picture and peak RSS against `curv estimate`'s, runs alternating
 
 The torus is closed (no border), a regular (major x minor) grid split into triangles, so every
 estimator has work at every vertex. Written with numpy in one go: no per-vertex Python.
@@ -68,6 +70,55 @@ def measure(path, method: str, k: int, curv_exe: str) -> dict:
             "seconds": round(wall, 2), "status": proc.returncode, "stdout": proc.stdout.strip().splitlines()}
 
 
+def _time_v(cmd: list[str], env=None) -> dict:
+    """Run ``cmd`` (whose first words may wrap ``/usr/bin/time -v``); wall seconds, CPU seconds (user +
+    system) and peak RSS of the timed process from time's report, and the exit status."""
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    out = proc.stderr
+    wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([\d:.]+)", out)
+    rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", out)
+    cpu = [float(x) for x in re.findall(r"(?:User|System) time \(seconds\): ([\d.]+)", out)]
+    secs = None
+    if wall:
+        secs = 0.0
+        for part in wall.group(1).split(":"):
+            secs = 60.0 * secs + float(part)
+    return {"seconds": secs, "cpu_seconds": round(sum(cpu), 2) if cpu else None,
+            "peak_bytes": int(rss.group(1)) * 1024 if rss else None, "status": proc.returncode}
+
+
+def viewer_against_cli(path, method: str, k: int, rounds: int, python: str, screenshot: str) -> list[dict]:
+    """Alternate ``curv estimate PATH -m METHOD -r K -q`` and ``curvlab PATH --method METHOD --range K
+    --screenshot PNG`` (under ``xvfb-run`` without a display), each under ``/usr/bin/time -v``.
+
+    The CLI's run is its estimate with the mesh report and no output file: the same work the viewer
+    does before its picture (the viewer writes a PNG, not the curvature file).
+    """
+    import os
+    import shutil
+
+    cli = ["/usr/bin/time", "-v", python, "-m", "curv.cli", "estimate", str(path), "-m", method, "-r", str(k), "-q"]
+    gui = ["/usr/bin/time", "-v", python, "-m", "app.main", str(path), "--method", method, "--range", str(k),
+           "--screenshot", screenshot]
+    if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
+        gui = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", *gui]
+    rows = []
+    for r in range(rounds):
+        for tool, cmd in (("cli", cli), ("viewer", gui)):
+            row = _time_v(cmd)
+            row.update(tool=tool, round=r)
+            print(json.dumps(row), flush=True)
+            rows.append(row)
+    for tool in ("cli", "viewer"):
+        runs = [x for x in rows if x["tool"] == tool and x["status"] == 0]
+        if runs:
+            secs = float(np.median([x["seconds"] for x in runs]))
+            cpu = float(np.median([x["cpu_seconds"] for x in runs]))
+            peak = float(np.median([x["peak_bytes"] for x in runs])) / 1e9
+            print(f"{tool:>6}: median wall {secs:.1f} s, CPU {cpu:.1f} s, peak RSS {peak:.2f} GB over {len(runs)} runs")
+    return rows
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -78,7 +129,16 @@ def main(argv=None) -> int:
     c.add_argument("--sizes", type=int, nargs="+", default=[100_000, 400_000])
     c.add_argument("--variants", nargs="+", default=["mru:2", "mru:4", "nc:1", "qs:4", "an:4", "meyer:1"])
     c.add_argument("--curv", default=str(Path(sys.executable).with_name("curv")))
+    g = sub.add_parser("viewer", help="the viewer's time to first picture and peak RSS against the CLI's")
+    g.add_argument("--ply", required=True)
+    g.add_argument("--method", default="mru")
+    g.add_argument("--range", type=int, default=2)
+    g.add_argument("--rounds", type=int, default=2)
+    g.add_argument("--screenshot", default=str(Path(tempfile.gettempdir()) / "curvlab-first-picture.png"))
     args = parser.parse_args(argv)
+    if args.command == "viewer":
+        viewer_against_cli(args.ply, args.method, args.range, args.rounds, sys.executable, args.screenshot)
+        return 0
     if args.command == "write":
         t0 = time.perf_counter()
         v, f = torus(args.vertices)

@@ -1,5 +1,5 @@
-"""The job controller: one source job, one estimate job per (method, range) and one advisor job, all
-off the GUI thread.
+"""The job controller: one source job, one estimate job per (method, range), the mesh report and one
+advisor job, all off the GUI thread.
 
 A new source supersedes everything running; a pane switching estimator stops the estimate nobody
 shows any more. Stale results are recognised by a generation number (the advisor's by its worker)
@@ -19,7 +19,7 @@ from app.model import AdviceRecord, Document, count_text
 from app.model.inputs import item_word, items_word
 
 from .advice import advice_compile_note, advise_mesh
-from .sources import prepare_source
+from .sources import mesh_report, prepare_source
 
 __all__ = ["Controller"]
 
@@ -67,6 +67,10 @@ class Controller(QObject):
         self._estimates: dict[tuple[str, int], object] = {}
         self._fractions: dict[tuple[str, int], float] = {}
         self._advice_job = None
+        self._report_job = None
+        self._report_due = False  # a new mesh's report, started once its first estimates are done
+        self._last_message = ""
+        self.message.connect(lambda text: setattr(self, "_last_message", text))
         self._advice_note = ""
         self._advise_after_load = False
         self._closed = False
@@ -78,8 +82,9 @@ class Controller(QObject):
     # -- state ----------------------------------------------------------------------------------
     @property
     def busy(self) -> bool:
-        """True while a source, estimate or advisor job runs."""
-        return self._source_job is not None or bool(self._estimates) or self._advice_job is not None
+        """True while a source, estimate, report or advisor job runs (or a report is due)."""
+        return (self._source_job is not None or bool(self._estimates) or self._advice_job is not None
+                or self._report_job is not None or self._report_due)
 
     @property
     def advising_now(self) -> bool:
@@ -101,21 +106,26 @@ class Controller(QObject):
             notes = "; ".join(dict.fromkeys(m for m in (*self._messages.values(), self._advice_note) if m))
             advising = "; advising" if self._advice_job is not None else ""
             self.progress.emit(f"Estimating {names}{advising}" + (f": {notes}" if notes else ""), frac)
+        elif self._report_job is not None or self._report_due:
+            self.progress.emit("Checking the mesh", -1.0)
         elif self._advice_job is not None:  # the advisor reports no fraction: a busy indicator
             label = self.doc.source.label if self.doc.source is not None else "the mesh"
             note = f": {self._advice_note}" if self._advice_note else ""
             self.progress.emit(f"Advising on {label}{note}", -1.0)
 
     # -- sources --------------------------------------------------------------------------------
-    def open_source(self, source) -> None:
-        """Load a file or mesh a surface; supersedes every running job."""
+    def open_source(self, source, *, loaded=None) -> None:
+        """Load a file or mesh a surface; supersedes every running job.
+
+        ``loaded``: the :func:`~app.controller.sources.preload` of this very source, already under way.
+        """
         if self._closed:
             return
         self._stop_all()
         self._generation += 1
         gen = self._generation
         # errored must be connected at creation, or superqt re-raises the error in the GUI thread
-        worker = create_worker(prepare_source, source, self.prepare, _start_thread=False, _connect={
+        worker = create_worker(prepare_source, source, self.prepare, loaded, _start_thread=False, _connect={
             "returned": lambda out, gen=gen: self._source_done(gen, out),
             "errored": lambda exc, gen=gen, src=source: self._source_failed(gen, src, exc)})
         self._source_job = (worker, source)
@@ -126,9 +136,12 @@ class Controller(QObject):
         if gen != self._generation or self._closed:
             return
         self._source_job = None
+        self._report_due = out.report is None
         self.doc.set_mesh(out.source, out.mesh, out.truth, report=out.report, repairs=out.repairs,
                           geometry=out.prepared)
-        self.message.emit(f"{out.source.label}: {'; '.join(out.report[:2])}")
+        size = "; ".join(out.report[:2]) if out.report else count_text(
+            out.mesh.n_vertices, "vertex", "vertices") + ", " + count_text(out.mesh.n_faces, "face", "faces")
+        self.message.emit(f"{out.source.label}: {size}")
         self.request_missing()
         if self._advise_after_load:
             self._advise_after_load = False
@@ -154,7 +167,33 @@ class Controller(QObject):
         for key in self.doc.missing_keys():
             if key not in self._estimates:
                 self._start_estimate(key)
+        self._start_report_when_due()
         self._update_busy()
+
+    # -- the mesh report ------------------------------------------------------------------------
+    def _start_report_when_due(self) -> None:
+        """Start the new mesh's report once no estimate runs (they built what it reads)."""
+        if not self._report_due or self._estimates or self._closed or self.doc.mesh is None:
+            return
+        self._report_due = False
+        gen = self._generation
+        box = []
+        worker = create_worker(mesh_report, self.doc.mesh, _start_thread=False, _connect={
+            "returned": lambda lines: self._report_done(box[0], gen, lines),
+            "errored": lambda exc: self._report_done(box[0], gen, [f"no report: {_one_line(exc)}"])})
+        box.append(worker)
+        self._report_job = worker
+        worker.start()
+
+    def _report_done(self, worker, gen, lines) -> None:
+        if self._closed or self._report_job is not worker:
+            return
+        self._report_job = None
+        if gen == self._generation:
+            self.doc.set_report(lines)
+        self._update_busy()
+        if not self.busy and self._last_message:  # the status bar showed the check: back to the last news
+            self.message.emit(self._last_message)
 
     def recompute(self, key) -> None:
         """Forget the result or failure of ``key`` and compute it again."""
@@ -206,6 +245,9 @@ class Controller(QObject):
             return
         self._forget(key)
         self.doc.set_result(key, result)
+        # after the coloured frame, not beside it: VTK holds the GIL while it draws, so the report
+        # gained no time there, and its temporaries piled onto the frame's buffers (0.9 GB at 10M)
+        self._start_report_when_due()
         computed = result.info.get("region", result.n)  # a region's result: the rest is NOT_COMPUTED, not invalid
         n_bad = int((~result.valid).sum()) - (result.n - computed)
         secs = result.info.get("seconds")
@@ -221,6 +263,7 @@ class Controller(QObject):
         self._forget(key)
         msg = f"{key[0]} {key[1]} failed: {_one_line(exc)}"
         self.doc.set_failure(key, msg)
+        self._start_report_when_due()
         self._update_busy()
         self.failed.emit(msg)
 
@@ -299,8 +342,10 @@ class Controller(QObject):
         was_advice = self._advice_job is not None or self._advise_after_load
         keys = list(self._estimates)
         self._advise_after_load = False
-        self._stop_all()
+        # the shown mesh's report still comes (it reads what the estimates built; it cannot stop midway)
+        self._stop_all(keep_report=not was_source)
         self._generation += 1 if was_source else 0
+        self._start_report_when_due()
         names = [f"{m} {r}" for m, r in keys]
         self.doc.set_failures({key: f"{name} cancelled" for key, name in zip(keys, names)})
         self._update_busy()
@@ -319,10 +364,14 @@ class Controller(QObject):
             worker.quit()
             self._forget(key)
 
-    def _stop_all(self) -> None:
+    def _stop_all(self, *, keep_report: bool = False) -> None:
         if self._source_job is not None:
             self._source_job[0].quit()
             self._source_job = None
+        if self._report_job is not None and not keep_report:  # it cannot stop midway: its answer is dropped
+            self._report_job.quit()
+            self._report_job = None
+        self._report_due = self._report_due and keep_report
         for key in list(self._estimates):
             self._stop(key)
         if self._advice_job is not None:

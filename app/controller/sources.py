@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import threading
+from concurrent.futures import Future
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from curv.io import is_point_file, load
+from curv.normals import cached_max_normals
 from curv.surfaces import SURFACES, make_surface, sample_points
 
 from app.model.inputs import cloud_report, is_points
 from app.model.sources import FileSource, SurfaceSource
 
-__all__ = ["load_source", "prepare_source", "Loaded"]
+__all__ = ["load_source", "preload", "prepare_source", "mesh_report", "Loaded"]
 
 
 @dataclass
@@ -23,8 +26,9 @@ class Loaded:
     source : FileSource or SurfaceSource
     mesh : curv.Mesh
     truth : curv.Curvature or None
-    report : list of str
-        ``mesh.report().lines()``, computed off the GUI thread.
+    report : list of str or None
+        A point cloud's report, computed off the GUI thread; None for a mesh, whose report the
+        controller computes after the mesh's first estimates (:func:`mesh_report`).
     repairs : list of str
         The repairs applied while loading (``mesh.info["repairs"]``).
     prepared : object
@@ -34,19 +38,54 @@ class Loaded:
     source: object
     mesh: object
     truth: object
-    report: list = field(default_factory=list)
+    report: list | None = None
     prepared: object = None
     repairs: list = field(default_factory=list)
 
 
-def prepare_source(source, prepare=None) -> Loaded:
-    """:func:`load_source`, the mesh (or point-cloud) report and ``prepare(mesh)`` if given; runs in a
-    worker thread."""
-    source, mesh, truth = load_source(source)
-    # a cloud's facts need its neighbour search: done here, the cloud keeps it for the GUI thread
-    report = cloud_report(mesh) if is_points(mesh) else mesh.report().lines()
+def preload(source) -> Future:
+    """Start :func:`load_source` of ``source`` and a mesh's default normals in a thread now; hand the
+    future to :func:`prepare_source` (``loaded=``).
+
+    ``curvlab FILE`` reads the file and computes its normals while the window is being built (the
+    imports of Qt, VTK and pyvista alone take seconds). Import this module before calling: the
+    thread uses only modules already imported.
+    """
+    future = Future()
+
+    def work():
+        try:
+            out = load_source(source)
+            if not is_points(out[1]):
+                cached_max_normals(out[1])  # what the drawing and the default estimates shade and fit with
+        except BaseException as exc:  # noqa: BLE001 (handed to whoever waits for the result)
+            future.set_exception(exc)
+        else:
+            future.set_result(out)
+
+    # a daemon: a window that never opens (a bad argument) does not wait for the file to load
+    threading.Thread(target=work, name="curvlab-preload", daemon=True).start()
+    return future
+
+
+def prepare_source(source, prepare=None, loaded: Future | None = None) -> Loaded:
+    """:func:`load_source` (or the result of ``loaded``, a :func:`preload`), a point cloud's report and
+    ``prepare(mesh)`` if given; runs in a worker thread.
+
+    A mesh's report waits for its first estimates (:func:`mesh_report`): they build the
+    connectivity it reads (vertex corners, components), as ``curv estimate`` reports after its
+    estimate, so the estimate starts seconds earlier on a large mesh and the report costs little.
+    """
+    source, mesh, truth = load_source(source) if loaded is None else loaded.result()
+    # a cloud's facts need its neighbour search: done here, the cloud keeps it for its estimates
+    report = cloud_report(mesh) if is_points(mesh) else None
     repairs = list(mesh.info.get("repairs", [])) if isinstance(getattr(mesh, "info", None), dict) else []
     return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh), repairs)
+
+
+def mesh_report(mesh) -> list[str]:
+    """``mesh.report().lines()``; runs in a worker thread."""
+    return mesh.report().lines()
 
 
 def load_source(source):

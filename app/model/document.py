@@ -154,8 +154,8 @@ class MeshChange:
     source : FileSource or SurfaceSource
     mesh : curv.Mesh
     truth : curv.Curvature or None
-    report : tuple of str
-        ``mesh.report().lines()``.
+    report : tuple of str or None
+        ``mesh.report().lines()``; None while it is computed (after the new mesh's estimates).
     repairs : tuple of str
         Repairs applied while loading.
     geometry : object
@@ -165,7 +165,7 @@ class MeshChange:
     source: object
     mesh: object
     truth: object = None
-    report: tuple = ()
+    report: tuple | None = ()
     repairs: tuple = ()
     geometry: object = None
 
@@ -192,6 +192,8 @@ class Document:
     advice_changed(AdviceRecord or None)
         The advisor's answer (or failure) arrived; whether it is for the current mesh is
         :attr:`advice_current` (a new mesh makes the advice stale without this event).
+    report_changed()
+        The mesh's report arrived (:attr:`report`, None until then when set later).
     """
 
     def __init__(self, *, default_panes: tuple[Pane, ...] | None = None) -> None:
@@ -199,7 +201,7 @@ class Document:
         self.source = None
         self.mesh = None
         self.truth = None
-        self.report: tuple = ()
+        self.report: tuple | None = ()
         self.repairs: tuple = ()
         self.results: dict[tuple, object] = {}
         self.failures: dict[tuple, str] = {}
@@ -220,16 +222,18 @@ class Document:
         self.result_changed = Event()
         self.picked_changed = Event()
         self.advice_changed = Event()
+        self.report_changed = Event()
 
     # -- source ---------------------------------------------------------------------------------
     def set_mesh(self, source, mesh, truth=None, *, report=(), repairs=(), geometry=None) -> None:
         """Replace the mesh; every cached result and the pick are dropped.
 
-        Manual colour limits go back to percentiles unless ``display.lock_limits`` is set.
+        ``report=None``: the report follows (:meth:`set_report`). Manual colour limits go back to
+        percentiles unless ``display.lock_limits`` is set.
         """
         self.source, self.mesh, self.truth = source, mesh, truth
         self.mesh_serial += 1  # the advice, if any, now belongs to an earlier mesh
-        self.report, self.repairs = tuple(report), tuple(repairs)
+        self.report, self.repairs = None if report is None else tuple(report), tuple(repairs)
         self.results.clear()
         self.failures.clear()
         self._last_good.clear()
@@ -244,6 +248,11 @@ class Document:
         if changes:
             self.display.update(**changes)
         self.mesh_changed.emit(MeshChange(source, mesh, truth, self.report, self.repairs, geometry))
+
+    def set_report(self, lines) -> None:
+        """The report of the current mesh (``mesh.report().lines()``), computed after it was set."""
+        self.report = tuple(lines)
+        self.report_changed.emit()
 
     def _panes_for(self, mesh) -> list[Pane]:
         """The panes on a new input: regions dropped (they name the old input's vertices), knn dropped

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 from curv.normals import cached_max_normals
 from curv.quantities import anisotropy
@@ -43,26 +45,39 @@ def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
     return poly
 
 
-class Geometry(tuple):
-    """``(polydata, length unit, border lines)`` built off the GUI thread (the unit: mean edge length of a
-    mesh, median spacing of a point cloud)."""
+class Geometry:
+    """What the views draw of a mesh or point cloud: its PolyData (built off the GUI thread), and on
+    first use its length unit and border lines.
 
-    @property
-    def base(self) -> pv.PolyData:
-        return self[0]
+    The length unit (mean edge length of a mesh, median spacing of a point cloud) and the border
+    edges need a mesh's edge table, which neither an estimate nor the first picture needs (at 10M
+    vertices 2.5 GB and 15-30 s): they are computed when something asks for them (direction glyphs,
+    the border overlay, a default radius).
 
-    @property
+    Parameters
+    ----------
+    mesh : curv.Mesh or curv.PointCloud
+    base : pyvista.PolyData
+        ``mesh`` as drawn (:func:`mesh_polydata` or :func:`cloud_polydata`).
+    """
+
+    def __init__(self, mesh, base: pv.PolyData) -> None:
+        self.mesh, self.base = mesh, base
+
+    @cached_property
     def edge_length(self) -> float:
-        return self[1]
+        """The length unit (:func:`app.model.inputs.unit_length`)."""
+        return unit_length(self.mesh)
 
-    @property
+    @cached_property
     def borders(self) -> pv.PolyData:
-        return self[2]
+        """The border edges as lines (none for a point cloud: its border points are a result's ``BORDER``)."""
+        return pv.PolyData() if self.points_only else border_lines(self.mesh)
 
     @property
     def points_only(self) -> bool:
         """Whether this is a point cloud (vertex cells only)."""
-        return self[0].n_cells == self[0].n_verts and self[0].n_verts > 0
+        return self.base.n_cells == self.base.n_verts and self.base.n_verts > 0
 
 
 def border_lines(mesh) -> pv.PolyData:
@@ -84,17 +99,18 @@ def cloud_polydata(cloud) -> pv.PolyData:
 
 
 def prepare_geometry(mesh) -> Geometry:
-    """Render geometry of ``mesh``, its length unit and border lines; safe to run in a worker thread.
+    """Render geometry of ``mesh``; safe to run in a worker thread.
 
-    A point cloud is drawn as its points; its length unit is its median spacing and it has no border
-    edges (its border points are a result's ``BORDER`` reason). A mesh's normals are its cached
-    default normals (:func:`curv.normals.cached_max_normals`), the ones a default estimate uses too:
-    computed once for both.
+    A point cloud is drawn as its points. A mesh's normals are its cached default normals
+    (:func:`curv.normals.cached_max_normals`), the ones a default estimate uses too: computed once
+    for both. A point cloud's length unit is asked here (its neighbour search, which the cloud
+    keeps and its estimates reuse); a mesh's waits until something needs it (:class:`Geometry`).
     """
     if is_points(mesh):
-        return Geometry((cloud_polydata(mesh), unit_length(mesh), pv.PolyData()))
-    return Geometry((mesh_polydata(mesh, cached_max_normals(mesh)), float(mesh.mean_edge_length),
-                     border_lines(mesh)))
+        geometry = Geometry(mesh, cloud_polydata(mesh))
+        geometry.edge_length  # noqa: B018 (computed here, off the GUI thread)
+        return geometry
+    return Geometry(mesh, mesh_polydata(mesh, cached_max_normals(mesh)))
 
 
 def glyph_subsample(n: int, *, count: int = 2000, seed: int = 0) -> np.ndarray:

@@ -4,13 +4,14 @@ estimate and help."""
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
 from curv.estimators import ESTIMATORS
 from curv.features import feature_edges
 from curv.io import save_ply, save_vtu
-from PySide6.QtCore import QSettings, Qt, Signal
+from PySide6.QtCore import QEvent, QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QGuiApplication, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QDialog, QDialogButtonBox, QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton,
@@ -50,6 +51,37 @@ ADVISE_POINTS_TIP = "The advisor ranks estimators for meshes (its table comes fr
 MAX_RECENT = 8
 GLYPH_PIXELS = 900
 """One direction glyph per this many pixels of a pane at most, so glyphs never bury the colours."""
+GREY_FRAME_DELAY_MS = 1000
+"""A new mesh is first drawn grey only if its estimates have not arrived this long after it: a
+frame of a large mesh takes seconds of the GUI thread under software GL, and the coloured frame
+replaces it anyway."""
+
+
+class BusyBar(QProgressBar):
+    """The status bar's progress bar; its busy animation (unknown progress) repaints
+    :data:`BUSY_FRAMES_PER_S` times a second instead of the style's 60.
+
+    Under software GL every repaint of a window that holds a 3D view composes the whole window:
+    the style's animation took 30 % of a core (0.3 s of CPU a second, measured under Xvfb) from the
+    loading and estimating it was showing.
+    """
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        self._last_frame = 0.0
+
+    def event(self, event) -> bool:  # noqa: D102 (Qt API)
+        if event.type() == QEvent.Type.StyleAnimationUpdate:
+            event.accept()  # keeps the animation running; it is drawn at the slower rate
+            now = time.monotonic()
+            if now - self._last_frame >= 1.0 / BUSY_FRAMES_PER_S:
+                self._last_frame = now
+                self.update()
+            return True
+        return super().event(event)
+
+
+BUSY_FRAMES_PER_S = 2
 
 
 class MainWindow(QMainWindow):
@@ -82,6 +114,12 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(self.grid)
         self._geometry = None
         self._drawn = None  # what the viewports show (see _scene): unchanged scenes are not re-rendered
+        self.grey_frames = True
+        """Whether a new mesh is drawn grey while its estimates run (after GREY_FRAME_DELAY_MS);
+        a scripted snapshot needs only the coloured frame."""
+        self._first_frame_due = False
+        self._grey_timer = QTimer(self, singleShot=True, interval=GREY_FRAME_DELAY_MS)
+        self._grey_timer.timeout.connect(self._grey_frame)
 
         self.source_panel = SourcePanel()
         self.inspect = InspectPanel(self.doc)
@@ -120,7 +158,7 @@ class MainWindow(QMainWindow):
 
         self.status_label = QLabel()
         self.status_label.setMinimumWidth(0)
-        self.progress = QProgressBar()
+        self.progress = BusyBar()
         self.progress.setMaximumWidth(220)
         self.progress.setRange(0, 100)
         self.cancel_button = QPushButton("Cancel")
@@ -208,21 +246,22 @@ class MainWindow(QMainWindow):
         self.grid.vertex_picked.connect(doc.set_picked)
 
     # -- sources --------------------------------------------------------------------------------
-    def open_path(self, path, *, repairs: tuple = ()) -> None:
-        """Load a mesh file in the background (the current scene stays until it succeeds)."""
+    def open_path(self, path, *, repairs: tuple = (), loaded=None) -> None:
+        """Load a mesh file in the background (the current scene stays until it succeeds); ``loaded``:
+        its :func:`~app.controller.sources.preload`, already under way."""
         path = str(Path(path).expanduser())
         self.settings.setValue("last_dir", str(Path(path).resolve().parent))
-        self.controller.open_source(FileSource(path, tuple(repairs)))
+        self.controller.open_source(FileSource(path, tuple(repairs)), loaded=loaded)
 
     def open_surface(self, source: SurfaceSource) -> None:
         """Mesh an analytic surface in the background and show it in the source panel."""
         self.source_panel.set_source(source)
         self.controller.open_source(source)
 
-    def open_source_then(self, source) -> None:
-        """Open a :class:`FileSource` or :class:`SurfaceSource`."""
+    def open_source_then(self, source, *, loaded=None) -> None:
+        """Open a :class:`FileSource` (``loaded``: its preload, if started) or :class:`SurfaceSource`."""
         if isinstance(source, FileSource):
-            self.open_path(source.path, repairs=source.repairs)
+            self.open_path(source.path, repairs=source.repairs, loaded=loaded)
         else:
             self.open_surface(source)
 
@@ -292,9 +331,9 @@ class MainWindow(QMainWindow):
             self._add_recent(str(Path(change.source.path).resolve()))
         self._geometry = change.geometry if change.geometry is not None else prepare_geometry(change.mesh)
         self.grid.set_point_size(doc.display.state.point_size)
-        self.grid.set_geometry(self._geometry.base, edge_length=self._geometry.edge_length,
-                               points=self._geometry.points_only)
+        self.grid.set_geometry(self._geometry.base, points=self._geometry.points_only)
         self._drawn = None
+        self._first_frame_due = True
         self._feature_lines = {}
         self.setWindowTitle(f"curvlab — {change.source.label}")
         points = doc.is_points
@@ -361,6 +400,15 @@ class MainWindow(QMainWindow):
         doc = self.doc
         if doc.mesh is None:
             return
+        if self._first_frame_due and not force and self.controller.running_keys() \
+                and all(doc.result(i) is None for i in range(len(doc.panes))):
+            # a new mesh whose estimates run: the coloured frame is its first, unless they take long
+            if self.grey_frames and not self._grey_timer.isActive():
+                self._grey_timer.start()
+            self.update_titles()
+            return
+        self._first_frame_due = False
+        self._grey_timer.stop()
         scene = self._scene()
         if not force and scene == self._drawn:
             self.update_titles()
@@ -406,6 +454,11 @@ class MainWindow(QMainWindow):
         self.inspect.show_values(active, table=(active[2] if active else doc.cmap(doc.active)).table,
                                  n_invalid=None if invalid is None else int(invalid.sum()),
                                  n_vertices=doc.mesh.n_vertices)
+
+    def _grey_frame(self) -> None:
+        if self._first_frame_due:
+            self._first_frame_due = False
+            self.redraw()
 
     def feature_lines(self, i: int):
         """The feature edges of view ``i``'s feature angle as lines, or None (no angle, difference pane)."""

@@ -45,6 +45,7 @@ class MeshPanel(QWidget):
         lay.addWidget(self.reload)
         lay.addStretch(1)
         doc.mesh_changed.connect(lambda change: self.refresh())
+        doc.report_changed.connect(self.refresh)
         doc.result_changed.connect(lambda key: self.refresh())
         doc.panes_changed.connect(self.refresh)
         doc.pane_changed.connect(lambda i: self.refresh())
@@ -55,7 +56,8 @@ class MeshPanel(QWidget):
         if doc.mesh is None:
             self.text.setText("<i>No mesh or point cloud yet.</i>")
         else:
-            lines = [f"<b>{doc.source.label}</b>"] + list(doc.report)
+            lines = [f"<b>{doc.source.label}</b>"] + (
+                ["<i>Checking the mesh (after its estimates)…</i>"] if doc.report is None else list(doc.report))
             lines += [f"repair: {r}" for r in doc.repairs]
             res = doc.result(doc.active) if doc.is_points else None
             if res is not None:  # what the active pane's estimate found: its normals, the border points

@@ -38,7 +38,6 @@ class PaneGrid(QWidget):
         self.viewports: list[Viewport] = []
         self.linked = True
         self._base: pv.PolyData | None = None
-        self._edge = 1.0
         self._points = False
         self._point_size = float(DEFAULT_POINT_SIZE)
         self._syncing = False
@@ -62,7 +61,7 @@ class PaneGrid(QWidget):
             vp.vertex_picked.connect(self.vertex_picked)
             vp.plotter.ren_win.AddObserver("EndEvent", self._after_render)
             if self._base is not None:
-                vp.set_geometry(self._base, edge_length=self._edge, points=self._points, point_size=self._point_size)
+                vp.set_geometry(self._base, points=self._points, point_size=self._point_size)
             self.viewports.append(vp)
         self._arrange()
         self.set_linked(self.linked)  # new viewports look through the shared camera (or a copy): the view stays
@@ -100,12 +99,12 @@ class PaneGrid(QWidget):
         if self._base is not None:
             QTimer.singleShot(0, lambda: self.reset_camera(render=True))
 
-    def set_geometry(self, base: pv.PolyData, *, edge_length: float, points: bool = False) -> None:
-        """Show a new mesh (or point cloud, drawn as points) in every viewport and frame it (rendered
-        by the next :meth:`render_all`)."""
-        self._base, self._edge, self._points = base, edge_length, bool(points)
+    def set_geometry(self, base: pv.PolyData, *, points: bool = False) -> None:
+        """Show a new mesh (or point cloud, drawn as points) in every viewport and frame it (drawn
+        from the viewports' next colours on)."""
+        self._base, self._points = base, bool(points)
         for vp in self.viewports:
-            vp.set_geometry(base, edge_length=edge_length, points=self._points, point_size=self._point_size)
+            vp.set_geometry(base, points=self._points, point_size=self._point_size)
         self.reset_camera(render=False)
         self._refit_later()  # again once Qt has laid the panes out (VTK fits their sizes then)
 
@@ -121,7 +120,8 @@ class PaneGrid(QWidget):
         first.view_vector((0.55, -1.0, 0.85), viewup=(0.0, 0.0, 1.0), render=False)
         # the renderer's own reset: pyvista's Plotter.reset_camera renders even with render=False
         # (a whole extra frame: 1.7 s on a 1M mesh under Xvfb)
-        first.renderer.reset_camera(render=False)
+        # the mesh's own bounds: its actor is hidden until its first colours
+        first.renderer.reset_camera(render=False, bounds=None if self._base is None else self._base.bounds)
         # VTK fits the first pane (its aspect included); a linked camera must also fit a narrower pane
         aspects = [vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports]
         narrow = min(aspects) / max(min(aspects[0], 1.0), 1e-3) if self.linked else 1.0

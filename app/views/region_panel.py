@@ -8,7 +8,7 @@ from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QCheckBox, QFormLayout, QHBoxLayout, QLabel, QLineEdit, QPushButton, QWidget
 
 from app.model import Document, pane_letter
-from app.model.inputs import unit_length
+from app.model.inputs import is_points, unit_length
 from app.model.region import REST_NOTE, ball_region, index_region, show_region, shown_region
 
 __all__ = ["RegionPanel", "vertices_in_view"]
@@ -91,6 +91,8 @@ class RegionPanel(QWidget):
         if doc.mesh is None or doc.picked is None:
             self.message.emit("Pick a vertex in a pane first (click on the mesh)", True)
             return
+        if not self.radius.text().strip():  # a new mesh's default, asked when first needed
+            self.radius.setText(f"{DEFAULT_RADIUS_EDGES * unit_length(doc.mesh):.3g}")
         try:
             region = ball_region(doc.mesh, doc.picked, float(self.radius.text()))
         except (ValueError, EstimatorError):
@@ -117,7 +119,11 @@ class RegionPanel(QWidget):
 
     # -- model -> widgets ----------------------------------------------------------------------
     def _on_mesh(self, change) -> None:
-        self.radius.setText(f"{DEFAULT_RADIUS_EDGES * unit_length(change.mesh):.3g}")
+        # the default radius is filled in at the first region: a mesh's length unit needs its edge
+        # table, which neither an estimate nor the first picture needs (seconds at 1M vertices)
+        self.radius.clear()
+        unit = "spacings" if is_points(change.mesh) else "mean edge lengths"
+        self.radius.setPlaceholderText(f"{DEFAULT_RADIUS_EDGES:g} {unit}")
         self.sync()
 
     def _on_picked(self, index) -> None:

@@ -8,7 +8,7 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from curv.normals import cached_max_normals
 
-from app.model import SurfaceSource
+from app.model import Quantity, SurfaceSource
 
 
 def test_display_reads_the_mesh_arrays_and_the_estimate_its_normals(qtbot, window, ui):
@@ -47,3 +47,122 @@ def test_framing_the_camera_draws_no_frame_unless_asked(qtbot, window, ui):
     assert frames == []
     window.grid.reset_camera(render=True)
     assert frames
+
+
+def _frames_of_the_mesh(vp) -> list:
+    """Record, for every frame ``vp`` renders from now on, whether the mesh was in it and grey."""
+    frames = []
+
+    def started(*_):
+        actor = vp._mesh_actor
+        if actor is not None and actor.GetVisibility():
+            frames.append("grey" if (np.asarray(vp.colours)[:, :3] == 200).all() else "colour")
+
+    vp.plotter.ren_win.AddObserver("StartEvent", started)
+    return frames
+
+
+def test_a_snapshot_draws_a_new_mesh_once_in_colour_and_paints_reuse_the_frame(qtbot, window, ui):
+    ui.open_surface("sphere", n_vertices=642)
+    window.grey_frames = False  # as a scripted snapshot
+    vp = window.grid.viewports[0]
+    frames = _frames_of_the_mesh(vp)
+    window.open_surface(SurfaceSource(name="torus", n_vertices=2000))
+    ui.wait_ready()
+    qtbot.wait(50)  # the paints a render schedules
+    assert frames == ["colour"]  # no grey frame, and a render is not drawn again by its paint
+    image = window.grid.grab().toImage()  # paints every viewport
+    assert frames == ["colour"] and vp.plotter.frame_is_current()
+    vp.render()  # the frame a paint shows is the one a render draws
+    assert frames == ["colour"] * 2 and window.grid.grab().toImage() == image
+    window.doc.display.update(quantity=Quantity.GAUSSIAN)
+    qtbot.wait(50)
+    assert frames == ["colour"] * 3  # new colours: a new frame
+    vp.plotter.camera.azimuth = 30.0
+    assert not vp.plotter.frame_is_current()  # a moved camera: the next paint renders
+    window.grid.grab()
+    assert len(frames) == 4 and vp.plotter.frame_is_current()
+
+
+def test_a_new_mesh_is_drawn_grey_while_a_long_estimate_runs(qtbot, window, ui):
+    ui.open_surface("sphere", n_vertices=642)
+    vp = window.grid.viewports[0]
+    frames = _frames_of_the_mesh(vp)
+    window._grey_timer.setInterval(0)  # "long": longer than no time at all
+    window.open_surface(SurfaceSource(name="torus", n_vertices=2000))
+    ui.wait_ready()
+    qtbot.wait(50)
+    assert frames in (["grey", "colour"], ["colour"])  # grey unless the estimate beat the timer
+    assert frames[-1] == "colour"
+
+
+def test_large_meshes_are_smoothed_by_fxaa_small_ones_by_multisampling(qtbot, window):
+    import pyvista as pv
+
+    from app.views.viewport import MSAA_MAX_CELLS, MSAA_SAMPLES
+
+    vp = window.grid.viewports[0]
+    small = pv.Plane(i_resolution=10, j_resolution=10).triangulate()
+    side = int(np.sqrt(MSAA_MAX_CELLS / 2)) + 2
+    large = pv.Plane(i_resolution=side, j_resolution=side).triangulate()
+    assert small.n_cells <= MSAA_MAX_CELLS < large.n_cells
+    vp.set_geometry(large)
+    assert vp.plotter.ren_win.GetMultiSamples() == 0 and vp.plotter.renderer.GetUseFXAA()
+    vp.set_geometry(small)
+    assert vp.plotter.ren_win.GetMultiSamples() == MSAA_SAMPLES and not vp.plotter.renderer.GetUseFXAA()
+
+
+def test_the_mesh_report_follows_the_estimates_and_fills_the_mesh_panel(qtbot, window, ui):
+    ui.open_surface("sphere", n_vertices=642)
+    doc, order = window.doc, []
+    doc.mesh_changed.connect(lambda change: order.append(("mesh", change.report)))
+    doc.result_changed.connect(lambda key: order.append(("result", doc.report)))
+    doc.report_changed.connect(lambda: order.append(("report", doc.report)))
+    window.open_surface(SurfaceSource(name="torus", n_vertices=2000))
+    ui.wait_ready()
+    assert [what for what, _ in order] == ["mesh", "result", "report"]
+    assert order[0][1] is None and order[1][1] is None  # a mesh's report comes after its estimate
+    assert order[2][1] == tuple(doc.mesh.report().lines())
+    assert doc.report[0] in window.mesh_panel.text.text() and "Checking" not in window.mesh_panel.text.text()
+
+
+def test_the_busy_indicator_repaints_a_few_times_a_second(qtbot, window):
+    from PySide6.QtCore import QEvent, QObject
+
+    from app.views.main_window import BUSY_FRAMES_PER_S
+
+    class Count(QObject):
+        paints = 0
+
+        def eventFilter(self, obj, event):  # noqa: N802 (Qt API)
+            if event.type() == QEvent.Type.Paint:
+                Count.paints += 1
+            return False
+
+    counter = Count()
+    window.progress.installEventFilter(counter)
+    window._set_busy(True)
+    window._on_progress("Loading", -1.0)  # unknown progress: the animated busy bar
+    assert window.progress.isVisible() and window.progress.maximum() == 0
+    qtbot.wait(300)
+    Count.paints = 0
+    qtbot.wait(2000)
+    assert 1 <= Count.paints <= 2 * BUSY_FRAMES_PER_S + 2 <= 10, Count.paints  # the style draws ~35 a second
+
+
+def test_a_file_read_while_the_window_is_built_is_the_mesh_shown(qtbot, window, ui, monkeypatch):
+    import app.controller.sources as sources
+    from app.model import FileSource
+    from app.packaged import resource
+
+    source = FileSource(str(resource("samples/torus.ply")))
+    future = sources.preload(source)  # as curvlab FILE starts it, before the window exists
+    future.result(timeout=30)
+    reads = []
+    monkeypatch.setattr(sources, "load_source", lambda s: reads.append(s) or None)  # a second read would fail
+    window.open_path(source.path, loaded=future)
+    qtbot.waitUntil(lambda: window.doc.mesh is not None and window.doc.source == source, timeout=30_000)
+    ui.wait_ready()
+    mesh = window.doc.mesh
+    assert reads == [] and mesh is future.result()[1]
+    assert window.doc.result(0).normals is cached_max_normals(mesh)  # computed in the preload, used by all
