@@ -275,3 +275,14 @@ def test_samplings_lie_on_the_surface_with_their_truth():
     noisy = sample_points(Sphere(), 3000, noise=0.5, rng=3)
     assert noisy.info["noise_sigma"] == pytest.approx(0.5 * noisy.info["spacing"])
     assert np.abs(np.linalg.norm(noisy.cloud.points, axis=1) - 1).max() > 0.1 * noisy.info["spacing"]
+
+
+@pytest.mark.parametrize("method", ["qs", "jet"])
+def test_whole_cloud_in_grid_order_equals_the_points_in_their_own_order(method):
+    """A whole cloud is estimated in its grid's cell order (for the cache); every row stays its own point's."""
+    cloud = sample_points(Sphere(), 3000, rng=4).cloud
+    whole = curv.estimate(cloud, method, 2)
+    listed = curv.estimate(cloud, method, 2, vertices=np.arange(cloud.n_points))
+    for name in ("k1", "k2", "d1", "d2", "reason"):
+        assert np.array_equal(getattr(whole, name), getattr(listed, name), equal_nan=True), name
+    assert whole.valid.mean() > 0.99
