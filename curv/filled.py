@@ -30,7 +30,7 @@ _TEMPLATES: dict[bytes, tuple[int, int]] = {}
 """The fill pattern (one item's bytes) -> (descriptor of the shared buffer holding it, its size)."""
 
 
-def filled(shape, fill, dtype=np.float64) -> np.ndarray:
+def filled(shape, fill, dtype=np.float64, *, most_written: bool = False) -> np.ndarray:
     """``np.full(shape, fill, dtype)``, writeable, at the cost of the pages later written.
 
     Parameters
@@ -39,6 +39,10 @@ def filled(shape, fill, dtype=np.float64) -> np.ndarray:
     fill : scalar
         The value of every element (NaN, a reason code, ...).
     dtype : numpy dtype
+    most_written : bool
+        The caller will write most rows (a whole-mesh estimate): then ``np.full`` is cheaper, since a
+        mapped page costs a copy when it is written (10M x 3 float64 written whole: 0.17 s mapped,
+        0.05 s plain).
 
     Returns
     -------
@@ -48,7 +52,7 @@ def filled(shape, fill, dtype=np.float64) -> np.ndarray:
     shape = (shape,) if np.ndim(shape) == 0 else tuple(shape)
     count = math.prod(shape)
     nbytes = count * dtype.itemsize
-    if nbytes < MIN_MAPPED_BYTES or not hasattr(os, "memfd_create"):
+    if most_written or nbytes < MIN_MAPPED_BYTES or not hasattr(os, "memfd_create"):
         return np.full(shape, fill, dtype)
     pattern = np.array(fill, dtype).tobytes()
     try:

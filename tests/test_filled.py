@@ -24,6 +24,18 @@ def test_filled_is_np_full(shape, value, dtype):
     assert out.dtype == np.dtype(dtype) and out.flags.writeable and out.flags.c_contiguous
 
 
+def test_most_written_arrays_are_ordinary_and_the_rest_mapped():
+    import mmap
+
+    mapped, plain = filled(LARGE, np.nan), filled(LARGE, np.nan, most_written=True)
+    np.testing.assert_array_equal(plain, mapped)
+    base = mapped
+    while isinstance(base, np.ndarray):
+        base = base.base
+    assert isinstance(base, memoryview) and isinstance(base.obj, mmap.mmap)
+    assert plain.base is None  # np.full's own buffer: a whole-mesh write pays no copy-on-write
+
+
 def test_filled_arrays_are_independent_and_grow():
     a = filled(LARGE, np.nan)
     a[[0, 5, LARGE - 1]] = 1.0

@@ -562,7 +562,8 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
-    k1_se, k2_se = filled(n, np.nan), filled(n, np.nan)
+    whole = centres.size == n
+    k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,

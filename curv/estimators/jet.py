@@ -449,9 +449,10 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     degree = check_degree(degree)
     n = mesh.n_vertices
     centres = all_centres(n, centres)
-    out = empty_principal(n)
-    k = filled((2, n), np.nan)
-    k_se = filled((2, n), np.nan)
+    whole = centres.size == n
+    out = empty_principal(n, most_written=whole)
+    k = filled((2, n), np.nan, most_written=whole)
+    k_se = filled((2, n), np.nan, most_written=whole)
     radius, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii, centres, features)
 
     def run(lo, hi):

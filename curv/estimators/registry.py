@@ -178,14 +178,16 @@ def all_variants() -> list[tuple[str, int]]:
     return [v for spec in ESTIMATORS.values() for v in spec.variants()]
 
 
-def empty_principal(n: int) -> Principal:
+def empty_principal(n: int, *, most_written: bool = False) -> Principal:
     """A :class:`Principal` of NaNs with every reason ``OK`` (to be filled by an estimator).
 
     The NaN arrays cost only the rows an estimator writes (:func:`curv.filled.filled`), so an
-    estimate over a small region of a large mesh does not pay for filling the whole mesh.
+    estimate over a small region of a large mesh does not pay for filling the whole mesh;
+    ``most_written`` (a whole-mesh estimate) fills them the ordinary way, which is cheaper then.
     """
+    full = dict(most_written=most_written)
     return Principal(
-        k1=filled(n, np.nan), k2=filled(n, np.nan),
-        d1=filled((n, 3), np.nan), d2=filled((n, 3), np.nan),
+        k1=filled(n, np.nan, **full), k2=filled(n, np.nan, **full),
+        d1=filled((n, 3), np.nan, **full), d2=filled((n, 3), np.nan, **full),
         reason=np.zeros(n, np.uint8),
     )
