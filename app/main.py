@@ -73,7 +73,7 @@ def _sampling_names() -> list[str]:
 
 
 def _quantity_names() -> list[str]:
-    from curv.quantities import QUANTITIES
+    from curv.core.quantities import QUANTITIES
 
     return list(QUANTITIES)
 
@@ -86,7 +86,7 @@ def configure(window, args) -> object:
     ValueError
         An unknown estimator, range, quantity, surface or colour map (message names the allowed ones).
     """
-    from curv.errors import EstimatorError
+    from curv.core.errors import EstimatorError
     from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
     from curv.surfaces import SURFACES
 
@@ -95,7 +95,7 @@ def configure(window, args) -> object:
 
     explicit = (args.method is not None or args.range is not None or args.radius is not None or args.compare
                 or args.features is not None or args.knn is not None)
-    # a missing range is the estimator's default one (curv.ranges decides), a radius replaces it
+    # a missing range is the estimator's default one (curv.core.ranges decides), a radius replaces it
     panes = [(args.method or DEFAULT_ESTIMATOR, args.range, args.features)] + [
         tuple((c.split(":", 2) + [None, None])[:3]) for c in args.compare]
     if len(panes) > 4:

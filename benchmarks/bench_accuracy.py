@@ -199,7 +199,7 @@ def run_mesh(job):
     import curv
     from curv.fitted_normals import fitted_normals
     from curv.metrics import relative_error
-    from curv.normals import vertex_normals
+    from curv.geometry.normals import vertex_normals
     from curv.study.protocol import Task
     from curv.study.testmesh import build_test_mesh
 

@@ -13,18 +13,18 @@ uses seed 0) and at settings between and beyond the table's grid points: noise l
 irregularity (0 to 30 degrees), hexagon densities 3 s (s + 1) + 1 with the vertex count
 log-uniform over s = 8..81 (217 to 19,927 vertices), three quarters Monge patches of eq. 5.1 (the
 study's meshes, :func:`curv.study.testmesh.build_test_mesh`, evaluated away from the border by
-:func:`curv.advisor_table.evaluated_for_table`, the study's R4 rule where it leaves 30 vertices),
+:func:`curv.advice.table.evaluated_for_table`, the study's R4 rule where it leaves 30 vertices),
 one quarter closed analytic surfaces of random shape
-(:func:`curv.advisor_table.random_closed_params`: sphere radius, ellipsoid semi-axes, torus tube
+(:func:`curv.advice.table.random_closed_params`: sphere radius, ellipsoid semi-axes, torus tube
 radius) at the same vertex counts (a geodesic sphere or ellipsoid snaps to the nearest
 10 f^2 + 2, so sizes between the table's 642, 2562 and 10242 too; every vertex evaluated; no
 irregularity option). Truth is exact (:mod:`curv.surfaces`). Per mesh every candidate call (the
-table's and :func:`curv.advisor_table.option_variants`) is run and scored by the median e_rel over
+table's and :func:`curv.advice.table.option_variants`) is run and scored by the median e_rel over
 the evaluated vertices it gives a value for (the study's ``median_erel``), and each call's valid
-share on the mesh is stored (:func:`curv.advisor.valid_shares`).
+share on the mesh is stored (:func:`curv.advice.advisor.valid_shares`).
 
 Reported: regret = median e_rel of the advised call / the best median e_rel over the calls the
-ranking admits first (within :data:`curv.advisor.VALID_SHARE_SLACK` of the best valid share)
+ranking admits first (within :data:`curv.advice.advisor.VALID_SHARE_SLACK` of the best valid share)
 (median, 90th percentile, share within 1.05), overall and for subsets (patches, closed surfaces,
 settings inside or beyond the table's grid, nearly noise-free); the advisor's mean error against
 that of every fixed choice (the best fixed choices named); the regret of a few fixed choices for
@@ -60,7 +60,7 @@ MONGE = ("quadratic", "ellipsoid_patch", "trigonometric")
 def draw_settings(n: int, seed: int, *, s_range=(8, 81)) -> list[dict]:
     """``n`` held-out mesh settings from one random stream (the shapes of closed surfaces too); the
     vertex count log-uniform over the hexagons of ``s_range`` (s = 8, 81: 217 to 19,927 vertices)."""
-    from curv.advisor_table import random_closed_params
+    from curv.advice.table import random_closed_params
 
     rng = np.random.default_rng([seed, 42])
     lo, hi = (np.log(3 * s * (s + 1) + 1) for s in s_range)
@@ -87,7 +87,7 @@ def _mesh(setting: dict, noise_level: float):
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import make_surface
 
-    from curv.advisor_table import evaluated_for_table
+    from curv.advice.table import evaluated_for_table
 
     if setting["closed"]:
         s = make_surface(setting["function"], n_vertices=setting["n_vertices"],
@@ -101,8 +101,8 @@ def _mesh(setting: dict, noise_level: float):
 def evaluate(setting: dict) -> dict:
     """Every candidate's median e_rel on one held-out mesh, and the advisor's answer."""
     from curv import advise
-    from curv.advisor import SHAPE_MEASURES, angle_deviation_deg, fan_triangles, load_table, valid_shares
-    from curv.advisor_table import option_variants, variant_errors
+    from curv.advice.advisor import SHAPE_MEASURES, angle_deviation_deg, fan_triangles, load_table, valid_shares
+    from curv.advice.table import option_variants, variant_errors
 
     mesh, truth, evaluated, irr_true = _mesh(setting, setting["noise_level"])
     clean = _mesh(setting, 0.0)[0]
@@ -140,8 +140,8 @@ def beyond_grid(runs: list[dict], table: dict) -> np.ndarray:
 
 def admissible(runs: list[dict], variants: list[str]) -> np.ndarray:
     """(m, v) bool: the candidates the ranking puts first on each mesh, those within
-    :data:`curv.advisor.VALID_SHARE_SLACK` of the best valid share (what regret compares against)."""
-    from curv.advisor import VALID_SHARE_SLACK
+    :data:`curv.advice.advisor.VALID_SHARE_SLACK` of the best valid share (what regret compares against)."""
+    from curv.advice.advisor import VALID_SHARE_SLACK
 
     S = np.array([[r.get("shares", {}).get(v, 1.0) for v in variants] for r in runs], float)
     return S >= S.max(axis=1, keepdims=True) - VALID_SHARE_SLACK
@@ -157,7 +157,7 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
     table : dict, optional
         The advisor table validated (for the grid's bounds); default the packaged one.
     """
-    from curv.advisor import load_table
+    from curv.advice.advisor import load_table
     from curv.study.protocol import NOISE_FRACTION
 
     table = load_table() if table is None else table
@@ -234,7 +234,7 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
         "Irregularity: median |estimate - 3D irregularity of the noise-free mesh| "
         f"{numbers['irr_median_abs_diff_clean']:.1f} degrees (p90 {numbers['irr_p90_abs_diff_clean']:.1f}); Monge patches against the planar target the mesh "
         f"was made with: median {numbers['irr_median_abs_diff']:.1f} degrees (the 3D measure includes the lift's "
-        "distortion, see curv.advisor.MeshFeatures).",
+        "distortion, see curv.advice.advisor.MeshFeatures).",
     ]
     return "\n".join(lines), numbers
 
@@ -242,7 +242,7 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
 def readvise(runs: list[dict], table: dict) -> list[dict]:
     """The runs with the advice of another table, from their stored raw measures (no estimator runs
     again): the same calibration, prediction and candidates as :func:`curv.advise`."""
-    from curv.advisor import (SHAPE_MEASURES, MeshFeatures, calibrate_irregularity, calibrate_noise, candidates,
+    from curv.advice.advisor import (SHAPE_MEASURES, MeshFeatures, calibrate_irregularity, calibrate_noise, candidates,
                               predict, rank)
 
     cal = table["calibration"]
@@ -262,7 +262,7 @@ def readvise(runs: list[dict], table: dict) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    from curv.advisor import load_table
+    from curv.advice.advisor import load_table
     from curv.study.executors import open_executor
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -145,7 +145,7 @@ def _points_child(kind: str, name: str, k: float, n: int) -> dict:
         extra["valid"] = float(res.valid.mean())
         extra["mean_H"] = float(np.median(res.mean[res.valid]))
     elif kind == "gridknn":
-        from curv.knn import nearest_neighbours
+        from curv.core.knn import nearest_neighbours
 
         nearest_neighbours(sphere_points(500), 20)
         gc.collect()

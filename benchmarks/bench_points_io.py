@@ -44,7 +44,7 @@ def make_files(n: int, folder: Path) -> list[Path]:
 def one(path: str, out: str) -> None:
     """Load ``path`` and write a result for it; one line of figures (run in a fresh process)."""
     import curv
-    from curv.result import Curvature
+    from curv.core.result import Curvature
 
     t = time.perf_counter()
     cpu = time.process_time()

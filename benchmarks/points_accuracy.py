@@ -9,7 +9,7 @@ of the clean mesh's mean edge length per coordinate; the truth stays that of the
 
 Evaluated points mirror the study's evaluated vertices: on the clean cloud, the points the library
 marks as the border of the scan (:func:`curv.point_normals.border_points`) are found, and a point is
-evaluated if none of them lies within its R4 ball (4 spacings, :func:`curv.ranges.ball_radii`).
+evaluated if none of them lies within its R4 ball (4 spacings, :func:`curv.core.ranges.ball_radii`).
 
 Normals: estimated from the (noisy) points, as a scan without normals would be
 (:func:`curv.point_normals.point_normals`, jet fits at R2, oriented up); every curvlab estimator
@@ -118,7 +118,7 @@ def evaluated_points(clean) -> np.ndarray:
 
     import curv
     from curv.point_normals import border_points
-    from curv.ranges import ball_radii, resolve
+    from curv.core.ranges import ball_radii, resolve
 
     border = border_points(clean)
     if not border.any():
@@ -160,9 +160,9 @@ def run_surface(job):
     """
     import curv
     from curv.estimators.registry import point_estimators
-    from curv.normals import vertex_normals
+    from curv.geometry.normals import vertex_normals
     from curv.point_normals import point_normals
-    from curv.pointcloud import PointCloud
+    from curv.core.pointcloud import PointCloud
     from curv.study.protocol import Task
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import sample_points

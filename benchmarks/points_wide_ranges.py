@@ -34,8 +34,8 @@ def run_cloud(tm, function: str, sample: int, s_index: int, sampling: str) -> di
 
     import curv
     from curv.point_normals import border_points, point_normals
-    from curv.pointcloud import PointCloud
-    from curv.ranges import ball_radii, resolve
+    from curv.core.pointcloud import PointCloud
+    from curv.core.ranges import ball_radii, resolve
     from curv.surfaces import sample_points
 
     rng = np.random.default_rng([sample, pa.FUNCTIONS.index(function), s_index, 16])

@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import CurvError, EstimatorError, LoadError, MeshError
-from .mesh import Mesh, MeshReport
-from .pointcloud import PointCloud
-from .quantities import QUANTITIES
-from .result import Curvature, Principal
-from .validity import Reason
+from .core.errors import CurvError, EstimatorError, LoadError, MeshError
+from .core.mesh import Mesh, MeshReport
+from .core.pointcloud import PointCloud
+from .core.quantities import QUANTITIES
+from .core.result import Curvature, Principal
+from .core.validity import Reason
 
 __version__ = "0.1.0"
 
@@ -22,7 +22,7 @@ _LAZY = {
     "estimate": ("curv.api", "estimate"),
     "iter_estimate": ("curv.api", "iter_estimate"),
     "ESTIMATORS": ("curv.estimators", "ESTIMATORS"),
-    "vertex_normals": ("curv.normals", "vertex_normals"),
+    "vertex_normals": ("curv.geometry.normals", "vertex_normals"),
     "load": ("curv.io", "load"),
     "save_ply": ("curv.io", "save_ply"),
     "save_vtu": ("curv.io", "save_vtu"),
@@ -30,15 +30,15 @@ _LAZY = {
     "save_result": ("curv.io", "save_result"),
     "as_mesh": ("curv.convert", "as_mesh"),
     "surfaces": ("curv.surfaces", None),
-    "advise": ("curv.advisor", "advise"),
-    "Advice": ("curv.advisor", "Advice"),
-    "Candidate": ("curv.advisor", "Candidate"),
-    "features": ("curv.features", None),
-    "feature_edges": ("curv.features", "feature_edges"),
-    "feature_vertices": ("curv.features", "feature_vertices"),
-    "feature_corners": ("curv.features", "feature_corners"),
-    "dihedral_angles": ("curv.features", "dihedral_angles"),
-    "suggest_threshold": ("curv.features", "suggest_threshold"),
+    "advise": ("curv.advice.advisor", "advise"),
+    "Advice": ("curv.advice.advisor", "Advice"),
+    "Candidate": ("curv.advice.advisor", "Candidate"),
+    "features": ("curv.core.features", None),
+    "feature_edges": ("curv.core.features", "feature_edges"),
+    "feature_vertices": ("curv.core.features", "feature_vertices"),
+    "feature_corners": ("curv.core.features", "feature_corners"),
+    "dihedral_angles": ("curv.core.features", "dihedral_angles"),
+    "suggest_threshold": ("curv.core.features", "suggest_threshold"),
 }
 
 __all__ = [

@@ -9,20 +9,20 @@ from typing import Generator
 
 import numpy as np
 
-from .errors import EstimatorError, MeshError
+from .core.errors import EstimatorError, MeshError
 from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
-from .jit import COMPILE_MESSAGE, Progress, compile_pending
+from .core.jit import COMPILE_MESSAGE, Progress, compile_pending
 from .convert import as_mesh
-from .mesh import Mesh
-from .pointcloud import PointCloud
-from .ranges import ball_radii, parse_range, resolve
-from .features import check_angle, feature_set
-from .filled import filled
-from .neighbourhood import latest_with_mesh
-from .normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
-from .result import Curvature
-from .smoothing import smooth_positions, smooth_values
-from .validity import Reason
+from .core.mesh import Mesh
+from .core.pointcloud import PointCloud
+from .core.ranges import ball_radii, parse_range, resolve
+from .core.features import check_angle, feature_set
+from .core.filled import filled
+from .geometry.neighbourhood import latest_with_mesh
+from .geometry.normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
+from .core.result import Curvature
+from .geometry.smoothing import smooth_positions, smooth_values
+from .core.validity import Reason
 
 __all__ = ["estimate", "iter_estimate", "Smoothing", "parse_range"]
 
@@ -75,7 +75,7 @@ def iter_estimate(
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
 
     Every ``yield`` is a point where a caller may stop (cancel); the yielded values are
-    :class:`curv.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
+    :class:`curv.core.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
     Parameters as in :func:`estimate`.
     """
     spec = get_spec(method)
@@ -108,7 +108,7 @@ def iter_estimate(
     kernel_normals = used_normals
     if on_crease and used_normals is not None:
         # a crease vertex's normal blends both sides: no neighbour-normal term may use it (icc takes
-        # its sector's normal instead, curv.features.sector_corner_normals; ru leaves its faces out)
+        # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
                                           lambda: _without(used_normals, feats.vertices))
     order = centres
@@ -316,7 +316,7 @@ def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray,
 
 
 def _scatter(n: int, centres: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """(n,) NaN with ``values`` at ``centres``, at the cost of the centres (:func:`curv.filled.filled`)."""
+    """(n,) NaN with ``values`` at ``centres``, at the cost of the centres (:func:`curv.core.filled.filled`)."""
     out = filled(n, np.nan)
     out[centres] = values
     return out
@@ -325,7 +325,7 @@ def _scatter(n: int, centres: np.ndarray, values: np.ndarray) -> np.ndarray:
 def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
     """Scatter a region's rows into full-length outputs: NaN and ``NOT_COMPUTED`` elsewhere.
 
-    At the cost of the region's rows, not of n (:func:`curv.filled.filled`).
+    At the cost of the region's rows, not of n (:func:`curv.core.filled.filled`).
     """
     out_k1, out_k2 = filled(n, np.nan), filled(n, np.nan)
     out_d1, out_d2 = filled((n, 3), np.nan), filled((n, 3), np.nan)
@@ -337,7 +337,7 @@ def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
 
 
 def _feature_set(mesh: Mesh, features):
-    """:func:`curv.features.feature_set`; the latest angle's is kept with the mesh, so that estimates
+    """:func:`curv.core.features.feature_set`; the latest angle's is kept with the mesh, so that estimates
     over small regions at one angle do no whole-mesh work to find the creases again."""
     if isinstance(features, (bool, np.bool_)) or np.ndim(features) != 0:
         return feature_set(mesh, features)  # a caller's mask (or a one-line error)
@@ -366,7 +366,7 @@ def _normals_label(normals, weighting, fit_range) -> str:
     if normals is None:
         return NormalWeighting(weighting).value
     if isinstance(normals, str):
-        from .ranges import range_label
+        from .core.ranges import range_label
 
         return f"fit {range_label(parse_range(fit_range))}"
     return "given"
@@ -406,12 +406,12 @@ def estimate(
     mesh : Mesh, PointCloud, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
         Other libraries' meshes are converted by :func:`curv.convert.as_mesh`. On a
         :class:`curv.PointCloud` the estimators with ``takes_points`` run (``nc``, ``qs``, ``an``,
-        ``mru``, ``jet``); the range unit is each point's spacing (:mod:`curv.ranges`), points on
+        ``mru``, ``jet``); the range unit is each point's spacing (:mod:`curv.core.ranges`), points on
         the rim of an open scan are ``BORDER``, repeats of a point ``DEGENERATE``.
     method : str
         Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
     range : int, float or str, optional
-        k of the range Rk: ``2``, ``2.5`` or ``"R2"`` (:mod:`curv.ranges`); any real k at least the
+        k of the range Rk: ``2``, ``2.5`` or ``"R2"`` (:mod:`curv.core.ranges`); any real k at least the
         estimator's smallest named range for the estimators with a support, the one named range
         for ``meyer`` (R1) and ``ru`` (R2). Default R2 where the estimator has it, else its range.
     radius : float, optional
@@ -435,7 +435,7 @@ def estimate(
         Vertices per kernel call (the granularity of progress and cancel); default adaptive, about
         every 0.05 s. Results do not depend on it.
     features : float or (e,) bool array_like, optional
-        Sharp features (:mod:`curv.features`): edges whose dihedral angle exceeds this many degrees,
+        Sharp features (:mod:`curv.core.features`): edges whose dihedral angle exceeds this many degrees,
         or a per-edge mask aligned with ``mesh.edges``, are creases. Supports never cross them,
         neighbour-normal terms take each side's own normal, and vertices on a crease get
         ``Reason.FEATURE`` (NaN). Default none. A smooth mesh gives the same result as without.

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import CurvError
+from .core.errors import CurvError
 
 __all__ = ["main"]
 
@@ -56,7 +56,7 @@ class Progress:
 
 def _cmd_list(args) -> int:
     from .estimators import ESTIMATORS
-    from .ranges import range_label, takes_any_range
+    from .core.ranges import range_label, takes_any_range
 
     print(f"{'name':<6} {'ranges':<12} {'polygons':<9} {'points':<7} {'borders':<8} title / reference")
     print(f"{'':<6} (k>=1, r: any real range Rk from that k on, or a fixed radius r)")
@@ -121,10 +121,10 @@ def _cmd_estimate(args) -> int:
     from .estimators import get_spec
     from .io import check_output_suffix, is_point_file, load, peek_counts, save_result
     from .pointcli import check_mesh_options, check_point_options
-    from .pointio import peek_points
-    from .quantities import EXPORTED
-    from .ranges import resolve
-    from .validity import describe_reasons
+    from .formats.pointio import peek_points
+    from .core.quantities import EXPORTED
+    from .core.ranges import resolve
+    from .core.validity import describe_reasons
 
     points = is_point_file(args.input)
     if args.method == "auto":
@@ -168,7 +168,7 @@ def _cmd_estimate(args) -> int:
     else:
         options = {"normals": "fit"} if args.normals == "fit" else {"normal_weighting": args.normals}
         if args.features is not None:
-            from .features import check_angle
+            from .core.features import check_angle
 
             options["features"] = check_angle(args.features)
         options["smooth"] = args.smooth
@@ -244,7 +244,7 @@ def _print_mesh_report(args, mesh) -> None:
 
 def _region_vertices(args, mesh):
     """``--vertices FILE`` or ``--region X Y Z R`` as vertex indices, or None for the whole mesh."""
-    from .region import read_vertex_file, vertices_in_ball
+    from .geometry.region import read_vertex_file, vertices_in_ball
 
     if args.vertices is not None and args.region is not None:
         raise CurvError("give either --vertices or --region, not both")
@@ -267,7 +267,7 @@ def cli_arguments(kwargs: dict) -> str:
 def _apply_advice(args) -> None:
     """``--method auto``: put the advisor's whole call (method, range, options) into ``args``, announced
     on stdout."""
-    from .advisor import advise
+    from .advice.advisor import advise
     from .io import load
 
     given = [flag for flag, value in (("--range", args.range), ("--radius", args.radius), ("--degree", args.degree),
@@ -294,7 +294,7 @@ def _apply_advice(args) -> None:
 def _cmd_advise(args) -> int:
     import json
 
-    from .advisor import advise
+    from .advice.advisor import advise
     from .io import is_point_file, load
 
     if is_point_file(args.input):
@@ -356,9 +356,9 @@ class CurvMemoryError(CurvError, MemoryError):
 def build_parser() -> argparse.ArgumentParser:
     from .estimators.registry import DEFAULT_ESTIMATOR
     from .io import OUTPUT_FORMATS
-    from .pointio import POINT_SUFFIXES
-    from .quantities import QUANTITIES
-    from .quantities import describe as describe_quantities
+    from .formats.pointio import POINT_SUFFIXES
+    from .core.quantities import QUANTITIES
+    from .core.quantities import describe as describe_quantities
 
     parser = argparse.ArgumentParser(prog="curv", description="Curvature estimation on surface meshes and point clouds.")
     sub = parser.add_subparsers(dest="command", required=True)

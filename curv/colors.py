@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .jit import jit
-from .quantities import QUANTITIES
+from .core.jit import jit
+from .core.quantities import QUANTITIES
 
 __all__ = ["INVALID_RGBA", "SIGNED", "CLIP_SHADE", "CLIP_MARGIN", "auto_limits", "diverges", "widen", "check_cmap",
            "check_limits", "colour_choice", "colour_table", "apply_table", "map_colors", "DIVERGING", "SEQUENTIAL"]
@@ -73,7 +73,7 @@ def colour_choice(values: np.ndarray, valid: np.ndarray, quantity: str, *, cmap:
     valid : (n,) bool
         Vertices whose values count for the automatic limits.
     quantity : str
-        A :data:`curv.quantities.QUANTITIES` name (or ``error_rel``...), for its sign and natural range.
+        A :data:`curv.core.quantities.QUANTITIES` name (or ``error_rel``...), for its sign and natural range.
     cmap, clim : optional
         The caller's choice; checked (:func:`check_cmap`, :func:`check_limits`) and kept.
 
@@ -196,7 +196,7 @@ def _apply_table_kernel(v, valid, lo, hi, table, shade, margin, invalid, out):
 
     Serial on purpose: the viewer colours on its GUI thread while a worker runs the estimators'
     parallel kernels, and numba's thread pool takes one parallel launch at a time
-    (:func:`curv.jit.launch`); a serial loop neither waits for that nor disturbs it.
+    (:func:`curv.core.jit.launch`); a serial loop neither waits for that nor disturbs it.
     """
     k = table.shape[0]
     scale = (k - 1) / (hi - lo)

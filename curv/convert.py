@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import MeshError
-from .mesh import Mesh
+from .core.errors import MeshError
+from .core.mesh import Mesh
 
 __all__ = ["as_mesh"]
 

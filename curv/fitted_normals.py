@@ -7,7 +7,7 @@ with its constant and linear terms, and ``n = (-J_u, -J_v, 1) / |.|``. The linea
 find its own tangent plane, so the normal does not inherit the bias of the face-angle weighting on
 irregular meshes nor, at a larger range, as much of the noise of the 1-ring.
 
-Orientation comes from the default Max-weighted normals (:func:`curv.normals.vertex_normals`): a
+Orientation comes from the default Max-weighted normals (:func:`curv.geometry.normals.vertex_normals`): a
 fitted normal points to the same side. Where there is no fit (fewer than ``(d+1)(d+2)/2`` support
 points, a singular system) or no Max normal to orient it, the normal is NaN.
 """
@@ -17,10 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 from .estimators.jet import jet_normals
-from .mesh import Mesh
-from .normals import unusable_normal_vertices, vertex_normals
+from .core.mesh import Mesh
+from .geometry.normals import unusable_normal_vertices, vertex_normals
 from .estimators import get_spec
-from .ranges import ball_radii, resolve
+from .core.ranges import ball_radii, resolve
 
 __all__ = ["fitted_normals", "DEFAULT_FIT_RANGE", "DEFAULT_FIT_DEGREE"]
 
@@ -41,12 +41,12 @@ def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
         Any polygon mesh.
     range : int, float or str
         k of the range Rk of the support (a ball of ``k`` times the vertex's longest 1-ring edge,
-        :mod:`curv.ranges`); ``2``, ``2.5`` or ``"R2"``; default :data:`DEFAULT_FIT_RANGE`.
+        :mod:`curv.core.ranges`); ``2``, ``2.5`` or ``"R2"``; default :data:`DEFAULT_FIT_RANGE`.
     degree : {2, 3, 4}
         Degree of the fitted jet.
     radius : float, optional
         Instead of ``range``: the same ball radius in mesh units at every vertex.
-    features : curv.features.FeatureSet, optional
+    features : curv.core.features.FeatureSet, optional
         The fits do not reach across a crease; a vertex on one keeps its Max normal (its curvature
         is ``FEATURE`` anyway, and neighbours never use it).
 
@@ -60,7 +60,7 @@ def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
     EstimatorError
         A range below 1, or a degree other than 2, 3, 4.
     """
-    # the normals come from the jet's own fit, so the jet's range rule applies (curv.ranges owns it)
+    # the normals come from the jet's own fit, so the jet's range rule applies (curv.core.ranges owns it)
     if range is None and radius is None:
         range = DEFAULT_FIT_RANGE
     rng = resolve(get_spec("jet"), range, radius)

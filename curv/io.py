@@ -14,15 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from .colors import colour_choice, map_colors
-from .errors import LoadError, MeshError
-from .mesh import Mesh
-from .paths import check_readable as _check_path
-from .paths import one_line as _one_line
-from .pointcloud import PointCloud
-from .quantities import EXPORTED, STANDARD_ERRORS
-from .repair import repair
-from .result import Curvature
-from .validity import Reason, reason_legend
+from .core.errors import LoadError, MeshError
+from .core.mesh import Mesh
+from .core.paths import check_readable as _check_path
+from .core.paths import one_line as _one_line
+from .core.pointcloud import PointCloud
+from .core.quantities import EXPORTED, STANDARD_ERRORS
+from .geometry.repair import repair
+from .core.result import Curvature
+from .core.validity import Reason, reason_legend
 
 __all__ = ["load", "is_point_file", "save_ply", "save_vtu", "save_vtp", "save_result", "check_output_suffix", "OUTPUT_FORMATS",
            "read_arrays", "peek_counts"]
@@ -192,7 +192,7 @@ def peek_counts(path) -> tuple[int, int] | None:
 
 def is_point_file(path) -> bool:
     """True when ``path`` holds a point cloud: a point-cloud suffix, or a PLY that declares no faces."""
-    from .pointio import POINT_SUFFIXES
+    from .formats.pointio import POINT_SUFFIXES
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -234,7 +234,7 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
     ----------
     path : str or Path
         PLY, OBJ, OFF (polygons kept) or anything trimesh reads (STL, glTF/GLB, ...); point clouds:
-        a PLY without faces, ``.xyz`` / ``.txt`` / ``.csv``, PCD, LAS/LAZ (:func:`curv.pointio.read_points`).
+        a PLY without faces, ``.xyz`` / ``.txt`` / ``.csv``, PCD, LAS/LAZ (:func:`curv.formats.pointio.read_points`).
     merge_vertices : bool
         Merge vertices at identical positions.
     remove_degenerate : bool
@@ -258,7 +258,7 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
         The file was read but its data are malformed (message names the file and the problem), or
         a repair was asked of a point cloud.
     """
-    from .pointio import read_points
+    from .formats.pointio import read_points
 
     path = Path(path)
     if is_point_file(path):
@@ -417,7 +417,7 @@ def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: s
 
 
 def _result_label(curvature: Curvature) -> str:
-    from .ranges import range_label
+    from .core.ranges import range_label
 
     rng = curvature.range
     if curvature.info.get("range_label"):

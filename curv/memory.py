@@ -61,7 +61,7 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: b
         Bytes.
     """
     units = float(n_vertices) + 0.5 * float(n_faces)
-    from .jit import threads
+    from .core.jit import threads
 
     from .estimators import get_spec
 

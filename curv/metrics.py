@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .result import Curvature
+from .core.result import Curvature
 
 __all__ = ["absolute_error", "relative_error", "curvature_error"]
 

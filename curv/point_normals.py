@@ -1,7 +1,7 @@
 """Normals and borders of a point cloud: local PCA, consistent orientation, the open-scan border.
 
 1. **PCA** (one kernel, :func:`local_frames`): over each point's range support (the ball of
-   ``k`` spacings through the neighbour graph, :mod:`curv.ranges`), the eigenvector of the
+   ``k`` spacings through the neighbour graph, :mod:`curv.core.ranges`), the eigenvector of the
    smallest eigenvalue of the covariance about the centroid is the unoriented normal. The same
    pass measures the largest **angular gap** between the support's offsets projected on that
    plane: about pi on the rim of an open scan, small inside (:func:`border_points`).
@@ -24,7 +24,7 @@
 5. **One pass.** Steps 1 and 4 and the line check of an estimate (:func:`support_spread`) read
    nested supports of the same point (R2 inside R3), so one kernel (:func:`_one_pass`) searches
    each point's ball once, at the largest radius, and takes every support from it. It walks the
-   points in the grid's cell order and reads their coordinates there (:func:`curv.knn.grid_gather`),
+   points in the grid's cell order and reads their coordinates there (:func:`curv.core.knn.grid_gather`),
    so that neighbours are near in memory; in the cloud's own order (random for a scan saved
    unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
    as its reference: a fit turned the other way is the same fit with its sign changed exactly,
@@ -38,19 +38,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import EstimatorError
+from .core.errors import EstimatorError
 from .estimators import get_spec
 from .estimators._local_fit import slice_bounds
 from .estimators._small_linalg import sym3_eigen
 from .estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
 from .estimators.jet import _scratch as jet_scratch
-from .jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from .knn import grid_gather
-from .neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
+from .core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from .core.knn import grid_gather
+from .geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                             latest_with_mesh, new_queues, new_scratch)
-from .pointcloud import PointCloud
-from .ranges import ball_radii, point_spacing, resolve
-from .validity import Reason
+from .core.pointcloud import PointCloud
+from .core.ranges import ball_radii, point_spacing, resolve
+from .core.validity import Reason
 
 _FIT_OK = int(Reason.OK)
 
@@ -436,7 +436,7 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
     ----------
     cloud : PointCloud
     radii : (n,) float64
-        Ball radius of every point (:func:`curv.ranges.ball_radii`).
+        Ball radius of every point (:func:`curv.core.ranges.ball_radii`).
     chunk : int, optional
         Points per kernel call (default adaptive).
 
@@ -720,7 +720,7 @@ def border_radii(cloud: PointCloud) -> np.ndarray:
     """(n,) float64 radius of the border test (and of the PCA that orients the fits) at each point.
 
     :data:`BORDER_RANGE` times the larger of the point's spacing and the median spacing of its
-    :data:`curv.knn.GRAPH_NEIGHBOURS` nearest. A point whose own six nearest sit in a tight clump
+    :data:`curv.core.knn.GRAPH_NEIGHBOURS` nearest. A point whose own six nearest sit in a tight clump
     has a spacing far below its surroundings'; at R3 of its own spacing its ball held only the
     clump (15 points against 51, median), all on one side, and read as a border: 62 of 200,000
     uniform random points of a closed sphere (0.03 %, the false borders of closed scans). With the
@@ -779,7 +779,7 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         :data:`BORDER_RANGE` (the default: on 20,000 random points of a sphere the fits then err
         by 0.1 % in H, against 10-20 % with the PCA normals), or the PCA of the support.
     range, radius, knn
-        The support of the fits, as for an estimate (:func:`curv.ranges.resolve`); default R2.
+        The support of the fits, as for an estimate (:func:`curv.core.ranges.resolve`); default R2.
     orient : {"up", "outward"} or (3,) array_like
         See :func:`orient_normals`.
 

@@ -1,14 +1,14 @@
 """What ``curv estimate`` does differently for a point-cloud file: its checks, options and report.
 
 The rest of the command (range, colours, output, region, progress, the written file) is the
-mesh command's own; :mod:`curv.cli` asks :func:`curv.pointio.is_point_file` once and calls here.
+mesh command's own; :mod:`curv.cli` asks :func:`curv.formats.pointio.is_point_file` once and calls here.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .errors import CurvError
+from .core.errors import CurvError
 
 __all__ = ["check_point_options", "check_mesh_options", "estimate_keywords", "report_lines", "MESH_ONLY"]
 
@@ -42,7 +42,7 @@ def check_point_options(args, spec) -> None:
     stand-in cloud because the file is not read yet.
     """
     from .estimators import refusal
-    from .pointcloud import PointCloud
+    from .core.pointcloud import PointCloud
 
     why_not = refusal(spec, PointCloud(np.zeros((1, 3))))
     if why_not is not None:
@@ -77,7 +77,7 @@ def estimate_keywords(args, cloud) -> dict:
 
 def report_lines(args, cloud, res) -> list[str]:
     """The point cloud's part of the summary: points, spacing, normals, coincident and border points."""
-    from .ranges import describe_spacing
+    from .core.ranges import describe_spacing
 
     spaced = describe_spacing(cloud)
     label = res.info.get("normals", "")

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .api import Smoothing
-from .ranges import canonical_k, parse_range, range_label
+from .core.ranges import canonical_k, parse_range, range_label
 
 __all__ = ["NOISE_FRACTION", "SMOOTHING_SUFFIX", "Variant", "short_name", "OPTION_SEPARATOR"]
 
@@ -39,7 +39,7 @@ class Variant:
 
     ``id`` (``"mru:R2"``, ``"mru:R2SM"``, ``"jet:R4;degree=4"``) is the key stored in the results;
     ``label`` (``"MRU (R2SM)"``, ``"JET (R4, degree 4)"``) is for tables and figures. The range is
-    written and read by :mod:`curv.ranges`. ``options`` are keyword arguments of
+    written and read by :mod:`curv.core.ranges`. ``options`` are keyword arguments of
     :func:`curv.estimate` as sorted ``(name, value)`` pairs: an estimator option
     (``("degree", 4)``) or the fitted normals (``("fit_range", 4), ("normals", "fit")``).
     """

@@ -4,7 +4,7 @@ import numpy as np
 
 import curv
 from curv.estimators._ball_clipping import face_in_ball_area
-from curv.neighbourhood import coordinate_columns
+from curv.geometry.neighbourhood import coordinate_columns
 
 
 def triangle_in_ball_area(a, b, c, centre, radius) -> float:

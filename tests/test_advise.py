@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import curv
-import curv.advisor_table
-from curv.advisor import (
+import curv.advice.table
+from curv.advice.advisor import (
     Advice, advise, angle_deviation_deg, kernel_predict, load_table, measure_features, predict,
 )
 from curv.cli import _stats_line, main
@@ -110,7 +110,7 @@ def test_ranking_covers_every_candidate_best_first(noisy):
     errs = [c.expected_erel for c in adv.ranking]
     assert all(np.isfinite(errs)) and min(errs) > 0
     top = max(c.valid_share for c in adv.ranking)
-    full = [c.valid_share >= top - curv.advisor.VALID_SHARE_SLACK for c in adv.ranking]
+    full = [c.valid_share >= top - curv.advice.advisor.VALID_SHARE_SLACK for c in adv.ranking]
     n_full = sum(full)
     assert full == [True] * n_full + [False] * (len(full) - n_full)     # the calls that cover the mesh first
     assert errs[:n_full] == sorted(errs[:n_full]) and errs[n_full:] == sorted(errs[n_full:])
@@ -138,9 +138,9 @@ def test_noise_raises_the_expected_error():
 
 
 def test_lazy_export_is_the_function_even_after_the_module_loads():
-    import curv.advisor
+    import curv.advice.advisor
 
-    assert curv.advise is curv.advisor.advise and curv.Advice is curv.advisor.Advice
+    assert curv.advise is curv.advice.advisor.advise and curv.Advice is curv.advice.advisor.Advice
 
 
 # ------------------------------------------------------------------ CLI
@@ -210,19 +210,19 @@ def test_estimate_method_auto_refuses_a_range(tmp_path, capsys, noisy):
 
 
 def test_estimate_method_auto_applies_the_options(tmp_path, capsys, monkeypatch, noisy):
-    import curv.advisor
+    import curv.advice.advisor
 
     path = _write_off(tmp_path / "m.off", noisy.mesh)
-    real = curv.advisor.advise
+    real = curv.advice.advisor.advise
     for options in ({"degree": 4}, {"normals": "fit", "fit_range": 4}):
 
         def fake(mesh, **kw):  # the advisor's answer with the first candidate carrying these options
             adv = real(mesh, **kw)
-            best = curv.advisor.Candidate("jet" if "degree" in options else "mru", 3, options, 0.01)
+            best = curv.advice.advisor.Candidate("jet" if "degree" in options else "mru", 3, options, 0.01)
             return Advice(features=adv.features, ranking=[best], method=best.method, range=3, expected_erel=0.01,
                           why="test", options=options)
 
-        monkeypatch.setattr(curv.advisor, "advise", fake)
+        monkeypatch.setattr(curv.advice.advisor, "advise", fake)
         assert main(["estimate", path, "--method", "auto", "-q"]) == 0
         out = capsys.readouterr().out.splitlines()
         method = "jet" if "degree" in options else "mru"
@@ -236,7 +236,7 @@ def test_estimate_method_auto_applies_the_options(tmp_path, capsys, monkeypatch,
 
 # ------------------------------------------------------------------ the table builder
 def test_calibration_fit_recovers_known_coefficients():
-    from curv.advisor_table import fit_calibration
+    from curv.advice.table import fit_calibration
 
     rng = np.random.default_rng(0)
     rows = []
@@ -255,7 +255,7 @@ def test_calibration_fit_recovers_known_coefficients():
 
 
 def test_a_tiny_table_builds_advises_and_rebuilds_from_its_measured_rows(tmp_path, noisy, monkeypatch):
-    import curv.advisor_table as at
+    import curv.advice.table as at
 
     settings = at.table_settings(samples=1, densities=(817,), noise=(0.0, 1.0), irregularity=(0.0,))
     build = lambda: at.build_table(settings, tmp_path / "study", workers=0, command="test",  # noqa: E731
@@ -285,7 +285,7 @@ def test_a_tiny_table_builds_advises_and_rebuilds_from_its_measured_rows(tmp_pat
 
 
 def test_closed_shapes_are_random_per_sample_and_shared_across_sizes_and_noise():
-    from curv.advisor_table import closed_mesh_point, random_closed_params
+    from curv.advice.table import closed_mesh_point, random_closed_params
 
     draw = lambda name: random_closed_params(name, np.random.default_rng(3))  # noqa: E731
     assert draw("torus") == draw("torus") and draw("cylinder") == {}
@@ -300,8 +300,8 @@ def test_closed_shapes_are_random_per_sample_and_shared_across_sizes_and_noise()
 
 
 def test_rounding_in_the_table_changes_predictions_by_less_than_a_percent():
-    from curv.advisor import MeshFeatures
-    from curv.advisor_table import EREL_DIGITS, make_table, table_points, table_settings
+    from curv.advice.advisor import MeshFeatures
+    from curv.advice.table import EREL_DIGITS, make_table, table_points, table_settings
 
     rng = np.random.default_rng(5)
     settings = table_settings(samples=1, densities=(817,), noise=(0.0,), irregularity=(0.0,))
@@ -324,7 +324,7 @@ def test_rounding_in_the_table_changes_predictions_by_less_than_a_percent():
 
 # ------------------------------------------------------------------ the packaged table
 def test_the_packaged_table_is_what_the_documented_commands_write():
-    import curv.advisor_table as at
+    import curv.advice.table as at
 
     table = load_table()
     meta = table["metadata"]
@@ -335,9 +335,9 @@ def test_the_packaged_table_is_what_the_documented_commands_write():
     assert meta["settings"] == at.table_settings().as_dict()
     assert meta["closed"] == {"surfaces": list(at.DEFAULT_CLOSED), "vertices": list(at.DEFAULT_CLOSED_VERTICES)}
     ext = meta["extension_command"].split()
-    assert ext[:4] == ["python", "-m", "curv.advisor_table", "extend"] and set(ext[4::2]) <= {"--base", "--work",
+    assert ext[:4] == ["python", "-m", "curv.advice.table", "extend"] and set(ext[4::2]) <= {"--base", "--work",
                                                                                              "--workers", "--out"}
-    assert "python -m curv.advisor_table extend --base base.json" in doc
+    assert "python -m curv.advice.table extend --base base.json" in doc
     jobs = at.extension_jobs(table)
     n_base = at.table_settings().n_tasks + len(at.DEFAULT_CLOSED) * len(at.DEFAULT_CLOSED_VERTICES) * len(
         at.DEFAULT_NOISE) * at.DEFAULT_SAMPLES
@@ -349,7 +349,7 @@ def test_the_packaged_table_is_what_the_documented_commands_write():
 def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
     from importlib import resources
 
-    from curv.advisor import TABLE_RESOURCE
+    from curv.advice.advisor import TABLE_RESOURCE
 
     table = load_table()
     hexagon = {k[2] for k in table["truth"]["key"] if k[1] in ("quadratic", "ellipsoid_patch", "trigonometric")}
@@ -357,7 +357,7 @@ def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
     assert min(k[2] for k in table["truth"]["key"]) == 162
     assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 1_200_000
     values = np.array(table["median_erel"], float)
-    n_options = len(curv.advisor_table.option_variants())
+    n_options = len(curv.advice.table.option_variants())
     assert np.isfinite(values[:, :-n_options]).mean() > 0.99 and np.nanmin(values) > 0
     assert np.all(np.isfinite(values[:, -n_options:]).sum(axis=0) > 0.3 * len(values))   # every option column
 
@@ -381,14 +381,14 @@ def _mixed_mesh(m=30, tri_cells=121, seed=0):
 
 
 def _every_candidate():
-    from curv.advisor_table import option_variants
+    from curv.advice.table import option_variants
 
     return list(dict.fromkeys([*load_table()["variants"], *option_variants()]))
 
 
 @pytest.mark.parametrize("which", ["mixed", "patch217"])
 def test_valid_shares_are_what_the_estimators_leave_valid(which):
-    from curv.advisor import valid_shares
+    from curv.advice.advisor import valid_shares
     from curv.variants import Variant
 
     mesh = _mixed_mesh() if which == "mixed" else build_test_mesh(Task(0, "quadratic", 217, 25.0, 0.33, 0)).mesh
@@ -404,7 +404,7 @@ def test_valid_shares_are_what_the_estimators_leave_valid(which):
 
 
 def test_valid_shares_on_a_sample_of_a_larger_mesh():
-    from curv.advisor import valid_shares
+    from curv.advice.advisor import valid_shares
 
     mesh = _study_mesh(0.0).mesh
     full = valid_shares(mesh, ["csm:R4", "jet:R1;degree=2", "qs:R2"], sample=10**9)
@@ -416,14 +416,14 @@ def test_valid_shares_on_a_sample_of_a_larger_mesh():
 
 def test_the_mixed_quad_mesh_is_not_advised_a_call_that_leaves_it_invalid():
     mesh = _mixed_mesh()
-    assert mesh.n_vertices == 900 and curv.advisor.polygon_kinds(mesh) == {3: 242, 4: 720}
+    assert mesh.n_vertices == 900 and curv.advice.advisor.polygon_kinds(mesh) == {3: 242, 4: 720}
     jet1 = curv.estimate(mesh, method="jet", range=1)
     assert np.sum(jet1.reason == curv.Reason.TOO_FEW_NEIGHBOURS) > 600           # the issue's 676 of 900
     adv = advise(mesh)
     shares = {c.variant.id: c.valid_share for c in adv.ranking}
     assert shares["jet:R1"] == pytest.approx(jet1.valid_fraction)
-    assert adv.valid_share >= max(shares.values()) - curv.advisor.VALID_SHARE_SLACK
-    full = [c for c in adv.ranking if c.valid_share >= max(shares.values()) - curv.advisor.VALID_SHARE_SLACK]
+    assert adv.valid_share >= max(shares.values()) - curv.advice.advisor.VALID_SHARE_SLACK
+    full = [c for c in adv.ranking if c.valid_share >= max(shares.values()) - curv.advice.advisor.VALID_SHARE_SLACK]
     assert adv.ranking[: len(full)] == full                                    # every full call before jet R1
     assert [c.expected_erel for c in full] == sorted(c.expected_erel for c in full)
     res = curv.estimate(mesh, **adv.kwargs)
@@ -432,7 +432,7 @@ def test_the_mixed_quad_mesh_is_not_advised_a_call_that_leaves_it_invalid():
 
 
 def test_rank_puts_calls_that_lose_vertices_after_the_rest():
-    from curv.advisor import rank
+    from curv.advice.advisor import rank
 
     pred = {"a": 0.1, "b": 0.2, "c": 0.05, "d": 0.01, "e": np.nan}
     assert rank(pred, {"a": 0.9, "b": 0.9, "c": 0.5, "d": 0.0, "e": 0.9}) == ["a", "b", "c"]
@@ -441,8 +441,8 @@ def test_rank_puts_calls_that_lose_vertices_after_the_rest():
 
 
 def test_support_sizes_match_the_stored_supports():
-    from curv.neighbourhood import support_sizes, supports
-    from curv.ranges import ball_radii, resolve
+    from curv.geometry.neighbourhood import support_sizes, supports
+    from curv.core.ranges import ball_radii, resolve
 
     mesh = build_test_mesh(Task(0, "trigonometric", 331, 16.0, 0.5, 0)).mesh
     radii = ball_radii(mesh, resolve(curv.ESTIMATORS["qs"], 1.5), uses_normals=False)
@@ -457,7 +457,7 @@ def test_support_sizes_match_the_stored_supports():
 
 
 def test_variants_and_candidates_carry_the_whole_call():
-    from curv.advisor import Candidate
+    from curv.advice.advisor import Candidate
     from curv.variants import Variant
 
     v = Variant.from_id("mru:R3;normals=fit;fit_range=4")
@@ -517,7 +517,7 @@ def test_estimate_takes_the_options_as_flags(tmp_path, capsys, noisy):
 
 # ------------------------------------------------------------------ shape and tessellation axes
 def test_shape_measures_tell_a_sphere_a_torus_and_a_patch_apart():
-    from curv.advisor import SHAPE_MEASURES
+    from curv.advice.advisor import SHAPE_MEASURES
 
     sphere = measure_features(make_surface("sphere", n_vertices=2562, radius=1.3).mesh)
     torus = measure_features(make_surface("torus", n_vertices=2562, major=1.0, minor=0.4).mesh)
@@ -537,7 +537,7 @@ def test_shape_measures_tell_a_sphere_a_torus_and_a_patch_apart():
 
 
 def test_table_coordinates_follow_the_kernels_axes():
-    from curv.advisor import table_coordinates
+    from curv.advice.advisor import table_coordinates
 
     old = {"kernel": {"noise_axis": "sqrt", "scales": [2.0, 0.5, 10.0]}}
     assert table_coordinates(old, np.e, 0.25, 5.0) == pytest.approx([0.5, 1.0, 0.5])
@@ -551,7 +551,7 @@ def test_table_coordinates_follow_the_kernels_axes():
 def test_errors_below_the_floor_do_not_outweigh_the_other_neighbours():
     """A call exact to rounding on one neighbour (nc R1 on a noise-free sphere: 1e-15) must not win
     over a call that is better on every other neighbour: the mean of logs is taken above the floor."""
-    from curv.advisor import MeshFeatures
+    from curv.advice.advisor import MeshFeatures
 
     table = {"columns": ["density", "noise_level", "irregularity_deg"], "variants": ["a", "b"],
              "kernel": {"noise_axis": "linear", "scales": [1.0, 1.0, 1.0], "bandwidth": 100.0, "erel_floor": 1e-6},
@@ -565,7 +565,7 @@ def test_errors_below_the_floor_do_not_outweigh_the_other_neighbours():
 
 
 def test_leave_one_out_regret_is_the_kernel_prediction_of_the_others():
-    from curv.advisor_table import _regret, loo_regret
+    from curv.advice.table import _regret, loo_regret
 
     rng = np.random.default_rng(3)
     coords = rng.normal(size=(40, 3))
@@ -589,7 +589,7 @@ def test_leave_one_out_regret_is_the_kernel_prediction_of_the_others():
 
 
 def test_the_selection_takes_an_axis_that_decides_and_leaves_a_random_one_out():
-    from curv.advisor_table import select_axes
+    from curv.advice.table import select_axes
 
     rng = np.random.default_rng(0)
     p = 240
@@ -605,8 +605,8 @@ def test_the_selection_takes_an_axis_that_decides_and_leaves_a_random_one_out():
 
 
 def test_the_packaged_table_has_the_selected_axes_and_the_floor():
-    import curv.advisor_table as at
-    from curv.advisor import BASE_COLUMNS, kernel_axes
+    import curv.advice.table as at
+    from curv.advice.advisor import BASE_COLUMNS, kernel_axes
 
     table = load_table()
     assert table["columns"] == [*BASE_COLUMNS, *at.EXTRA_COLUMNS]
@@ -617,5 +617,5 @@ def test_the_packaged_table_has_the_selected_axes_and_the_floor():
     doc = " ".join(at.__doc__.replace("\\\n", " ").split())
     for step in ("fill", "refeature"):
         cmd = table["metadata"][f"{step}_command"].split()
-        assert cmd[:4] == ["python", "-m", "curv.advisor_table", step]
-        assert f"python -m curv.advisor_table {step}" in doc
+        assert cmd[:4] == ["python", "-m", "curv.advice.table", step]
+        assert f"python -m curv.advice.table {step}" in doc

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 import curv
-from curv.validity import Reason
+from curv.core.validity import Reason
 from tests.meshes import icosphere, tube
 
 

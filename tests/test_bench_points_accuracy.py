@@ -49,7 +49,7 @@ def test_apss_conversion_separates_the_principal_curvatures_of_a_cylinder():
 def test_evaluated_points_stay_beyond_r4_of_the_border():
     import curv
     from curv.point_normals import border_points
-    from curv.ranges import ball_radii, resolve
+    from curv.core.ranges import ball_radii, resolve
     from curv.surfaces import sample_points
 
     surface = curv.surfaces.SURFACES["quadratic"].random(np.random.default_rng(3))

@@ -14,8 +14,8 @@ import pytest
 import curv
 from curv.estimators.meyer import iter_meyer
 from curv.estimators.rusinkiewicz import iter_ru
-from curv.normals import unusable_normal_vertices, vertex_normals
-from curv.validity import Reason
+from curv.geometry.normals import unusable_normal_vertices, vertex_normals
+from curv.core.validity import Reason
 from tests.meshes import icosphere, torus_grid
 
 CHUNKS = [1, 7, 256, 1000, 3000, None]

@@ -1,4 +1,4 @@
-"""The connectivity kernels (curv.connectivity) against plain numpy/scipy definitions of each table.
+"""The connectivity kernels (curv.core.connectivity) against plain numpy/scipy definitions of each table.
 
 The meshes are chosen to reach every branch: random polygon soups (repeated indices, edges with one,
 two or many faces, isolated vertices), a fan large enough for the merge-sort path, a bow tie.
@@ -11,7 +11,7 @@ import pytest
 import scipy.sparse as sp
 
 import curv
-from curv import connectivity
+from curv.core import connectivity
 from tests.meshes import icosphere, torus_grid
 
 

@@ -9,9 +9,9 @@ import pytest
 import scipy.sparse as sp
 
 import curv
-from curv import connectivity
-from curv.jit import launch
-from curv.normals import _vertex_normals, MAX
+from curv.core import connectivity
+from curv.core.jit import launch
+from curv.geometry.normals import _vertex_normals, MAX
 from tests.test_connectivity_kernels import IDS, MESHES
 
 
@@ -36,7 +36,7 @@ def test_corner_pass_normals_are_the_max_normals(mesh):
 
 @pytest.mark.parametrize("mesh", MESHES, ids=IDS)
 def test_report_edge_counts_equal_the_edge_table(mesh):
-    from curv.features import SHARP_DEGREES
+    from curv.core.features import SHARP_DEGREES
 
     rep = mesh.report()
     two = mesh.edge_face_count == 2

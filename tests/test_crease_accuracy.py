@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 import curv
-from curv.features import feature_set
+from curv.core.features import feature_set
 from curv.metrics import absolute_error
 from curv.surfaces import Box, CappedCylinder, Cone, HemisphereOnDisc, Torus, crease_distance_rings
 

@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import curv
-from curv.features import dihedral_angles
+from curv.core.features import dihedral_angles
 from curv.surfaces import (
     SURFACES, Box, CappedCylinder, Cone, CreasedSurface, HemisphereOnDisc, Sphere, crease_distance_rings,
     make_surface,

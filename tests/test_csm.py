@@ -10,9 +10,9 @@ import pytest
 import curv
 from curv.estimators._ball_clipping import disc_triangle_area
 from curv.estimators.csm import iter_csm, segment_in_ball
-from curv.normals import vertex_normals
-from curv.ranges import Range, ball_radii
-from curv.validity import Reason
+from curv.geometry.normals import vertex_normals
+from curv.core.ranges import Range, ball_radii
+from curv.core.validity import Reason
 from tests.clipping import triangle_in_ball_area
 from tests.meshes import icosphere
 
@@ -201,7 +201,7 @@ def test_disc_triangle_area_with_a_corner_just_outside(poke):
 
 def test_a_region_computes_only_the_triangles_and_edges_its_supports_touch():
     from curv.estimators._ball_clipping import touched_elements
-    from curv.neighbourhood import expansion_adjacency, supports
+    from curv.geometry.neighbourhood import expansion_adjacency, supports
 
     mesh = icosphere(3)
     radii = ball_radii(mesh, Range(k=2.0), uses_normals=False)

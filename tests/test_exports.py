@@ -12,7 +12,7 @@ import pytest
 
 import curv
 from curv.io import save_result
-from curv.quantities import QUANTITIES, compute
+from curv.core.quantities import QUANTITIES, compute
 
 
 @pytest.fixture
@@ -70,7 +70,7 @@ def test_ply_comment_names_field_estimator_range_map_and_limits(tmp_path, sphere
     out = curv.save_ply(tmp_path / "a.ply", mesh, res, quantity="gaussian", cmap="magma", clim=(0.1, 0.4))
     assert PlyData.read(str(out)).comments == [
         "curvlab: mru R2, colours show gaussian (magma, limits 0.1 .. 0.4); property 'shown' holds it",
-        curv.validity.reason_legend()]
+        curv.core.validity.reason_legend()]
 
 
 def test_cli_refuses_an_output_suffix_it_cannot_write_before_any_work(tmp_path, sphere_result):

@@ -7,9 +7,9 @@ import pytest
 
 import curv
 from curv.estimators import ESTIMATORS
-from curv.features import feature_set, sector_corner_normals
-from curv.neighbourhood import supports
-from curv.ranges import Range, ball_radii
+from curv.core.features import feature_set, sector_corner_normals
+from curv.geometry.neighbourhood import supports
+from curv.core.ranges import Range, ball_radii
 from creased_meshes import box, folded_strip, mirrored_sheet
 from meshes import icosphere, torus_grid
 
@@ -122,7 +122,7 @@ def test_supports_do_not_cross_a_crease():
     x = mesh.vertices[:, 0]
     left = (x < -1e-9) & ~fold
     fs = feature_set(mesh, 30)
-    from curv.neighbourhood import expansion_adjacency
+    from curv.geometry.neighbourhood import expansion_adjacency
 
     radii = ball_radii(mesh, Range(k=3.0), uses_normals=False)
     centres = np.flatnonzero(left)

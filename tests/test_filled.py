@@ -1,4 +1,4 @@
-"""Full-length arrays of one value that cost only the rows written (curv.filled), and the region's ball radii."""
+"""Full-length arrays of one value that cost only the rows written (curv.core.filled), and the region's ball radii."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import curv
-from curv.filled import MIN_MAPPED_BYTES, filled
-from curv.ranges import Range, ball_radii
+from curv.core.filled import MIN_MAPPED_BYTES, filled
+from curv.core.ranges import Range, ball_radii
 from curv.surfaces import Torus
-from curv.validity import Reason
+from curv.core.validity import Reason
 
 LARGE = MIN_MAPPED_BYTES // 8 + 12345  # float64 rows above the mapping threshold
 
@@ -75,7 +75,7 @@ def test_a_large_region_result_is_full_length_nan_outside():
 
 
 def test_the_latest_choice_is_kept_with_the_mesh():
-    from curv.neighbourhood import latest_with_mesh
+    from curv.geometry.neighbourhood import latest_with_mesh
 
     mesh = Torus().mesh(300).mesh
     built = []

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 import curv
 from curv.metrics import relative_error
 from curv.fitted_normals import fitted_normals
-from curv.normals import vertex_normals
+from curv.geometry.normals import vertex_normals
 from curv.study.testmesh import evaluated_vertices
 from curv.surfaces import QuadraticPatch
 from tests.meshes import icosphere, torus_grid, tube

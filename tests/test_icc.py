@@ -9,10 +9,10 @@ import pytest
 
 import curv
 from curv.estimators.icc import face_measures, icc_mean_gaussian, iter_icc
-from curv.normals import vertex_normals
-from curv.ranges import Range, ball_radii
+from curv.geometry.normals import vertex_normals
+from curv.core.ranges import Range, ball_radii
 from curv.surfaces import make_surface
-from curv.validity import Reason
+from curv.core.validity import Reason
 from tests.clipping import triangle_in_ball_area
 from tests.meshes import icosphere, torus_exact, torus_grid, tube
 

@@ -10,7 +10,7 @@ from plyfile import PlyData
 
 import curv
 from curv.io import peek_counts, save_ply
-from curv.repair import repair
+from curv.geometry.repair import repair
 from tests.corpus import _torus_polygons, _write_obj, _write_off, _write_ply
 
 

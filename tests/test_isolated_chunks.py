@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import curv
-from curv.validity import Reason
+from curv.core.validity import Reason
 from tests.meshes import icosphere
 
 CHUNKS = [1, 256, 2000, None]

@@ -12,7 +12,7 @@ import trimesh
 import curv
 from curv.cli import main
 from curv.convert import as_mesh
-from curv.quantities import EXPORTED, QUANTITIES
+from curv.core.quantities import EXPORTED, QUANTITIES
 from tests.meshes import icosphere
 
 

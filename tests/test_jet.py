@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 
 import curv
 from curv.estimators.jet import DEFAULT_DEGREE, iter_jet, unknowns
-from curv.normals import vertex_normals
-from curv.ranges import Range, ball_radii
+from curv.geometry.normals import vertex_normals
+from curv.core.ranges import Range, ball_radii
 from curv.study.testmesh import evaluated_vertices
 from curv.surfaces import QuadraticPatch, TrigonometricPatch
 from tests.meshes import hex_plane, icosphere, torus_exact, torus_grid, tube

@@ -5,12 +5,12 @@ import sys
 
 import numpy as np
 
-from curv import jit as J
+from curv.core import jit as J
 
 
 def test_compile_pending_until_the_kernel_is_compiled_and_cached(tmp_path, monkeypatch):
     (tmp_path / "fresh_kernel_module.py").write_text(
-        "from curv.jit import jit\n\n@jit\ndef twice(x):\n    return 2 * x\n")
+        "from curv.core.jit import jit\n\n@jit\ndef twice(x):\n    return 2 * x\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     module = importlib.import_module("fresh_kernel_module")
     try:

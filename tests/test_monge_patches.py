@@ -5,7 +5,7 @@ import pytest
 
 import curv
 from curv.estimators import all_variants
-from curv.neighbourhood import neighbourhood_matrix
+from curv.geometry.neighbourhood import neighbourhood_matrix
 from curv.surfaces import EllipsoidPatch, QuadraticPatch, TrigonometricPatch, hexagon_mesh
 from tests.tolerances import LATTICE_BIASED, extra_tolerance
 

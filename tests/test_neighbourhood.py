@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import curv
-from curv.neighbourhood import iter_neighbourhoods, neighbourhood_matrix
+from curv.geometry.neighbourhood import iter_neighbourhoods, neighbourhood_matrix
 from tests.meshes import hex_plane, icosphere
 
 

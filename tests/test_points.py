@@ -8,10 +8,10 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 import curv
-from curv.errors import EstimatorError, MeshError
+from curv.core.errors import EstimatorError, MeshError
 from curv.estimators import ESTIMATORS, point_estimators, refusal
 from curv.point_normals import GRAZING_COSINE, point_normals
-from curv.ranges import point_spacing
+from curv.core.ranges import point_spacing
 from curv.surfaces import Cylinder, QuadraticPatch, Sphere, Torus, sample_points
 
 POINT_METHODS = ["nc", "qs", "an", "mru", "jet"]
@@ -159,7 +159,7 @@ def test_knn_radius_and_range_agree_on_an_even_sample(sphere2):
 
 
 def test_an_and_mru_keep_the_k_minus_one_rule_on_points(sphere2):
-    from curv.ranges import Range, ball_radii
+    from curv.core.ranges import Range, ball_radii
 
     spacing = point_spacing(sphere2.cloud)
     radii = ball_radii(sphere2.cloud, Range(k=3), uses_normals=True)

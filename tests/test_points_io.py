@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import curv
-from curv.errors import LoadError, MeshError
-from curv.lzf import decompress
+from curv.core.errors import LoadError, MeshError
+from curv.formats.lzf import decompress
 
 
 @pytest.fixture
@@ -289,7 +289,7 @@ def test_repairs_are_refused_on_a_point_cloud(tmp_path, cloud):
 
 def test_peek_points_reads_the_count_from_headers(tmp_path, cloud):
     from curv.io import is_point_file, peek_counts
-    from curv.pointio import peek_points
+    from curv.formats.pointio import peek_points
 
     points, normals = cloud
     ply = _ply(tmp_path / "a.ply", points)
@@ -315,7 +315,7 @@ def cloud_result():
 def test_point_ply_export_holds_the_mesh_export_fields_and_reads_back(tmp_path, cloud_result):
     from plyfile import PlyData
 
-    from curv.quantities import EXPORTED
+    from curv.core.quantities import EXPORTED
 
     cloud, res = cloud_result
     out = curv.save_result(tmp_path / "out.ply", cloud, res, quantity="gaussian")
@@ -328,7 +328,7 @@ def test_point_ply_export_holds_the_mesh_export_fields_and_reads_back(tmp_path, 
     np.testing.assert_array_equal(vert["d2y"], res.d2[:, 1].astype(np.float32))
     np.testing.assert_array_equal(vert["valid"], res.valid)
     np.testing.assert_array_equal(vert["reason"], res.reason)
-    assert ply.comments[1] == curv.validity.reason_legend() and "colours show gaussian" in ply.comments[0]
+    assert ply.comments[1] == curv.core.validity.reason_legend() and "colours show gaussian" in ply.comments[0]
     assert len(np.unique(np.column_stack([vert["red"], vert["green"], vert["blue"]]), axis=0)) > 1
     back = curv.load(out)
     np.testing.assert_array_equal(back.points, cloud.points)

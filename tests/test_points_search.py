@@ -7,9 +7,9 @@ import pytest
 from scipy.spatial import cKDTree
 
 import curv
-from curv.knn import GRAPH_NEIGHBOURS, nearest_neighbours, symmetric_graph
-from curv.neighbourhood import supports
-from curv.ranges import Range, ball_radii, point_spacing
+from curv.core.knn import GRAPH_NEIGHBOURS, nearest_neighbours, symmetric_graph
+from curv.geometry.neighbourhood import supports
+from curv.core.ranges import Range, ball_radii, point_spacing
 from curv.surfaces import QuadraticPatch, Sphere, sample_points
 
 

@@ -1,11 +1,11 @@
-"""The range rule: parsing, validation, continuous ranges and absolute radii (curv.ranges)."""
+"""The range rule: parsing, validation, continuous ranges and absolute radii (curv.core.ranges)."""
 
 import numpy as np
 import pytest
 
 import curv
-from curv.neighbourhood import supports
-from curv.ranges import Range, ball_radii, parse_range, range_label, resolve
+from curv.geometry.neighbourhood import supports
+from curv.core.ranges import Range, ball_radii, parse_range, range_label, resolve
 from tests.meshes import icosphere, torus_grid, tube
 
 SUPPORTED = [name for name, spec in curv.ESTIMATORS.items() if spec.has_support]
@@ -118,7 +118,8 @@ def test_real_range_is_accepted_and_labelled(method):
 
 def test_range_owner_helpers_follow_the_registry():
     from curv.estimators import ESTIMATORS, refusal, polygon_estimators
-    from curv import Mesh, ranges
+    from curv import Mesh
+    from curv.core import ranges
 
     mru, meyer, an = ESTIMATORS["mru"], ESTIMATORS["meyer"], ESTIMATORS["an"]
     assert ranges.default_range(mru) == 2 and ranges.default_range(meyer) == 1

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import curv
-from curv import connectivity
-from curv.jit import launch
+from curv.core import connectivity
+from curv.core.jit import launch
 from tests.meshes import icosphere, torus_grid
 
 

@@ -1,4 +1,4 @@
-"""Code outside the owners asks them: the range rule (curv.ranges) and estimator facts (the registry).
+"""Code outside the owners asks them: the range rule (curv.core.ranges) and estimator facts (the registry).
 
 Each test swaps or probes the owner and checks that the asking code follows it, so a copy of the
 rule re-coded elsewhere fails here.
@@ -11,7 +11,8 @@ import dataclasses
 import pytest
 
 import curv
-from curv import memory, ranges
+from curv import memory
+from curv.core import ranges
 from curv.cli import build_parser
 from curv.estimators import ESTIMATORS, get_spec, registry
 from curv.fitted_normals import fitted_normals
@@ -27,7 +28,7 @@ def _message(call) -> str:
 @pytest.mark.parametrize("kwargs", [dict(range=0.5), dict(range="R0.5"), dict(radius=True), dict(radius=-1.0),
                                     dict(radius="wide"), dict(range=2, radius=0.3)])
 def test_fitted_normals_refuse_what_the_range_rule_refuses_with_its_words(kwargs):
-    # the fit is the jet's: whatever curv.ranges refuses for the jet, fitted_normals refuses the same way
+    # the fit is the jet's: whatever curv.core.ranges refuses for the jet, fitted_normals refuses the same way
     mesh = icosphere(1)
     expected = _message(lambda: ranges.resolve(get_spec("jet"), kwargs.get("range"), kwargs.get("radius")))
     assert _message(lambda: fitted_normals(mesh, **kwargs)) == expected

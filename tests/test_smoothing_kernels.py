@@ -1,4 +1,4 @@
-"""The cotan-Laplacian kernels (curv.smoothing) against the per-triangle sparse definition."""
+"""The cotan-Laplacian kernels (curv.geometry.smoothing) against the per-triangle sparse definition."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 import scipy.sparse as sp
 
 import curv
-from curv.smoothing import cotan_weights, smooth_positions, smooth_values
+from curv.geometry.smoothing import cotan_weights, smooth_positions, smooth_values
 from tests.meshes import icosphere, torus_grid, tube
 
 

@@ -177,12 +177,12 @@ def test_exports_carry_the_standard_errors(tmp_path, suffix):
         from plyfile import PlyData
 
         vertex = PlyData.read(str(path))["vertex"]
-        got = {name: np.asarray(vertex[name]) for name in curv.quantities.STANDARD_ERRORS}
+        got = {name: np.asarray(vertex[name]) for name in curv.core.quantities.STANDARD_ERRORS}
     else:
         import meshio
 
         data = meshio.read(path).point_data
-        got = {name: np.asarray(data[name]) for name in curv.quantities.STANDARD_ERRORS}
+        got = {name: np.asarray(data[name]) for name in curv.core.quantities.STANDARD_ERRORS}
     np.testing.assert_allclose(got["k1_se"], res.k1_se, rtol=1e-6)
     np.testing.assert_allclose(got["k2_se"], res.k2_se, rtol=1e-6)
 

@@ -3,8 +3,8 @@
 import numpy as np
 
 import curv
-from curv.quantities import anisotropy
-from curv.wording import count_text
+from curv.core.quantities import anisotropy
+from curv.core.wording import count_text
 
 
 def test_count_text():

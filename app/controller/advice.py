@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import time
 
-from curv.advisor import FIT_METHOD, advise
+from curv.advice.advisor import FIT_METHOD, advise
 from curv.estimators import ESTIMATORS
-from curv.jit import COMPILE_MESSAGE, compile_pending
+from curv.core.jit import COMPILE_MESSAGE, compile_pending
 
 from app.model import AdviceRecord
 

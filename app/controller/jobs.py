@@ -40,7 +40,7 @@ class Controller(QObject):
         Something is (no longer) running.
     progress(str, float)
         What runs and the fraction done (``-1``: unknown); the text includes the estimator's own
-        status message when it yields one (``curv.jit.Progress.message``, e.g. first-run compiling).
+        status message when it yields one (``curv.core.jit.Progress.message``, e.g. first-run compiling).
     message(str)
         Informational status text.
     failed(str)

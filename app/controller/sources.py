@@ -8,7 +8,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from curv.io import is_point_file, load
-from curv.normals import cached_max_normals
+from curv.geometry.normals import cached_max_normals
 from curv.surfaces import SURFACES, make_surface, sample_points
 
 from app.model.inputs import cloud_report, is_points

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from curv import ranges
+from curv.core import ranges
 
 __all__ = ["AdviceRecord", "FeatureRow", "RankingRow", "feature_rows", "ranking_rows", "polygon_text",
            "percent_text"]
@@ -96,18 +96,18 @@ def polygon_text(kinds: dict) -> str:
 
 
 def feature_rows(features) -> list[FeatureRow]:
-    """The measured features of a :class:`curv.advisor.MeshFeatures`, in the order a person reads them.
+    """The measured features of a :class:`curv.advice.advisor.MeshFeatures`, in the order a person reads them.
 
     Parameters
     ----------
-    features : curv.advisor.MeshFeatures
+    features : curv.advice.advisor.MeshFeatures
 
     Returns
     -------
     list of FeatureRow
         Irregularity, noise, density, border, polygons, vertices.
     """
-    from curv.advisor import FIT_METHOD, FIT_RANGE
+    from curv.advice.advisor import FIT_METHOD, FIT_RANGE
     from curv.estimators import ESTIMATORS
     from curv.variants import NOISE_FRACTION
 

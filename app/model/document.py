@@ -5,11 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from curv import ranges
+from curv.core import ranges
 from curv.colors import diverges
 from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators, refusal
-from curv.errors import EstimatorError
-from curv.features import check_angle
+from curv.core.errors import EstimatorError
+from curv.core.features import check_angle
 from curv.variants import Variant
 
 from .advice import AdviceRecord
@@ -73,7 +73,7 @@ class Pane:
 
     @property
     def label(self) -> str:
-        """``R2``, ``R2.5``, ``r=0.3`` or the K nearest points: the range as :mod:`curv.ranges` writes it."""
+        """``R2``, ``R2.5``, ``r=0.3`` or the K nearest points: the range as :mod:`curv.core.ranges` writes it."""
         if self.knn is not None:
             return ranges.Range(knn=self.knn).label
         return ranges.Range(radius=self.radius).label if self.radius is not None else ranges.range_label(self.range)
@@ -120,7 +120,7 @@ class Pane:
         return {**kwargs, **dict(self.options)}
 
     def validated(self) -> "Pane":
-        """This pane checked by :func:`curv.ranges.resolve` and :func:`curv.features.check_angle`
+        """This pane checked by :func:`curv.core.ranges.resolve` and :func:`curv.core.features.check_angle`
         (``EstimatorError`` naming the allowed forms)."""
         spec = ESTIMATORS[self.method]
         features = None if self.features is None else check_angle(self.features)

@@ -1,4 +1,4 @@
-"""The Feature angle control's default and words (the rule is :func:`curv.features.feature_edges`'s)."""
+"""The Feature angle control's default and words (the rule is :func:`curv.core.features.feature_edges`'s)."""
 
 from __future__ import annotations
 

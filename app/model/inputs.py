@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 from curv import PointCloud
-from curv.ranges import describe_spacing, point_spacing
+from curv.core.ranges import describe_spacing, point_spacing
 from curv.surfaces import SAMPLINGS
 
 __all__ = ["is_points", "unit_length", "item_word", "items_word", "samplings", "can_sample_points", "cloud_report",
@@ -28,7 +28,7 @@ def is_points(obj) -> bool:
 
 def unit_length(obj) -> float:
     """The input's own length unit, for default radii and glyph lengths: a mesh's mean edge length, a
-    point cloud's median spacing (the unit of its range, :func:`curv.ranges.point_spacing`; the cloud
+    point cloud's median spacing (the unit of its range, :func:`curv.core.ranges.point_spacing`; the cloud
     keeps its neighbour search, so the source worker's first question makes later ones cheap)."""
     if not is_points(obj):
         return float(obj.mean_edge_length)
@@ -54,7 +54,7 @@ def can_sample_points(surface_class) -> bool:
 
 def cloud_report(cloud) -> list[str]:
     """The point-cloud report's lines before any estimate: points, spacing, normals, coincident points
-    (the facts are the library's: :func:`curv.ranges.describe_spacing`, ``PointCloud.coincident_points``)."""
+    (the facts are the library's: :func:`curv.core.ranges.describe_spacing`, ``PointCloud.coincident_points``)."""
     lines = [f"{cloud.n_points:,} points, no faces", describe_spacing(cloud)]
     lines.append("normals from the file" if cloud.normals is not None else
                  "no normals in the file: each estimate fits and orients its own")

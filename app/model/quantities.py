@@ -1,4 +1,4 @@
-"""The per-vertex scalar quantities the viewer can colour by: an enum over :mod:`curv.quantities`.
+"""The per-vertex scalar quantities the viewer can colour by: an enum over :mod:`curv.core.quantities`.
 
 Adding a quantity to the curv registry adds it here, to the menus and to the help text.
 """
@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import enum
 
-from curv.quantities import QUANTITIES, QuantitySpec
+from curv.core.quantities import QUANTITIES, QuantitySpec
 
 __all__ = ["Quantity"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
-from curv.validity import Reason
+from curv.core.validity import Reason
 
 from .document import Document, pane_letter
 from .scalars import relative_error

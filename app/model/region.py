@@ -13,8 +13,8 @@ import itertools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from curv.region import vertices_in_ball
-from curv.validity import Reason
+from curv.geometry.region import vertices_in_ball
+from curv.core.validity import Reason
 
 from .text import count_text
 
@@ -71,7 +71,7 @@ def index_region(label: str, vertices, *, centre: int | None = None) -> Region:
 
 
 def ball_region(mesh, centre: int, radius: float) -> Region:
-    """The vertices within ``radius`` (mesh units) of vertex ``centre``, as :func:`curv.region.vertices_in_ball`
+    """The vertices within ``radius`` (mesh units) of vertex ``centre``, as :func:`curv.geometry.region.vertices_in_ball`
     finds them (``EstimatorError`` for a radius that is not a positive length)."""
     idx = vertices_in_ball(mesh, mesh.vertices[int(centre)], radius)
     return index_region(f"{radius:g} around vertex {int(centre)}", idx, centre=int(centre))

@@ -2,6 +2,6 @@
 
 from __future__ import annotations
 
-from curv.wording import count_text
+from curv.core.wording import count_text
 
 __all__ = ["count_text"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from html import escape
 
-from curv.errors import EstimatorError
+from curv.core.errors import EstimatorError
 from curv.estimators import ESTIMATORS
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QBrush, QColor, QFont

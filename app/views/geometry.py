@@ -5,8 +5,8 @@ from __future__ import annotations
 from functools import cached_property
 
 import numpy as np
-from curv.normals import cached_max_normals
-from curv.quantities import anisotropy
+from curv.geometry.normals import cached_max_normals
+from curv.core.quantities import anisotropy
 import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray
@@ -102,7 +102,7 @@ def prepare_geometry(mesh) -> Geometry:
     """Render geometry of ``mesh``; safe to run in a worker thread.
 
     A point cloud is drawn as its points. A mesh's normals are its cached default normals
-    (:func:`curv.normals.cached_max_normals`), the ones a default estimate uses too: computed once
+    (:func:`curv.geometry.normals.cached_max_normals`), the ones a default estimate uses too: computed once
     for both. A point cloud's length unit is asked here (its neighbour search, which the cloud
     keeps and its estimates reuse); a mesh's waits until something needs it (:class:`Geometry`).
     """

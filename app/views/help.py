@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from html import escape
 
-from curv import __version__, ranges
+from curv import __version__
+from curv.core import ranges
 from curv.estimators import ESTIMATORS
-from curv.quantities import QUANTITIES
+from curv.core.quantities import QUANTITIES
 
 from app.model.region import REST_NOTE
 

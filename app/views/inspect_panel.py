@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import contextlib
 
-from curv import ranges
-from curv.errors import EstimatorError
+from curv.core import ranges
+from curv.core.errors import EstimatorError
 from curv.estimators import ESTIMATORS, refusal
 from PySide6.QtCore import QEvent, QObject, Qt, Signal
 from PySide6.QtGui import QDoubleValidator
@@ -109,12 +109,12 @@ class InspectPanel(QWidget):
         self.range.setToolTip(RANGE_TIP)
         self.use_radius = QCheckBox("Radius")
         self.use_radius.setToolTip(RANGE_TIP)
-        self.radius = QLineEdit()  # read by curv.ranges, which refuses bad input with a message
+        self.radius = QLineEdit()  # read by curv.core.ranges, which refuses bad input with a message
         self.radius.setPlaceholderText("—")
         self.radius.setToolTip("Ball radius in mesh units (the same at every vertex), a positive number")
         self.use_knn = QCheckBox("Nearest")
         self.use_knn.setToolTip(RANGE_TIP)
-        self.knn = QSpinBox()  # what K may be is curv.ranges' rule: a refused K comes back with its message
+        self.knn = QSpinBox()  # what K may be is curv.core.ranges' rule: a refused K comes back with its message
         self.knn.setRange(1, 10_000)
         self.knn.setValue(DEFAULT_KNN)
         self.knn.setSuffix(" points")
@@ -262,7 +262,7 @@ class InspectPanel(QWidget):
     # -- widget -> model ------------------------------------------------------------------------
     def _set_pane(self, **changes) -> bool:
         """Ask for ``changes`` in the active pane if the estimator can run on the mesh and
-        :mod:`curv.ranges` accepts them; else say why in red and start nothing."""
+        :mod:`curv.core.ranges` accepts them; else say why in red and start nothing."""
         doc = self.doc
         try:
             pane = Pane(**{**doc.panes[doc.active].__dict__, **changes}).validated()
@@ -318,7 +318,7 @@ class InspectPanel(QWidget):
     def _radius_edited(self) -> None:
         if self.use_radius.isChecked():
             spec = ESTIMATORS[self.doc.panes[self.doc.active].method]
-            try:  # curv.ranges owns what a radius may be: anything else is refused with its message
+            try:  # curv.core.ranges owns what a radius may be: anything else is refused with its message
                 radius = ranges.resolve(spec, radius=self.radius.text().strip()).radius
             except EstimatorError as exc:
                 self._refuse(str(exc))

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 from curv.estimators import ESTIMATORS
-from curv.features import feature_edges
+from curv.core.features import feature_edges
 from curv.io import save_ply, save_vtu
 from PySide6.QtCore import QEvent, QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QGuiApplication, QIcon, QKeySequence

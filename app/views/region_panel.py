@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from curv.errors import EstimatorError
+from curv.core.errors import EstimatorError
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QCheckBox, QFormLayout, QHBoxLayout, QLabel, QLineEdit, QPushButton, QWidget
 

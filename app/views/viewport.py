@@ -35,6 +35,15 @@ software GL (Mesa's llvmpipe, Xvfb) 8-sample MSAA made a 2M-triangle frame 3-4x 
 against 0.7 s) while its triangles are smaller than a pixel anyway."""
 
 
+_NONE_PIN = [None] * 2_000_000
+"""Two million references to None, held for the life of the process (16 MB). Each VTK render and
+make-current through pyvistaqt 0.13 / VTK 9.7 / PySide6 6.12 drops None's reference count by one
+more than it takes (measured: -1 per ``ren_win.Render()``, -1 per ``makeCurrent()``, about -4 per
+frame), so after some ten thousand frames None would be freed and the interpreter abort
+("none_dealloc"; the whole GUI test run did at exit). The pin keeps None alive for about
+half a million frames."""
+
+
 class _Interactor(QtInteractor):
     """A ``QtInteractor`` whose paints show VTK's last frame again when nothing drawn changed since.
 

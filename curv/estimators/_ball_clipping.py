@@ -11,10 +11,10 @@ import math
 
 import numpy as np
 
-from ..jit import jit
-from ..mesh import Mesh
-from ..neighbourhood import ball_support, coordinate_columns
-from ..validity import Reason
+from ..core.jit import jit
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import ball_support, coordinate_columns
+from ..core.validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area",
            "face_in_ball_area", "vertex_bits", "touches", "touched_elements", "element_list"]
@@ -399,7 +399,7 @@ def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr:
     radii : (n,) float64
         Ball radius of every vertex.
     indptr, indices : (n+1,), (a,) int64
-        :func:`curv.neighbourhood.expansion_adjacency`.
+        :func:`curv.geometry.neighbourhood.expansion_adjacency`.
     edges : bool
         Collect the edges too (they need the mesh's edge table).
 

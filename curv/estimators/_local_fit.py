@@ -28,12 +28,12 @@ from typing import Generator
 
 import numpy as np
 
-from ..filled import filled
-from ..jit import iter_chunks, jit, launch, threads
-from ..mesh import Mesh
-from ..neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
-from ..result import Principal
-from ..validity import Reason
+from ..core.filled import filled
+from ..core.jit import iter_chunks, jit, launch, threads
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
+from ..core.result import Principal
+from ..core.validity import Reason
 
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
@@ -530,7 +530,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     normals : (n, 3) float64
         Unit vertex normals (NaN rows: no frame, the vertex is ``DEGENERATE``).
     radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`).
     kernel : numba dispatcher
         ``kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2,
         d1, d2, reason, k1_se, k2_se)`` estimates the vertices ``centres[lo:hi]``, splitting them into
@@ -539,7 +539,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         Vertices per call (default adaptive).
     centres : (c,) int64, optional
         The vertices to estimate (default all); the other rows of the outputs are left unset.
-    features : curv.features.FeatureSet, optional
+    features : curv.core.features.FeatureSet, optional
         The search does not expand through feature vertices.
 
     Yields

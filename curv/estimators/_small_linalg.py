@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..jit import jit
+from ..core.jit import jit
 
 __all__ = ["sym3_eigen", "sym2_eigen", "solve_spd_scaled"]
 

@@ -15,9 +15,9 @@ import math
 
 import numpy as np
 
-from ..jit import jit
-from ..result import Principal
-from ..validity import Reason
+from ..core.jit import jit
+from ..core.result import Principal
+from ..core.validity import Reason
 
 __all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag", "unset_principal"]
 

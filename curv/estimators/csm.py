@@ -1,7 +1,7 @@
 """Cohen-Steiner & Morvan (2003): the normal-cycle curvature tensor averaged over a ball (R1-R4).
 
 For vertex p and the ball B of radius ``r(p)`` around it (``k * mesh.longest_edge[p]`` at range
-Rk, or a fixed radius: :func:`curv.ranges.ball_radii`)::
+Rk, or a fixed radius: :func:`curv.core.ranges.ball_radii`)::
 
     T(p) = 1 / area(B ∩ mesh) * sum_e beta(e) |e ∩ B| ê êᵀ
 
@@ -14,7 +14,7 @@ its eigenvalue 1/r along the axis, the direction of zero curvature).
 What is approximated
 --------------------
 The edges and faces considered are those touching p or a vertex of its support
-(:func:`curv.neighbourhood.ball_support`: vertices reachable from p along edges without leaving
+(:func:`curv.geometry.neighbourhood.ball_support`: vertices reachable from p along edges without leaving
 B). Edges and faces whose vertices all lie outside that support are ignored even when they graze B
 (e.g. a long edge passing through the rim of the ball, or a part of the surface that re-enters the
 ball without a path inside it). Everything else is exact: ``|e ∩ B|`` is the segment/sphere
@@ -23,7 +23,7 @@ intersection and ``area(B ∩ face)`` the exact area of the triangle within the 
 
 How it runs
 -----------
-One parallel kernel per chunk of vertices (:func:`curv.jit.iter_chunks`); per vertex it searches
+One parallel kernel per chunk of vertices (:func:`curv.core.jit.iter_chunks`); per vertex it searches
 the support and visits every edge and face touching it once, through the corners of the support's
 vertices (per-thread stamps over edges and faces, like the search's own visited stamps over
 vertices), so no (centre, edge) pairs are stored. One test sorts each face and edge: all corners
@@ -40,9 +40,9 @@ import math
 
 import numpy as np
 
-from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from ..mesh import Mesh
-from ..neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
                              new_queues, new_scratch)
 from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
                              vertex_bits)
@@ -278,13 +278,13 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     normals : (n, 3) float64
         Unit vertex normals; they only pick which eigenvector of T is the normal.
     radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.ranges.ball_radii` with ``uses_normals=False``).
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii` with ``uses_normals=False``).
     chunk : int, optional
-        Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
+        Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
     centres : (c,) int64, optional
         The vertices to estimate (default all). The per-edge dihedral angles are then computed
         only for the edges their supports touch.
-    features : curv.features.FeatureSet, optional
+    features : curv.core.features.FeatureSet, optional
         The ball stops at creases, and the faces touching a crease vertex are left out (as icc and
         ru do). Each face carries half of the dihedral term of each of its edges (an edge's dual
         strip lies half in each face), so an edge next to a left-out face keeps half of its term

@@ -16,7 +16,7 @@ of radius r gives ``+1/r``.
 
 At vertex p with the ball B of radius ``r(p)`` (range Rk: ``k * mesh.longest_edge[p]``, as csm;
 or a fixed radius), every measure is summed over the triangles touching p or a vertex of its
-support (:func:`curv.neighbourhood.ball_support`), each weighted by the **fraction of its area
+support (:func:`curv.geometry.neighbourhood.ball_support`), each weighted by the **fraction of its area
 inside B**, ``area(t ∩ B) / area(t)``, computed exactly (triangle ∩ disc of B in its plane, as
 in :mod:`curv.estimators.csm`). Then
 
@@ -52,11 +52,11 @@ import math
 
 import numpy as np
 
-from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from ..mesh import Mesh
-from ..neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
                              new_queues, new_scratch)
-from ..validity import Reason
+from ..core.validity import Reason
 from ._local_fit import store_principal, tangent_frame
 from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
                              vertex_bits)
@@ -286,14 +286,14 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     normals : (n, 3) float64
         Unit vertex normals: the corrected normal field interpolates them over each triangle.
     radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.ranges.ball_radii` with ``uses_normals=False``).
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii` with ``uses_normals=False``).
     chunk : int, optional
-        Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
+        Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
     from_measures : bool
         k1, k2 from H and K (mu1, mu2; default) or from the eigenvalues of M (as CGAL).
     centres : (c,) int64, optional
         The vertices to estimate (default all).
-    features : curv.features.FeatureSet, optional
+    features : curv.core.features.FeatureSet, optional
         The ball stops at creases, and the faces touching a crease vertex are left out of the sums
         (a crease vertex's normal, or its side's, tilts them: an error that does not shrink with
         the mesh).

@@ -1,6 +1,6 @@
 """Osculating jet fitting (Cazals & Pouget, SGP 2003), over the range support.
 
-At each vertex p, with support S(p) = p and the vertices of its ball (:mod:`curv.neighbourhood`):
+At each vertex p, with support S(p) = p and the vertices of its ball (:mod:`curv.geometry.neighbourhood`):
 
 1. **Frame.** PCA of S(p): the eigenvector of the smallest eigenvalue of the covariance about the
    centroid is the height axis ``e3`` (turned to agree with the given vertex normal), the largest
@@ -35,12 +35,12 @@ import math
 
 import numpy as np
 
-from ..errors import EstimatorError
-from ..filled import filled
-from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from ..mesh import Mesh
-from ..neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch
-from ..validity import Reason
+from ..core.errors import EstimatorError
+from ..core.filled import filled
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch
+from ..core.validity import Reason
 from ._local_fit import factor_whiten, noise_variance, principal_gradients, row_dot, slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
@@ -395,7 +395,7 @@ def _jet_normal_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z
 
 
 def check_degree(degree) -> int:
-    """The degree as an int; :class:`~curv.errors.EstimatorError` unless it is one of :data:`DEGREES`."""
+    """The degree as an int; :class:`~curv.core.errors.EstimatorError` unless it is one of :data:`DEGREES`."""
     if isinstance(degree, (bool, np.bool_)) or degree not in DEGREES:
         raise EstimatorError(f"jet degree must be one of {', '.join(map(str, DEGREES))}; got {degree!r}")
     return int(degree)
@@ -425,14 +425,14 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     normals : (n, 3) float64
         Unit vertex normals; they orient each fit and its curvature sign (NaN rows: ``DEGENERATE``).
     radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.ranges.ball_radii`, ``uses_normals=False``).
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`, ``uses_normals=False``).
     chunk : int, optional
         Vertices per kernel call (default adaptive).
     degree : {2, 3, 4}
         Jet degree; the support must hold at least ``(d+1)(d+2)/2`` points, the centre included.
     centres : (c,) int64, optional
         The vertices to estimate (default all); other rows are left unset.
-    features : curv.features.FeatureSet, optional
+    features : curv.core.features.FeatureSet, optional
         The supports do not expand through feature vertices.
 
     Yields

@@ -24,12 +24,12 @@ import math
 
 import numpy as np
 
-from .. import connectivity
-from ..jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from ..filled import filled
-from ..mesh import Mesh
-from ..neighbourhood import all_centres
-from ..normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
+from ..core import connectivity
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..core.filled import filled
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import all_centres
+from ..geometry.normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
 from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
 from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, turn_by_corner, unset_principal
 from .registry import EstimatorSpec, register
@@ -151,12 +151,12 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
     normals : (n, 3) float64 or None
         Unit vertex normals: the sign of H and the tangent frame of the direction fit. None: compute
         the Max-weighted normals from the same corners (returned in ``Principal.normals``, NaN
-        where :func:`curv.normals.unusable_normal_vertices`; identical to
-        :func:`curv.normals.vertex_normals` there).
+        where :func:`curv.geometry.normals.unusable_normal_vertices`; identical to
+        :func:`curv.geometry.normals.vertex_normals` there).
     radii : None
         Unused (the estimator has no range support).
     chunk : int, optional
-        Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
+        Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
 
     Yields
     ------

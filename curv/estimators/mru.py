@@ -13,9 +13,9 @@ import math
 
 import numpy as np
 
-from ..jit import jit, jit_parallel, prange
-from ..mesh import Mesh
-from ..neighbourhood import ball_support
+from ..core.jit import jit, jit_parallel, prange
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import ball_support
 from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit,
                          slice_bounds, solve_sym3, store_se3, tangent_frame)
 from .registry import EstimatorSpec, register

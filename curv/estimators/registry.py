@@ -11,10 +11,10 @@ from typing import Callable, Generator
 
 import numpy as np
 
-from ..errors import EstimatorError
-from ..filled import filled
-from ..pointcloud import PointCloud
-from ..result import Principal
+from ..core.errors import EstimatorError
+from ..core.filled import filled
+from ..core.pointcloud import PointCloud
+from ..core.result import Principal
 
 __all__ = ["EstimatorSpec", "ESTIMATORS", "DEFAULT_ESTIMATOR", "register", "get_spec", "EstimatorFunction",
            "polygon_estimators", "point_estimators", "refusal"]
@@ -26,9 +26,9 @@ EstimatorFunction = Callable[..., Generator[float, None, Principal]]
 """``fn(mesh, normals, radii, *, chunk) -> Generator[fraction done, None, Principal]``.
 
 ``normals`` (n, 3) is None only for a spec with ``computes_normals``; ``radii`` (n,) float64 is the
-ball radius every vertex collects its support in (:func:`curv.ranges.ball_radii`), None for an
+ball radius every vertex collects its support in (:func:`curv.core.ranges.ball_radii`), None for an
 estimator without a support (``has_support=False``); ``chunk`` fixes the vertices per kernel call
-(default adaptive, :func:`curv.jit.iter_chunks`)."""
+(default adaptive, :func:`curv.core.jit.iter_chunks`)."""
 
 
 @dataclass(frozen=True)
@@ -67,11 +67,11 @@ class EstimatorSpec:
         as extra rows beside them).
     kernels : tuple
         The numba dispatchers the estimator calls, so that a caller can announce a first-run
-        compilation (:func:`curv.jit.compile_pending`).
+        compilation (:func:`curv.core.jit.compile_pending`).
     computes_normals : bool
         Can compute the default (Max-weighted) vertex normals in its own pass over the mesh: called
         with ``normals=None`` it returns them in :attr:`Principal.normals`, already NaN at
-        :func:`curv.normals.unusable_normal_vertices`, saving a separate pass.
+        :func:`curv.geometry.normals.unusable_normal_vertices`, saving a separate pass.
     min_neighbours : int or callable
         Fewest support vertices (the centre excluded) a vertex needs, else ``TOO_FEW_NEIGHBOURS``:
         the fit's unknowns, or a function of the estimator options giving it (the jet's degree);
@@ -181,7 +181,7 @@ def all_variants() -> list[tuple[str, int]]:
 def empty_principal(n: int, *, most_written: bool = False) -> Principal:
     """A :class:`Principal` of NaNs with every reason ``OK`` (to be filled by an estimator).
 
-    The NaN arrays cost only the rows an estimator writes (:func:`curv.filled.filled`), so an
+    The NaN arrays cost only the rows an estimator writes (:func:`curv.core.filled.filled`), so an
     estimate over a small region of a large mesh does not pay for filling the whole mesh;
     ``most_written`` (a whole-mesh estimate) fills them the ordinary way, which is cheaper then.
     """

@@ -22,10 +22,10 @@ import math
 
 import numpy as np
 
-from .. import connectivity
-from ..jit import iter_chunks, jit, jit_parallel, launch, prange
-from ..mesh import Mesh
-from ..neighbourhood import all_centres
+from ..core import connectivity
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import all_centres
 from ._local_fit import solve_sym3, store_principal, tangent_frame
 from ._triangle_corners import corner_triangle, ring_flag, ring_reason, unset_principal
 from .registry import EstimatorSpec, register
@@ -168,10 +168,10 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
     radii : None
         Unused (the estimator has no range support).
     chunk : int, optional
-        Vertices per kernel call; default adaptive (:func:`curv.jit.iter_chunks`).
+        Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
     centres : (c,) int64, optional
         The vertices to estimate (default all).
-    features : curv.features.FeatureSet, optional
+    features : curv.core.features.FeatureSet, optional
         The faces that touch a feature vertex are left out of the average (the module's notes).
 
     Yields

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..metrics import absolute_error, relative_error
-from ..quantities import compute
+from ..core.quantities import compute
 
 __all__ = ["absolute_error", "relative_error", "summarize", "METRIC_COLUMNS"]
 

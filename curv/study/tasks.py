@@ -35,7 +35,7 @@ def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
         One row per variant with the columns of :data:`curv.study.table.COLUMNS`.
     """
     from ..api import estimate
-    from ..normals import cached_max_normals
+    from ..geometry.normals import cached_max_normals
 
     tm = build_test_mesh(task)
     normals = cached_max_normals(tm.mesh)  # the mesh's own corner pass: no second walk

@@ -14,9 +14,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..mesh import Mesh
-from ..neighbourhood import iter_neighbourhoods
-from ..result import Curvature
+from ..core.mesh import Mesh
+from ..geometry.neighbourhood import iter_neighbourhoods
+from ..core.result import Curvature
 from .protocol import EXCLUSION_RANGE, NOISE_FRACTION, Task
 
 __all__ = ["TestMesh", "build_test_mesh", "evaluated_vertices", "random_surface"]
@@ -62,7 +62,7 @@ def evaluated_vertices(mesh: Mesh, *, range_factor: float = EXCLUSION_RANGE) -> 
     mesh : Mesh
     range_factor : float
         The range k: the support is every vertex reachable along edges inside the ball of radius
-        ``k * mesh.longest_edge[p]`` (the convention of :mod:`curv.neighbourhood`).
+        ``k * mesh.longest_edge[p]`` (the convention of :mod:`curv.geometry.neighbourhood`).
 
     Returns
     -------

@@ -8,8 +8,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..mesh import Mesh
-from ..result import Curvature
+from ..core.mesh import Mesh
+from ..core.result import Curvature
 
 __all__ = ["Param", "Surface", "SampledSurface", "add_noise"]
 

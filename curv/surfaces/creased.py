@@ -23,9 +23,9 @@ from typing import ClassVar
 import numpy as np
 from scipy.sparse.csgraph import dijkstra
 
-from ..mesh import Mesh
-from ..result import Curvature
-from ..validity import Reason
+from ..core.mesh import Mesh
+from ..core.result import Curvature
+from ..core.validity import Reason
 from .base import Param, SampledSurface, Surface
 from .closed import _positive
 from .geometry import tangent_frame

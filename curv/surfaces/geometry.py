@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..result import Curvature
+from ..core.result import Curvature
 
 __all__ = [
     "tangent_frame",

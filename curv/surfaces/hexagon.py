@@ -19,8 +19,8 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import Delaunay
 
-from ..errors import MeshError
-from ..mesh import Mesh
+from ..core.errors import MeshError
+from ..core.mesh import Mesh
 
 __all__ = [
     "PAPER_VERTEX_COUNTS",

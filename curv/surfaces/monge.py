@@ -11,8 +11,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..mesh import Mesh
-from ..result import Curvature
+from ..core.mesh import Mesh
+from ..core.result import Curvature
 from .base import Param, SampledSurface, Surface
 from .geometry import exact_curvature, monge_principal
 from .hexagon import PlanarMesh, hexagon_mesh

@@ -14,7 +14,7 @@ Samplings (:data:`SAMPLINGS`):
 Points are drawn by area on a fine mesh of the surface (:meth:`Surface.mesh`) and moved onto the
 exact surface by the surface's own ``project``; the truth is the surface's ``exact_at`` there. With
 ``noise``, each point moves by 3-D Gaussian noise of that many mean spacings (the range unit of
-:mod:`curv.ranges`), and its truth stays that of the clean point, as for meshes
+:mod:`curv.core.ranges`), and its truth stays that of the clean point, as for meshes
 (:func:`curv.surfaces.add_noise`).
 """
 
@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..jit import jit
-from ..knn import nearest_neighbours
-from ..pointcloud import PointCloud
-from ..ranges import point_spacing
-from ..result import Curvature
+from ..core.jit import jit
+from ..core.knn import nearest_neighbours
+from ..core.pointcloud import PointCloud
+from ..core.ranges import point_spacing
+from ..core.result import Curvature
 from .base import Surface
 from .monge import MongePatch
 

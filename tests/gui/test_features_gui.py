@@ -10,8 +10,8 @@ import pytest
 from PySide6.QtCore import QSettings
 
 import curv
-from curv.features import feature_edges
-from curv.validity import Reason
+from curv.core.features import feature_edges
+from curv.core.validity import Reason
 
 from app.model import Pane, readout_rows
 from app.model.colors import INVALID_RGBA
@@ -49,7 +49,7 @@ def test_feature_angle_is_off_by_default_keys_the_result_and_names_creases_in_wo
     ui.wait_ready()
     res = doc.result(0)
     assert res is not whole and res.info["features"] == 30.0
-    crease = curv.features.feature_vertices(doc.mesh, feature_edges(doc.mesh, 30.0))
+    crease = curv.core.features.feature_vertices(doc.mesh, feature_edges(doc.mesh, 30.0))
     assert crease.any()
     np.testing.assert_array_equal(res.reason == Reason.FEATURE, crease)   # every crease vertex, nothing else
     assert "features 30°" in window.grid.viewports[0].title.text()

@@ -13,7 +13,7 @@ from PySide6.QtCore import QSettings, Qt
 from PySide6.QtWidgets import QApplication
 
 import curv
-from curv.jit import Progress
+from curv.core.jit import Progress
 
 from app.model import FileSource, Layer, LimitMode, Pane, Quantity, SurfaceSource
 from tests.gui.conftest import TIMEOUT_MS

@@ -259,7 +259,7 @@ def test_direction_crosses_have_a_legend_in_their_colours(qtbot, window, ui):
 
 
 def test_pane_default_comes_from_the_registry_and_ranges():
-    from curv import ranges
+    from curv.core import ranges
     from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
 
     pane = Pane.default()

@@ -108,13 +108,13 @@ def test_nearest_control_sets_a_knn_pane_validated_by_the_library(qtbot, window,
     ui.wait_ready(timeout=TIMEOUT_MS)
     pane = doc.panes[0]
     assert pane.knn == ins.knn.value() and pane.radius is None
-    assert pane.label == curv.ranges.resolve(ESTIMATORS[pane.method], knn=pane.knn).label
+    assert pane.label == curv.core.ranges.resolve(ESTIMATORS[pane.method], knn=pane.knn).label
     assert pane.label in window.grid.viewports[0].title.text()
     res = doc.result(0)
     assert np.nanmedian(res.mean) == pytest.approx(1 / SPHERE_R, rel=0.05)   # outward sphere: +1/r
     assert not ins.range.isEnabled()
     with pytest.raises(curv.EstimatorError) as refused:
-        curv.ranges.resolve(ESTIMATORS[pane.method], knn=1)
+        curv.core.ranges.resolve(ESTIMATORS[pane.method], knn=1)
     ins.knn.setValue(1)                                   # a K the library refuses: its message, no estimate
     assert str(refused.value) in window.status_label.text() and doc.panes[0].knn == pane.knn
     ins.range.setEditText("R3")
@@ -263,7 +263,7 @@ def test_command_line_options_for_points(qtbot, window):
 def test_radius_directions_and_a_region_on_points(qtbot, window, ui):
     _open_points(qtbot, window, ui, "torus", n=3000)
     doc, ins, vp = window.doc, window.inspect, window.grid.viewports[0]
-    spacing = float(np.median(curv.ranges.point_spacing(doc.mesh)))
+    spacing = float(np.median(curv.core.ranges.point_spacing(doc.mesh)))
     ins.use_radius.setChecked(True)                      # offered: two spacings, in mesh units
     ui.wait_ready(timeout=TIMEOUT_MS)
     assert doc.panes[0].radius == pytest.approx(2 * spacing, rel=1e-5) and doc.panes[0].knn is None

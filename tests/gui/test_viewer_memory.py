@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
-from curv.normals import cached_max_normals
+from curv.geometry.normals import cached_max_normals
 
 from app.model import Quantity, SurfaceSource
 

@@ -7,7 +7,7 @@
 The advisor measures the three features the paper's study varies (density, noise, irregularity)
 and the mesh's shape and tessellation (valence and edge spread, curvature spread, anisotropy, saddle
 share, border share; see :class:`MeshFeatures`) and predicts the median e_rel of every candidate variant from a table
-of study results (``curv/data/advisor_table.json``, built by :mod:`curv.advisor_table`; the module is not named ``advise`` so that importing it cannot shadow the function ``curv.advise``). The
+of study results (``curv/data/advisor_table.json``, built by :mod:`curv.advice.table`; the module is not named ``advise`` so that importing it cannot shadow the function ``curv.advise``). The
 table holds one point per mesh of a study run (the paper's Monge patches on the hexagon, plus
 noisy closed analytic surfaces, which widen the range of densities and tessellations): the
 advisor's own features measured on that mesh, and the median e_rel every variant reached on it
@@ -30,15 +30,15 @@ from importlib import resources
 
 import numpy as np
 
-from .errors import MeshError
-from .mesh import Mesh
+from ..core.errors import MeshError
+from ..core.mesh import Mesh
 
 __all__ = ["Advice", "Candidate", "MeshFeatures", "advise", "measure_features", "load_table", "valid_shares",
            "TABLE_RESOURCE", "FIT_METHOD", "FIT_RANGE", "VALID_SHARE_SLACK", "VALID_SAMPLE", "SHAPE_MEASURES",
            "BASE_COLUMNS", "kernel_axes", "table_coordinates", "feature_values", "shape_measures"]
 
 TABLE_RESOURCE = "data/advisor_table.json"
-"""The table inside the ``curv`` package (see :mod:`curv.advisor_table`)."""
+"""The table inside the ``curv`` package (see :mod:`curv.advice.table`)."""
 
 FIT_METHOD = "qs"
 FIT_RANGE = 3
@@ -140,7 +140,7 @@ class MeshFeatures:
     @property
     def noise_level(self) -> float:
         """:attr:`noise` as a fraction of the paper's 100 % level."""
-        from .variants import NOISE_FRACTION
+        from ..variants import NOISE_FRACTION
 
         return self.noise / NOISE_FRACTION
 
@@ -177,7 +177,7 @@ class Candidate:
     @property
     def variant(self):
         """The :class:`curv.variants.Variant` of this call."""
-        from .variants import Variant
+        from ..variants import Variant
 
         return Variant(self.method, self.range, options=self.options)
 
@@ -223,9 +223,9 @@ class Advice:
     why : str
         One line for a person.
     suggested_features : float or None
-        When the mesh has many sharp edges (:func:`curv.features.has_many_sharp_edges`), a
+        When the mesh has many sharp edges (:func:`curv.core.features.has_many_sharp_edges`), a
         ``features`` angle that separates its creases from its smooth edges
-        (:func:`curv.features.suggest_threshold`); the study's meshes are smooth, so the ranking
+        (:func:`curv.core.features.suggest_threshold`); the study's meshes are smooth, so the ranking
         assumes the creases are handled that way.
     options : dict
         The recommendation's other keyword arguments (see :class:`Candidate`).
@@ -346,7 +346,7 @@ def raw_measures(mesh: Mesh, *, normals=None) -> dict:
     MeshError
         When no vertex can be fitted (too small or degenerate a mesh).
     """
-    from .api import estimate
+    from ..api import estimate
 
     edge = float(mesh.mean_edge_length)
     if not (np.isfinite(edge) and edge > 0):
@@ -414,7 +414,7 @@ def calibrate_noise(noise_raw: float, calibration: dict, density: float = 0.0) -
 
 def calibrate_irregularity(raw_deg: float, noise: float, calibration: dict) -> float:
     """``sqrt(max(raw² - (c noise_level)², 0))`` (see :attr:`MeshFeatures.irregularity_deg`)."""
-    from .variants import NOISE_FRACTION
+    from ..variants import NOISE_FRACTION
 
     c = calibration["irregularity_noise_deg"]
     return float(np.sqrt(max(raw_deg**2 - (c * noise / NOISE_FRACTION) ** 2, 0.0)))
@@ -437,7 +437,7 @@ def _packaged_table() -> str:
 
 
 def load_table(path=None) -> dict:
-    """The advisor's table: the packaged one, or a JSON file written by :mod:`curv.advisor_table`."""
+    """The advisor's table: the packaged one, or a JSON file written by :mod:`curv.advice.table`."""
     if path is None:
         return json.loads(_packaged_table())
     with open(path) as fh:
@@ -552,10 +552,10 @@ def candidates(table: dict, features: MeshFeatures) -> list[str]:
     """Variant ids of the table the mesh admits: registered, with options the estimator accepts,
     and not refused for the mesh's faces (:func:`curv.estimators.refusal`: triangle-only estimators
     on polygons)."""
-    from .errors import EstimatorError
-    from .estimators import ESTIMATORS
-    from .estimators.registry import refusal
-    from .variants import Variant
+    from ..core.errors import EstimatorError
+    from ..estimators import ESTIMATORS
+    from ..estimators.registry import refusal
+    from ..variants import Variant
 
     faces = _FaceKinds(features.polygon_kinds)
     out = []
@@ -585,7 +585,7 @@ def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE) -> dict
 
     Counted on the same vertices for every variant (all of them up to ``sample``, else a fixed random
     sample of that many, seed 0) with one support search per distinct ball
-    (:func:`curv.neighbourhood.support_sizes`, the radius from :func:`curv.ranges.ball_radii`), by the
+    (:func:`curv.geometry.neighbourhood.support_sizes`, the radius from :func:`curv.core.ranges.ball_radii`), by the
     registry's facts: a vertex is lost when it is on a border or has no usable normal (every
     estimator), when its support holds fewer vertices than the fit needs
     (:meth:`EstimatorSpec.fewest_neighbours`: the fit's unknowns, the jet's by degree), when a
@@ -606,12 +606,12 @@ def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE) -> dict
     dict
         ``{variant id: share in [0, 1]}``.
     """
-    from .estimators import get_spec
-    from .estimators.registry import refusal
-    from .neighbourhood import support_sizes
-    from .normals import unusable_normal_vertices
-    from .ranges import ball_radii, resolve
-    from .variants import Variant
+    from ..estimators import get_spec
+    from ..estimators.registry import refusal
+    from ..geometry.neighbourhood import support_sizes
+    from ..geometry.normals import unusable_normal_vertices
+    from ..core.ranges import ball_radii, resolve
+    from ..variants import Variant
 
     n = mesh.n_vertices
     centres = np.arange(n) if n <= sample else np.sort(np.random.default_rng(0).choice(n, size=sample, replace=False))
@@ -694,9 +694,9 @@ def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
     MeshError
         When the features cannot be measured (no valid fit anywhere).
     """
-    from .variants import Variant
+    from ..variants import Variant
 
-    from .convert import as_mesh
+    from ..convert import as_mesh
 
     mesh = as_mesh(mesh)
     table = load_table() if table is None else table
@@ -722,6 +722,6 @@ def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
 
 def _sharp_edge_angle(mesh: Mesh) -> float | None:
     """The features angle to suggest when the mesh has many sharp edges, else None."""
-    from .features import has_many_sharp_edges, suggest_threshold
+    from ..core.features import has_many_sharp_edges, suggest_threshold
 
     return suggest_threshold(mesh) if has_many_sharp_edges(mesh) else None

@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import LoadError, MeshError
-from .paths import check_readable, one_line as _one_line
-from .pointcloud import PointCloud
+from ..core.errors import LoadError, MeshError
+from ..core.paths import check_readable, one_line as _one_line
+from ..core.pointcloud import PointCloud
 
 __all__ = ["POINT_SUFFIXES", "read_points", "peek_points"]
 

@@ -8,7 +8,7 @@ is a *corner*.
 
 What the estimators do with them (``curv.estimate(..., features=30)``):
 
-- the support search (:func:`curv.neighbourhood.expansion_adjacency`) reaches a feature vertex but
+- the support search (:func:`curv.geometry.neighbourhood.expansion_adjacency`) reaches a feature vertex but
   never expands through it, so a vertex next to a crease is estimated from its own side only;
 - neighbour-normal terms leave feature vertices' normals out (their vertex normal blends both
   sides); ``icc``, which interpolates normals over faces, gives each corner of a face at a

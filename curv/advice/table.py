@@ -25,7 +25,7 @@ Monge patches x 3 samples; plus sphere, ellipsoid and torus at 642, 2562 and 102
 same noise levels x 3 random shapes: 1449 meshes; 28.5 CPU-minutes, 32 minutes wall with 2 workers
 on 2 cores shared with another study run, from scratch)::
 
-    python -m curv.advisor_table --work /tmp/advisor-study-3 --workers 2
+    python -m curv.advice.table --work /tmp/advisor-study-3 --workers 2
 
 Every grid setting is a default (``--samples``, ``--densities``, ``--noise``,
 ``--irregularity``, ``--closed``, ``--closed-vertices`` change them).
@@ -38,7 +38,7 @@ of 217, 331 and 469 vertices, evaluated away from the border at the largest of R
 at least 30 vertices, and sphere, ellipsoid and torus at 162, 252 and 362 vertices, one sample
 each::
 
-    python -m curv.advisor_table extend --base base.json --work /tmp/advisor-ext --workers 2
+    python -m curv.advice.table extend --base base.json --work /tmp/advisor-ext --workers 2
 
 Then the option candidates are run on the closed surfaces of the other two samples too (the closed
 surfaces are few beside the patches; their option columns were empty there), and every mesh is
@@ -47,8 +47,8 @@ length spread, valence spread, anisotropy, curvature spread, saddle share; the m
 from their keys, only the measuring fit runs), which a forward selection by grouped leave-one-out
 regret turns into further kernel axes (:func:`select_axes`)::
 
-    python -m curv.advisor_table fill --table extended.json --out filled.json --work /tmp/advisor-fill --workers 2
-    python -m curv.advisor_table refeature --table filled.json --work /tmp/advisor-refeature --workers 1
+    python -m curv.advice.table fill --table extended.json --out filled.json --work /tmp/advisor-fill --workers 2
+    python -m curv.advice.table refeature --table filled.json --work /tmp/advisor-refeature --workers 1
 
 (``base.json``: the base table the first command writes, ``--out base.json``; ``extended.json``
 the second's ``--out``). The fill ran 150 meshes (5036 estimates) in 151 s wall with 2 workers,
@@ -71,15 +71,15 @@ from pathlib import Path
 import numpy as np
 
 from .advisor import FIT_METHOD, FIT_RANGE, kernel_predict, raw_measures, table_coordinates
-from .study.protocol import StudySettings, Task, study_variants
-from .variants import NOISE_FRACTION
+from ..study.protocol import StudySettings, Task, study_variants
+from ..variants import NOISE_FRACTION
 
 __all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "random_closed_params", "closed_mesh_point",
            "measure_rows", "fit_calibration", "table_points", "choose_bandwidth", "fit_kernel", "make_table",
            "build_table", "main", "table_mesh", "fill_jobs", "fill_table", "feature_row", "noise_groups",
            "select_axes", "refeature_table", "loo_regret", "EXTRA_COLUMNS", "EREL_FLOOR"]
 
-DEFAULT_OUT = Path(__file__).parent / "data" / "advisor_table.json"
+DEFAULT_OUT = Path(__file__).parents[1] / "data" / "advisor_table.json"
 BANDWIDTHS = (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
 """Candidate kernel widths in scaled units, tried by leave-one-out."""
 NOISE_AXES = ("linear", "sqrt")
@@ -111,7 +111,7 @@ def table_settings(*, samples: int = DEFAULT_SAMPLES, densities=DEFAULT_DENSITIE
 
 def mesh_features(task: Task) -> dict:
     """The advisor's raw measures on the mesh of ``task``, with the truth beside them."""
-    from .study.testmesh import build_test_mesh
+    from ..study.testmesh import build_test_mesh
 
     tm = build_test_mesh(task)
     raw = raw_measures(tm.mesh)
@@ -153,11 +153,11 @@ def closed_mesh_point(args: tuple) -> tuple[dict, dict]:
     """
     import zlib
 
-    from .api import estimate
-    from .normals import vertex_normals
-    from .study.metrics import summarize
-    from .variants import Variant
-    from .surfaces import make_surface
+    from ..api import estimate
+    from ..geometry.normals import vertex_normals
+    from ..study.metrics import summarize
+    from ..variants import Variant
+    from ..surfaces import make_surface
 
     seed, name, n, level, sample, variant_ids = args
     params = random_closed_params(name, np.random.default_rng([seed, 8, zlib.crc32(name.encode()), sample]))
@@ -188,7 +188,7 @@ measures what is new."""
 
 MEASURES = f"{FIT_METHOD} R{FIT_RANGE}, closed shapes v1"
 """What the cached rows were measured with; a cache of other measures is discarded. Change it
-with :func:`curv.advisor.raw_measures` or :func:`random_closed_params`."""
+with :func:`curv.advice.advisor.raw_measures` or :func:`random_closed_params`."""
 
 
 def _key_text(key) -> str:
@@ -282,7 +282,7 @@ def loo_regret(coords: np.ndarray, log_values: np.ndarray, bandwidth: float, gro
     -------
     (p,) float64
         The chosen variant's median e_rel over the best one's, per mesh: the same prediction as
-        :func:`curv.advisor.kernel_predict` (weights shifted per row by the nearest other mesh, and
+        :func:`curv.advice.advisor.kernel_predict` (weights shifted per row by the nearest other mesh, and
         exactly per variant where that leaves a variant no weight).
     """
     p = len(coords)
@@ -344,8 +344,8 @@ def measure_rows(settings: StudySettings, work_dir, *, workers: int | None = Non
     seconds : dict
         Wall seconds of the phases run now (``study``, ``features``, ``closed``).
     """
-    from .study.executors import open_executor
-    from .study.runner import run
+    from ..study.executors import open_executor
+    from ..study.runner import run
 
     work_dir = Path(work_dir)
     say = progress or (lambda text: None)
@@ -515,8 +515,8 @@ def option_variants() -> list[str]:
     """Variant ids of the documented options that change the result: jet degrees 3 and 4 at R2-R4,
     ``normals="fit"`` at each of :data:`FIT_RANGES` for :data:`FIT_NORMAL_ESTIMATORS` at their
     named ranges (R2-R4 for the fits; icc also R1)."""
-    from .estimators import ESTIMATORS
-    from .variants import Variant
+    from ..estimators import ESTIMATORS
+    from ..variants import Variant
 
     out = [Variant("jet", k, options={"degree": d}).id for d in JET_DEGREES for k in (2, 3, 4)]
     for fr in FIT_RANGES:
@@ -530,7 +530,7 @@ def option_variants() -> list[str]:
 def evaluated_for_table(mesh) -> np.ndarray:
     """(n,) bool: vertices with no border vertex within the largest range of R4..R1 that leaves at
     least :data:`MIN_EVALUATED` of them (R4 is the study's rule), all vertices on a closed mesh."""
-    from .study.testmesh import evaluated_vertices
+    from ..study.testmesh import evaluated_vertices
 
     if not mesh.border_vertices.any():
         return np.ones(mesh.n_vertices, bool)
@@ -544,11 +544,11 @@ def evaluated_for_table(mesh) -> np.ndarray:
 def variant_errors(mesh, truth, evaluated, variant_ids) -> dict:
     """``{variant id: median e_rel}`` of every variant on one mesh (NaN where it raised or gave no
     value): Max normals, fitted normals computed once per fit range."""
-    from .api import estimate
-    from .fitted_normals import fitted_normals
-    from .normals import vertex_normals
-    from .study.metrics import summarize
-    from .variants import Variant
+    from ..api import estimate
+    from ..fitted_normals import fitted_normals
+    from ..geometry.normals import vertex_normals
+    from ..study.metrics import summarize
+    from ..variants import Variant
 
     normals = {None: vertex_normals(mesh)}
     erel = {}
@@ -575,9 +575,9 @@ def table_mesh(key) -> tuple:
     n_vertices, 0.0, noise, sample]`` (:func:`closed_mesh_point`'s shapes and noise draws)."""
     import zlib
 
-    from .study.protocol import Task
-    from .study.testmesh import build_test_mesh
-    from .surfaces import make_surface
+    from ..study.protocol import Task
+    from ..study.testmesh import build_test_mesh
+    from ..surfaces import make_surface
 
     seed, name, n, irr, level, sample = key
     if name in DEFAULT_CLOSED:
@@ -640,7 +640,7 @@ def extension_jobs(base: dict, *, samples: int = 1, option_samples: int = 1, see
 def run_extension(jobs: list[tuple], work_dir, *, workers: int | None = None, progress=None) -> dict:
     """Run (or resume) ``jobs`` (:func:`candidate_point`) into ``work_dir/extension.json``:
     ``{key text: [row, {variant id: e_rel}]}``; saved after every batch, so a run may be split."""
-    from .study.executors import open_executor
+    from ..study.executors import open_executor
 
     work_dir = Path(work_dir)
     work_dir.mkdir(parents=True, exist_ok=True)
@@ -724,8 +724,8 @@ def extend_table(base: dict, done: dict, *, command: str = "", jobs=None) -> dic
 
 
 def extend_main(argv) -> int:
-    """``python -m curv.advisor_table extend``: add the options and the coarse meshes to a table."""
-    parser = argparse.ArgumentParser(prog="python -m curv.advisor_table extend", description=extend_main.__doc__)
+    """``python -m curv.advice.table extend``: add the options and the coarse meshes to a table."""
+    parser = argparse.ArgumentParser(prog="python -m curv.advice.table extend", description=extend_main.__doc__)
     parser.add_argument("--base", default=str(DEFAULT_OUT), help="table to extend; default the packaged one")
     parser.add_argument("--out", default=str(DEFAULT_OUT))
     parser.add_argument("--work", default="advisor-extension", help="keeps the computed meshes (resumes)")
@@ -741,7 +741,7 @@ def extend_main(argv) -> int:
         return 0
     t0 = time.process_time()
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
-    command = "python -m curv.advisor_table extend " + " ".join(argv)
+    command = "python -m curv.advice.table extend " + " ".join(argv)
     table = extend_table(base, done, command=command, jobs=jobs)
     table["metadata"]["extension_cpu_seconds_main_process"] = round(time.process_time() - t0, 1)
     with open(args.out, "w") as fh:
@@ -752,12 +752,12 @@ def extend_main(argv) -> int:
 
 
 def load_base(path) -> dict:
-    """The base table to extend (what ``python -m curv.advisor_table --out base.json`` writes); an
+    """The base table to extend (what ``python -m curv.advice.table --out base.json`` writes); an
     already extended table is refused (its option columns would be taken for base ones)."""
     with open(path) as fh:
         table = json.load(fh)
     if set(option_variants()) & set(table["variants"]):
-        raise SystemExit(f"{path}: already extended; give the base table (python -m curv.advisor_table --out base.json)")
+        raise SystemExit(f"{path}: already extended; give the base table (python -m curv.advice.table --out base.json)")
     return table
 
 
@@ -797,9 +797,9 @@ def fill_table(table: dict, done: dict, *, command: str = "") -> dict:
 
 
 def fill_main(argv) -> int:
-    """``python -m curv.advisor_table fill``: run the variants a table's meshes of some kinds have no
+    """``python -m curv.advice.table fill``: run the variants a table's meshes of some kinds have no
     value for (by default the option candidates on the closed surfaces of samples 1 and 2)."""
-    parser = argparse.ArgumentParser(prog="python -m curv.advisor_table fill", description=fill_main.__doc__)
+    parser = argparse.ArgumentParser(prog="python -m curv.advice.table fill", description=fill_main.__doc__)
     parser.add_argument("--table", default=str(DEFAULT_OUT))
     parser.add_argument("--out", default=str(DEFAULT_OUT))
     parser.add_argument("--work", default="advisor-fill", help="keeps the computed meshes (resumes)")
@@ -814,7 +814,7 @@ def fill_main(argv) -> int:
         print(f"{len(jobs)} jobs, {sum(len(j[1]) for j in jobs)} estimates")
         return 0
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
-    out = fill_table(table, done, command="python -m curv.advisor_table fill " + " ".join(argv))
+    out = fill_table(table, done, command="python -m curv.advice.table fill " + " ".join(argv))
     with open(args.out, "w") as fh:
         json.dump(out, fh, separators=(",", ":"))
     print(f"wrote {args.out}: {out['metadata']['filled_cells']} cells filled", flush=True)
@@ -824,7 +824,7 @@ def fill_main(argv) -> int:
 # ---------------------------------------------------------------------------- further axes: shape and tessellation
 EXTRA_COLUMNS = ("border_share", "edge_cv", "valence_sd", "anisotropy", "curvature_spread", "hyperbolic_share")
 """Point columns beyond the base three: the open/closed distinction and the shape and tessellation
-measures of :class:`curv.advisor.MeshFeatures`, candidates for further kernel axes."""
+measures of :class:`curv.advice.advisor.MeshFeatures`, candidates for further kernel axes."""
 EXTRA_TRANSFORMS = {"border_share": "sqrt"}
 """Axis transforms of the extra columns (default linear): a border share spans 0 (closed) to a
 fifth (the coarsest patch), and its square root separates the small shares of dense patches from
@@ -839,14 +839,14 @@ one surface at every noise level), so a narrower kernel turns into the nearest g
 leave-one-out over the grid rewards and a mesh between the grid's points does not."""
 EREL_FLOOR = 1e-6
 """Median e_rel below this counts as this (rounding: nc R1 on a noise-free sphere reads 1e-15), in
-the prediction (:func:`curv.advisor.log_erel`) and in the regret the selection scores."""
+the prediction (:func:`curv.advice.advisor.log_erel`) and in the regret the selection scores."""
 MIN_GAIN = 0.02
 """A further axis is taken only when it lowers the grouped leave-one-out mean regret by more (each
 axis thins the table around a mesh: an axis must pay for it)."""
 
 
 def feature_row(key) -> dict:
-    """Every raw measure (:func:`curv.advisor.raw_measures`) of the table mesh of ``key``."""
+    """Every raw measure (:func:`curv.advice.advisor.raw_measures`) of the table mesh of ``key``."""
     mesh, _, _ = table_mesh(key)
     raw = raw_measures(mesh)
     raw.pop("polygon_kinds")
@@ -959,16 +959,16 @@ def refeature_table(table: dict, rows: dict, *, command: str = "", progress=None
 
 
 def refeature_main(argv) -> int:
-    """``python -m curv.advisor_table refeature``: measure the extra columns on a table's meshes
+    """``python -m curv.advice.table refeature``: measure the extra columns on a table's meshes
     (rebuilt from their keys; no estimator runs but the measuring fit) and choose the kernel's axes."""
-    parser = argparse.ArgumentParser(prog="python -m curv.advisor_table refeature",
+    parser = argparse.ArgumentParser(prog="python -m curv.advice.table refeature",
                                      description=refeature_main.__doc__)
     parser.add_argument("--table", default=str(DEFAULT_OUT), help="table to refeature; default the packaged one")
     parser.add_argument("--out", default=str(DEFAULT_OUT))
     parser.add_argument("--work", default="advisor-refeature", help="keeps the measured rows (resumes)")
     parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
-    from .study.executors import open_executor
+    from ..study.executors import open_executor
 
     with open(args.table) as fh:
         table = json.load(fh)
@@ -987,7 +987,7 @@ def refeature_main(argv) -> int:
                 rows[_key_text(k)] = row
             path.write_text(json.dumps(rows))
             print(f"{min(b + 64, len(todo))}/{len(todo)} meshes measured, {time.perf_counter() - t0:.0f} s", flush=True)
-    command = "python -m curv.advisor_table refeature " + " ".join(argv)
+    command = "python -m curv.advice.table refeature " + " ".join(argv)
     out = refeature_table(table, rows, command=command, progress=lambda t: print(t, flush=True))
     out["metadata"]["refeature_seconds"] = round(time.perf_counter() - t0, 1)
     out["metadata"]["refeature_cpu_seconds_main_process"] = round(time.process_time() - c0, 1)
@@ -1007,7 +1007,7 @@ def main(argv=None) -> int:
         return fill_main(argv[1:])
     if argv[:1] == ["refeature"]:
         return refeature_main(argv[1:])
-    parser = argparse.ArgumentParser(prog="python -m curv.advisor_table", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m curv.advice.table", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="table to write; default the packaged one")
     parser.add_argument("--work", default="advisor-study", help="study directory (resumes); default ./advisor-study")
     parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES)
@@ -1022,7 +1022,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     settings = table_settings(samples=args.samples, densities=args.densities, noise=args.noise,
                               irregularity=args.irregularity, seed=args.seed)
-    command = "python -m curv.advisor_table " + " ".join(sys.argv[1:] if argv is None else argv)
+    command = "python -m curv.advice.table " + " ".join(sys.argv[1:] if argv is None else argv)
     table = build_table(settings, args.work, workers=args.workers, command=command,
                         closed=tuple(args.closed), closed_vertices=tuple(args.closed_vertices),
                         progress=lambda text: print(text, flush=True))

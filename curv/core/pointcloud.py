@@ -2,10 +2,10 @@
 
 A point cloud offers the estimators what a mesh offers them, so that one kernel per estimator
 serves both: positions (``vertices``), an ``adjacency`` (here the
-symmetric graph of each point's :data:`curv.knn.GRAPH_NEIGHBOURS` nearest, along which normals are
+symmetric graph of each point's :data:`curv.core.knn.GRAPH_NEIGHBOURS` nearest, along which normals are
 oriented), a ``grid`` that gives every support exactly (the ball around the point, as the mesh's
 search gives the ball's connected vertices), and the per-vertex flags the API reads (``isolated_vertices``, ``nonmanifold_vertices``,
-``coincident_points``). What a point's range unit is (its spacing) is :mod:`curv.ranges`' rule.
+``coincident_points``). What a point's range unit is (its spacing) is :mod:`curv.core.ranges`' rule.
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ class PointCloud:
 
     @cached_property
     def grid(self):
-        """The uniform grid over the points (:func:`curv.knn.build_grid`), made once: it answers the
+        """The uniform grid over the points (:func:`curv.core.knn.build_grid`), made once: it answers the
         nearest-neighbour queries and every ball support of an estimate."""
         return build_grid(self._points, GRAPH_NEIGHBOURS)
 
@@ -115,7 +115,7 @@ class PointCloud:
 
     @cached_property
     def nearest(self) -> tuple[np.ndarray, np.ndarray]:
-        """The :data:`~curv.knn.GRAPH_NEIGHBOURS` nearest other points of every point (computed once).
+        """The :data:`~curv.core.knn.GRAPH_NEIGHBOURS` nearest other points of every point (computed once).
 
         Returns
         -------
@@ -132,7 +132,7 @@ class PointCloud:
     def kth_distance(self, k: int) -> np.ndarray:
         """(n,) float64 distance from every point to its k-th nearest other point (inf if none).
 
-        Cached per k (read-only); k up to :data:`~curv.knn.GRAPH_NEIGHBOURS` reads :attr:`nearest`.
+        Cached per k (read-only); k up to :data:`~curv.core.knn.GRAPH_NEIGHBOURS` reads :attr:`nearest`.
         """
         k = int(k)
         if k < 1:
@@ -150,7 +150,7 @@ class PointCloud:
     @cached_property
     def adjacency(self) -> sp.csr_matrix:
         """(n, n) int8 CSR neighbour graph: p and q are joined if either is among the other's
-        :data:`~curv.knn.GRAPH_NEIGHBOURS` nearest (symmetric, sorted indices).
+        :data:`~curv.core.knn.GRAPH_NEIGHBOURS` nearest (symmetric, sorted indices).
 
         Normals are oriented along it (:mod:`curv.point_normals`); supports come from the grid.
         """

@@ -32,7 +32,7 @@ class Reason(enum.IntEnum):
     or the vertex lies outside the region asked for with ``vertices=``)."""
     FEATURE = 7
     """On a feature edge (a crease sharper than the ``features`` angle) or a corner of them: the
-    smooth curvature is undefined there (:mod:`curv.features`)."""
+    smooth curvature is undefined there (:mod:`curv.core.features`)."""
     ORIENTATION = 8
     """A point-cloud normal whose orientation its neighbourhood cannot decide (a thin sheet, a fold,
     a sparse spot; :mod:`curv.point_normals`): no sign is guessed, so there is no estimate."""

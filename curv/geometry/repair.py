@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .mesh import Mesh
+from ..core.mesh import Mesh
 
 __all__ = ["repair", "merge_duplicate_vertices", "drop_degenerate_faces", "drop_unreferenced_vertices",
            "orient_faces"]

@@ -44,7 +44,7 @@ class Principal:
 
 
 def _quantity_property(name: str) -> property:
-    """A read-only ``Curvature`` attribute computing quantity ``name`` by :mod:`curv.quantities`."""
+    """A read-only ``Curvature`` attribute computing quantity ``name`` by :mod:`curv.core.quantities`."""
     spec = QUANTITIES[name]
     return property(lambda self: self.quantity(name), doc=f"(n,) {spec.title}: {spec.formula}.")
 
@@ -115,6 +115,6 @@ class Curvature:
         return float(self.valid.mean()) if self.valid.size else 0.0
 
     def quantity(self, name: str) -> np.ndarray:
-        """A per-vertex scalar by name, one of :data:`curv.quantities.QUANTITIES` (``ValueError`` otherwise)."""
+        """A per-vertex scalar by name, one of :data:`curv.core.quantities.QUANTITIES` (``ValueError`` otherwise)."""
         return _compute(name, self.k1, self.k2)
 

@@ -56,7 +56,7 @@ def _choose_cache_dir() -> None:
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return
-    package = Path(__file__).resolve().parent
+    package = Path(__file__).resolve().parents[1]  # curv/
     in_tree = package / "__pycache__"
     if _writable(in_tree) and _writable(package / "estimators" / "__pycache__"):
         return

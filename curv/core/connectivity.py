@@ -445,7 +445,7 @@ class CornerPass(NamedTuple):
     longest_edge: np.ndarray
     """(n,) float64 the longest edge at each vertex (0 without one)."""
     max_normals: np.ndarray
-    """(n, 3) float64, column-major: unit Max (1999) vertex normals (:func:`curv.normals.max_normal`); NaN rows where
+    """(n, 3) float64, column-major: unit Max (1999) vertex normals (:func:`curv.geometry.normals.max_normal`); NaN rows where
     the corner terms cancel or there is no corner."""
 
 
@@ -476,7 +476,7 @@ def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     counts = np.empty(n, np.int64)
     # a vertex has at most two neighbours per corner: each writes into its own slot of this
     spread = np.empty(2 * h, np.int32 if n < 2**31 else np.int64)
-    # column-major: the fit kernels read each coordinate as a contiguous column (curv.normals.cached_max_normals)
+    # column-major: the fit kernels read each coordinate as a contiguous column (curv.geometry.normals.cached_max_normals)
     longest, normals = np.empty(n), np.empty((n, 3), order="F")
     launch(_corner_pass, indptr, corners, indices, corner_next, corner_prev, vertices, _ring_width(indptr),
            max(1, min(threads(), n)), nonmanifold, border, inconsistent, counts, spread, longest, normals)
@@ -723,4 +723,4 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
 KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
            vertex_face_incidence, _corner_pass, _gather_neighbours, triangle_geometry, duplicate_positions,
            dihedral_angles, corner_links, component_labels, _edge_counts)
-"""The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""
+"""The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""

@@ -1,7 +1,7 @@
 """Range neighbourhoods: the support of an estimate at a vertex (paper §4.1).
 
 The support of vertex p is every vertex reachable from p along mesh edges while staying inside the
-ball of radius ``r(p)`` around p (:func:`curv.ranges.ball_radii` says what ``r(p)`` is): a
+ball of radius ``r(p)`` around p (:func:`curv.core.ranges.ball_radii` says what ``r(p)`` is): a
 breadth-first search that never leaves the ball. :func:`ball_support` is that search for one
 vertex, a numba helper that every support-based estimator calls inside its own per-vertex loop, so
 no (centre, neighbour) pair arrays are ever built. Each thread brings its own scratch (a visited
@@ -11,8 +11,8 @@ The search expands along :func:`expansion_adjacency`: a support may contain a no
 (a bow tie, the end of a fin) but does not continue through it onto another sheet.
 
 **The support provider.** On a :class:`curv.PointCloud`, :func:`expansion_adjacency` returns the
-cloud's grid (:func:`curv.knn.build_grid`, two tuples of arrays) instead of the CSR edges, and
-:func:`ball_support` answers with the exact ball through the grid (:func:`curv.knn.grid_ball`):
+cloud's grid (:func:`curv.core.knn.build_grid`, two tuples of arrays) instead of the CSR edges, and
+:func:`ball_support` answers with the exact ball through the grid (:func:`curv.core.knn.grid_ball`):
 numba picks the implementation by the argument types when it compiles a kernel, so every
 estimator kernel runs unchanged on meshes and points.
 """
@@ -30,11 +30,11 @@ import scipy.sparse as sp
 from numba.core import types
 from numba.extending import overload
 
-from .jit import jit, jit_parallel, launch, prange, thread_slices, threads
-from .knn import grid_ball
-from .mesh import Mesh
-from .pointcloud import PointCloud
-from .ranges import Range, ball_radii
+from ..core.jit import jit, jit_parallel, launch, prange, thread_slices, threads
+from ..core.knn import grid_ball
+from ..core.mesh import Mesh
+from ..core.pointcloud import PointCloud
+from ..core.ranges import Range, ball_radii
 
 __all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "latest_with_mesh", "supports", "support_sizes", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
@@ -144,7 +144,7 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np
 
     The mesh adjacency with the rows of non-manifold vertices (and of ``blocked`` ones) emptied: a
     support may reach such a vertex but must not continue through it onto another sheet, or across
-    a crease (:mod:`curv.features` passes the feature vertices as ``blocked``).
+    a crease (:mod:`curv.core.features` passes the feature vertices as ``blocked``).
 
     Parameters
     ----------
@@ -157,7 +157,7 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np
     The plain form (no ``blocked``) is cached with the mesh, and the form for the latest
     ``blocked`` array (the same object again: a cached feature set's vertices), so that an estimate
     over a small region does no O(n) work to build it again. On a point cloud: a grid, ``(cells,
-    coords)`` (:func:`curv.knn.build_grid`), which :func:`ball_support` searches instead of edges;
+    coords)`` (:func:`curv.core.knn.build_grid`), which :func:`ball_support` searches instead of edges;
     its cells suit the balls of ``radii`` (:meth:`curv.PointCloud.ball_grid`) when they are given.
     """
     if isinstance(mesh, PointCloud):
@@ -189,7 +189,7 @@ def all_centres(n_vertices: int, centres: np.ndarray | None) -> np.ndarray:
 
 
 def blocked_vertices(features) -> np.ndarray | None:
-    """(n,) bool vertices a support search must not expand through for a :class:`curv.features.FeatureSet`."""
+    """(n,) bool vertices a support search must not expand through for a :class:`curv.core.features.FeatureSet`."""
     return None if features is None or not features.any else features.vertices
 
 
@@ -299,7 +299,7 @@ def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = N
     ----------
     mesh : Mesh
     radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`).
     vertices : (c,) int, optional
         Centres; default all.
     flags : (n,) bool, optional
@@ -329,12 +329,12 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, 
     ----------
     mesh : Mesh
     radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.ranges.ball_radii`).
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`).
     vertices : (c,) int, optional
         Centres; default all.
     blocked : (n,) bool, optional
         Vertices the search reaches but does not expand through (the feature vertices of
-        :mod:`curv.features`), as in :func:`expansion_adjacency`.
+        :mod:`curv.core.features`), as in :func:`expansion_adjacency`.
 
     Returns
     -------

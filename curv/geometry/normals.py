@@ -14,11 +14,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .corner_normals import max_normal, max_weight, unit
-from .jit import jit_parallel, launch, prange
+from ..core.corner_normals import max_normal, max_weight, unit
+from ..core.jit import jit_parallel, launch, prange
 
 if TYPE_CHECKING:  # the mesh's corner pass uses this module's kernels: no import at run time
-    from .mesh import Mesh
+    from ..core.mesh import Mesh
 
 __all__ = ["NormalWeighting", "vertex_normals", "normalize_rows", "unusable_normal_vertices", "max_normal",
            "max_weight", "unit", "KERNELS", "cached_max_normals"]
@@ -89,7 +89,7 @@ def _vertex_normals(indptr, corners, indices, corner_next, corner_prev, corner_f
 
 
 KERNELS = (_vertex_normals,)
-"""The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""
+"""The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""
 
 
 def vertex_normals(mesh: Mesh, *, weighting: NormalWeighting | str = NormalWeighting.MAX) -> np.ndarray:

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import EstimatorError
-from .mesh import Mesh
+from ..core.errors import EstimatorError
+from ..core.mesh import Mesh
 
 __all__ = ["read_vertex_file", "vertices_in_ball"]
 

@@ -70,7 +70,7 @@ EXPORTED = ("k1", "k2", "mean", "gaussian")
 """The quantities every export writes as float fields and the CLI summarises (the rest derive from k1, k2)."""
 
 STANDARD_ERRORS = ("k1_se", "k2_se")
-"""The :class:`~curv.result.Curvature` fields of the standard errors of k1 and k2 (docs/UNCERTAINTY.md),
+"""The :class:`~curv.core.result.Curvature` fields of the standard errors of k1 and k2 (docs/UNCERTAINTY.md),
 which every export writes as float fields after :data:`EXPORTED` (NaN where undefined)."""
 
 

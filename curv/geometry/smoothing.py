@@ -13,9 +13,9 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import MeshError
-from .jit import jit, jit_parallel, launch, prange
-from .mesh import Mesh
+from ..core.errors import MeshError
+from ..core.jit import jit, jit_parallel, launch, prange
+from ..core.mesh import Mesh
 
 __all__ = ["cotan_weights", "smooth_positions", "smooth_values", "KERNELS"]
 
@@ -84,7 +84,7 @@ def _smooth_step(indptr, neighbours, weights, keep, step, x, out):
 
 
 KERNELS = (_cotan_rows, _smooth_step)
-"""The numba dispatchers of this module (for :func:`curv.jit.compile_pending`)."""
+"""The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""
 
 
 def _cotan_data(mesh: Mesh) -> np.ndarray:

@@ -41,7 +41,7 @@ class MeshReport:
     inconsistent_edges: int = 0
     duplicate_vertices: int = 0
     sharp_edges: int = 0
-    """Interior edges with a dihedral angle above :data:`curv.features.SHARP_DEGREES`."""
+    """Interior edges with a dihedral angle above :data:`curv.core.features.SHARP_DEGREES`."""
     suggested_features: float | None = None
     """A ``features`` angle that separates the creases from the smooth edges, when many are sharp."""
 
@@ -278,7 +278,7 @@ class Mesh:
 
     @cached_property
     def _edge_data(self):
-        """The edge table (:func:`curv.connectivity.edge_table`): edges, halfedge_edge, face count,
+        """The edge table (:func:`curv.core.connectivity.edge_table`): edges, halfedge_edge, face count,
         edge faces, edge halfedges, forward count."""
         indptr, corners = self.vertex_corners
         return _kernels.edge_table(indptr, corners, self._indices, self.corner_next, self.corner_prev,
@@ -332,7 +332,7 @@ class Mesh:
     @cached_property
     def corner_pass(self) -> _kernels.CornerPass:
         """The vertex flags, edge neighbours, longest 1-ring edge and Max normals, from one walk over
-        the corners around each vertex (:func:`curv.connectivity.corner_pass`; no edge table, so a
+        the corners around each vertex (:func:`curv.core.connectivity.corner_pass`; no edge table, so a
         fresh estimate never builds it). The arrays are read-only; the properties below expose them."""
         indptr, corners = self.vertex_corners
         out = _kernels.corner_pass(indptr, corners, self._indices, self.corner_next, self.corner_prev,
@@ -433,7 +433,7 @@ class Mesh:
 
         0 on a flat sheet, 90 on a box's edge, up to 180 on a fold flat onto itself; NaN on border
         and non-manifold edges and next to a degenerate face. Which of them are creases is
-        :mod:`curv.features`' rule.
+        :mod:`curv.core.features`' rule.
         """
         out = np.empty(self.edge_faces.shape[0])
         launch(_kernels.dihedral_angles, self.edge_faces, self.edge_face_count, self.face_normals, out)
@@ -481,7 +481,7 @@ class Mesh:
         """(e,) bool: manifold edges whose two faces traverse them in the same direction.
 
         Such an edge joins faces of opposite orientation (a flipped face); the vertex normals there
-        are unreliable. :func:`curv.repair.orient_faces` fixes them.
+        are unreliable. :func:`curv.geometry.repair.orient_faces` fixes them.
         """
         return (self.edge_face_count == 2) & (self._edge_data[5] != 1)
 
@@ -511,7 +511,7 @@ class Mesh:
         group. Vertices on non-manifold edges are included too.
         """
         # two corners at v are linked when their faces share an edge at v with exactly two faces;
-        # the linked groups are the fans (curv.connectivity.corner_pass)
+        # the linked groups are the fans (curv.core.connectivity.corner_pass)
         return self._vertex_flags[0]
 
     @cached_property

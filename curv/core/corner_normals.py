@@ -1,7 +1,7 @@
 """Max (1999) vertex normal terms of the corners around a vertex, as numba helpers.
 
-The corner pass of a fresh mesh (:func:`curv.connectivity.corner_pass`), the normals
-(:mod:`curv.normals`, which owns the weighting and exposes these) and meyer call them; they sit
+The corner pass of a fresh mesh (:func:`curv.core.connectivity.corner_pass`), the normals
+(:mod:`curv.geometry.normals`, which owns the weighting and exposes these) and meyer call them; they sit
 below the mesh model so that the connectivity kernels may use them.
 """
 
@@ -54,7 +54,7 @@ def max_weight(cx, cy, cz, a2, b2):
 
 @jit
 def unit(sx, sy, sz):
-    """``s / |s|``; NaN when ``|s|`` is (near) zero (as :func:`curv.normals.normalize_rows`)."""
+    """``s / |s|``; NaN when ``|s|`` is (near) zero (as :func:`curv.geometry.normals.normalize_rows`)."""
     norm = math.sqrt(sx * sx + sy * sy + sz * sz)
     if not norm > 1e-300:
         return math.nan, math.nan, math.nan

@@ -269,7 +269,7 @@ def ball_radii(mesh, rng: Range, *, uses_normals: bool, at: np.ndarray | None = 
         Whether the estimator also uses its neighbours' normals (support ``k - 1``; not for knn).
     at : (c,) int64, optional
         Only these vertices of a mesh need a radius (an estimate over a region): the other rows are
-        NaN, and the cost follows ``at``, not the mesh (:func:`curv.filled.filled`).
+        NaN, and the cost follows ``at``, not the mesh (:func:`curv.core.filled.filled`).
 
     Raises
     ------

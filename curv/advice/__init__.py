@@ -1,0 +1,1 @@
+"""Which estimator suits a mesh: the advisor and the builder of its table."""

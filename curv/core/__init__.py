@@ -1,0 +1,1 @@
+"""The mesh and point-cloud models and what every layer above them asks: connectivity, ranges, crease rule, results, reasons, errors, kernels' threading."""

@@ -1,0 +1,1 @@
+"""Point-cloud file formats (read and write) below curv.io."""
