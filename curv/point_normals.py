@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .core.connectivity import find_root
 from .core.errors import EstimatorError
 from .estimators import get_spec
 from .estimators._local_fit import slice_bounds
@@ -481,18 +482,10 @@ def _tree_edges(indptr, neighbours, normal, finite):
                     rows[m] = p
                     cols[m] = q
                     c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-                    # a zero weight would be read as no edge by a sparse MST: keep every weight positive
+                    # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
                     weight[m] = 1.0 - abs(c) + 1e-9
                     m += 1
     return rows, cols, weight
-
-
-@jit
-def _find(parent, p):
-    while parent[p] != p:
-        parent[p] = parent[parent[p]]
-        p = parent[p]
-    return p
 
 
 @jit
@@ -503,8 +496,8 @@ def _spanning_forest(n, rank, rows, cols):
     take = np.zeros(rank.size, np.bool_)
     degree = np.zeros(n + 1, np.int64)
     for e in rank:
-        a = _find(parent, rows[e])
-        b = _find(parent, cols[e])
+        a = find_root(parent, rows[e])
+        b = find_root(parent, cols[e])
         if a != b:
             parent[max(a, b)] = min(a, b)
             take[e] = True
@@ -521,7 +514,7 @@ def _spanning_forest(n, rank, rows, cols):
             fill[cols[e]] += 1
     part = np.empty(n, np.int64)
     for p in range(n):
-        part[p] = _find(parent, p)
+        part[p] = find_root(parent, p)
     return ptr, adj, part
 
 

@@ -347,7 +347,8 @@ def vertex_face_incidence(indptr, corners, corner_face):
 
 
 @jit
-def _root(parent, i):
+def find_root(parent, i):
+    """The root of ``i`` in a union-find forest ``parent`` (path halving: the path is shortened on the way)."""
     while parent[i] != i:
         parent[i] = parent[parent[i]]
         i = parent[i]
@@ -402,7 +403,7 @@ def _corner_pass(indptr, corners, indices, corner_next, corner_prev, x, width, p
                 faces = i - start
                 if faces == 2:
                     # the two faces are one fan at u; opposite orientation if both run the same way
-                    a, b = _root(parent, corner[start] >> 1), _root(parent, corner[start + 1] >> 1)
+                    a, b = find_root(parent, corner[start] >> 1), find_root(parent, corner[start + 1] >> 1)
                     if a != b:
                         parent[max(a, b)] = min(a, b)
                         fans -= 1
@@ -636,12 +637,12 @@ def component_labels(indptr, neighbours, labels):
     parent = np.arange(n)
     for u in range(n):
         for i in range(indptr[u], indptr[u + 1]):
-            a, b = _root(parent, u), _root(parent, neighbours[i])
+            a, b = find_root(parent, u), find_root(parent, neighbours[i])
             if a != b:
                 parent[max(a, b)] = min(a, b)
     count = 0
     for u in range(n):
-        r = _root(parent, u)
+        r = find_root(parent, u)
         if r == u:  # the root is the lowest vertex of its component, so it comes first
             labels[u] = count
             count += 1
