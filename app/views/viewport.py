@@ -4,6 +4,9 @@ direction glyphs, picked-vertex marker. Colours are updated in place, never by r
 
 from __future__ import annotations
 
+import ctypes
+import sys
+
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Qt, Signal
@@ -35,13 +38,21 @@ software GL (Mesa's llvmpipe, Xvfb) 8-sample MSAA made a 2M-triangle frame 3-4x 
 against 0.7 s) while its triangles are smaller than a pixel anyway."""
 
 
-_NONE_PIN = [None] * 2_000_000
-"""Two million references to None, held for the life of the process (16 MB). Each VTK render and
-make-current through pyvistaqt 0.13 / VTK 9.7 / PySide6 6.12 drops None's reference count by one
-more than it takes (measured: -1 per ``ren_win.Render()``, -1 per ``makeCurrent()``, about -4 per
-frame), so after some ten thousand frames None would be freed and the interpreter abort
-("none_dealloc"; the whole GUI test run did at exit). The pin keeps None alive for about
-half a million frames."""
+def _pin_none(references: int = 2_000_000) -> None:
+    """Give None ``references`` references that are never released (CPython before 3.12 only).
+
+    Each VTK render and make-current through pyvistaqt 0.13 / VTK 9.7 / PySide6 6.12 drops None's
+    reference count by one more than it takes (measured: -1 per ``ren_win.Render()``, -1 per
+    ``makeCurrent()``, about -4 per frame, with a plain ``QtInteractor`` too), so after some ten
+    thousand frames None would be freed and the interpreter abort ("none_dealloc"; the whole GUI
+    test run did at exit). A list of Nones does not help: finalisation frees it first. From
+    Python 3.12 None is immortal and nothing is needed.
+    """
+    if sys.version_info < (3, 12) and sys.implementation.name == "cpython":
+        ctypes.c_ssize_t.from_address(id(None)).value += references  # ob_refcnt is None's first field
+
+
+_pin_none()
 
 
 class _Interactor(QtInteractor):
