@@ -78,20 +78,26 @@ def _quantity_names() -> list[str]:
     return list(QUANTITIES)
 
 
-def configure(window, args) -> object:
-    """Apply parsed ``args`` to a :class:`~app.views.main_window.MainWindow`; return the source to open.
+def requested_panes(args) -> tuple[list, bool]:
+    """The panes the command line asks for, validated, and whether it names any estimate at all.
+
+    Returns
+    -------
+    panes : list of app.model.Pane
+        Pane A from ``--method``/``--range``/``--radius``/``--knn``/``--features`` (the registry's
+        default estimator and range where not given), then one per ``--compare``.
+    explicit : bool
+        False when no estimate option was given: the viewer then keeps the last session's panes.
 
     Raises
     ------
     ValueError
-        An unknown estimator, range, quantity, surface or colour map (message names the allowed ones).
+        An unknown estimator, a bad range or more than 4 panes (the message names the allowed forms).
     """
     from curv.core.errors import EstimatorError
     from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
-    from curv.surfaces import SURFACES
 
-    from app.model import FileSource, Layer, LimitMode, Pane, Quantity, SurfaceSource, colormap_names
-    from app.views.main_window import DEFAULT_SOURCE
+    from app.model import Pane
 
     explicit = (args.method is not None or args.range is not None or args.radius is not None or args.compare
                 or args.features is not None or args.knn is not None)
@@ -112,6 +118,23 @@ def configure(window, args) -> object:
                                 knn=knn).validated())
         except EstimatorError as exc:
             raise ValueError(str(exc)) from None
+    return checked, bool(explicit)
+
+
+def configure(window, args) -> object:
+    """Apply parsed ``args`` to a :class:`~app.views.main_window.MainWindow`; return the source to open.
+
+    Raises
+    ------
+    ValueError
+        An unknown estimator, range, quantity, surface or colour map (message names the allowed ones).
+    """
+    from curv.surfaces import SURFACES
+
+    from app.model import FileSource, Layer, LimitMode, Quantity, SurfaceSource, colormap_names
+    from app.views.main_window import DEFAULT_SOURCE
+
+    checked, explicit = requested_panes(args)
     doc = window.doc
     if explicit or args.screenshot:  # otherwise the panes remembered from the last session stay
         doc.set_pane_count(len(checked))
@@ -223,14 +246,26 @@ def main(argv: list[str] | None = None) -> int:
 
 def _preload(args):
     """``(FileSource, future)``: the mesh file of ``args`` read (and its normals computed) in a thread
-    while the window is built, or None without a file."""
+    while the window is built, or None without a file.
+
+    When the command line sets the panes (as a snapshot always does), pane A's estimate follows in
+    the same thread: it is the first thing the window would compute, and the window's imports
+    leave the second core idle meanwhile.
+    """
     if not args.mesh or args.surface:
         return None
-    from app.controller.sources import preload
+    from app.controller.sources import EarlyEstimate, preload
     from app.model.sources import FileSource
 
     source = FileSource(str(Path(args.mesh).expanduser()))
-    return source, preload(source)
+    early = None
+    try:
+        panes, explicit = requested_panes(args)
+    except ValueError:
+        panes, explicit = [], False  # configure() reports it once the window is there
+    if panes and (explicit or args.screenshot):
+        early = EarlyEstimate(panes[0].method, panes[0].estimate_kwargs())
+    return source, preload(source, early)
 
 
 def _matching(preloaded, source):

@@ -5,8 +5,9 @@ Usage::
     python benchmarks/bench_large.py write --vertices 10000000 --out /tmp/torus10M.ply
     nice /usr/bin/time -v curv estimate /tmp/torus10M.ply -m mru -r 2 -q
     python benchmarks/bench_large.py calibrate     # peak RSS of `curv estimate` at a few sizes
-    python benchmarks/bench_large.py viewer --ply /tmp/torus10M.ply --rounds 2
-        # the viewer's time to first picture and peak RSS against `curv estimate`'s, runs alternating
+    python benchmarks/bench_large.py viewer --ply /tmp/torus10M.ply --rounds 2 --baseline 1000
+        # the viewer's time to first picture and peak RSS against `curv estimate`'s, runs alternating;
+        # --baseline adds both tools on a 1000-vertex torus (their fixed start-up)
 
 The torus is closed (no border), a regular (major x minor) grid split into triangles, so every
 estimator has work at every vertex. Written with numpy in one go: no per-vertex Python.
@@ -87,35 +88,58 @@ def _time_v(cmd: list[str], env=None) -> dict:
             "peak_bytes": int(rss.group(1)) * 1024 if rss else None, "status": proc.returncode}
 
 
-def viewer_against_cli(path, method: str, k: int, rounds: int, python: str, screenshot: str) -> list[dict]:
+def viewer_against_cli(path, method: str, k: int, rounds: int, python: str, screenshot: str,
+                       baseline: str | None = None) -> list[dict]:
     """Alternate ``curv estimate PATH -m METHOD -r K -q`` and ``curvlab PATH --method METHOD --range K
     --screenshot PNG`` (under ``xvfb-run`` without a display), each under ``/usr/bin/time -v``.
 
     The CLI's run is its estimate with the mesh report and no output file: the same work the viewer
-    does before its picture (the viewer writes a PNG, not the curvature file).
+    does before its picture (the viewer writes a PNG, not the curvature file). With ``baseline`` (a
+    small mesh file) both tools also run on it in every round, and the summary adds what the large
+    mesh costs each tool beyond its fixed start-up (the large run's figure minus the small one's).
     """
     import os
     import shutil
 
-    cli = ["/usr/bin/time", "-v", python, "-m", "curv.cli", "estimate", str(path), "-m", method, "-r", str(k), "-q"]
-    gui = ["/usr/bin/time", "-v", python, "-m", "app.main", str(path), "--method", method, "--range", str(k),
-           "--screenshot", screenshot]
-    if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
-        gui = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", *gui]
+    def commands(mesh):
+        cli = ["/usr/bin/time", "-v", python, "-m", "curv.cli", "estimate", str(mesh), "-m", method, "-r", str(k), "-q"]
+        gui = ["/usr/bin/time", "-v", python, "-m", "app.main", str(mesh), "--method", method, "--range", str(k),
+               "--screenshot", screenshot]
+        if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
+            gui = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", *gui]
+        return (("cli", cli), ("viewer", gui))
+
+    meshes = [("mesh", path)] + ([("baseline", baseline)] if baseline else [])
     rows = []
     for r in range(rounds):
-        for tool, cmd in (("cli", cli), ("viewer", gui)):
-            row = _time_v(cmd)
-            row.update(tool=tool, round=r)
-            print(json.dumps(row), flush=True)
-            rows.append(row)
-    for tool in ("cli", "viewer"):
-        runs = [x for x in rows if x["tool"] == tool and x["status"] == 0]
-        if runs:
-            secs = float(np.median([x["seconds"] for x in runs]))
-            cpu = float(np.median([x["cpu_seconds"] for x in runs]))
-            peak = float(np.median([x["peak_bytes"] for x in runs])) / 1e9
-            print(f"{tool:>6}: median wall {secs:.1f} s, CPU {cpu:.1f} s, peak RSS {peak:.2f} GB over {len(runs)} runs")
+        for which, mesh in meshes:
+            for tool, cmd in commands(mesh):
+                row = _time_v(cmd)
+                row.update(tool=tool, mesh=which, round=r)
+                print(json.dumps(row), flush=True)
+                rows.append(row)
+    medians = {}
+    for which, _ in meshes:
+        for tool in ("cli", "viewer"):
+            runs = [x for x in rows if x["tool"] == tool and x["mesh"] == which and x["status"] == 0]
+            if not runs:
+                continue
+            med = {key: float(np.median([x[key] for x in runs])) for key in ("seconds", "cpu_seconds", "peak_bytes")}
+            medians[which, tool] = med
+            print(f"{which:>8} {tool:>6}: median wall {med['seconds']:.1f} s, CPU {med['cpu_seconds']:.1f} s, "
+                  f"peak RSS {med['peak_bytes'] / 1e9:.2f} GB over {len(runs)} runs")
+    keys = [("mesh", "cli"), ("mesh", "viewer")]
+    if all(key in medians for key in keys):
+        cli, gui = (medians[key] for key in keys)
+        print(f"viewer / CLI: wall {gui['seconds'] / cli['seconds']:.2f}x, CPU {gui['cpu_seconds'] / cli['cpu_seconds']:.2f}x, "
+              f"peak {gui['peak_bytes'] / cli['peak_bytes']:.2f}x")
+        if all(("baseline", tool) in medians for tool in ("cli", "viewer")):
+            def beyond(tool, key):
+                return medians["mesh", tool][key] - medians["baseline", tool][key]
+            print("beyond each tool's start-up on the baseline mesh, viewer / CLI: "
+                  f"wall {beyond('viewer', 'seconds') / beyond('cli', 'seconds'):.2f}x, "
+                  f"CPU {beyond('viewer', 'cpu_seconds') / beyond('cli', 'cpu_seconds'):.2f}x, "
+                  f"peak {beyond('viewer', 'peak_bytes') / beyond('cli', 'peak_bytes'):.2f}x")
     return rows
 
 
@@ -135,9 +159,17 @@ def main(argv=None) -> int:
     g.add_argument("--range", type=int, default=2)
     g.add_argument("--rounds", type=int, default=2)
     g.add_argument("--screenshot", default=str(Path(tempfile.gettempdir()) / "curvlab-first-picture.png"))
+    g.add_argument("--baseline", type=int, metavar="N", default=0,
+                   help="also run both tools on an N-vertex torus each round (e.g. 1000): the fixed start-up")
     args = parser.parse_args(argv)
     if args.command == "viewer":
-        viewer_against_cli(args.ply, args.method, args.range, args.rounds, sys.executable, args.screenshot)
+        with tempfile.TemporaryDirectory() as tmp:
+            baseline = None
+            if args.baseline:
+                baseline = Path(tmp) / f"torus{args.baseline}.ply"
+                write_ply(baseline, *torus(args.baseline))
+            viewer_against_cli(args.ply, args.method, args.range, args.rounds, sys.executable, args.screenshot,
+                               baseline)
         return 0
     if args.command == "write":
         t0 = time.perf_counter()

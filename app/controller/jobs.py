@@ -64,6 +64,7 @@ class Controller(QObject):
         self.cancelled_at: float | None = None
         """``perf_counter`` time of the last cancel (for measuring how soon the workers stop)."""
         self._source_job = None
+        self._early = None  # the preload's estimate of pane A (sources.EarlyEstimate), until used
         self._estimates: dict[tuple[str, int], object] = {}
         self._fractions: dict[tuple[str, int], float] = {}
         self._advice_job = None
@@ -124,6 +125,7 @@ class Controller(QObject):
         self._stop_all()
         self._generation += 1
         gen = self._generation
+        self._early = getattr(loaded, "early", None)
         # errored must be connected at creation, or superqt re-raises the error in the GUI thread
         worker = create_worker(prepare_source, source, self.prepare, loaded, _start_thread=False, _connect={
             "returned": lambda out, gen=gen: self._source_done(gen, out),
@@ -143,6 +145,7 @@ class Controller(QObject):
             out.mesh.n_vertices, "vertex", "vertices") + ", " + count_text(out.mesh.n_faces, "face", "faces")
         self.message.emit(f"{out.source.label}: {size}")
         self.request_missing()
+        self._drop_early()  # no pane wanted it (settings changed the panes): stop it
         if self._advise_after_load:
             self._advise_after_load = False
             self._start_advice()
@@ -219,8 +222,12 @@ class Controller(QObject):
                 self.doc.set_failure(key, f"{pane.title} failed: this curv does not take {name}= yet")
                 self.failed.emit(self.doc.failures[key])
                 return
+        call, args = iter_estimate, (self.doc.mesh, pane.method)
+        if self._early is not None and self._early.follows(self.doc.mesh, pane.method, kwargs):
+            call, args, kwargs = self._early.follow, (), {}  # started with the file's read: follow it
+            self._early = None
         box = []  # the worker, for the callbacks (they must exist before it does)
-        worker = create_worker(iter_estimate, self.doc.mesh, pane.method,
+        worker = create_worker(call, *args,
                                **kwargs,
                                _start_thread=False, _connect={
             "yielded": lambda f: self._estimate_progress(box[0], key, f),
@@ -364,7 +371,13 @@ class Controller(QObject):
             worker.quit()
             self._forget(key)
 
+    def _drop_early(self) -> None:
+        if self._early is not None:
+            self._early.cancel()
+            self._early = None
+
     def _stop_all(self, *, keep_report: bool = False) -> None:
+        self._drop_early()
         if self._source_job is not None:
             self._source_job[0].quit()
             self._source_job = None

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import threading
 from concurrent.futures import Future
+from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from curv.api import iter_estimate
 from curv.io import is_point_file, load
 from curv.geometry.normals import cached_max_normals
 from curv.surfaces import SURFACES, make_surface, sample_points
@@ -14,7 +16,7 @@ from curv.surfaces import SURFACES, make_surface, sample_points
 from app.model.inputs import cloud_report, is_points
 from app.model.sources import FileSource, SurfaceSource
 
-__all__ = ["load_source", "preload", "prepare_source", "mesh_report", "Loaded"]
+__all__ = ["EarlyEstimate", "load_source", "preload", "prepare_source", "mesh_report", "Loaded"]
 
 
 @dataclass
@@ -43,15 +45,91 @@ class Loaded:
     repairs: list = field(default_factory=list)
 
 
-def preload(source) -> Future:
+class EarlyEstimate:
+    """Pane A's estimate of a mesh file named on the command line, run in the preload thread as soon
+    as the mesh and its normals are there, while the window is still being built.
+
+    The controller's first estimate of the same pane on the same mesh follows this one
+    (:meth:`follows`, :meth:`follow`) instead of starting its own; any other use cancels it
+    (:meth:`cancel`). The estimate is ``curv.iter_estimate(mesh, method, **kwargs)``, the call the
+    controller would make, so the result is the same.
+
+    Parameters
+    ----------
+    method : str
+        Registry name of the estimator.
+    kwargs : dict
+        The pane's ``estimate_kwargs()``.
+    """
+
+    def __init__(self, method: str, kwargs: dict) -> None:
+        self.method = method
+        self.kwargs = dict(kwargs)
+        self.mesh = None
+        self.progress = 0.0
+        self._stop = threading.Event()
+        self._result: Future = Future()
+
+    def follows(self, mesh, method: str, kwargs: dict) -> bool:
+        """True if this estimate is ``method`` with ``kwargs`` on this very ``mesh``."""
+        return mesh is not None and mesh is self.mesh and method == self.method and kwargs == self.kwargs
+
+    def run(self) -> None:
+        """Estimate on :attr:`mesh` (set beforehand); called in the preload thread."""
+        try:
+            steps = iter_estimate(self.mesh, self.method, **self.kwargs)
+            while True:
+                if self._stop.is_set():
+                    steps.close()
+                    raise InterruptedError(f"{self.method} cancelled")
+                try:
+                    self.progress = next(steps)
+                except StopIteration as end:
+                    self._result.set_result(end.value)
+                    return
+        except BaseException as exc:  # noqa: BLE001 (handed to whoever follows the estimate)
+            self._result.set_exception(exc)
+
+    @property
+    def stopped(self) -> bool:
+        """True once the estimate was told to stop (cancelled, or its follower quit or ended)."""
+        return self._stop.is_set()
+
+    def result(self, timeout: float | None = None):
+        """The :class:`curv.Curvature` once the estimate has ended (its exception if it failed;
+        ``concurrent.futures.TimeoutError`` after ``timeout`` seconds)."""
+        return self._result.result(timeout=timeout)
+
+    def follow(self):
+        """A generator for the controller's worker: yields the progress (a fraction, with the
+        estimator's message) until the estimate ends and returns its :class:`curv.Curvature`; a
+        worker that quits closes it, which stops the estimate."""
+        try:
+            while True:
+                try:
+                    return self.result(timeout=0.05)
+                except FutureTimeout:
+                    yield self.progress
+        finally:
+            self._stop.set()  # no effect once the estimate has ended
+
+    def cancel(self) -> None:
+        """Stop the estimate at its next step (nobody will follow it)."""
+        self._stop.set()
+
+
+def preload(source, early: EarlyEstimate | None = None) -> Future:
     """Start :func:`load_source` of ``source`` and a mesh's default normals in a thread now; hand the
     future to :func:`prepare_source` (``loaded=``).
 
     ``curvlab FILE`` reads the file and computes its normals while the window is being built (the
-    imports of Qt, VTK and pyvista alone take seconds). Import this module before calling: the
+    imports of Qt, VTK and pyvista alone take seconds). With ``early`` the same thread then runs
+    that estimate on the mesh (not on a point cloud), still beside the window's construction; the
+    future's ``early`` attribute holds it for the controller. Import this module before calling: the
     thread uses only modules already imported.
     """
     future = Future()
+    future.early = early
 
     def work():
         try:
@@ -59,9 +137,16 @@ def preload(source) -> Future:
             if not is_points(out[1]):
                 cached_max_normals(out[1])  # what the drawing and the default estimates shade and fit with
         except BaseException as exc:  # noqa: BLE001 (handed to whoever waits for the result)
+            if early is not None:
+                early.cancel()
             future.set_exception(exc)
-        else:
-            future.set_result(out)
+            return
+        runs_early = early is not None and not is_points(out[1])
+        if runs_early:
+            early.mesh = out[1]  # before the result: the controller compares meshes once it has it
+        future.set_result(out)
+        if runs_early:
+            early.run()
 
     # a daemon: a window that never opens (a bad argument) does not wait for the file to load
     threading.Thread(target=work, name="curvlab-preload", daemon=True).start()

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import curv
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
@@ -166,6 +167,44 @@ def test_a_file_read_while_the_window_is_built_is_the_mesh_shown(qtbot, window, 
     mesh = window.doc.mesh
     assert reads == [] and mesh is future.result()[1]
     assert window.doc.result(0).normals is cached_max_normals(mesh)  # computed in the preload, used by all
+
+
+def _early_preload(method, kwargs):
+    import app.controller.sources as sources
+    from app.model import FileSource
+    from app.packaged import resource
+
+    source = FileSource(str(resource("samples/torus.ply")))
+    early = sources.EarlyEstimate(method, kwargs)
+    future = sources.preload(source, early)  # as curvlab FILE --method M --range K starts it
+    return source, early, future
+
+
+def test_pane_a_follows_the_estimate_started_with_the_files_read(qtbot, window, ui, monkeypatch):
+    import app.controller.jobs as jobs
+
+    window.doc.set_pane(0, method="qs", range=2)
+    pane = window.doc.panes[0]
+    source, early, future = _early_preload("qs", pane.estimate_kwargs())
+    calls = []
+    real = jobs.iter_estimate
+    monkeypatch.setattr(jobs, "iter_estimate", lambda *a, **k: calls.append(a[1:]) or real(*a, **k))
+    window.open_path(source.path, loaded=future)
+    ui.wait_ready()
+    assert window.doc.mesh is early.mesh
+    assert window.doc.result(0) is early.result(timeout=0)  # the early one is shown
+    assert calls == []  # and not computed a second time
+    np.testing.assert_array_equal(curv.estimate(early.mesh, "qs", **pane.estimate_kwargs()).k1,
+                                  window.doc.result(0).k1)
+
+
+def test_an_early_estimate_nobody_shows_is_stopped(qtbot, window, ui, monkeypatch):
+    window.doc.set_pane(0, method="mru", range=2)
+    source, early, future = _early_preload("qs", {"range": 3})  # not what pane A shows
+    window.open_path(source.path, loaded=future)
+    ui.wait_ready()
+    assert window.doc.panes[0].key == ("mru", "R2") and window.doc.result(0).method == "mru"
+    assert early.stopped and window.controller.running_keys() == []
 
 
 def test_none_survives_the_render_paths_reference_drain():
