@@ -360,7 +360,7 @@ class InspectPanel(QWidget):
         letter = pane_letter(doc.active)
         colour = PANE_COLOURS[doc.active % len(PANE_COLOURS)]
         several = len(doc.panes) > 1
-        self.pane_box.setTitle(f"Pane {letter}: estimator and range" + (" (click a pane to switch)" if several else ""))
+        self.pane_box.setTitle(f"Pane {letter} (click a pane to switch)" if several else f"Pane {letter}: estimator and range")
         self.pane_box.setStyleSheet(
             f"#pane_box {{ border: 2px solid {colour if several else '#c8c8c8'}; border-radius: 4px; margin-top: 1.2em; }}"
             "#pane_box::title { subcontrol-origin: margin; left: 8px; padding: 0 3px; }")

@@ -473,15 +473,13 @@ class MainWindow(QMainWindow):
     def update_titles(self) -> None:
         """Pane headers: estimator and status; no re-render needed."""
         for i, vp in enumerate(self.grid.viewports[:self.doc.view_count]):
-            vp.set_title(self._pane_title(i), status=self._pane_message(i))
+            vp.set_title(self.doc.view_title(i), status=self._pane_message(i), detail=self._pane_detail(i))
 
-    def _pane_title(self, i: int) -> str:
+    def _pane_detail(self, i: int) -> str:
+        """The estimator's full name, shown in the header where it fits (always in its tooltip)."""
         doc = self.doc
-        title = doc.view_title(i)
-        if not doc.is_difference(i) and doc.view_count <= 2:  # more panes: short headers (full in the tooltip)
-            spec = ESTIMATORS.get(doc.panes[i].method)
-            title += f" — {spec.title}" if spec else ""
-        return title
+        spec = None if doc.is_difference(i) else ESTIMATORS.get(doc.panes[i].method)
+        return spec.title if spec else ""
 
     def _pane_message(self, i: int) -> str:
         doc = self.doc

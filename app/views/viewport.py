@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Qt, Signal
+from PySide6.QtGui import QTextDocument
 from PySide6.QtWidgets import QFrame, QLabel, QSizePolicy, QVBoxLayout
 from pyvistaqt import QtInteractor
 from vtkmodules.vtkCommonCore import vtkLookupTable, vtkObject
@@ -132,6 +133,7 @@ class Viewport(QFrame):
         self.setObjectName(f"viewport{index}")
         self.setFrameShape(QFrame.Shape.Box)
         self.setLineWidth(2)
+        self._title_parts = ("", "", "")
         self.title = QLabel(self)
         self.title.setAlignment(Qt.AlignmentFlag.AlignCenter)
         # a long title must never widen the window: it is clipped, and complete in the tooltip
@@ -245,12 +247,26 @@ class Viewport(QFrame):
         self.glyph_colours = tuple(contrasting_colours(cmap, 2))
         self._marker_colour = contrasting_colours(cmap, 1, avoid=self.glyph_colours)[0]
 
-    def set_title(self, text: str, *, status: str = "") -> None:
-        """The pane's header: estimator, the field the colours show, and its status (computing, failed) in red."""
+    def set_title(self, text: str, *, status: str = "", detail: str = "") -> None:
+        """The pane's header: estimator (``text``, with ``detail``, its full name, where the header has
+        room), the field the colours show, the direction legend and the status (computing, failed) in red."""
+        self._title_parts = (text, status, detail)
+        self.title.setToolTip(" — ".join(x for x in (text, detail) if x) + (f" {status}" if status else ""))
+        self._fit_title()
+
+    def _fit_title(self) -> None:
+        """Set the header from :meth:`set_title`'s parts, leaving the estimator's full name out when
+        the whole would not fit the pane's width."""
+        text, status, detail = self._title_parts
         extra = f" &nbsp;<span style='color:#b00020'>{status}</span>" if status else ""
         field = f" &nbsp;·&nbsp; <b>{self.field_title}</b>" if self.field_title and self._bar.GetVisibility() else ""
-        self.title.setText(f"{text}{field}{self.glyph_legend()}{extra}")
-        self.title.setToolTip(f"{text} {status}".strip())
+        rest = f"{field}{self.glyph_legend()}{extra}"
+        full = f"{text} — {detail}{rest}" if detail else f"{text}{rest}"
+        self.title.setText(full if _html_width(self.title, full) <= self.title.width() else f"{text}{rest}")
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        super().resizeEvent(event)
+        self._fit_title()
 
     def glyph_legend(self) -> str:
         """What the direction crosses mean, in their colours (empty while none are drawn)."""
@@ -415,6 +431,15 @@ class Viewport(QFrame):
         """Release the VTK render window (call before the widget goes away)."""
         self.plotter.removeEventFilter(self)
         self.plotter.close()
+
+
+def _html_width(label: QLabel, html: str) -> float:
+    """Width in pixels of the rich text ``html`` set in ``label``'s font, with the label's margins."""
+    doc = QTextDocument()
+    doc.setDefaultFont(label.font())
+    doc.setDocumentMargin(0)
+    doc.setHtml(html)
+    return doc.idealWidth() + 2 * label.margin() + label.contentsMargins().left() + label.contentsMargins().right()
 
 
 def _scalar_bar(lut: vtkLookupTable) -> vtkScalarBarActor:

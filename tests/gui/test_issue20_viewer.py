@@ -258,6 +258,25 @@ def test_direction_crosses_have_a_legend_in_their_colours(qtbot, window, ui):
     assert "d1" not in _header(window)
 
 
+def test_pane_headers_keep_the_estimators_full_name_only_where_it_fits(qtbot, window, ui):
+    from app.views.viewport import _html_width
+
+    window.resize(1800, 900)
+    ui.open_surface("saddle", n_vertices=817)
+    window.doc.set_pane(0, method="qs", range=2)
+    ui.wait_ready()
+    qtbot.waitUntil(lambda: "Quadratic" in _header(window), timeout=5000)  # one wide pane: the full name
+    window.compare.count.setValue(3)
+    window.inspect.directions.setChecked(True)
+    window.resize(1366, 768)
+    ui.wait_ready()
+    for vp in window.grid.viewports[:window.doc.view_count]:
+        qtbot.waitUntil(lambda vp=vp: _html_width(vp.title, vp.title.text()) <= vp.title.width(), timeout=5000)
+        assert "d1" in vp.title.text()  # the legend and the field stay; the long name went
+        assert " — " in vp.title.toolTip()  # ... to the tooltip
+    assert "Quadratic" not in _header(window, 0) and "Quadratic" in window.grid.viewports[0].title.toolTip()
+
+
 def test_pane_default_comes_from_the_registry_and_ranges():
     from curv.core import ranges
     from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
