@@ -119,9 +119,12 @@ def iter_estimate(
         order = work_mesh.ball_grid(radii)[0][3]
     raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
                                    features=feats if on_crease else None, **options)
+    # the neighbours an estimator that reads their normals can use (a NaN normal is left out)
+    usable = (np.isfinite(kernel_normals).all(axis=1)
+              if spec.uses_normals and kernel_normals is not None else None)
     for mask_of in flags.support_marks:
-        # checks of the supports themselves (points: a support along a line), on the estimated rows
-        mask, code = yield from mask_of(radii, centres)
+        # checks of the supports themselves (points: a support along a curve), on the estimated rows
+        mask, code = yield from mask_of(radii, centres, usable)
         flags = flags.marked(mask, code)
     if fused:
         used_normals = raw.normals
@@ -195,7 +198,8 @@ class _Flags:
     info: dict
     forced: tuple = ()
     support_marks: tuple = ()
-    """Generators ``(radii, centres) -> (mask, Reason)`` run after the estimate."""
+    """Generators ``(radii, centres, usable) -> (mask, Reason)`` run after the estimate; ``usable``
+    (n,) bool marks the points whose normals the estimator reads (None: it reads none)."""
 
     def marked(self, mask: np.ndarray, code) -> "_Flags":
         """These flags with one more ``(mask, code)`` mark, applied last."""
@@ -280,11 +284,13 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
 
 
 def _line_supports(cloud: PointCloud):
-    """A support check: points whose support lies along a line are SINGULAR (:data:`curv.point_normals.MIN_SPREAD`)."""
+    """A support check: points whose support lies along a line or a curve (of the neighbours whose
+    normals the estimator can use, when it reads them) are SINGULAR
+    (:data:`curv.point_normals.MIN_SPREAD`)."""
     from .point_normals import MIN_SPREAD, support_spread
 
-    def check(radii, centres):
-        spread = yield from support_spread(cloud, radii, centres)
+    def check(radii, centres, usable=None):
+        spread = yield from support_spread(cloud, radii, centres, usable=usable)
         return ~(spread >= MIN_SPREAD), Reason.SINGULAR
 
     return check

@@ -217,16 +217,16 @@ def test_coincident_points_are_degenerate_and_isolated_ones_too():
     res = curv.estimate(cloud, "mru", 2)
     assert (res.reason[2000:] == curv.Reason.DEGENERATE).all()
     assert res.info["coincident_points"] == 7
-    assert res.valid[:2000].mean() > 0.99
+    # 19 points without a normal (one-sided) and 3 whose neighbours with normals lie along a curve
+    assert res.valid[:2000].mean() > 0.985
     lone = curv.estimate(curv.PointCloud([[0.0, 0.0, 0.0]], normals=[[0.0, 0.0, 1.0]]), "qs", 2)
     assert lone.reason[0] == curv.Reason.DEGENERATE and np.isnan(lone.k1[0])
 
 
 ROWS_MISSES = {
-    # R2 support of mru and an: the (k-1) rule gives them the 6 nearest points, mostly one row,
-    # with one or two points of a neighbouring row deciding the curvature across the rows
-    "mru": "99th percentile |H error| 12.6 against max |H| 0.56 (one-sided normals left out)",
-    "an": "99th percentile |H error| 4460 against max |H| 0.56 (one-sided normals left out)",
+    # an's R2 support (the (k-1) rule: about 7 points) is imprecise on any irregular sample, not a
+    # made-up value: its 99th percentile is 0.091 on uniform random points of the same patch too
+    "an": "99th percentile |H error| 0.149 against max |H| 0.56 (0.091 on uniform random points)",
     # nc's one equation per neighbour weights the few far rows' normal curvatures like the near row's
     "nc": "99th percentile |H error| 0.43 against max |H| 0.56 (one-sided normals left out)",
 }

@@ -162,3 +162,31 @@ def test_one_pass_gives_the_jet_normals_and_spreads_of_the_separate_kernels():
     centres = np.arange(0, cloud.n_points, 7)
     region = _run_gen(support_spread(curv.PointCloud(cloud.points), r2, centres))
     np.testing.assert_allclose(region[centres], fresh[centres], rtol=0, atol=1e-12)
+
+
+def test_a_support_along_a_bending_row_has_no_spread_and_a_patch_keeps_its_own():
+    """The line check reads a scan row over a curved surface (a plane curve) as one-dimensional: its
+    sagitta is a quadratic function of the position along the row, and is not taken for width."""
+    from curv.point_normals import MIN_SPREAD, support_spread
+
+    u = np.linspace(-1.0, 1.0, 41)
+    row = np.column_stack([u, np.zeros_like(u), 0.5 * u**2])   # a parabola, curvature 1 at its vertex
+    cloud = curv.PointCloud(row)
+    centre = np.array([20])
+    radii = np.full(row.shape[0], 1.0)
+    spread = _run_gen(support_spread(cloud, radii, centre))[20]
+    offsets = row - row[20]
+    eig = np.linalg.eigvalsh(offsets.T @ offsets)
+    assert np.sqrt(eig[1] / eig[2]) > MIN_SPREAD  # the plain eigenvalue ratio reads the sagitta as width
+    assert spread < 1e-6
+    # across a patch of the same surface the second direction is independent of the first
+    g = np.linspace(-1.0, 1.0, 21)
+    x, y = (a.ravel() for a in np.meshgrid(g, 0.5 * g))
+    patch = np.column_stack([x, y, 0.5 * x**2 + 0.5 * y**2])
+    centre = np.array([len(patch) // 2])
+    spread = _run_gen(support_spread(curv.PointCloud(patch), np.full(len(patch), 2.0), centre))[centre[0]]
+    assert spread == pytest.approx(0.5, rel=0.05)  # half as wide as long
+    # neighbours the estimator cannot use (no normal) are not counted: the patch's centre row alone is a row
+    usable = np.abs(patch[:, 1]) < 1e-12
+    thin = _run_gen(support_spread(curv.PointCloud(patch), np.full(len(patch), 2.0), centre, usable=usable))
+    assert thin[centre[0]] < 1e-6
