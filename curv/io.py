@@ -17,7 +17,7 @@ from .colors import colour_choice, map_colors
 from .core.errors import LoadError, MeshError
 from .core.mesh import Mesh
 from .core.paths import check_readable as _check_path
-from .core.paths import one_line as _one_line
+from .core.paths import read_with
 from .core.pointcloud import PointCloud
 from .core.quantities import EXPORTED, STANDARD_ERRORS
 from .geometry.repair import repair
@@ -215,15 +215,7 @@ def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:
     suffix = path.suffix.lower()
     reader = {".ply": _read_ply, ".off": _read_off}.get(suffix) or (
         _read_meshio if suffix in _MESHIO_SUFFIXES else _read_trimesh)
-    try:
-        return reader(path)
-    except LoadError:
-        raise
-    except MemoryError:
-        raise LoadError(f"{path}: not enough memory to read the file") from None
-    except Exception as exc:  # every reader has its own exception zoo; one clear line for the user
-        kind = suffix.lstrip(".").upper() or "mesh"
-        raise LoadError(f"{path}: not a readable {kind} file ({_one_line(exc)})") from None
+    return read_with(reader, path, suffix.lstrip(".").upper() or "mesh")
 
 
 def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False, orient: bool = False,

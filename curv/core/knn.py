@@ -231,6 +231,24 @@ def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarra
 
 
 @jit
+def _ball_cells(px, py, pz, radius2, dims, origin):
+    """The block of grid cells ``(x0, x1, y0, y1, z0, z1)`` (inclusive) that holds every point within
+    ``sqrt(radius2)`` of (px, py, pz): the point's cell and enough rings around it that a ball of
+    that radius around any point of the cell stays inside."""
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    h = origin[3]
+    cx = min(max(int(math.floor((px - origin[0]) / h)), 0), nx - 1)
+    cy = min(max(int(math.floor((py - origin[1]) / h)), 0), ny - 1)
+    cz = min(max(int(math.floor((pz - origin[2]) / h)), 0), nz - 1)
+    widest = max(nx, max(ny, nz))
+    reach = math.sqrt(radius2) / h
+    # an infinite or huge ball (fewer points than knn=K asks for) covers the whole grid
+    ring = widest if not reach < widest else int(math.ceil(reach))
+    return (max(cx - ring, 0), min(cx + ring, nx - 1), max(cy - ring, 0), min(cy + ring, ny - 1),
+            max(cz - ring, 0), min(cz + ring, nz - 1))
+
+
+@jit
 def grid_ball(p, radius2, cells, coords, x, y, z, queue):
     """Every point within ``sqrt(radius2)`` of point ``p`` (p excluded), through the grid.
 
@@ -254,23 +272,13 @@ def grid_ball(p, radius2, cells, coords, x, y, z, queue):
     """
     cell_keys, cell_start, dims, order = cells
     origin, xs, ys, zs = coords
-    nx, ny, nz = dims[0], dims[1], dims[2]
-    h = origin[3]
+    ny, nz = dims[1], dims[2]
     px, py, pz = x[p], y[p], z[p]
-    cx = min(max(int(math.floor((px - origin[0]) / h)), 0), nx - 1)
-    cy = min(max(int(math.floor((py - origin[1]) / h)), 0), ny - 1)
-    cz = min(max(int(math.floor((pz - origin[2]) / h)), 0), nz - 1)
-    # cells far enough that a ball of this radius around any point of p's cell stays inside
-    widest = max(nx, max(ny, nz))
-    reach = math.sqrt(radius2) / h
-    # an infinite or huge ball (fewer points than knn=K asks for) covers the whole grid
-    ring = widest if not reach < widest else int(math.ceil(reach))
-    z0 = max(cz - ring, 0)
-    z1 = min(cz + ring, nz - 1)
+    x0, x1, y0, y1, z0, z1 = _ball_cells(px, py, pz, radius2, dims, origin)
     queue[0] = p
     count = 1
-    for ix in range(max(cx - ring, 0), min(cx + ring, nx - 1) + 1):
-        for iy in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
+    for ix in range(x0, x1 + 1):
+        for iy in range(y0, y1 + 1):
             base = (ix * ny + iy) * nz
             a = _first_at_least(cell_keys, base + z0)
             b = _first_at_least(cell_keys, base + z1 + 1)
@@ -312,22 +320,14 @@ def grid_gather(i, radius2, cells, coords, queue, dist2):
     """
     cell_keys, cell_start, dims, order = cells
     origin, xs, ys, zs = coords
-    nx, ny, nz = dims[0], dims[1], dims[2]
-    h = origin[3]
+    ny, nz = dims[1], dims[2]
     px, py, pz = xs[i], ys[i], zs[i]
-    cx = min(max(int(math.floor((px - origin[0]) / h)), 0), nx - 1)
-    cy = min(max(int(math.floor((py - origin[1]) / h)), 0), ny - 1)
-    cz = min(max(int(math.floor((pz - origin[2]) / h)), 0), nz - 1)
-    widest = max(nx, max(ny, nz))
-    reach = math.sqrt(radius2) / h
-    ring = widest if not reach < widest else int(math.ceil(reach))
-    z0 = max(cz - ring, 0)
-    z1 = min(cz + ring, nz - 1)
+    x0, x1, y0, y1, z0, z1 = _ball_cells(px, py, pz, radius2, dims, origin)
     queue[0] = i
     dist2[0] = 0.0
     count = 1
-    for ix in range(max(cx - ring, 0), min(cx + ring, nx - 1) + 1):
-        for iy in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
+    for ix in range(x0, x1 + 1):
+        for iy in range(y0, y1 + 1):
             base = (ix * ny + iy) * nz
             a = _first_at_least(cell_keys, base + z0)
             b = _first_at_least(cell_keys, base + z1 + 1)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .errors import LoadError
 
-__all__ = ["check_readable", "one_line"]
+__all__ = ["check_readable", "one_line", "read_with"]
 
 
 def one_line(exc: BaseException) -> str:
@@ -26,3 +26,20 @@ def check_readable(path: Path) -> None:
         raise LoadError(f"{path}: permission denied")
     if path.stat().st_size == 0:
         raise LoadError(f"{path}: file is empty")
+
+
+def read_with(reader, path: Path, kind: str):
+    """``reader(path)``, with whatever else it raises turned into one :class:`LoadError` line naming
+    ``path`` as a ``kind`` file (a LoadError of the reader's own passes as it is).
+
+    Each format's library has its own exceptions (struct, unicode, parser, index errors ...); a user
+    gets "PATH: not a readable PLY file (the library's message)" for all of them.
+    """
+    try:
+        return reader(path)
+    except LoadError:
+        raise
+    except MemoryError:
+        raise LoadError(f"{path}: not enough memory to read the file") from None
+    except Exception as exc:  # noqa: BLE001 (see above)
+        raise LoadError(f"{path}: not a readable {kind} file ({one_line(exc)})") from None

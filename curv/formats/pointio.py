@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import LoadError, MeshError
-from ..core.paths import check_readable, one_line as _one_line
+from ..core.paths import check_readable, one_line as _one_line, read_with
 from ..core.pointcloud import PointCloud
 
 __all__ = ["POINT_SUFFIXES", "read_points", "peek_points"]
@@ -352,12 +352,4 @@ def read_points(path) -> PointCloud:
     reader = _READERS.get(path.suffix.lower())
     if reader is None:
         raise LoadError(f"{path}: not a point-cloud file (use one of .ply, {', '.join(POINT_SUFFIXES)})")
-    try:
-        return reader(path)
-    except LoadError:
-        raise
-    except MemoryError:
-        raise LoadError(f"{path}: not enough memory to read the file") from None
-    except Exception as exc:  # noqa: BLE001 - each format's own exceptions become one line for the user
-        kind = path.suffix.lstrip(".").upper()
-        raise LoadError(f"{path}: not a readable {kind} file ({_one_line(exc)})") from None
+    return read_with(reader, path, path.suffix.lstrip(".").upper())
