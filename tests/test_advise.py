@@ -657,7 +657,7 @@ def test_the_selection_leaves_out_an_axis_that_only_names_the_surface():
     assert "anisotropy" not in [a[0] for a in by_surface["axes"]]
     both = select_axes(points, cols, erel, [surf, np.arange(p)])  # the score is the mean of the two
     step = both["selection"][0]["loo_mean_regret"]
-    one = [select_axes(points, cols[:3] + [], erel, g)["selection"][0]["loo_mean_regret"] for g in (surf, np.arange(p))]
+    one = [select_axes(points, cols[:3], erel, g)["selection"][0]["loo_mean_regret"] for g in (surf, np.arange(p))]
     assert step == pytest.approx(np.mean(one), abs=1e-3)
 
 
@@ -687,7 +687,7 @@ def test_fill_adds_coarse_surfaces_as_rows_measured_with_the_calibration(monkeyp
     assert out["median_erel"] == [[0.01, 0.04], [0.02, 0.03]]  # an empty cell filled, a new row
     assert out["truth"]["key"][1] == jobs[2][0] and out["metadata"]["n_meshes"] == 2  # not run: not added
     noise = calibrate_noise(0.07, table["calibration"], 0.25)
-    assert out["points"][1] == pytest.approx([0.25, noise / 0.1, calibrate_irregularity(22.0, noise, table["calibration"])],
-                                             rel=1e-3)
+    irr = calibrate_irregularity(22.0, noise, table["calibration"])
+    assert out["points"][1] == pytest.approx([0.25, noise / 0.1, irr], rel=1e-3)
     assert out["columns"] == ["density", "noise_level", "irregularity_deg"] and len(out["points"][0]) == 3
     assert out["metadata"]["fill_commands"][0] == "python -m curv.advice.table fill"

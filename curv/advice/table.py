@@ -836,7 +836,8 @@ def fill_table(table: dict, done: dict, *, command: str = "", new_keys=()) -> di
     points, truth = [list(p) for p in base], {k: list(v) for k, v in table["truth"].items()}
     new_rows = [done[_key_text(k)] for k in new_keys if _key_text(k) in done]
     extra = _append_rows(new_rows, table["calibration"], col, points, truth)
-    keep = np.all(np.isfinite(np.array(points[len(base):], float).reshape(-1, 3)), axis=1) & np.isfinite(extra).any(axis=1)
+    added = np.array(points[len(base):], float).reshape(-1, 3)
+    keep = np.all(np.isfinite(added), axis=1) & np.isfinite(extra).any(axis=1)
     for r in np.nonzero(keep)[0]:
         erel.append([_round(x, EREL_DIGITS) if np.isfinite(x) else None for x in extra[r]])
     keep_all = np.concatenate([np.ones(len(base), bool), keep])
