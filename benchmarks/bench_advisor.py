@@ -24,7 +24,8 @@ the evaluated vertices it gives a value for (the study's ``median_erel``), and e
 share on the mesh is stored (:func:`curv.advice.advisor.valid_shares`).
 
 Reported: regret = median e_rel of the advised call / the best median e_rel over the calls the
-ranking admits first (within :data:`curv.advice.advisor.VALID_SHARE_SLACK` of the best valid share)
+ranking admits first (within :data:`curv.advice.advisor.VALID_SHARE_SLACK` of the best valid share;
+errors below the table's ``erel_floor``, 1e-6, count as the floor: rounding, as in the advisor)
 (median, 90th percentile, share within 1.05), overall and for subsets (patches, closed surfaces,
 settings inside or beyond the table's grid, nearly noise-free); the advisor's mean error against
 that of every fixed choice (the best fixed choices named); the regret of a few fixed choices for
@@ -163,9 +164,13 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
     table = load_table() if table is None else table
     variants = list(runs[0]["erel"])
     E = np.array([[r["erel"][v] for v in variants] for r in runs], float)
-    E = np.where(E > 0, E, np.nan)
+    # below the table's floor an error is rounding (nc R1 and mru R4 on a noise-free sphere: 1e-14 and
+    # 4e-16), and every such call is as good as the others: the advisor says so, the regret too
+    floor = table["kernel"].get("erel_floor", 0.0)
+    E = np.where(E > 0, np.maximum(E, floor), np.nan)
     best = np.nanmin(np.where(admissible(runs, variants), E, np.nan), axis=1)
     adv = np.array([r["erel"].get(r["advised"], np.nan) for r in runs], float)
+    adv = np.where(adv > 0, np.maximum(adv, floor), np.nan)
     regret = adv / best
     fixed_mean = {v: float(np.nanmean(E[:, j])) for j, v in enumerate(variants) if np.isfinite(E[:, j]).all()}
     ranked_fixed = sorted(fixed_mean, key=fixed_mean.get)
@@ -251,7 +256,7 @@ def readvise(runs: list[dict], table: dict) -> list[dict]:
         noise = calibrate_noise(r["raw"]["noise_raw"], cal, r["raw"]["density"])
         feats = MeshFeatures(irregularity_deg=calibrate_irregularity(r["raw"]["irregularity_raw_deg"], noise, cal),
                              noise=noise, density=r["raw"]["density"], border_share=r["raw"]["border_share"],
-                             polygon_kinds={3: 1},
+                             polygon_kinds={3: 1}, noise_raw=r["raw"]["noise_raw"],
                              **{k: r["raw"].get(k, float("nan")) for k in SHAPE_MEASURES})
         pred = predict(table, feats)
         ok = [v for v in candidates(table, feats) if np.isfinite(pred[v])]

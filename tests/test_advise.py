@@ -338,11 +338,15 @@ def test_the_packaged_table_is_what_the_documented_commands_write():
     assert ext[:4] == ["python", "-m", "curv.advice.table", "extend"] and set(ext[4::2]) <= {"--base", "--work",
                                                                                              "--workers", "--out"}
     assert "python -m curv.advice.table extend --base base.json" in doc
-    jobs = at.extension_jobs(table)
     n_base = at.table_settings().n_tasks + len(at.DEFAULT_CLOSED) * len(at.DEFAULT_CLOSED_VERTICES) * len(
         at.DEFAULT_NOISE) * at.DEFAULT_SAMPLES
-    n_new = sum(1 for key, _ in jobs if key[2] in at.COARSE_DENSITIES + at.COARSE_CLOSED_VERTICES)
-    assert meta["n_meshes"] == len(table["points"]) == n_base + n_new
+    fill = meta["fill_commands"][-1].split()
+    assert fill[:4] == ["python", "-m", "curv.advice.table", "fill"] and "--coarse-samples" in fill
+    samples = int(fill[fill.index("--coarse-samples") + 1])
+    n_coarse = len(at.coarse_jobs({**table, "truth": {"key": []}}, samples))  # every coarse mesh of those samples
+    assert n_coarse == samples * 315
+    assert meta["n_meshes"] == len(table["points"]) == n_base + n_coarse
+    assert f"--coarse-samples {samples}" in doc
     assert table["variants"] == [v.id for v in at.table_settings().variants()] + at.option_variants()
 
 
@@ -355,7 +359,7 @@ def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
     hexagon = {k[2] for k in table["truth"]["key"] if k[1] in ("quadratic", "ellipsoid_patch", "trigonometric")}
     assert {217, 331, 469, 817, 3169, 12481} <= hexagon and len(hexagon) >= 8
     assert min(k[2] for k in table["truth"]["key"]) == 162
-    assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 1_200_000
+    assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 1_400_000
     values = np.array(table["median_erel"], float)
     n_options = len(curv.advice.table.option_variants())
     assert np.isfinite(values[:, :-n_options]).mean() > 0.99 and np.nanmin(values) > 0
@@ -619,3 +623,71 @@ def test_the_packaged_table_has_the_selected_axes_and_the_floor():
         cmd = table["metadata"][f"{step}_command"].split()
         assert cmd[:4] == ["python", "-m", "curv.advice.table", step]
         assert f"python -m curv.advice.table {step}" in doc
+
+
+def test_surface_groups_hold_one_random_surface_at_every_setting():
+    from curv.advice.table import noise_groups, surface_groups
+
+    keys = [[0, "quadratic", 817, 0.0, 0.0, 0], [0, "quadratic", 3169, 16.0, 0.6, 0],
+            [0, "quadratic", 817, 0.0, 0.0, 1], [0, "trigonometric", 817, 0.0, 0.0, 0],
+            [0, "torus", 642, 0.0, 0.2, 2], [0, "torus", 162, 0.0, 1.0, 2]]
+    g = surface_groups(keys)
+    assert g[0] == g[1] and g[4] == g[5] and len(set(g[[0, 2, 3, 4]])) == 4
+    n = noise_groups(keys)
+    assert n[0] != n[1]  # by noise level only, the same surface at another density is another group
+
+
+def test_the_selection_leaves_out_an_axis_that_only_names_the_surface():
+    """An axis that tells the surfaces apart wins a leave-one-out that keeps the same surface's other
+    settings as neighbours, but cannot help a new surface: left out by surface, it is not taken."""
+    from curv.advice.table import select_axes
+
+    rng = np.random.default_rng(1)
+    surfaces, per = 24, 12
+    surf = np.repeat(np.arange(surfaces), per)
+    p = surf.size
+    name = rng.random(surfaces)[surf]  # a per-surface constant, no relation to which variant wins
+    wins = rng.random(surfaces)[surf] < 0.5  # which variant wins: a property of the surface only
+    points = np.c_[np.exp(rng.uniform(-4, -1, p)), rng.uniform(0, 1, p), rng.uniform(0, 30, p), name]
+    erel = np.where(wins[:, None], [0.01, 0.05], [0.05, 0.01]) * np.exp(rng.normal(0, 0.1, (p, 2)))
+    cols = ["density", "noise_level", "irregularity_deg", "anisotropy"]
+    by_mesh = select_axes(points, cols, erel, np.arange(p))
+    by_surface = select_axes(points, cols, erel, surf)
+    assert "anisotropy" in [a[0] for a in by_mesh["axes"]]
+    assert "anisotropy" not in [a[0] for a in by_surface["axes"]]
+    both = select_axes(points, cols, erel, [surf, np.arange(p)])  # the score is the mean of the two
+    step = both["selection"][0]["loo_mean_regret"]
+    one = [select_axes(points, cols[:3], erel, g)["selection"][0]["loo_mean_regret"] for g in (surf, np.arange(p))]
+    assert step == pytest.approx(np.mean(one), abs=1e-3)
+
+
+def test_fill_adds_coarse_surfaces_as_rows_measured_with_the_calibration(monkeypatch):
+    import curv.advice.table as at
+    from curv.advice.advisor import calibrate_irregularity, calibrate_noise
+
+    table = {"variants": ["nc:R1", "qs:R1"], "calibration": {"noise_floor": 0.0, "noise_gain": 1.2,
+                                                              "noise_density4": 0.01, "irregularity_noise_deg": 10.0},
+             "metadata": {"settings": {"functions": ["quadratic"], "irregularity": [0.0], "noise": [0.0, 0.5]},
+                          "fill_command": "python -m curv.advice.table fill"},
+             "truth": {"key": [[0, "quadratic", 217, 0.0, 0.0, 0]], "noise_true": [0.0],
+                       "irregularity_planar": [0.0], "density_true": [0.2], "n_evaluated": [40]},
+             "points": [[0.2, 0.0, 20.0, 0.1]], "columns": ["density", "noise_level", "irregularity_deg", "edge_cv"],
+             "median_erel": [[0.01, None]]}
+    monkeypatch.setattr(at, "COARSE_DENSITIES", (217,))
+    monkeypatch.setattr(at, "COARSE_CLOSED_VERTICES", ())
+    jobs = at.coarse_jobs(table, 2)
+    assert [j[0] for j in jobs] == [[0, "quadratic", 217, 0.0, 0.5, 0], [0, "quadratic", 217, 0.0, 0.0, 1],
+                                    [0, "quadratic", 217, 0.0, 0.5, 1]]  # the ones the table lacks
+    row = {"key": jobs[2][0], "noise_true": 0.05, "irregularity_planar": 0.0, "density_true": 0.3,
+           "noise_raw": 0.07, "irregularity_raw": 22.0, "density": 0.25, "n_evaluated": 35}
+    done = {at._key_text(jobs[2][0]): [row, {"nc:R1": 0.02, "qs:R1": 0.03}],
+            at._key_text(table["truth"]["key"][0]): [{}, {"qs:R1": 0.04}]}
+    out = at.fill_table(table, done, command="python -m curv.advice.table fill --coarse-samples 2",
+                        new_keys=[j[0] for j in jobs])
+    assert out["median_erel"] == [[0.01, 0.04], [0.02, 0.03]]  # an empty cell filled, a new row
+    assert out["truth"]["key"][1] == jobs[2][0] and out["metadata"]["n_meshes"] == 2  # not run: not added
+    noise = calibrate_noise(0.07, table["calibration"], 0.25)
+    irr = calibrate_irregularity(22.0, noise, table["calibration"])
+    assert out["points"][1] == pytest.approx([0.25, noise / 0.1, irr], rel=1e-3)
+    assert out["columns"] == ["density", "noise_level", "irregularity_deg"] and len(out["points"][0]) == 3
+    assert out["metadata"]["fill_commands"][0] == "python -m curv.advice.table fill"

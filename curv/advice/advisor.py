@@ -99,7 +99,9 @@ class MeshFeatures:
     mean_edge : float
         Mean edge length in mesh units.
     noise_raw : float
-        The uncalibrated noise measure (``raw`` above).
+        The uncalibrated noise measure (``raw`` above). The table's kernel may use its logarithm as
+        an axis: it keeps what the calibration clips to zero (a coarse mesh's noise swallowed by the
+        density term, a hundredth of the paper's level on a dense mesh).
     irregularity_raw_deg : float
         The uncorrected RMS angle deviation.
     edge_cv : float
@@ -117,9 +119,9 @@ class MeshFeatures:
     hyperbolic_share : float
         Share of the same vertices with ``k1 k2 < 0`` (saddle-shaped).
 
-    The last five are shape and tessellation measures the table's kernel may use as further axes
-    (which, and how wide, is chosen when the table is built: ``kernel["axes"]``); the open/closed
-    distinction is :attr:`border_share`.
+    The last five, :attr:`noise_raw` and :attr:`border_share` are measures the table's kernel may
+    use as further axes (which, and how wide, is chosen when the table is built:
+    ``kernel["axes"]``); the open/closed distinction is :attr:`border_share`.
     """
 
     irregularity_deg: float

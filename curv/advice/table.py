@@ -41,19 +41,24 @@ each::
     python -m curv.advice.table extend --base base.json --work /tmp/advisor-ext --workers 2
 
 Then the option candidates are run on the closed surfaces of the other two samples too (the closed
-surfaces are few beside the patches; their option columns were empty there), and every mesh is
-measured again for the shape and tessellation columns (:data:`EXTRA_COLUMNS`: border share, edge
-length spread, valence spread, anisotropy, curvature spread, saddle share; the meshes are rebuilt
-from their keys, only the measuring fit runs), which a forward selection by grouped leave-one-out
-regret turns into further kernel axes (:func:`select_axes`)::
+surfaces are few beside the patches; their option columns were empty there), two more random
+surfaces of every coarse setting are added as rows (every candidate: the best call changes fastest
+with the surface on coarse meshes), and every mesh is measured again for the shape, tessellation
+and raw noise columns (:data:`EXTRA_COLUMNS`: border share, edge length spread, valence spread,
+anisotropy, curvature spread, saddle share, uncalibrated noise measure; the meshes are rebuilt from
+their keys, only the measuring fit runs), which a forward selection by grouped leave-one-out regret
+turns into further kernel axes (:func:`select_axes`)::
 
     python -m curv.advice.table fill --table extended.json --out filled.json --work /tmp/advisor-fill --workers 2
-    python -m curv.advice.table refeature --table filled.json --work /tmp/advisor-refeature --workers 1
+    python -m curv.advice.table fill --table filled.json --out coarse.json --kinds --coarse-samples 3 --work /tmp/advisor-coarse --workers 2
+    python -m curv.advice.table refeature --table coarse.json --work /tmp/advisor-refeature --workers 1
 
 (``base.json``: the base table the first command writes, ``--out base.json``; ``extended.json``
 the second's ``--out``). The fill ran 150 meshes (5036 estimates) in 151 s wall with 2 workers,
-the refeature measured the 1764 meshes in 192 s wall (102 CPU-s) with 1 worker and chose the axes
-in about 2 minutes more (a rerun over the same ``--work`` only chooses). The coarse rows are
+the coarse fill 630 meshes (42,840 estimates) in about 2 minutes wall with 2 workers, the refeature
+measures every mesh (1764 of them took 192 s wall, 102 CPU-s, with 1 worker) and chose the axes in
+about 7 minutes more on the loaded machine (two leave-one-outs per trial; a rerun over the same
+``--work`` only chooses). The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
@@ -77,7 +82,8 @@ from ..variants import NOISE_FRACTION
 __all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "random_closed_params", "closed_mesh_point",
            "measure_rows", "fit_calibration", "table_points", "choose_bandwidth", "fit_kernel", "make_table",
            "build_table", "main", "table_mesh", "fill_jobs", "fill_table", "feature_row", "noise_groups",
-           "select_axes", "refeature_table", "loo_regret", "EXTRA_COLUMNS", "EREL_FLOOR"]
+           "select_axes", "refeature_table", "loo_regret", "EXTRA_COLUMNS", "EREL_FLOOR", "surface_groups",
+           "coarse_jobs"]
 
 DEFAULT_OUT = Path(__file__).parents[1] / "data" / "advisor_table.json"
 BANDWIDTHS = (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
@@ -693,18 +699,7 @@ def extend_table(base: dict, done: dict, *, command: str = "", jobs=None) -> dic
         for vid, x in values.items():
             if vid in col and x is not None and np.isfinite(x) and x > 0:
                 erel[i, col[vid]] = x
-    extra = np.full((len(new_rows), len(variants)), np.nan)
-    for r, (row, values) in enumerate(new_rows):
-        noise = calibrate_noise(row["noise_raw"], cal, row["density"])
-        points.append([row["density"], noise / NOISE_FRACTION,
-                       calibrate_irregularity(row["irregularity_raw"], noise, cal)])
-        for name, value in (("key", row["key"]), ("noise_true", row["noise_true"]),
-                            ("irregularity_planar", row["irregularity_planar"]),
-                            ("density_true", row["density_true"]), ("n_evaluated", row["n_evaluated"])):
-            truth[name].append(value)
-        for vid, x in values.items():
-            if vid in col and x is not None and np.isfinite(x) and x > 0:
-                extra[r, col[vid]] = x
+    extra = _append_rows(new_rows, cal, col, points, truth)
     erel = np.concatenate([erel, extra])
     pts = np.array(points, float)
     keep = np.all(np.isfinite(pts), axis=1) & np.isfinite(erel).any(axis=1)
@@ -721,6 +716,27 @@ def extend_table(base: dict, done: dict, *, command: str = "", jobs=None) -> dic
             "points": [[_round(x, POINT_DIGITS) for x in p] for p in pts],
             "truth": {k: [(_round(x, 4) if isinstance(x, float) else x) for x in vals] for k, vals in truth.items()},
             "median_erel": [[_round(x, EREL_DIGITS) for x in row] for row in erel]}
+
+
+def _append_rows(new_rows, cal: dict, col: dict, points: list, truth: dict) -> np.ndarray:
+    """Append new meshes (:func:`candidate_point`'s ``(row, errors)``) to ``points`` (the three base
+    columns, measured with the calibration ``cal``) and ``truth``; return their (r, v) median e_rel
+    in the columns ``col`` (variant id -> column), NaN where missing."""
+    from .advisor import calibrate_irregularity, calibrate_noise
+
+    extra = np.full((len(new_rows), len(col)), np.nan)
+    for r, (row, values) in enumerate(new_rows):
+        noise = calibrate_noise(row["noise_raw"], cal, row["density"])
+        points.append([row["density"], noise / NOISE_FRACTION,
+                       calibrate_irregularity(row["irregularity_raw"], noise, cal)])
+        for name, value in (("key", row["key"]), ("noise_true", row["noise_true"]),
+                            ("irregularity_planar", row["irregularity_planar"]),
+                            ("density_true", row["density_true"]), ("n_evaluated", row["n_evaluated"])):
+            truth[name].append(value)
+        for vid, x in values.items():
+            if vid in col and x is not None and np.isfinite(x) and x > 0:
+                extra[r, col[vid]] = x
+    return extra
 
 
 def extend_main(argv) -> int:
@@ -776,10 +792,35 @@ def fill_jobs(table: dict, *, kinds=DEFAULT_CLOSED) -> list[tuple]:
     return jobs
 
 
-def fill_table(table: dict, done: dict, *, command: str = "") -> dict:
-    """``table`` with the values of ``done`` (:func:`run_extension`'s results) in its empty cells;
-    points, calibration and kernel unchanged (refit with ``refeature``)."""
-    col = {v: j for j, v in enumerate(table["variants"])}
+def coarse_jobs(table: dict, samples: int) -> list[tuple]:
+    """Jobs (:func:`candidate_point`, every variant of ``table``) for the coarse meshes
+    (:data:`COARSE_DENSITIES` patches, :data:`COARSE_CLOSED_VERTICES` closed surfaces) of the samples
+    below ``samples`` that ``table`` does not hold yet: more random surfaces per coarse setting, where
+    the best call changes fastest with the surface."""
+    settings = table["metadata"]["settings"]
+    have = {_key_text(k) for k in table["truth"]["key"]}
+    every = tuple(table["variants"])
+    jobs = []
+    for s in range(samples):
+        for fn in settings["functions"]:
+            for d in COARSE_DENSITIES:
+                for irr in settings["irregularity"]:
+                    for lv in settings["noise"]:
+                        jobs.append(([0, fn, d, float(irr), float(lv), s], every))
+        for nm in DEFAULT_CLOSED:
+            for n in COARSE_CLOSED_VERTICES:
+                for lv in settings["noise"]:
+                    jobs.append(([0, nm, n, 0.0, float(lv), s], every))
+    return [j for j in jobs if _key_text(j[0]) not in have]
+
+
+def fill_table(table: dict, done: dict, *, command: str = "", new_keys=()) -> dict:
+    """``table`` with the values of ``done`` (:func:`run_extension`'s results) in its empty cells and
+    the meshes of ``new_keys`` (keys of ``done`` the table does not hold, :func:`coarse_jobs`) as new
+    rows (their base columns measured with the table's calibration); calibration and kernel unchanged
+    (refit with ``refeature``)."""
+    variants = table["variants"]
+    col = {v: j for j, v in enumerate(variants)}
     erel = [list(row) for row in table["median_erel"]]
     filled = 0
     for i, key in enumerate(table["truth"]["key"]):
@@ -791,9 +832,26 @@ def fill_table(table: dict, done: dict, *, command: str = "") -> dict:
             if j is not None and erel[i][j] is None and x is not None and np.isfinite(x) and x > 0:
                 erel[i][j] = _round(x, EREL_DIGITS)
                 filled += 1
+    base = [p[:3] for p in table["points"]]  # the extra columns are measured by refeature
+    points, truth = [list(p) for p in base], {k: list(v) for k, v in table["truth"].items()}
+    new_rows = [done[_key_text(k)] for k in new_keys if _key_text(k) in done]
+    extra = _append_rows(new_rows, table["calibration"], col, points, truth)
+    added = np.array(points[len(base):], float).reshape(-1, 3)
+    keep = np.all(np.isfinite(added), axis=1) & np.isfinite(extra).any(axis=1)
+    for r in np.nonzero(keep)[0]:
+        erel.append([_round(x, EREL_DIGITS) if np.isfinite(x) else None for x in extra[r]])
+    keep_all = np.concatenate([np.ones(len(base), bool), keep])
+    points = [[_round(x, POINT_DIGITS) for x in p] for p, ok in zip(points, keep_all) if ok]
+    truth = {k: [(_round(x, 4) if isinstance(x, float) else x) for x, ok in zip(vals, keep_all) if ok]
+             for k, vals in truth.items()}
     meta = dict(table["metadata"])
-    meta.update(fill_command=command, filled_cells=filled)
-    return {**table, "median_erel": erel, "metadata": meta}
+    meta.update(fill_command=command, filled_cells=filled, n_meshes=len(points), added_meshes=int(keep.sum()),
+                fill_commands=[*meta.get("fill_commands", [meta["fill_command"]] if "fill_command" in meta else []),
+                               command])
+    out = {**table, "median_erel": erel, "metadata": meta, "points": points, "truth": truth}
+    if new_rows:  # the extra columns of the old rows no longer match the new rows: refeature measures them
+        out["columns"] = ["density", "noise_level", "irregularity_deg"]
+    return out
 
 
 def fill_main(argv) -> int:
@@ -804,17 +862,22 @@ def fill_main(argv) -> int:
     parser.add_argument("--out", default=str(DEFAULT_OUT))
     parser.add_argument("--work", default="advisor-fill", help="keeps the computed meshes (resumes)")
     parser.add_argument("--workers", type=int, default=None)
-    parser.add_argument("--kinds", nargs="+", default=list(DEFAULT_CLOSED))
+    parser.add_argument("--kinds", nargs="*", default=list(DEFAULT_CLOSED),
+                        help="kinds of mesh whose empty cells are run (none: only --coarse-samples)")
+    parser.add_argument("--coarse-samples", type=int, default=1,
+                        help="random surfaces per coarse setting: the missing ones are added as new rows")
     parser.add_argument("--dry-run", action="store_true", help="count the jobs and stop")
     args = parser.parse_args(argv)
     with open(args.table) as fh:
         table = json.load(fh)
-    jobs = fill_jobs(table, kinds=tuple(args.kinds))
+    new = coarse_jobs(table, args.coarse_samples)
+    jobs = fill_jobs(table, kinds=tuple(args.kinds)) + new
     if args.dry_run:
         print(f"{len(jobs)} jobs, {sum(len(j[1]) for j in jobs)} estimates")
         return 0
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
-    out = fill_table(table, done, command="python -m curv.advice.table fill " + " ".join(argv))
+    out = fill_table(table, done, command="python -m curv.advice.table fill " + " ".join(argv),
+                     new_keys=[j[0] for j in new])
     with open(args.out, "w") as fh:
         json.dump(out, fh, separators=(",", ":"))
     print(f"wrote {args.out}: {out['metadata']['filled_cells']} cells filled", flush=True)
@@ -822,13 +885,18 @@ def fill_main(argv) -> int:
 
 
 # ---------------------------------------------------------------------------- further axes: shape and tessellation
-EXTRA_COLUMNS = ("border_share", "edge_cv", "valence_sd", "anisotropy", "curvature_spread", "hyperbolic_share")
-"""Point columns beyond the base three: the open/closed distinction and the shape and tessellation
-measures of :class:`curv.advice.advisor.MeshFeatures`, candidates for further kernel axes."""
-EXTRA_TRANSFORMS = {"border_share": "sqrt"}
+EXTRA_COLUMNS = ("border_share", "edge_cv", "valence_sd", "anisotropy", "curvature_spread", "hyperbolic_share",
+                 "noise_raw")
+"""Point columns beyond the base three: the open/closed distinction, the shape and tessellation
+measures of :class:`curv.advice.advisor.MeshFeatures` and the uncalibrated noise measure,
+candidates for further kernel axes."""
+EXTRA_TRANSFORMS = {"border_share": "sqrt", "noise_raw": "log"}
 """Axis transforms of the extra columns (default linear): a border share spans 0 (closed) to a
 fifth (the coarsest patch), and its square root separates the small shares of dense patches from
-a closed surface."""
+a closed surface; the raw noise measure spans five decades (a noise-free dense patch's quadric
+misses its neighbours by a few millionths of an edge, a noisy coarse one by a tenth), and its
+logarithm keeps what the calibrated noise level clips to zero: a thousandth of the paper's level
+on a dense mesh, or the noise a coarse mesh's density term swallows."""
 AXIS_WEIGHTS = (0.5, 1.0, 2.0)
 """Weights tried for an extra axis (its scale is its standard deviation over the table divided by
 the weight: 2 makes it count twice as much as a base axis)."""
@@ -853,6 +921,17 @@ def feature_row(key) -> dict:
     return {"key": list(key), **raw}
 
 
+def surface_groups(keys) -> np.ndarray:
+    """(p,) int64: one group per random surface (a key's seed, function or closed shape, and sample:
+    the same surface at every density, irregularity and noise level), so that the selection's
+    leave-one-out advises a mesh only from other surfaces, as a user's mesh is. Left out by noise
+    level only (:func:`noise_groups`), the same surface at a neighbouring density or irregularity
+    still stood next to it, and an axis that names the surface (its anisotropy: each Monge function
+    has its own) won the selection and lost on new surfaces."""
+    index: dict = {}
+    return np.array([index.setdefault(_key_text([k[0], k[1], k[5]]), len(index)) for k in keys], np.int64)
+
+
 def noise_groups(keys) -> np.ndarray:
     """(p,) int64: one group per table surface (its key without the noise level), so that a mesh is
     left out with its twins at the other noise levels."""
@@ -860,9 +939,17 @@ def noise_groups(keys) -> np.ndarray:
     return np.array([index.setdefault(_key_text(list(k[:4]) + list(k[5:])), len(index)) for k in keys], np.int64)
 
 
-def select_axes(points: np.ndarray, columns, erel: np.ndarray, groups, *, progress=None) -> dict:
+def select_axes(points: np.ndarray, columns, erel: np.ndarray, groups, *, progress=None,
+                note: str = "grouped leave-one-out") -> dict:
     """The kernel: the base axes of :func:`fit_kernel`'s noise transform and, by forward selection,
     the extra columns that lower the grouped leave-one-out mean regret by more than :data:`MIN_GAIN`.
+
+    With several groupings the score is the mean of their leave-one-out mean regrets: the shipped
+    table is scored left out by surface (:func:`surface_groups`: how a new surface is advised) and by
+    noise level (:func:`noise_groups`: how a known surface is advised between the grid's settings),
+    so an axis must pay on both; each alone misled the selection on the development meshes (by
+    surface only it could not see that the curvature spread places a mesh between settings, by noise
+    level only it took an axis that names the surface).
 
     Parameters
     ----------
@@ -871,16 +958,19 @@ def select_axes(points: np.ndarray, columns, erel: np.ndarray, groups, *, progre
     columns : sequence of str
     erel : (p, v) float64
         Median e_rel (NaN where missing).
-    groups : (p,) array_like
-        :func:`noise_groups`.
+    groups : (p,) array_like, or a sequence of them
+        Meshes left out together (:func:`surface_groups`, :func:`noise_groups`); several: one
+        leave-one-out per grouping, scored by the mean.
     progress : callable, optional
+    note : str
+        What the groupings are (stored as ``loo_note``).
 
     Returns
     -------
     dict
         ``axes`` (``[column, transform, scale]``), ``bandwidth``, ``loo_mean_regret`` (per
-        bandwidth of the chosen axes, grouped), ``loo_p90_regret``, ``selection`` (each step:
-        the axes added and the score) and ``loo_note``.
+        bandwidth of the chosen axes, the score), ``loo_p90_regret`` (per bandwidth and grouping),
+        ``selection`` (each step: the axes added and the score) and ``loo_note``.
     """
     from .advisor import table_coordinates
 
@@ -894,11 +984,14 @@ def select_axes(points: np.ndarray, columns, erel: np.ndarray, groups, *, progre
         sd = float(np.std(x))
         return [col, how, (sd if sd > 0 else 1.0) / weight]
 
+    groupings = [np.asarray(groups)] if np.ndim(groups[0]) == 0 else [np.asarray(g) for g in groups]
+
     def score(axes):
         coords = table_coordinates({"kernel": {"axes": axes}, "columns": columns}, *points.T)
-        per = {h: loo_regret(coords, log_values, h, groups) for h in SELECTION_BANDWIDTHS}
-        h = min(per, key=lambda b: per[b].mean())
-        return float(per[h].mean()), h, per
+        per = {h: [loo_regret(coords, log_values, h, g) for g in groupings] for h in SELECTION_BANDWIDTHS}
+        mean = {h: float(np.mean([r.mean() for r in rs])) for h, rs in per.items()}
+        h = min(mean, key=mean.get)
+        return mean[h], h, per
 
     best_axes, best = None, None
     for noise_axis in NOISE_AXES:
@@ -928,10 +1021,11 @@ def select_axes(points: np.ndarray, columns, erel: np.ndarray, groups, *, progre
                       "bandwidth": sc[1]})
     _, h, per = best
     return {"axes": best_axes, "bandwidth": h, "erel_floor": EREL_FLOOR,
-            "loo_mean_regret": {str(b): round(float(r.mean()), 4) for b, r in per.items()},
-            "loo_p90_regret": {str(b): round(float(np.percentile(r, 90)), 4) for b, r in per.items()},
+            "loo_mean_regret": {str(b): round(float(np.mean([r.mean() for r in rs])), 4) for b, rs in per.items()},
+            "loo_mean_regret_per_grouping": {str(b): [round(float(r.mean()), 4) for r in rs] for b, rs in per.items()},
+            "loo_p90_regret": {str(b): [round(float(np.percentile(r, 90)), 4) for r in rs] for b, rs in per.items()},
             "selection": steps,
-            "loo_note": "grouped: each mesh advised from the others, its twins at the other noise levels left out"}
+            "loo_note": note}
 
 
 def refeature_table(table: dict, rows: dict, *, command: str = "", progress=None) -> dict:
@@ -951,7 +1045,10 @@ def refeature_table(table: dict, rows: dict, *, command: str = "", progress=None
                     *(r[c] for c in EXTRA_COLUMNS)])
     pts = np.array(pts, float)
     erel = np.array(table["median_erel"], float)
-    kernel = select_axes(pts, columns, erel, noise_groups(keys), progress=progress)
+    kernel = select_axes(pts, columns, erel, [surface_groups(keys), noise_groups(keys)], progress=progress,
+                         note="the mean of two grouped leave-one-outs: each mesh advised from the other surfaces "
+                              "(its random surface at every density, irregularity and noise level left out), and "
+                              "from all but its twins at the other noise levels")
     meta = dict(table["metadata"])
     meta.update(refeature_command=command, created=time.strftime("%Y-%m-%d %H:%M:%S %Z"))
     return {**table, "kernel": kernel, "metadata": meta, "columns": columns,
