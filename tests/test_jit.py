@@ -49,3 +49,21 @@ def test_progress_is_a_float_with_a_message():
     assert p == 0.25 and isinstance(p, float) and "first run only" in p.message
     assert J.Progress(0.5).message == ""
     assert np.isclose(float(p) + 0.25, 0.5)
+
+
+def test_each_state_of_the_sources_has_its_own_kernel_cache(tmp_path):
+    """A kernel's cache entry knows only its own file: a changed helper in another module must not
+    let it load old machine code, so the cache folder follows every source file's contents."""
+    from pathlib import Path
+
+    package = tmp_path / "pkg"
+    (package / "sub").mkdir(parents=True)
+    (package / "kernel.py").write_text("from .sub.helper import h\n")
+    (package / "sub" / "helper.py").write_text("def h(x):\n    return x\n")
+    before = J.source_fingerprint(package)
+    assert J.source_fingerprint(package) == before
+    (package / "sub" / "helper.py").write_text("def h(x):\n    return 2 * x\n")  # the helper alone
+    assert J.source_fingerprint(package) != before
+    curv_sources = Path(J.__file__).resolve().parents[1]
+    if not J.os.environ.get("NUMBA_CACHE_DIR"):
+        assert Path(J.numba.config.CACHE_DIR).name == f"numba-{J.source_fingerprint(curv_sources)}"

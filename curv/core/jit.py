@@ -13,12 +13,15 @@ Every hot loop in curv is a numba kernel compiled with :data:`jit` (serial) or :
 - **Progress and cancel.** :func:`iter_chunks` cuts the vertices into chunks whose size adapts so
   that each kernel call lasts about :data:`TARGET_SECONDS`; it yields between chunks, which is
   where a caller may stop.
-- **Compilation.** Kernels are cached on disk (``cache=True``); :func:`compile_pending` tells whether
-  a first call will compile, so the CLI and the viewer can say so.
+- **Compilation.** Kernels are cached on disk (``cache=True``), in a folder of their own for each
+  state of curv's sources (:func:`source_fingerprint`: numba would otherwise keep a kernel's old
+  machine code when only a helper it calls from another module changed); :func:`compile_pending`
+  tells whether a first call will compile, so the CLI and the viewer can say so.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import tempfile
 import threading
@@ -31,7 +34,7 @@ from numba import njit
 
 __all__ = [
     "jit", "jit_parallel", "prange", "threads", "launch", "iter_chunks", "thread_slices",
-    "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
+    "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK", "source_fingerprint",
 ]
 
 # must be chosen before the first parallel launch of the process
@@ -46,24 +49,57 @@ def _writable(folder: Path) -> bool:
     return os.access(folder, os.W_OK | os.X_OK)
 
 
-def _choose_cache_dir() -> None:
-    """Give numba a cache folder it can write, so that no install layout breaks ``import curv``.
+def source_fingerprint(package: Path) -> str:
+    """A short hash of the contents of every ``.py`` file below ``package`` (16 hex digits).
 
-    numba caches next to the sources (``__pycache__``) or in the user's cache folder, and raises
-    at decoration time when it can write neither (a read-only install run by a user without a
-    home, as in a service or a test run as ``nobody``). Then use a per-user folder in the system's
-    temporary directory. ``NUMBA_CACHE_DIR`` set by the user always wins.
+    numba's cache knows a kernel by its own file only, not by the helpers of other modules it
+    compiled in: after an edit (or a ``git pull``) that changed a helper and not the kernel's file,
+    the kernel would load its old machine code from the cache. Each state of curv's sources
+    therefore gets its own cache folder (:func:`_choose_cache_dir`).
+    """
+    digest = hashlib.blake2b(digest_size=8)
+    for path in sorted(package.rglob("*.py")):
+        digest.update(str(path.relative_to(package)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def _prune_other_states(folder: Path, *, keep_days: float = 1.0) -> None:
+    """Delete the cache folders of other source states beside ``folder`` unused for ``keep_days``."""
+    import shutil
+
+    now = time.time()
+    for other in folder.parent.glob("numba-*"):
+        try:
+            if other != folder and now - other.stat().st_mtime > keep_days * 86400:
+                shutil.rmtree(other, ignore_errors=True)
+        except OSError:
+            pass
+
+
+def _choose_cache_dir() -> None:
+    """Give numba a cache folder it can write and that belongs to this state of curv's sources.
+
+    The folder is ``numba-<source_fingerprint>`` in curv's own ``__pycache__``, else in the user's
+    cache folder, else in a per-user folder of the system's temporary directory (a read-only
+    install run by a user without a home, as in a service or a test run as ``nobody``: numba
+    raises at decoration time when it can write nowhere). Folders of earlier source states unused
+    for a day are deleted. ``NUMBA_CACHE_DIR`` set by the user always wins.
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return
     package = Path(__file__).resolve().parents[1]  # curv/
-    in_tree = package / "__pycache__"
-    if _writable(in_tree) and _writable(package / "estimators" / "__pycache__"):
-        return
+    state = f"numba-{source_fingerprint(package)}"
     home_cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "curvlab-numba"
-    for folder in (home_cache, Path(tempfile.gettempdir()) / f"curvlab-numba-{os.getuid()}"):
+    for base in (package / "__pycache__", home_cache, Path(tempfile.gettempdir()) / f"curvlab-numba-{os.getuid()}"):
+        folder = base / state
         if _writable(folder):
             numba.config.CACHE_DIR = str(folder)
+            try:
+                os.utime(folder)  # in use: not pruned by another state's process
+            except OSError:
+                pass
+            _prune_other_states(folder)
             return
 
 
