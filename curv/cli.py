@@ -312,6 +312,7 @@ def _cmd_advise(args) -> int:
     print(f"  noise        {f.noise:.4f} mean edges ({f.noise_level:.2f} of the paper's level)")
     print(f"  irregularity {f.irregularity_deg:.1f} degrees RMS from 60")
     print(f"  density      {f.density:.4f} (mean edge x median |k1|+|k2|)")
+    print(f"  spreads      valence {f.valence_sd:.2f} (sd), curvature {f.curvature_spread:.2f} (IQR of log |k1|+|k2|)")
     print(f"advice: {adv.why}")
     print(f"  call: {adv.call}")
     print(f"  or:   curv estimate {args.input} {cli_arguments(adv.kwargs)}")

@@ -4,7 +4,7 @@ Qt widgets subscribe to the :class:`~app.model.events.Event` attributes and push
 through the model's setters, as in napari's layer/_qt split.
 """
 
-from .advice import AdviceRecord, feature_rows, ranking_rows
+from .advice import FEATURE_LABELS, AdviceRecord, feature_rows, ranking_rows
 from .colors import Colormap, LimitMode, colormap, colormap_names, compute_limits, format_limit, map_colours
 from .display import Display, Layer
 from .document import Document, MeshChange, Pane, default_panes, pane_letter
@@ -17,7 +17,7 @@ from .sources import FileSource, SurfaceSource
 from .text import count_text
 
 __all__ = [
-    "AdviceRecord", "feature_rows", "ranking_rows",
+    "AdviceRecord", "FEATURE_LABELS", "feature_rows", "ranking_rows",
     "Colormap", "LimitMode", "colormap", "colormap_names", "compute_limits", "format_limit", "map_colours",
     "Document", "MeshChange", "Pane", "default_panes", "pane_letter", "Display", "Layer", "Event", "ExportPayload",
     "export_payload", "Quantity", "readout_columns", "readout_rows", "relative_error", "FileSource",

@@ -95,6 +95,11 @@ def polygon_text(kinds: dict) -> str:
     return ", ".join(parts) or "no faces"
 
 
+FEATURE_LABELS = ("Irregularity", "Noise", "Density", "Valence spread", "Curvature spread", "Border", "Polygons",
+                  "Vertices")
+"""The rows of :func:`feature_rows`, in order (the Advice panel lays its form out from them)."""
+
+
 def feature_rows(features) -> list[FeatureRow]:
     """The measured features of a :class:`curv.advice.advisor.MeshFeatures`, in the order a person reads them.
 
@@ -105,7 +110,7 @@ def feature_rows(features) -> list[FeatureRow]:
     Returns
     -------
     list of FeatureRow
-        Irregularity, noise, density, border, polygons, vertices.
+        Irregularity, noise, density, valence spread, curvature spread, border, polygons, vertices.
     """
     from curv.advice.advisor import FIT_METHOD, FIT_RANGE
     from curv.estimators import ESTIMATORS
@@ -127,6 +132,13 @@ def feature_rows(features) -> list[FeatureRow]:
                    "Dimensionless resolution: the mean edge length times the median of |k1| + |k2| of a local "
                    f"quadratic fit ({fit}). Small: finely sampled for its curvature; a sphere of radius r meshed "
                    "with edges h gives about 2 h / r. Noise inflates it."),
+        FeatureRow("Valence spread", f"{f.valence_sd:.2f}",
+                   "Standard deviation of the vertex valence off the border: 0 on a regular grid, a little above "
+                   "on a geodesic sphere, larger on a scan. One of the table's axes: which calls win changes "
+                   "with the kind of tessellation."),
+        FeatureRow("Curvature spread", f"{f.curvature_spread:.2f}",
+                   f"Interquartile range of log(|k1| + |k2|) of the same fit ({fit}): 0 on a sphere, larger where "
+                   "the surface bends unevenly. One of the table's axes."),
         FeatureRow("Border", f"{percent_text(f.border_share)} of the vertices",
                    "Share of the vertices on a border. Border vertices are invalid for every estimator; the "
                    f"closed-ring estimators ({closed}) also lose every vertex whose support reaches one."),

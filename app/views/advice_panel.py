@@ -15,7 +15,7 @@ from PySide6.QtWidgets import (
     QTableWidget, QTableWidgetItem, QToolButton, QVBoxLayout, QWidget,
 )
 
-from app.model import Document, Pane, feature_rows, pane_letter, ranking_rows
+from app.model import FEATURE_LABELS, Document, Pane, feature_rows, pane_letter, ranking_rows
 from app.model.advice import RankingRow
 
 from .inspect_panel import RANGE_TIP, estimator_tooltip
@@ -84,7 +84,7 @@ class AdvicePanel(QWidget):
         features_form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
         self.feature_labels: dict[str, QLabel] = {}
         self.feature_values: dict[str, QLabel] = {}
-        for name in ("Irregularity", "Noise", "Density", "Border", "Polygons", "Vertices"):
+        for name in FEATURE_LABELS:
             label, value = QLabel(name), QLabel()
             value.setWordWrap(True)
             value.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)

@@ -70,6 +70,7 @@ def test_advise_runs_in_the_background_and_fills_the_panel(qtbot, window, ui):
     assert float(values["Border"].split()[0]) == pytest.approx(100 * f.border_share, abs=0.5)
     assert values["Polygons"] == f"{f.polygon_kinds[3]} triangles"
     assert values["Vertices"].startswith("817 ")
+    assert values["Valence spread"] == f"{f.valence_sd:.2f}" and values["Curvature spread"] == f"{f.curvature_spread:.2f}"
     assert all(label.toolTip() for label in panel.feature_values.values())
     assert all(label.toolTip() for label in panel.feature_labels.values())
 
@@ -310,7 +311,7 @@ def test_apply_with_options_sets_them_in_the_pane_and_computes_that_call(qtbot, 
 
 
 def test_ranking_rows_mark_exactly_the_recommendation():
-    from app.model import feature_rows, ranking_rows
+    from app.model import FEATURE_LABELS, feature_rows, ranking_rows
 
     sampled = curv.surfaces.make_surface("saddle", n_vertices=217)
     advice = curv.advise(sampled.mesh)
@@ -320,7 +321,8 @@ def test_ranking_rows_mark_exactly_the_recommendation():
     first = [r.expected_erel for r in rows if r.valid_share >= rows[0].valid_share - 0.02]
     assert [r.expected_erel for r in rows[: len(first)]] == sorted(first)
     labels = [f.label for f in feature_rows(advice.features)]
-    assert labels == ["Irregularity", "Noise", "Density", "Border", "Polygons", "Vertices"]
+    assert labels == list(FEATURE_LABELS) == ["Irregularity", "Noise", "Density", "Valence spread", "Curvature spread",
+                                               "Border", "Polygons", "Vertices"]
     assert all(f.text and f.tooltip for f in feature_rows(advice.features))
 
 
