@@ -7,16 +7,19 @@ Run by hand from the repository root (about 10 minutes on a loaded 2-core machin
 The clouds are those of ``bench_accuracy.py --points`` (same surfaces, samplings, noise levels and
 seeds). **Same-footing rule**: every support of every variant compared stays inside the patch at
 every evaluated point. A point is evaluated when no border point of the clean cloud lies within
-:data:`REACH` spacings (R13, :func:`curv.core.ranges.ball_radii`); curvlab's jet reaches exactly its
-range, so R10-R13 qualify; APSS's ball at filter scale s has radius ``s * r_i``, with MeshLab's
-per-point radius ``r_i = d16 / 2`` (half the distance to the 16th nearest point, its
-``computeVertexRaddi``), measured here at :data:`APSS_RADIUS_PER_SPACING` spacings (median), so
-scales up to 16 (13.0 spacings) qualify. Both get the same points, the same normals (jet R2,
-oriented up; NaN ones excluded from APSS's input, as in ``points_accuracy.apss_curvature``), the
-same evaluated points; an invalid estimate counts against the 1 % rule for both.
+its reach: the larger of its own R13 ball (13 of its spacings, :func:`curv.core.ranges.ball_radii`)
+and 13 times the noisy cloud's median spacing (the ``radius=`` variants' ball). The jet reaches
+exactly its ball (its normal only orients it), so R12-R13 and ``radius=`` 12-13 median spacings
+qualify; APSS's ball at filter scale s has radius ``s * r_i``, MeshLab's per-point radius
+``r_i = d16 / 2`` (half the distance to the 16th nearest point, its ``computeVertexRaddi``),
+measured here at :data:`APSS_RADIUS_PER_SPACING` spacings (median), so scales up to 16 (13.0
+spacings) qualify. Both get the same points, the same normals (jet R2, oriented up; NaN ones left
+out of APSS's input, as in ``points_accuracy.apss_curvature``) and the same evaluated points; an
+invalid estimate counts against the 1 % rule for both.
 
-Variants: the jet at degrees 2-4, uniform and smooth weights (``weights="smooth"``), R10, R12, R13;
-APSS at scales 8, 12, 14, 16. Prints the pooled measures per cell (sampling, noise) and the best of
+Variants: the jet at degrees 2-4, uniform and smooth weights (``weights="smooth"``), at R12, R13
+and at ``radius=`` 12 and 13 median spacings, and at degree 4 R3 (the clean cells' choice); APSS
+at scales 6, 8, 12, 14, 16. Prints the pooled measures per cell (sampling, noise) and the best of
 each side.
 """
 
@@ -36,10 +39,11 @@ import points_accuracy as pa  # noqa: E402
 
 REACH = 13
 """Evaluated points have no border point within this many spacings (R13)."""
-RANGES = (10, 12, 13)
+RANGES = (12, 13)
+"""Ranges (per-point spacings) and radii (in median spacings of the cloud) of the wide variants."""
 DEGREES = (2, 3, 4)
 WEIGHTS = ("uniform", "smooth")
-APSS_SCALES = (8.0, 12.0, 14.0, 16.0)
+APSS_SCALES = (6.0, 8.0, 12.0, 14.0, 16.0)
 APSS_RADIUS_PER_SPACING = 0.813
 """MeshLab's per-point radius d16/2 over curvlab's spacing (6th-neighbour distance), median over the
 clouds of this benchmark (0.8131 on the noisy ones); printed again by every run."""
@@ -65,13 +69,15 @@ def run_cloud(job) -> tuple:
     rng = np.random.default_rng([sample, pa.FUNCTIONS.index(function), s_index, 16])
     sampled = sample_points(tm.sampled.surface, pa.DENSITY, sampling=sampling, rng=rng)
     border = border_points(sampled.cloud)
-    reach = ball_radii(sampled.cloud, resolve(curv.ESTIMATORS["jet"], REACH), uses_normals=False)
-    ev = cKDTree(sampled.cloud.points[border]).query(sampled.cloud.points)[0] > reach
     points = sampled.cloud.points
     if noise:
         points = points + rng.normal(scale=tm.noise_sigma, size=points.shape)
     cloud = PointCloud(points)
     spacing = ball_radii(cloud, resolve(curv.ESTIMATORS["jet"], 1), uses_normals=False)
+    median_spacing = float(np.median(spacing))
+    reach = np.maximum(ball_radii(sampled.cloud, resolve(curv.ESTIMATORS["jet"], REACH), uses_normals=False),
+                       REACH * median_spacing)
+    ev = cKDTree(sampled.cloud.points[border]).query(sampled.cloud.points)[0] > reach
     ratio = float(np.median(cKDTree(points).query(points, 17)[0][:, 16] / 2.0 / spacing))
     t1, t2 = sampled.truth.k1[ev], sampled.truth.k2[ev]
     normals = point_normals(cloud).normals
@@ -81,6 +87,11 @@ def run_cloud(job) -> tuple:
             for k in RANGES:
                 res = curv.estimate(cloud, "jet", k, normals=normals, degree=degree, weights=weights)
                 out[f"jet degree {degree} {weights} R{k}"] = pa._errors(t1, t2, res.k1[ev], res.k2[ev])
+                res = curv.estimate(cloud, "jet", radius=k * median_spacing, normals=normals, degree=degree,
+                                    weights=weights)
+                out[f"jet degree {degree} {weights} radius {k}"] = pa._errors(t1, t2, res.k1[ev], res.k2[ev])
+    res = curv.estimate(cloud, "jet", 3, normals=normals, degree=4)
+    out["jet degree 4 uniform R3"] = pa._errors(t1, t2, res.k1[ev], res.k2[ev])
     for scale in APSS_SCALES:
         k1, k2, _, _ = pa.apss_curvature(points, normals, scale)
         out[f"APSS scale {scale:g}"] = pa._errors(t1, t2, k1[ev], k2[ev])

@@ -8,7 +8,10 @@ At each vertex p, with support S(p) = p and the vertices of its ball (:mod:`curv
 2. **Fit.** In coordinates divided by ``h`` (the largest distance from p to its support, for
    conditioning), least squares of the height ``w = J(u, v) = sum_{i+j<=d} J_ij u^i v^j`` over S(p):
    ``N_d = (d+1)(d+2)/2`` unknowns, constant and linear terms included, so the jet finds its own
-   tangent plane. Normal equations, Jacobi-scaled, Cholesky; fewer than ``N_d`` points is
+   tangent plane. With ``weights="smooth"`` a support point at distance d counts with
+   ``w = (1 - d²/r²)^4`` (r the ball radius; 1 at the centre, 0 at the edge with its first three
+   derivatives, as in MLS and APSS) in the PCA and in the fit (weighted least squares); the default
+   ``"uniform"`` counts every point alike. Normal equations, Jacobi-scaled, Cholesky; fewer than ``N_d`` points is
    ``TOO_FEW_NEIGHBOURS``, an estimated reciprocal condition number below :data:`RCOND` is
    ``SINGULAR``.
 3. **Differential quantities** of the graph ``(u, v, J(u, v))`` at ``(0, 0)``: the jet normal
@@ -481,8 +484,11 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     degree : {2, 3, 4}
         Jet degree; the support must hold at least ``(d+1)(d+2)/2`` points, the centre included.
     weights : {"uniform", "smooth"}
-        How the support points count in the PCA frame and the fit (:data:`WEIGHTS`). With
-        ``"smooth"`` the standard errors treat the weights as inverse variances (first order).
+        How the support points count in the PCA frame and the fit (:data:`WEIGHTS`). At a given
+        range the smooth fit has less bias and more noise than the uniform one (about half the
+        degree-2 bias on a sphere, 2.5x the spread at 10 % noise); its standard errors treat the
+        weights as inverse variances (first order), which puts them about 20 % below the spread
+        measured on a noisy sphere (within 10 % with uniform weights).
     centres : (c,) int64, optional
         The vertices to estimate (default all); other rows are left unset.
     features : curv.core.features.FeatureSet, optional
