@@ -486,7 +486,7 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     weights : {"uniform", "smooth"}
         How the support points count in the PCA frame and the fit (:data:`WEIGHTS`). At a given
         range the smooth fit has less bias and more noise than the uniform one (about half the
-        degree-2 bias on a sphere, 2.5x the spread at 10 % noise); its standard errors treat the
+        degree-2 bias on a sphere, 2.6-2.8x the spread under noise); its standard errors treat the
         weights as inverse variances (first order), which puts them about 20 % below the spread
         measured on a noisy sphere (within 10 % with uniform weights).
     centres : (c,) int64, optional
