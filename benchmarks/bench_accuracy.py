@@ -5,6 +5,7 @@ Run by hand (not part of the test suite)::
     .venv/bin/python benchmarks/bench_accuracy.py --out docs/accuracy_table.md     # 10 surfaces a cell
     .venv/bin/python benchmarks/bench_accuracy.py --quick                          # 2 surfaces: smoke run
     .venv/bin/python benchmarks/bench_accuracy.py --points --samples 10            # point clouds vs APSS
+    .venv/bin/python benchmarks/bench_accuracy.py --points --wide --samples 3      # both at their widest, same footing
 
 ``--points`` runs the protocol on point clouds instead (``benchmarks/points_accuracy.py``).
 
@@ -291,8 +292,15 @@ def main(argv=None) -> int:
                         help="point clouds sampled from the same patches, against MeshLab's APSS and the meshes")
     parser.add_argument("--extras", action="store_true",
                         help="--points: also normals fitted over R4 (points and mesh) and the jet at degree 4")
+    parser.add_argument("--wide", action="store_true",
+                        help="--points: both sides at their widest on the same deep-interior points "
+                             "(benchmarks/points_wide_ranges.py)")
     args = parser.parse_args(argv)
     samples = 2 if args.quick else args.samples
+    if args.points and args.wide:
+        import points_wide_ranges
+
+        return points_wide_ranges.main(samples, args.workers)
     if args.points:
         import points_accuracy
 

@@ -65,7 +65,8 @@ def apss_curvature(points, normals, scale: float = 2.0):
     Parameters
     ----------
     points, normals : (n, 3) float
-        The points and their unit normals (APSS is signed by them).
+        The points and their unit normals (APSS is signed by them); points whose normal is NaN
+        are left out of APSS's input and get NaN.
     scale : float
         APSS filter scale in mean point spacings.
 
@@ -75,8 +76,15 @@ def apss_curvature(points, normals, scale: float = 2.0):
         ``h = Mean / 2`` (APSS's "Mean" is ``k1 + k2``), ``k`` = "Gauss", and the principal
         curvatures they imply, ``k1 >= k2``; NaN where APSS gives a non-finite value.
     """
-    h = 0.5 * _apss_values(points, normals, "Mean", scale)
-    k = _apss_values(points, normals, "Gauss", scale)
+    points, normals = np.asarray(points, float), np.asarray(normals, float)
+    # A NaN normal (a point whose orientation the library left ambiguous) poisons every APSS fit
+    # whose ball holds it (MeshLab then reports 0 there): APSS gets only the points with a normal,
+    # and the others are NaN (no estimate), as curvlab's estimators leave them.
+    ok = np.isfinite(normals).all(axis=1)
+    h = np.full(len(points), np.nan)
+    k = np.full(len(points), np.nan)
+    h[ok] = 0.5 * _apss_values(points[ok], normals[ok], "Mean", scale)
+    k[ok] = _apss_values(points[ok], normals[ok], "Gauss", scale)
     root = np.sqrt(np.maximum(h * h - k, 0.0))
     return h + root, h - root, h, k
 

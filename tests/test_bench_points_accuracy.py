@@ -31,6 +31,20 @@ def test_apss_conversion_gives_k_equal_one_over_r_on_a_sphere(radius, sign):
     assert np.all(k1 >= k2)
 
 
+def test_apss_gets_only_the_points_with_a_normal():
+    """A NaN normal zeroes every APSS fit whose ball holds it; the points without one are left out
+    and get NaN, the others keep 1/r."""
+    pytest.importorskip("pymeshlab")
+    p = _sphere(3000, np.random.default_rng(5))
+    normals = p.copy()
+    normals[::300] = np.nan
+    k1, k2, h, k = points_accuracy.apss_curvature(2.0 * p, normals, 12.0)
+    lost = np.isnan(normals[:, 0])
+    assert np.isnan(h[lost]).all() and np.isnan(k1[lost]).all()
+    np.testing.assert_allclose(h[~lost], 0.5, rtol=1e-2)
+    np.testing.assert_allclose(k[~lost], 0.25, rtol=2e-2)
+
+
 def test_apss_conversion_separates_the_principal_curvatures_of_a_cylinder():
     pytest.importorskip("pymeshlab")
     rng = np.random.default_rng(2)

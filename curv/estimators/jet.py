@@ -8,7 +8,10 @@ At each vertex p, with support S(p) = p and the vertices of its ball (:mod:`curv
 2. **Fit.** In coordinates divided by ``h`` (the largest distance from p to its support, for
    conditioning), least squares of the height ``w = J(u, v) = sum_{i+j<=d} J_ij u^i v^j`` over S(p):
    ``N_d = (d+1)(d+2)/2`` unknowns, constant and linear terms included, so the jet finds its own
-   tangent plane. Normal equations, Jacobi-scaled, Cholesky; fewer than ``N_d`` points is
+   tangent plane. With ``weights="smooth"`` a support point at distance d counts with
+   ``w = (1 - d²/r²)^4`` (r the ball radius; 1 at the centre, 0 at the edge with its first three
+   derivatives, as in MLS and APSS) in the PCA and in the fit (weighted least squares); the default
+   ``"uniform"`` counts every point alike. Normal equations, Jacobi-scaled, Cholesky; fewer than ``N_d`` points is
    ``TOO_FEW_NEIGHBOURS``, an estimated reciprocal condition number below :data:`RCOND` is
    ``SINGULAR``.
 3. **Differential quantities** of the graph ``(u, v, J(u, v))`` at ``(0, 0)``: the jet normal
@@ -45,7 +48,8 @@ from ._local_fit import factor_whiten, noise_variance, principal_gradients, row_
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
 from .registry import EstimatorSpec, empty_principal, register
 
-__all__ = ["iter_jet", "DEFAULT_DEGREE", "DEGREES", "RCOND", "unknowns", "jet_normals"]
+__all__ = ["iter_jet", "DEFAULT_DEGREE", "DEGREES", "DEFAULT_WEIGHTS", "WEIGHTS", "RCOND", "unknowns", "jet_normals",
+           "smooth_weight"]
 
 DEGREES = (2, 3, 4)
 """The jet degrees offered."""
@@ -71,6 +75,31 @@ does not describe the surface at the vertex (``DEGENERATE``)."""
 
 _SINGULAR = int(Reason.SINGULAR)
 _DEGENERATE = int(Reason.DEGENERATE)
+
+
+WEIGHTS = ("uniform", "smooth")
+"""The fit weightings offered (``curv.estimate(..., weights=...)``): ``"uniform"`` (the default)
+counts every support point alike; ``"smooth"`` weighs a point at distance d from the centre by
+``(1 - d²/r²)^4``, r the ball radius (:func:`smooth_weight`), as MLS and APSS fits do."""
+
+DEFAULT_WEIGHTS = "uniform"
+
+
+@jit
+def smooth_weight(d2, r2):
+    """Weight of a support point at squared distance ``d2``: 1 when ``r2 <= 0`` (uniform), else
+    ``(1 - d2/r2)^4`` inside the ball and 0 outside it.
+
+    The weight and its first three derivatives fall to zero at the ball's edge, so a point entering
+    or leaving the ball does not jump the fit: a low-pass on noise that the uniform fit lacks.
+    """
+    if r2 <= 0.0:
+        return 1.0
+    t = 1.0 - d2 / r2
+    if t <= 0.0:
+        return 0.0
+    t2 = t * t
+    return t2 * t2
 
 
 def unknowns(degree: int) -> int:
@@ -104,7 +133,7 @@ def _monomials(u, v, degree, out):
 
 
 @jit
-def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec):
+def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec, r2=0.0):
     """Fit the degree-``degree`` jet of the support of ``p`` (steps 1 and 2 of the module notes).
 
     Parameters
@@ -120,6 +149,10 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
         Per-thread scratch from :func:`_scratch`. On success ``frame`` rows are ``e1, e2, e3``
         (world coordinates) and ``vec[1, :N_d]`` holds the coefficients ``J`` in the order of
         :func:`_monomials`, for coordinates divided by the returned ``h``.
+    r2 : float, optional
+        0 (the default): every support point counts alike. Positive: the squared ball radius of the
+        smooth weights ``w = (1 - d²/r2)^4`` (:func:`smooth_weight`), applied to the PCA (weighted
+        centroid and covariance) and to the height fit.
 
     Returns
     -------
@@ -128,7 +161,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
     h : float
         The coordinate scale: largest distance from p to a support vertex.
     ww : float
-        The sum of the squared heights ``bᵀb`` (scaled coordinates), for the residuals.
+        The sum of the (weighted) squared heights ``bᵀWb`` (scaled coordinates), for the residuals.
     """
     nd = (degree + 1) * (degree + 2) // 2  # unknowns(degree); the registry's min_neighbours is nd - 1
     if count < nd:
@@ -140,30 +173,36 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
     # centroid c and covariance sum (q - c)(q - c)^T, from offsets to p for accuracy
     cx = cy = cz = 0.0
     h2 = 0.0
+    total = 0.0
     for i in range(count):
         q = queue[i]
         dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
-        cx += dx
-        cy += dy
-        cz += dz
-        h2 = max(h2, dx * dx + dy * dy + dz * dz)
-    if not h2 > 0.0:
+        d2 = dx * dx + dy * dy + dz * dz
+        wt = smooth_weight(d2, r2)
+        cx += wt * dx
+        cy += wt * dy
+        cz += wt * dz
+        total += wt
+        h2 = max(h2, d2)
+    if not (h2 > 0.0 and total > 0.0):
         return _DEGENERATE, 0.0, 0.0
-    cx /= count
-    cy /= count
-    cz /= count
+    cx /= total
+    cy /= total
+    cz /= total
     for a in range(3):
         for b in range(3):
             cov[a, b] = 0.0
     for i in range(count):
         q = queue[i]
-        dx, dy, dz = x[q] - px - cx, y[q] - py - cy, z[q] - pz - cz
-        cov[0, 0] += dx * dx
-        cov[0, 1] += dx * dy
-        cov[0, 2] += dx * dz
-        cov[1, 1] += dy * dy
-        cov[1, 2] += dy * dz
-        cov[2, 2] += dz * dz
+        dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
+        wt = smooth_weight(dx * dx + dy * dy + dz * dz, r2)
+        dx, dy, dz = dx - cx, dy - cy, dz - cz
+        cov[0, 0] += wt * dx * dx
+        cov[0, 1] += wt * dx * dy
+        cov[0, 2] += wt * dx * dz
+        cov[1, 1] += wt * dy * dy
+        cov[1, 2] += wt * dy * dz
+        cov[2, 2] += wt * dz * dz
     cov[1, 0] = cov[0, 1]
     cov[2, 0] = cov[0, 2]
     cov[2, 1] = cov[1, 2]
@@ -190,14 +229,16 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
             m[a, b] = 0.0
     for i in range(count):
         q = queue[i]
-        dx, dy, dz = (x[q] - px) * inv_h, (y[q] - py) * inv_h, (z[q] - pz) * inv_h
+        dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
+        wt = smooth_weight(dx * dx + dy * dy + dz * dz, r2)
+        dx, dy, dz = dx * inv_h, dy * inv_h, dz * inv_h
         u = dx * frame[0, 0] + dy * frame[0, 1] + dz * frame[0, 2]
         v = dx * frame[1, 0] + dy * frame[1, 1] + dz * frame[1, 2]
         w = dx * frame[2, 0] + dy * frame[2, 1] + dz * frame[2, 2]
         _monomials(u, v, degree, vec)
-        ww += w * w
+        ww += wt * w * w
         for a in range(nd):
-            ma = vec[1, a]
+            ma = wt * vec[1, a]
             vec[0, a] += ma * w
             for b in range(a, nd):
                 m[a, b] += ma * vec[1, b]
@@ -357,8 +398,8 @@ def jet_se(vec, m, h, count, nd, ww, grads, out_se, row):
 
 
 @jit_parallel
-def _jet_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2, reason,
-                k_se):
+def _jet_kernel(centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, normals, stamps, queues, k, d1, d2,
+                reason, k_se):
     parts = stamps.shape[0]
     nd = (degree + 1) * (degree + 2) // 2
     for t in prange(parts):
@@ -369,8 +410,10 @@ def _jet_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z, norma
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
-            count, queue = ball_support(p, radius[p] ** 2, indptr, indices, x, y, z, stamp, queue)
-            code, h, ww = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
+            r2 = radius[p] ** 2
+            count, queue = ball_support(p, r2, indptr, indices, x, y, z, stamp, queue)
+            code, h, ww = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
+                                  r2 if smooth else 0.0)
             if code == _OK:
                 code = jet_principal(vec, frame, h, normals, k, d1, d2, p)
                 jet_se(vec, m, h, count, nd, ww, grads, k_se, p)
@@ -378,7 +421,8 @@ def _jet_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z, norma
 
 
 @jit_parallel
-def _jet_normal_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z, normals, stamps, queues, out, reason):
+def _jet_normal_kernel(centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, normals, stamps, queues, out,
+                       reason):
     parts = stamps.shape[0]
     for t in prange(parts):
         stamp = stamps[t]
@@ -387,8 +431,9 @@ def _jet_normal_kernel(centres, lo, hi, degree, radius, indptr, indices, x, y, z
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
-            count, queue = ball_support(p, radius[p] ** 2, indptr, indices, x, y, z, stamp, queue)
-            code, _, _ = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec)
+            r2 = radius[p] ** 2
+            count, queue = ball_support(p, r2, indptr, indices, x, y, z, stamp, queue)
+            code, _, _ = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec, r2 if smooth else 0.0)
             if code == _OK:
                 jet_normal(vec, frame, out, p)
             reason[p] = code
@@ -399,6 +444,13 @@ def check_degree(degree) -> int:
     if isinstance(degree, (bool, np.bool_)) or degree not in DEGREES:
         raise EstimatorError(f"jet degree must be one of {', '.join(map(str, DEGREES))}; got {degree!r}")
     return int(degree)
+
+
+def check_weights(weights) -> bool:
+    """True for ``"smooth"``, False for ``"uniform"``; :class:`~curv.core.errors.EstimatorError` otherwise."""
+    if not isinstance(weights, str) or weights not in WEIGHTS:
+        raise EstimatorError(f"jet weights must be one of {', '.join(WEIGHTS)}; got {weights!r}")
+    return weights == "smooth"
 
 
 def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, features):
@@ -415,7 +467,8 @@ def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndar
 
 
 def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-             degree: int = DEFAULT_DEGREE, centres: np.ndarray | None = None, features=None):
+             degree: int = DEFAULT_DEGREE, weights: str = DEFAULT_WEIGHTS, centres: np.ndarray | None = None,
+             features=None):
     """Osculating jet of degree ``degree`` over each vertex's ball support.
 
     Parameters
@@ -430,6 +483,12 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         Vertices per kernel call (default adaptive).
     degree : {2, 3, 4}
         Jet degree; the support must hold at least ``(d+1)(d+2)/2`` points, the centre included.
+    weights : {"uniform", "smooth"}
+        How the support points count in the PCA frame and the fit (:data:`WEIGHTS`). At a given
+        range the smooth fit has less bias and more noise than the uniform one (about half the
+        degree-2 bias on a sphere, 2.6-2.8x the spread under noise); its standard errors treat the
+        weights as inverse variances (first order), which puts them about 20 % below the spread
+        measured on a noisy sphere (within 10 % with uniform weights).
     centres : (c,) int64, optional
         The vertices to estimate (default all); other rows are left unset.
     features : curv.core.features.FeatureSet, optional
@@ -447,6 +506,7 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         ``SINGULAR``, ``DEGENERATE`` where there is no fit.
     """
     degree = check_degree(degree)
+    smooth = check_weights(weights)
     n = mesh.n_vertices
     centres = all_centres(n, centres)
     whole = centres.size == n
@@ -456,7 +516,7 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     radius, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii, centres, features)
 
     def run(lo, hi):
-        launch(_jet_kernel, centres, lo, hi, degree, radius, indptr, indices, x, y, z, ref, stamps, queues,
+        launch(_jet_kernel, centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, ref, stamps, queues,
                k, out.d1, out.d2, out.reason, k_se)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
@@ -473,7 +533,7 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 
 def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree: int = DEFAULT_DEGREE,
-                chunk: int | None = None, features=None):
+                weights: str = DEFAULT_WEIGHTS, chunk: int | None = None, features=None):
     """Unit normals of the jets fitted over each vertex's ball support, a generator.
 
     Parameters as in :func:`iter_jet` (``reference`` orients each fit; with ``features`` the fits
@@ -486,6 +546,7 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
     reason : (n,) uint8
     """
     degree = check_degree(degree)
+    smooth = check_weights(weights)
     n = mesh.n_vertices
     out = np.full((n, 3), np.nan)
     reason = np.zeros(n, np.uint8)
@@ -493,7 +554,7 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
     radius, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, reference, radii, centres, features)
 
     def run(lo, hi):
-        launch(_jet_normal_kernel, centres, lo, hi, degree, radius, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
+        launch(_jet_normal_kernel, centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
 
     yield from iter_chunks(n, run, chunk=chunk)
     out[reason != _OK] = np.nan
@@ -505,7 +566,7 @@ register(EstimatorSpec(
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True,
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
-    options={"degree": DEGREES},
+    options={"degree": DEGREES, "weights": WEIGHTS},
     kernels=(_jet_kernel,),
     min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
 ))
