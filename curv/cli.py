@@ -179,6 +179,8 @@ def _cmd_estimate(args) -> int:
         options["fit_range"] = args.fit_range
     if args.degree is not None:
         options["degree"] = args.degree
+    if args.weights is not None:
+        options["weights"] = args.weights
     region = _region_vertices(args, mesh)
     if rng.knn is not None:
         options["knn"] = rng.knn
@@ -258,8 +260,8 @@ def _region_vertices(args, mesh):
 
 def cli_arguments(kwargs: dict) -> str:
     """The ``curv estimate`` flags of a call's keyword arguments: ``--method jet --range 4 --degree 4``."""
-    flags = {"method": "--method", "range": "--range", "degree": "--degree", "normals": "--normals",
-             "fit_range": "--fit-range", "features": "--features"}
+    flags = {"method": "--method", "range": "--range", "degree": "--degree", "weights": "--weights",
+             "normals": "--normals", "fit_range": "--fit-range", "features": "--features"}
     return " ".join(f"{flag} {kwargs[k]:g}" if isinstance(kwargs[k], float) else f"{flag} {kwargs[k]}"
                     for k, flag in flags.items() if k in kwargs)
 
@@ -271,7 +273,8 @@ def _apply_advice(args) -> None:
     from .io import load
 
     given = [flag for flag, value in (("--range", args.range), ("--radius", args.radius), ("--degree", args.degree),
-                                      ("--fit-range", args.fit_range)) if value is not None]
+                                      ("--weights", args.weights), ("--fit-range", args.fit_range))
+             if value is not None]
     if args.normals not in (None, "max"):
         given.append("--normals")
     if given:
@@ -355,6 +358,7 @@ class CurvMemoryError(CurvError, MemoryError):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .estimators.jet import WEIGHTS as JET_WEIGHTS
     from .estimators.registry import DEFAULT_ESTIMATOR
     from .io import OUTPUT_FORMATS
     from .formats.pointio import POINT_SUFFIXES
@@ -393,6 +397,9 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("--fit-range", help="range k of the fitted normals (with --normals fit); "
                        "default 2")
     p_est.add_argument("--degree", type=int, choices=[2, 3, 4], help="jet degree (estimator jet); default 2")
+    p_est.add_argument("--weights", choices=list(JET_WEIGHTS),
+                       help="jet fit weights: uniform (default) or smooth, (1 - d²/r²)^4 falling to 0 at the ball's "
+                            "edge (estimator jet)")
     p_est.add_argument("--smooth", choices=["mesh", "values"], help="smooth the mesh before or the values after")
     p_est.add_argument("--merge-vertices", action="store_true", help="merge vertices at identical positions")
     p_est.add_argument("--remove-degenerate", action="store_true", help="drop zero-area / repeated-index faces")

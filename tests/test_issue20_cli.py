@@ -44,6 +44,18 @@ def test_summary_times_the_write(sphere_file, tmp_path, capsys):
     assert "load" in line and "estimate" in line and "write" in line
 
 
+def test_jet_weights_flag_is_the_librarys_option(sphere_file, tmp_path, capsys):
+    out = tmp_path / "smooth.ply"
+    assert main(["estimate", str(sphere_file), "-m", "jet", "-r", "3", "--weights", "smooth", "-o", str(out), "-q"]) == 0
+    k1 = plyfile.PlyData.read(str(out))["vertex"]["k1"]
+    mesh = curv.load(sphere_file)
+    np.testing.assert_allclose(k1, curv.estimate(mesh, "jet", 3, weights="smooth").k1, rtol=1e-6)
+    assert not np.allclose(k1, curv.estimate(mesh, "jet", 3).k1, rtol=1e-9, atol=0)
+    capsys.readouterr()
+    assert main(["estimate", str(sphere_file), "-m", "qs", "--weights", "smooth", "-q"]) == 2
+    assert "has no option 'weights'" in capsys.readouterr().err
+
+
 def test_ply_export_has_shown_and_named_reasons(sphere_file, tmp_path):
     out = tmp_path / "o.ply"
     assert main(["estimate", str(sphere_file), "-m", "qs", "-q", "--quantity", "gaussian", "-o", str(out)]) == 0
