@@ -253,7 +253,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     indptr, indices = expansion_adjacency(mesh, blocked)
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
     radii = np.ascontiguousarray(radii, dtype=np.float64)
-    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[0] if region else None
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[1] if region else None
     measures = face_measures(mesh, normals, touched)
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
