@@ -225,15 +225,15 @@ def _two_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radi
 
 
 @jit
-def _one_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radius2, tp):
+def _one_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radius2, tp, tk):
     """Twice the area inside the ball of a triangle (i, j, k), counter-clockwise about n, whose
     only corner inside is i.
 
     The boundary inside leaves along i -> j at p (at ``tp``: :func:`exit_fraction`) and comes back along
-    k -> i at q; the edge j -> k, both ends outside, may pass through the disc between them (a
-    second chord, two arcs).
+    k -> i at q (where i -> k leaves, at ``tk``); the edge j -> k, both ends outside, may pass
+    through the disc between them (a second chord, two arcs).
     """
-    tq = 1.0 - exit_fraction(ix, iy, iz, qi, kx, ky, kz, radius2)
+    tq = 1.0 - tk
     px, py, pz = ix + tp * (jx - ix), iy + tp * (jy - iy), iz + tp * (jz - iz)
     qx, qy, qz = kx + tq * (ix - kx), ky + tq * (iy - ky), kz + tq * (iz - kz)
     straight = tp * _triple(nx, ny, nz, ix, iy, iz, jx, jy, jz) + (1.0 - tq) * _triple(nx, ny, nz, kx, ky, kz,
@@ -316,13 +316,16 @@ def face_in_ball_area(tri, f, x, y, z, vector_area, area, px, py, pz, radius2):
     elif inside == 1:
         if in0:
             part = _one_inside(a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, a2x, a2y, a2z, nx, ny, nz, h2, radius2,
-                               exit_fraction(a0x, a0y, a0z, q0, a1x, a1y, a1z, radius2))
+                               exit_fraction(a0x, a0y, a0z, q0, a1x, a1y, a1z, radius2),
+                               exit_fraction(a0x, a0y, a0z, q0, a2x, a2y, a2z, radius2))
         elif in1:
             part = _one_inside(a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, a0x, a0y, a0z, nx, ny, nz, h2, radius2,
-                               exit_fraction(a1x, a1y, a1z, q1, a2x, a2y, a2z, radius2))
+                               exit_fraction(a1x, a1y, a1z, q1, a2x, a2y, a2z, radius2),
+                               exit_fraction(a1x, a1y, a1z, q1, a0x, a0y, a0z, radius2))
         else:
             part = _one_inside(a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, a1x, a1y, a1z, nx, ny, nz, h2, radius2,
-                               exit_fraction(a2x, a2y, a2z, q2, a0x, a0y, a0z, radius2))
+                               exit_fraction(a2x, a2y, a2z, q2, a0x, a0y, a0z, radius2),
+                               exit_fraction(a2x, a2y, a2z, q2, a1x, a1y, a1z, radius2))
         part *= 0.5
     else:
         # frame of the face: u along corner 0 -> 1, v = n x u; the corners' in-plane coordinates
@@ -338,7 +341,7 @@ def face_in_ball_area(tri, f, x, y, z, vector_area, area, px, py, pz, radius2):
 
 
 @jit
-def crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, vector_area, area, radius2):
+def crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area, area, radius2):
     """Exact area inside the ball of a triangle f = (v, w, u) whose corner v is inside and w outside.
 
     Parameters
@@ -348,8 +351,9 @@ def crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, vector_
     vx, vy, vz, wx, wy, wz, ux, uy, uz : float
         The corners' offsets from the ball's centre; ``qv``, ``qw``, ``qu`` their squared lengths
         (``qv <= radius2 < qw``).
-    tp : float
-        Where v -> w leaves the ball (:func:`exit_fraction`), which the caller has for the edge already.
+    tp, tu : float
+        Where v -> w and, if u is outside, v -> u leave the ball (:func:`exit_fraction`): the caller
+        has them for those edges already (``tu`` is not read when u is inside).
     vector_area, area : (m, 3), (m,) float64
         ``Mesh.face_vector_areas`` and ``Mesh.face_areas`` (area > 0).
 
@@ -367,7 +371,7 @@ def crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, vector_
     if qu <= radius2:
         part = _two_inside(ux, uy, uz, qu, vx, vy, vz, qv, wx, wy, wz, nx, ny, nz, h2, radius2, 2.0 * area[f], tp)
     else:
-        part = _one_inside(vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, nx, ny, nz, h2, radius2, tp)
+        part = _one_inside(vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, nx, ny, nz, h2, radius2, tp, tu)
     part *= 0.5
     return part if math.isfinite(part) else 0.0
 

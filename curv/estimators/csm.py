@@ -347,12 +347,13 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_sca
 @jit_parallel
 def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, half_scale, star, clean,
                halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area, degenerate, border,
-               nonmanifold, cut, crease, normals, vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
+               nonmanifold, cut, crease, normals, width, vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
         vectors = np.empty((4, 3))
         tensor = np.empty((3, 3))
         res = np.empty(8)
+        out_h, out_w, out_t = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width)
         queue, vstamp, estamp, fstamp = queues[t], vstamps[t], estamps[t], fstamps[t]
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
@@ -391,6 +392,9 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                     reach = inner - longest[v]
                     if reach > 0.0 and qv <= reach * reach:
                         continue
+                    # the halfedges leaving the ball from v, with their exits (a face with v alone
+                    # inside leaves along two of them)
+                    leaving = 0
                     for j in range(vc_ptr[v], vc_ptr[v + 1]):
                         h = vc[j]
                         f = h // 3
@@ -398,12 +402,28 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                         w = tri[f, c + 1 if c < 2 else 0]
                         wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
                         qw = wx * wx + wy * wy + wz * wz
-                        if qw <= r2:
-                            continue
+                        if qw > r2:
+                            out_h[leaving] = h
+                            out_w[leaving] = w
+                            out_t[leaving] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, r2)
+                            leaving += 1
+                    for a in range(leaving):
+                        h, w, tp = out_h[a], out_w[a], out_t[a]
+                        f = h // 3
+                        c = h - 3 * f
+                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+                        qw = wx * wx + wy * wy + wz * wz
                         u = tri[f, c - 1 if c > 0 else 2]
                         ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
                         qu = ux * ux + uy * uy + uz * uz
-                        tp = exit_fraction(vx, vy, vz, qv, wx, wy, wz, r2)
+                        tu = 0.0
+                        if qu > r2:
+                            tu = -1.0
+                            for b in range(leaving):
+                                if out_w[b] == u:
+                                    tu = out_t[b]
+                            if tu < 0.0:  # v -> u is on no face at v (a border edge)
+                                tu = exit_fraction(vx, vy, vz, qv, ux, uy, uz, r2)
                         s = half_scale[h]
                         if s != 0.0:
                             wt = s * (tp - 0.5)
@@ -416,7 +436,7 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                             t12 += ey * dz
                             t22 += wt * dz * dz
                         third = face_area[f] / 3.0
-                        area += crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, vector_area,
+                        area += crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area,
                                               face_area, r2) - (third + third if qu <= r2 else third)
             else:
                 t00, t01, t02, t11, t12, t22, area, bits = _walk_sums(
@@ -514,6 +534,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     else:
         beta_scale, halfedge_edge, edge_faces = np.empty(0), np.empty(0, np.int64), np.empty((0, 2), np.int64)
     vc_ptr, vc = mesh.vertex_corners
+    width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
@@ -526,7 +547,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, half_scale,
                star, clean, halfedge_edge, beta_scale, edge_faces, tri, mesh.face_vector_areas,
                mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices, blocked is not None, crease,
-               normals, vstamps, queues, estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
+               normals, width, vstamps, queues, estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return out

@@ -247,10 +247,11 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_
 
 @jit_parallel
 def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, star, clean, tri, vector_area,
-               face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, vstamps,
+               face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, width, vstamps,
                queues, fstamps, k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
+        out_h, out_w, out_t = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width)
         queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
@@ -291,6 +292,9 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                     reach = inner - longest[v]
                     if reach > 0.0 and qv <= reach * reach:
                         continue
+                    # the halfedges leaving the ball from v, with their exits (a face with v alone
+                    # inside leaves along two of them)
+                    leaving = 0
                     for j in range(vc_ptr[v], vc_ptr[v + 1]):
                         h = vc[j]
                         f = h // 3
@@ -298,13 +302,29 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                         w = tri[f, c + 1 if c < 2 else 0]
                         wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
                         qw = wx * wx + wy * wy + wz * wz
-                        if qw <= r2:
-                            continue
+                        if qw > r2:
+                            out_h[leaving] = h
+                            out_w[leaving] = w
+                            out_t[leaving] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, r2)
+                            leaving += 1
+                    for a in range(leaving):
+                        h, w, tp = out_h[a], out_w[a], out_t[a]
+                        f = h // 3
+                        c = h - 3 * f
+                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+                        qw = wx * wx + wy * wy + wz * wz
                         u = tri[f, c - 1 if c > 0 else 2]
                         ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
                         qu = ux * ux + uy * uy + uz * uz
-                        tp = exit_fraction(vx, vy, vz, qv, wx, wy, wz, r2)
-                        inside = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, vector_area,
+                        tu = 0.0
+                        if qu > r2:
+                            tu = -1.0
+                            for b in range(leaving):
+                                if out_w[b] == u:
+                                    tu = out_t[b]
+                            if tu < 0.0:  # v -> u is on no face at v (a border edge)
+                                tu = exit_fraction(vx, vy, vz, qv, ux, uy, uz, r2)
+                        inside = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area,
                                                face_area, r2)
                         third = 1.0 / 3.0
                         wt = min(inside / face_area[f], 1.0) - (third + third if qu <= r2 else third)
@@ -386,6 +406,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     walk = blocked is not None or not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
+    width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
     queues = new_queues(n, parts)
@@ -397,7 +418,8 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     def run(lo: int, hi: int) -> None:
         launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, star, clean, tri,
                mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
-               mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, vstamps, queues, fstamps,
+               mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, width, vstamps, queues,
+               fstamps,
                out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
