@@ -199,61 +199,65 @@ of each face's area, and a pad to one cache line."""
 
 
 @jit_parallel
-def _star_terms(ids, vc_ptr, vc, tri, x, y, z, vector_area, area, degenerate, nonmanifold, inconsistent,
+def _star_terms(ids, parts, width, vc_ptr, vc, tri, x, y, z, vector_area, area, degenerate, nonmanifold, inconsistent,
                 half_scale, star, clean):
-    for i in prange(ids.size):
-        v = ids[i]
-        ok = not (nonmanifold[v] or inconsistent[v])
-        t00 = t01 = t02 = t11 = t12 = t22 = 0.0
-        third = 0.0
-        first, last = vc_ptr[v], vc_ptr[v + 1]
-        for j in range(first, last):
-            h = vc[j]
-            f = h // 3
-            c = h - 3 * f
-            half_scale[h] = 0.0
-            if degenerate[f]:
-                ok = False
-                continue
-            third += area[f] / 3.0
-            w = tri[f, c + 1 if c < 2 else 0]
-            # the face across v -> w: the face at v where w precedes v (one at most on a clean vertex)
-            g = -1
-            for k in range(first, last):
-                h2 = vc[k]
-                f2 = h2 // 3
-                c2 = h2 - 3 * f2
-                if tri[f2, c2 - 1 if c2 > 0 else 2] == w:
-                    g = f2
-            if g < 0:
-                continue  # a border edge: no dihedral term
-            # beta / |e| as _edge_beta_scale has it (its two orientations give the same bits)
-            dx, dy, dz = x[w] - x[v], y[w] - y[v], z[w] - z[v]
-            length = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if not length > 0.0:
-                continue
-            n0x, n0y, n0z = vector_area[f, 0] / area[f], vector_area[f, 1] / area[f], vector_area[f, 2] / area[f]
-            n1x, n1y, n1z = vector_area[g, 0] / area[g], vector_area[g, 1] / area[g], vector_area[g, 2] / area[g]
-            sx = n0y * n1z - n0z * n1y
-            sy = n0z * n1x - n0x * n1z
-            sz = n0x * n1y - n0y * n1x
-            beta = math.atan2((sx * dx + sy * dy + sz * dz) / length, n0x * n1x + n0y * n1y + n0z * n1z)
-            scale = beta / length
-            if not math.isfinite(scale):
-                continue
-            half_scale[h] = scale
-            wt = 0.5 * scale
-            wx, wy = wt * dx, wt * dy
-            t00 += wx * dx
-            t01 += wx * dy
-            t02 += wx * dz
-            t11 += wy * dy
-            t12 += wy * dz
-            t22 += wt * dz * dz
-        star[v, 0], star[v, 1], star[v, 2] = t00, t01, t02
-        star[v, 3], star[v, 4], star[v, 5] = t11, t12, t22
-        star[v, 6] = third
-        clean[v] = ok
+    for t in prange(parts):
+        previous = np.empty(width, np.int64)  # the vertex before v in each face at v
+        for i in range((t * ids.size) // parts, ((t + 1) * ids.size) // parts):
+            v = ids[i]
+            ok = not (nonmanifold[v] or inconsistent[v])
+            t00 = t01 = t02 = t11 = t12 = t22 = 0.0
+            third = 0.0
+            first, last = vc_ptr[v], vc_ptr[v + 1]
+            for j in range(first, last):
+                h = vc[j]
+                f = h // 3
+                c = h - 3 * f
+                previous[j - first] = tri[f, c - 1 if c > 0 else 2]
+            for j in range(first, last):
+                h = vc[j]
+                f = h // 3
+                c = h - 3 * f
+                half_scale[h] = 0.0
+                if degenerate[f]:
+                    ok = False
+                    continue
+                third += area[f] / 3.0
+                w = tri[f, c + 1 if c < 2 else 0]
+                # the face across v -> w: the face at v where w precedes v (one at most on a clean vertex)
+                g = -1
+                for k in range(last - first):
+                    if previous[k] == w:
+                        g = vc[first + k] // 3
+                if g < 0:
+                    continue  # a border edge: no dihedral term
+                # beta / |e| as _edge_beta_scale has it (its two orientations give the same bits)
+                dx, dy, dz = x[w] - x[v], y[w] - y[v], z[w] - z[v]
+                length = math.sqrt(dx * dx + dy * dy + dz * dz)
+                if not length > 0.0:
+                    continue
+                n0x, n0y, n0z = vector_area[f, 0] / area[f], vector_area[f, 1] / area[f], vector_area[f, 2] / area[f]
+                n1x, n1y, n1z = vector_area[g, 0] / area[g], vector_area[g, 1] / area[g], vector_area[g, 2] / area[g]
+                sx = n0y * n1z - n0z * n1y
+                sy = n0z * n1x - n0x * n1z
+                sz = n0x * n1y - n0y * n1x
+                beta = math.atan2((sx * dx + sy * dy + sz * dz) / length, n0x * n1x + n0y * n1y + n0z * n1z)
+                scale = beta / length
+                if not math.isfinite(scale):
+                    continue
+                half_scale[h] = scale
+                wt = 0.5 * scale
+                wx, wy = wt * dx, wt * dy
+                t00 += wx * dx
+                t01 += wx * dy
+                t02 += wx * dz
+                t11 += wy * dy
+                t12 += wy * dz
+                t22 += wt * dz * dz
+            star[v, 0], star[v, 1], star[v, 2] = t00, t01, t02
+            star[v, 3], star[v, 4], star[v, 5] = t11, t12, t22
+            star[v, 6] = third
+            clean[v] = ok
 
 
 def star_terms(mesh: Mesh, ids: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -290,7 +294,10 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None) -> tuple[np.ndarray, n
     star = np.empty((n, STAR))
     clean = np.empty(n, np.bool_)
     x, y, z = coordinate_columns(mesh)
-    launch(_star_terms, element_list(n, ids), vc_ptr, vc, tri, x, y, z, mesh.face_vector_areas, mesh.face_areas,
+    ids = element_list(n, ids)
+    width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
+    parts = max(1, min(8 * threads(), ids.size))  # slices of vertices, each with its own scratch
+    launch(_star_terms, ids, parts, width, vc_ptr, vc, tri, x, y, z, mesh.face_vector_areas, mesh.face_areas,
            mesh.degenerate_faces, mesh.nonmanifold_vertices, mesh.inconsistent_vertices, half_scale, star, clean)
     return half_scale, star, clean
 
