@@ -35,8 +35,8 @@ goes from inside to outside. The edge's half is replaced by its exact part ``|e 
 in the ball (:func:`curv.estimators._ball_clipping.crossing_area`, which reuses the edge's exit).
 Support vertices whose every edge stays inside the ball (``|v - p| + longest edge <= r``) are not
 walked at all. A support holding a vertex whose terms are not exact (a non-manifold or
-inconsistently oriented edge, a degenerate face) and every support with ``features`` is summed
-the long way, face by face and edge by edge over the mesh's edge table, which is only built then
+inconsistently oriented edge, a degenerate face; with ``features``, a face touching a crease) is
+summed the long way, face by face and edge by edge over the mesh's edge table, which is only built then
 (:func:`edge_beta_scale`). With ``centres`` (a region), the star terms are computed only for the
 vertices the region's supports hold, so the cost follows the region.
 """
@@ -200,7 +200,7 @@ of each face's area, and a pad to one cache line."""
 
 @jit_parallel
 def _star_terms(ids, parts, width, vc_ptr, vc, tri, x, y, z, vector_area, area, degenerate, nonmanifold, inconsistent,
-                half_scale, star, clean):
+                crease, half_scale, star, clean):
     for t in prange(parts):
         previous = np.empty(width, np.int64)  # the vertex before v in each face at v
         for i in range((t * ids.size) // parts, ((t + 1) * ids.size) // parts):
@@ -222,6 +222,8 @@ def _star_terms(ids, parts, width, vc_ptr, vc, tri, x, y, z, vector_area, area, 
                 if degenerate[f]:
                     ok = False
                     continue
+                if touches(crease, tri, f):
+                    ok = False  # the feature path leaves this face out and halves its edges' terms
                 third += area[f] / 3.0
                 w = tri[f, c + 1 if c < 2 else 0]
                 # the face across v -> w: the face at v where w precedes v (one at most on a clean vertex)
@@ -260,7 +262,8 @@ def _star_terms(ids, parts, width, vc_ptr, vc, tri, x, y, z, vector_area, area, 
             clean[v] = ok
 
 
-def star_terms(mesh: Mesh, ids: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def star_terms(mesh: Mesh, ids: np.ndarray | None = None, crease: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What every centre whose support holds vertex v shares: v's half of its edges and third of its faces.
 
     Parameters
@@ -269,6 +272,8 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None) -> tuple[np.ndarray, n
         Triangle mesh.
     ids : (k,) int64, optional
         Compute only these vertices (a region's supports); the other rows are left unset.
+    crease : (n,) bool, optional
+        Crease vertices (``features``): a vertex with a face touching one is not clean.
 
     Returns
     -------
@@ -280,7 +285,8 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None) -> tuple[np.ndarray, n
         zz), then a third of the area of each face at v (column 7 is padding).
     clean : (n,) bool
         v's terms are exact for the sums: no non-manifold or inconsistent edge at v and no
-        degenerate face (then the edges out of v are all its edges, each once).
+        degenerate face (then the edges out of v are all its edges, each once), and no face at v
+        touching a crease vertex.
 
     Notes
     -----
@@ -293,12 +299,13 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None) -> tuple[np.ndarray, n
     half_scale = np.empty(3 * tri.shape[0])
     star = np.empty((n, STAR))
     clean = np.empty(n, np.bool_)
+    crease = np.zeros(n, np.bool_) if crease is None else crease
     x, y, z = coordinate_columns(mesh)
     ids = element_list(n, ids)
     width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
     parts = max(1, min(8 * threads(), ids.size))  # slices of vertices, each with its own scratch
     launch(_star_terms, ids, parts, width, vc_ptr, vc, tri, x, y, z, mesh.face_vector_areas, mesh.face_areas,
-           mesh.degenerate_faces, mesh.nonmanifold_vertices, mesh.inconsistent_vertices, half_scale, star, clean)
+           mesh.degenerate_faces, mesh.nonmanifold_vertices, mesh.inconsistent_vertices, crease, half_scale, star, clean)
     return half_scale, star, clean
 
 
@@ -369,7 +376,7 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
-            exact = not cut
+            exact = True
             for i in range(count):
                 v = queue[i]
                 hit |= vertex_bits(v, border, nonmanifold)
@@ -528,10 +535,10 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
     radii = np.ascontiguousarray(radii, dtype=np.float64)
     touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[0] if region else None
-    half_scale, star, clean = star_terms(mesh, touched)
+    half_scale, star, clean = star_terms(mesh, touched, crease)
     yield 0.0
-    # the edge table only where a support is not clean (or stops at creases): they walk edge by edge
-    walk = blocked is not None or not (clean.all() if touched is None else clean[touched].all())
+    # the edge table only where a support is not clean (or near a crease): they walk edge by edge
+    walk = not (clean.all() if touched is None else clean[touched].all())
     if walk:
         edges = mesh.edges
         edge_ids = touched_elements(mesh, centres, radii, indptr, indices, edges=True)[2] if region else None

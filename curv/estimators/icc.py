@@ -39,8 +39,8 @@ by thirds. Only the triangles that cross the sphere are clipped: each is found o
 halfedge v -> w leaving the ball (v in the support), and its thirds in the sum are replaced by its
 area fraction (:func:`curv.estimators._ball_clipping.crossing_area`). Support vertices whose
 every edge stays inside the ball are not walked. A support holding a non-manifold vertex, a
-degenerate triangle or one without measures, and every support with ``features``, is summed the
-long way, face by face. For a region, the measures and the thirds are computed only for the
+degenerate triangle or one without measures (with ``features``, one touching a crease) is summed
+the long way, face by face. For a region, the measures and the thirds are computed only for the
 triangles and vertices its supports touch.
 With ``features``, the triangles touching a crease vertex are left out of the sums: their normal
 field would use the crease vertex's normal (or its side's), tilted by O(h) from the surface's,
@@ -157,7 +157,7 @@ def _row_is_finite(a, r):
 
 
 @jit_parallel
-def _star_measures(ids, vc_ptr, vc, measures, degenerate, nonmanifold, star, clean):
+def _star_measures(ids, vc_ptr, vc, tri, measures, degenerate, nonmanifold, crease, star, clean):
     for i in prange(ids.size):
         v = ids[i]
         ok = not nonmanifold[v]
@@ -168,12 +168,15 @@ def _star_measures(ids, vc_ptr, vc, measures, degenerate, nonmanifold, star, cle
             if degenerate[f] or not _row_is_finite(measures, f):
                 ok = False
                 continue
+            if touches(crease, tri, f):
+                ok = False  # the feature path leaves this face out
             for c in range(MEASURES):
                 star[v, c] += measures[f, c] / 3.0
         clean[v] = ok
 
 
-def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = None,
+                  crease: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """A third of the measures of every face at each vertex: what the centres whose support holds it share.
 
     Parameters
@@ -184,6 +187,8 @@ def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = Non
         :func:`face_measures`.
     ids : (k,) int64, optional
         Compute only these vertices (a region's supports); the other rows are left unset.
+    crease : (n,) bool, optional
+        Crease vertices (``features``): a vertex with a face touching one is not clean.
 
     Returns
     -------
@@ -192,14 +197,15 @@ def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = Non
     clean : (n,) bool
         v's sums are exact: v is manifold (its support search expands through it, so every face
         at v inside the ball has all its corners in the support) and no face at v is degenerate
-        or without measures.
+        or without measures, or touching a crease vertex.
     """
     n = mesh.n_vertices
     vc_ptr, vc = mesh.vertex_corners
     star = np.empty((n, MEASURES))
     clean = np.empty(n, np.bool_)
-    launch(_star_measures, element_list(n, ids), vc_ptr, vc, measures, mesh.degenerate_faces,
-           mesh.nonmanifold_vertices, star, clean)
+    crease = np.zeros(n, np.bool_) if crease is None else crease
+    launch(_star_measures, element_list(n, ids), vc_ptr, vc, np.ascontiguousarray(mesh.triangles), measures,
+           mesh.degenerate_faces, mesh.nonmanifold_vertices, crease, star, clean)
     return star, clean
 
 
@@ -260,7 +266,7 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
-            exact = not cut
+            exact = True
             for i in range(count):
                 v = queue[i]
                 hit |= vertex_bits(v, border, nonmanifold)
@@ -402,8 +408,8 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     radii = np.ascontiguousarray(radii, dtype=np.float64)
     touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False) if region else (None, None, None)
     measures = face_measures(mesh, normals, touched[1])
-    star, clean = star_measures(mesh, measures, touched[0])
-    walk = blocked is not None or not (clean.all() if touched[0] is None else clean[touched[0]].all())
+    star, clean = star_measures(mesh, measures, touched[0], crease)
+    walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
     width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
