@@ -13,11 +13,11 @@ import numpy as np
 
 from ..core.jit import jit
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import ball_support, coordinate_columns
+from ..geometry.neighbourhood import ball_support, cached_with_mesh, coordinate_columns
 from ..core.validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area",
-           "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list"]
+           "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list", "corner_width"]
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
@@ -482,3 +482,13 @@ def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr:
 def element_list(count: int, touched: np.ndarray | None) -> np.ndarray:
     """(k,) int64 the elements a per-face or per-edge pass must compute: ``touched``, or all ``count``."""
     return np.arange(count, dtype=np.int64) if touched is None else touched
+
+
+def corner_width(mesh: Mesh) -> int:
+    """The most corners at one vertex (at least 1): the length of a kernel's per-thread row for a
+    vertex's corners. Cached with the mesh, so a region's estimate does no O(n) work for it."""
+    def build():
+        indptr = mesh.vertex_corners[0]
+        return max(1, int(np.diff(indptr).max(initial=0)))
+
+    return cached_with_mesh(mesh, "corner width", build)

@@ -51,8 +51,8 @@ from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
                              new_queues, new_scratch)
-from ._ball_clipping import (DEGENERATE_BIT, crossing_area, element_list, exit_fraction, face_in_ball_area,
-                             support_reason, touched_elements, touches, vertex_bits)
+from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, exit_fraction,
+                             face_in_ball_area, support_reason, touched_elements, touches, vertex_bits)
 from ._small_linalg import sym3_eigen
 from ._triangle_corners import unset_principal
 from .registry import EstimatorSpec, register
@@ -302,10 +302,11 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None, crease: np.ndarray | N
     crease = np.zeros(n, np.bool_) if crease is None else crease
     x, y, z = coordinate_columns(mesh)
     ids = element_list(n, ids)
-    width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
+    width = corner_width(mesh)  # corners at a vertex, at most
     parts = max(1, min(8 * threads(), ids.size))  # slices of vertices, each with its own scratch
     launch(_star_terms, ids, parts, width, vc_ptr, vc, tri, x, y, z, mesh.face_vector_areas, mesh.face_areas,
-           mesh.degenerate_faces, mesh.nonmanifold_vertices, mesh.inconsistent_vertices, crease, half_scale, star, clean)
+           mesh.degenerate_faces, mesh.nonmanifold_vertices, mesh.inconsistent_vertices, crease, half_scale, star,
+           clean)
     return half_scale, star, clean
 
 
@@ -548,7 +549,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     else:
         beta_scale, halfedge_edge, edge_faces = np.empty(0), np.empty(0, np.int64), np.empty((0, 2), np.int64)
     vc_ptr, vc = mesh.vertex_corners
-    width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
+    width = corner_width(mesh)  # corners at a vertex, at most
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
@@ -560,7 +561,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     def run(lo: int, hi: int) -> None:
         launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, half_scale,
                star, clean, halfedge_edge, beta_scale, edge_faces, tri, mesh.face_vector_areas,
-               mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices, blocked is not None, crease,
+               mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
+               blocked is not None, crease,
                normals, width, vstamps, queues, estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)

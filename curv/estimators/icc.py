@@ -65,8 +65,8 @@ from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertice
                              new_queues, new_scratch)
 from ..core.validity import Reason
 from ._local_fit import store_principal, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, crossing_area, element_list, exit_fraction, face_in_ball_area,
-                             support_reason, touched_elements, touches, vertex_bits)
+from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, exit_fraction,
+                             face_in_ball_area, support_reason, touched_elements, touches, vertex_bits)
 from ._triangle_corners import unset_principal
 from .registry import EstimatorSpec, register
 
@@ -253,8 +253,8 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_
 
 @jit_parallel
 def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, star, clean, tri, vector_area,
-               face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, width, vstamps,
-               queues, fstamps, k1, k2, d1, d2, mean, gaussian, reason):
+               face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, width,
+               vstamps, queues, fstamps, k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
         out_h, out_w, out_t = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width)
@@ -412,7 +412,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
-    width = max(1, int(np.diff(vc_ptr).max(initial=0)))  # corners at a vertex, at most
+    width = corner_width(mesh)  # corners at a vertex, at most
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
     queues = new_queues(n, parts)
@@ -422,11 +422,10 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     gaussian = np.empty(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, star, clean, tri,
-               mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
+        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, star, clean,
+               tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
                mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, width, vstamps, queues,
-               fstamps,
-               out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
+               fstamps, out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return out, mean, gaussian
