@@ -13,11 +13,11 @@ import numpy as np
 
 from ..core.jit import jit
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import ball_support, coordinate_columns
+from ..geometry.neighbourhood import ball_support, cached_with_mesh, coordinate_columns
 from ..core.validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area",
-           "face_in_ball_area", "vertex_bits", "touches", "touched_elements", "element_list"]
+           "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list", "corner_width"]
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
@@ -172,7 +172,7 @@ def _triple(nx, ny, nz, ax, ay, az, bx, by, bz):
 
 
 @jit
-def _exit(ax, ay, az, qa_in, bx, by, bz, radius2):
+def exit_fraction(ax, ay, az, qa_in, bx, by, bz, radius2):
     """Parameter t in [0, 1] where the segment a -> b (a inside the ball around 0, b outside) leaves it.
 
     ``qa_in`` is ``|a|^2``. The same root as :func:`disc_triangle_area`'s, in 3-D (the offset of the
@@ -207,16 +207,15 @@ def _arc3(ex, ey, ez, fx, fy, fz, nx, ny, nz, h2, cx, cy, cz, gx, gy, gz, corner
 
 
 @jit
-def _two_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radius2, twice_area):
+def _two_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radius2, twice_area, tp):
     """Twice the area inside the ball of a triangle (i, j, k), counter-clockwise about n, whose
     corners i and j are inside (offsets from the centre; ``qi``, ``qj`` their squared lengths).
 
-    The boundary inside is i -> j -> p (where j -> k leaves) and q -> i (where k -> i comes back),
-    closed by the arc p -> q: the whole triangle's fan less the parts of the two edges beyond the
-    circle, plus the sector of the arc.
+    The boundary inside is i -> j -> p (where j -> k leaves, at ``tp``: :func:`exit_fraction`) and q -> i
+    (where k -> i comes back), closed by the arc p -> q: the whole triangle's fan less the parts of
+    the two edges beyond the circle, plus the sector of the arc.
     """
-    tp = _exit(jx, jy, jz, qj, kx, ky, kz, radius2)
-    tq = 1.0 - _exit(ix, iy, iz, qi, kx, ky, kz, radius2)  # k -> i enters where i -> k leaves
+    tq = 1.0 - exit_fraction(ix, iy, iz, qi, kx, ky, kz, radius2)  # k -> i enters where i -> k leaves
     px, py, pz = jx + tp * (kx - jx), jy + tp * (ky - jy), jz + tp * (kz - jz)
     qx, qy, qz = kx + tq * (ix - kx), ky + tq * (iy - ky), kz + tq * (iz - kz)
     straight = (twice_area - (1.0 - tp) * _triple(nx, ny, nz, jx, jy, jz, kx, ky, kz)
@@ -226,15 +225,15 @@ def _two_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radi
 
 
 @jit
-def _one_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, qk, nx, ny, nz, h2, radius2):
+def _one_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, nx, ny, nz, h2, radius2, tp, tk):
     """Twice the area inside the ball of a triangle (i, j, k), counter-clockwise about n, whose
     only corner inside is i.
 
-    The boundary inside leaves along i -> j at p and comes back along k -> i at q; the edge j -> k,
-    both ends outside, may pass through the disc between them (a second chord, two arcs).
+    The boundary inside leaves along i -> j at p (at ``tp``: :func:`exit_fraction`) and comes back along
+    k -> i at q (where i -> k leaves, at ``tk``); the edge j -> k, both ends outside, may pass
+    through the disc between them (a second chord, two arcs).
     """
-    tp = _exit(ix, iy, iz, qi, jx, jy, jz, radius2)
-    tq = 1.0 - _exit(ix, iy, iz, qi, kx, ky, kz, radius2)
+    tq = 1.0 - tk
     px, py, pz = ix + tp * (jx - ix), iy + tp * (jy - iy), iz + tp * (jz - iz)
     qx, qy, qz = kx + tq * (ix - kx), ky + tq * (iy - ky), kz + tq * (iz - kz)
     straight = tp * _triple(nx, ny, nz, ix, iy, iz, jx, jy, jz) + (1.0 - tq) * _triple(nx, ny, nz, kx, ky, kz,
@@ -244,7 +243,9 @@ def _one_inside(ix, iy, iz, qi, jx, jy, jz, qj, kx, ky, kz, qk, nx, ny, nz, h2, 
     qa = dx * dx + dy * dy + dz * dz
     qb = dx * jx + dy * jy + dz * jz
     disc = qb * qb - qa * (qj - radius2)
-    if disc > 0.0:
+    # the line meets the sphere (disc > 0) nearest the centre between j and k (0 < -qb < qa):
+    # otherwise both roots fall outside (0, 1) and the test below would fail after a square root
+    if disc > 0.0 and 0.0 < -qb < qa:
         sq = math.sqrt(disc)
         t1 = min(max((-qb - sq) / qa, 0.0), 1.0)
         t2 = min(max((-qb + sq) / qa, 0.0), 1.0)
@@ -303,19 +304,28 @@ def face_in_ball_area(tri, f, x, y, z, vector_area, area, px, py, pz, radius2):
     if inside == 2:
         twice = 2.0 * area[f]
         if not in0:
-            part = _two_inside(a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, a0x, a0y, a0z, nx, ny, nz, h2, radius2, twice)
+            part = _two_inside(a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, a0x, a0y, a0z, nx, ny, nz, h2, radius2, twice,
+                               exit_fraction(a2x, a2y, a2z, q2, a0x, a0y, a0z, radius2))
         elif not in1:
-            part = _two_inside(a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, a1x, a1y, a1z, nx, ny, nz, h2, radius2, twice)
+            part = _two_inside(a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, a1x, a1y, a1z, nx, ny, nz, h2, radius2, twice,
+                               exit_fraction(a0x, a0y, a0z, q0, a1x, a1y, a1z, radius2))
         else:
-            part = _two_inside(a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, a2x, a2y, a2z, nx, ny, nz, h2, radius2, twice)
+            part = _two_inside(a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, a2x, a2y, a2z, nx, ny, nz, h2, radius2, twice,
+                               exit_fraction(a1x, a1y, a1z, q1, a2x, a2y, a2z, radius2))
         part *= 0.5
     elif inside == 1:
         if in0:
-            part = _one_inside(a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, nx, ny, nz, h2, radius2)
+            part = _one_inside(a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, a2x, a2y, a2z, nx, ny, nz, h2, radius2,
+                               exit_fraction(a0x, a0y, a0z, q0, a1x, a1y, a1z, radius2),
+                               exit_fraction(a0x, a0y, a0z, q0, a2x, a2y, a2z, radius2))
         elif in1:
-            part = _one_inside(a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, nx, ny, nz, h2, radius2)
+            part = _one_inside(a1x, a1y, a1z, q1, a2x, a2y, a2z, q2, a0x, a0y, a0z, nx, ny, nz, h2, radius2,
+                               exit_fraction(a1x, a1y, a1z, q1, a2x, a2y, a2z, radius2),
+                               exit_fraction(a1x, a1y, a1z, q1, a0x, a0y, a0z, radius2))
         else:
-            part = _one_inside(a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, a1x, a1y, a1z, q1, nx, ny, nz, h2, radius2)
+            part = _one_inside(a2x, a2y, a2z, q2, a0x, a0y, a0z, q0, a1x, a1y, a1z, nx, ny, nz, h2, radius2,
+                               exit_fraction(a2x, a2y, a2z, q2, a0x, a0y, a0z, radius2),
+                               exit_fraction(a2x, a2y, a2z, q2, a1x, a1y, a1z, radius2))
         part *= 0.5
     else:
         # frame of the face: u along corner 0 -> 1, v = n x u; the corners' in-plane coordinates
@@ -327,6 +337,42 @@ def face_in_ball_area(tri, f, x, y, z, vector_area, area, px, py, pz, radius2):
         part = disc_triangle_area(a0x * ux + a0y * uy + a0z * uz, a0x * vx + a0y * vy + a0z * vz,
                                   a1x * ux + a1y * uy + a1z * uz, a1x * vx + a1y * vy + a1z * vz,
                                   a2x * ux + a2y * uy + a2z * uz, a2x * vx + a2y * vy + a2z * vz, radius2 - h2)
+    return part if math.isfinite(part) else 0.0
+
+
+@jit
+def crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area, area, radius2):
+    """Exact area inside the ball of a triangle f = (v, w, u) whose corner v is inside and w outside.
+
+    Parameters
+    ----------
+    f : int
+        The triangle, counter-clockwise (v, w, u): w follows v in it.
+    vx, vy, vz, wx, wy, wz, ux, uy, uz : float
+        The corners' offsets from the ball's centre; ``qv``, ``qw``, ``qu`` their squared lengths
+        (``qv <= radius2 < qw``).
+    tp, tu : float
+        Where v -> w and, if u is outside, v -> u leave the ball (:func:`exit_fraction`): the caller
+        has them for those edges already (``tu`` is not read when u is inside).
+    vector_area, area : (m, 3), (m,) float64
+        ``Mesh.face_vector_areas`` and ``Mesh.face_areas`` (area > 0).
+
+    Notes
+    -----
+    The same boundary as :func:`face_in_ball_area`'s for a face with one or two corners inside,
+    without its three-way test of which corners are in: u decides it.
+    """
+    inv = 1.0 / area[f]
+    nx, ny, nz = vector_area[f, 0] * inv, vector_area[f, 1] * inv, vector_area[f, 2] * inv
+    h = vx * nx + vy * ny + vz * nz
+    h2 = h * h
+    if not radius2 - h2 > 0.0:
+        return 0.0
+    if qu <= radius2:
+        part = _two_inside(ux, uy, uz, qu, vx, vy, vz, qv, wx, wy, wz, nx, ny, nz, h2, radius2, 2.0 * area[f], tp)
+    else:
+        part = _one_inside(vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, nx, ny, nz, h2, radius2, tp, tu)
+    part *= 0.5
     return part if math.isfinite(part) else 0.0
 
 
@@ -358,14 +404,20 @@ def _grow(a, count):
 
 @jit
 def _touched(centres, radii, indptr, indices, x, y, z, vc_ptr, vc, with_edges, halfedge_edge, vstamp, queue,
-             fseen, eseen):
+             vseen, fseen, eseen):
+    vertices = np.empty(64, np.int64)
     faces = np.empty(64, np.int64)
     edges = np.empty(64, np.int64)
-    nf = ne = 0
+    nv = nf = ne = 0
     for p in centres:
         count, queue = ball_support(p, radii[p] ** 2, indptr, indices, x, y, z, vstamp, queue)
         for i in range(count):
             v = queue[i]
+            if not vseen[v]:
+                vseen[v] = True
+                vertices = _grow(vertices, nv)
+                vertices[nv] = v
+                nv += 1
             for j in range(vc_ptr[v], vc_ptr[v + 1]):
                 h = vc[j]
                 f = h // 3
@@ -383,12 +435,12 @@ def _touched(centres, radii, indptr, indices, x, y, z, vc_ptr, vc, with_edges, h
                         edges = _grow(edges, ne)
                         edges[ne] = e
                         ne += 1
-    return faces[:nf], edges[:ne]
+    return vertices[:nv], faces[:nf], edges[:ne]
 
 
 def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr: np.ndarray,
-                     indices: np.ndarray, *, edges: bool) -> tuple[np.ndarray, np.ndarray | None]:
-    """The triangles (and edges) the supports of ``centres`` touch: what a region's estimate reads.
+                     indices: np.ndarray, *, edges: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The vertices, triangles (and edges) the supports of ``centres`` touch: what a region's estimate reads.
 
     Parameters
     ----------
@@ -405,6 +457,8 @@ def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr:
 
     Returns
     -------
+    vertices : (j,) int64
+        Every vertex of a support, once.
     faces : (k,) int64
         Every triangle with a corner in a support, once.
     edges : (l,) int64 or None
@@ -419,12 +473,22 @@ def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr:
     vc_ptr, vc = mesh.vertex_corners
     halfedge = mesh.halfedge_edge if edges else np.empty(0, np.int64)
     eseen = np.zeros(mesh.edges.shape[0] if edges else 0, np.bool_)
-    faces, edge_ids = _touched(centres, radii, indptr, indices, *coordinate_columns(mesh), vc_ptr, vc, edges,
-                               halfedge, np.zeros(n, np.int64), np.empty(n, np.int64),
-                               np.zeros(mesh.n_faces, np.bool_), eseen)
-    return faces, (edge_ids if edges else None)
+    vertices, faces, edge_ids = _touched(centres, radii, indptr, indices, *coordinate_columns(mesh), vc_ptr, vc,
+                                         edges, halfedge, np.zeros(n, np.int64), np.empty(n, np.int64),
+                                         np.zeros(n, np.bool_), np.zeros(mesh.n_faces, np.bool_), eseen)
+    return vertices, faces, (edge_ids if edges else None)
 
 
 def element_list(count: int, touched: np.ndarray | None) -> np.ndarray:
     """(k,) int64 the elements a per-face or per-edge pass must compute: ``touched``, or all ``count``."""
     return np.arange(count, dtype=np.int64) if touched is None else touched
+
+
+def corner_width(mesh: Mesh) -> int:
+    """The most corners at one vertex (at least 1): the length of a kernel's per-thread row for a
+    vertex's corners. Cached with the mesh, so a region's estimate does no O(n) work for it."""
+    def build():
+        indptr = mesh.vertex_corners[0]
+        return max(1, int(np.diff(indptr).max(initial=0)))
+
+    return cached_with_mesh(mesh, "corner width", build)

@@ -24,14 +24,21 @@ intersection and ``area(B ∩ face)`` the exact area of the triangle within the 
 How it runs
 -----------
 One parallel kernel per chunk of vertices (:func:`curv.core.jit.iter_chunks`); per vertex it searches
-the support and visits every edge and face touching it once, through the corners of the support's
-vertices (per-thread stamps over edges and faces, like the search's own visited stamps over
-vertices), so no (centre, edge) pairs are stored. One test sorts each face and edge: all corners
-inside the (convex) ball, the whole of it; only the faces and edges that cross the sphere are
-clipped exactly (:func:`curv.estimators._ball_clipping.face_in_ball_area`, :func:`segment_in_ball`).
-What neighbouring centres share is computed once: ``beta(e) / |e|`` per edge, and the mesh's
-cached face areas and vector areas. With ``centres`` (a region), ``beta`` is computed only for
-the edges the region's supports touch, so the cost follows the region.
+the support. What neighbouring centres share is computed once per call (:func:`star_terms`): for
+every vertex v, half of ``beta(e) |e| ê êᵀ`` summed over its edges and a third of the area of its
+faces. Summed over a support, these hold every edge and face inside the (convex) ball whole, each
+edge twice by halves and each face thrice by thirds; the only elements left to correct are those
+that cross the sphere. They are found as the halfedges v -> w leaving the ball (v in the support,
+w outside): each crossing edge once, and each crossing face (v, w, u) once, its one halfedge that
+goes from inside to outside. The edge's half is replaced by its exact part ``|e ∩ B|``
+(:func:`curv.estimators._ball_clipping.exit_fraction`) and the face's thirds by its exact area
+in the ball (:func:`curv.estimators._ball_clipping.crossing_area`, which reuses the edge's exit).
+Support vertices whose every edge stays inside the ball (``|v - p| + longest edge <= r``) are not
+walked at all. A support holding a vertex whose terms are not exact (a non-manifold or
+inconsistently oriented edge, a degenerate face; with ``features``, a face touching a crease) is
+summed the long way, face by face and edge by edge over the mesh's edge table, which is only built then
+(:func:`edge_beta_scale`). With ``centres`` (a region), the star terms are computed only for the
+vertices the region's supports hold, so the cost follows the region.
 """
 
 from __future__ import annotations
@@ -44,13 +51,13 @@ from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
                              new_queues, new_scratch)
-from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
-                             vertex_bits)
+from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, exit_fraction,
+                             face_in_ball_area, support_reason, touched_elements, touches, vertex_bits)
 from ._small_linalg import sym3_eigen
 from ._triangle_corners import unset_principal
 from .registry import EstimatorSpec, register
 
-__all__ = ["iter_csm", "segment_in_ball", "edge_beta_scale"]
+__all__ = ["iter_csm", "segment_in_ball", "edge_beta_scale", "star_terms"]
 
 
 # ---------------------------------------------------------------------------- clipping helpers
@@ -186,63 +193,271 @@ def _kept_share(e, edge_faces, crease, tri):
     return share
 
 
+STAR = 8
+"""Columns of the per-vertex star terms: half of each edge's ``beta |e| ê êᵀ`` (xx, xy, xz, yy, yz, zz), a third
+of each face's area, and a pad to one cache line."""
+
+
 @jit_parallel
-def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale,
-               edge_faces, tri, vector_area, face_area, degenerate, border, nonmanifold, cut, crease, normals,
-               vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
+def _star_terms(ids, parts, width, vc_ptr, vc, tri, x, y, z, vector_area, area, degenerate, nonmanifold, inconsistent,
+                crease, half_scale, star, clean):
+    for t in prange(parts):
+        previous = np.empty(width, np.int64)  # the vertex before v in each face at v
+        for i in range((t * ids.size) // parts, ((t + 1) * ids.size) // parts):
+            v = ids[i]
+            ok = not (nonmanifold[v] or inconsistent[v])
+            t00 = t01 = t02 = t11 = t12 = t22 = 0.0
+            third = 0.0
+            first, last = vc_ptr[v], vc_ptr[v + 1]
+            for j in range(first, last):
+                h = vc[j]
+                f = h // 3
+                c = h - 3 * f
+                previous[j - first] = tri[f, c - 1 if c > 0 else 2]
+            for j in range(first, last):
+                h = vc[j]
+                f = h // 3
+                c = h - 3 * f
+                half_scale[h] = 0.0
+                if degenerate[f]:
+                    ok = False
+                    continue
+                if touches(crease, tri, f):
+                    ok = False  # the feature path leaves this face out and halves its edges' terms
+                third += area[f] / 3.0
+                w = tri[f, c + 1 if c < 2 else 0]
+                # the face across v -> w: the face at v where w precedes v (one at most on a clean vertex)
+                g = -1
+                for k in range(last - first):
+                    if previous[k] == w:
+                        g = vc[first + k] // 3
+                if g < 0:
+                    continue  # a border edge: no dihedral term
+                # beta / |e| as _edge_beta_scale has it (its two orientations give the same bits)
+                dx, dy, dz = x[w] - x[v], y[w] - y[v], z[w] - z[v]
+                length = math.sqrt(dx * dx + dy * dy + dz * dz)
+                if not length > 0.0:
+                    continue
+                n0x, n0y, n0z = vector_area[f, 0] / area[f], vector_area[f, 1] / area[f], vector_area[f, 2] / area[f]
+                n1x, n1y, n1z = vector_area[g, 0] / area[g], vector_area[g, 1] / area[g], vector_area[g, 2] / area[g]
+                sx = n0y * n1z - n0z * n1y
+                sy = n0z * n1x - n0x * n1z
+                sz = n0x * n1y - n0y * n1x
+                beta = math.atan2((sx * dx + sy * dy + sz * dz) / length, n0x * n1x + n0y * n1y + n0z * n1z)
+                scale = beta / length
+                if not math.isfinite(scale):
+                    continue
+                half_scale[h] = scale
+                wt = 0.5 * scale
+                wx, wy = wt * dx, wt * dy
+                t00 += wx * dx
+                t01 += wx * dy
+                t02 += wx * dz
+                t11 += wy * dy
+                t12 += wy * dz
+                t22 += wt * dz * dz
+            star[v, 0], star[v, 1], star[v, 2] = t00, t01, t02
+            star[v, 3], star[v, 4], star[v, 5] = t11, t12, t22
+            star[v, 6] = third
+            clean[v] = ok
+
+
+def star_terms(mesh: Mesh, ids: np.ndarray | None = None, crease: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What every centre whose support holds vertex v shares: v's half of its edges and third of its faces.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Triangle mesh.
+    ids : (k,) int64, optional
+        Compute only these vertices (a region's supports); the other rows are left unset.
+    crease : (n,) bool, optional
+        Crease vertices (``features``): a vertex with a face touching one is not clean.
+
+    Returns
+    -------
+    half_scale : (3 m,) float64
+        ``beta(e) / |e|`` of the edge of each halfedge (corner h to the next corner of its face), as
+        :func:`edge_beta_scale` has it; 0 on a border edge.
+    star : (n, 8) float64
+        Half of ``beta(e) |e| ê êᵀ`` summed over the edges out of v (upper triangle, xx xy xz yy yz
+        zz), then a third of the area of each face at v (column 7 is padding).
+    clean : (n,) bool
+        v's terms are exact for the sums: no non-manifold or inconsistent edge at v and no
+        degenerate face (then the edges out of v are all its edges, each once), and no face at v
+        touching a crease vertex.
+
+    Notes
+    -----
+    The face across a halfedge v -> w is found among v's own corners (the one where w precedes v),
+    so no edge table is built; on a clean vertex there is exactly one, or none on a border edge.
+    """
+    tri = np.ascontiguousarray(mesh.triangles)
+    n = mesh.n_vertices
+    vc_ptr, vc = mesh.vertex_corners
+    half_scale = np.empty(3 * tri.shape[0])
+    star = np.empty((n, STAR))
+    clean = np.empty(n, np.bool_)
+    crease = np.zeros(n, np.bool_) if crease is None else crease
+    x, y, z = coordinate_columns(mesh)
+    ids = element_list(n, ids)
+    width = corner_width(mesh)  # corners at a vertex, at most
+    parts = max(1, min(8 * threads(), ids.size))  # slices of vertices, each with its own scratch
+    launch(_star_terms, ids, parts, width, vc_ptr, vc, tri, x, y, z, mesh.face_vector_areas, mesh.face_areas,
+           mesh.degenerate_faces, mesh.nonmanifold_vertices, mesh.inconsistent_vertices, crease, half_scale, star,
+           clean)
+    return half_scale, star, clean
+
+
+@jit
+def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri, vector_area,
+               face_area, degenerate, cut, crease, estamp, fstamp):
+    """The sums of a centre whose support is not clean (or that stops at creases), face by face and edge by edge.
+
+    Returns the upper triangle of T, the area and the DEGENERATE_BIT if a degenerate face was met.
+    """
+    mark = p + 1  # the stamps start zeroed
+    px, py, pz = x[p], y[p], z[p]
+    hit = 0
+    t00 = t01 = t02 = t11 = t12 = t22 = 0.0
+    area = 0.0
+    for i in range(count):
+        v = queue[i]
+        vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
+        for j in range(vc_ptr[v], vc_ptr[v + 1]):
+            h = vc[j]
+            f = h // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
+            if cut and crease[v]:
+                if degenerate[f]:
+                    hit |= DEGENERATE_BIT
+                continue
+            if fstamp[f] != mark:
+                fstamp[f] = mark
+                if degenerate[f]:
+                    hit |= DEGENERATE_BIT
+                elif not (cut and touches(crease, tri, f)):
+                    area += face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
+            # the edge out of v in triangle f: on a consistently oriented mesh every interior
+            # edge of v is one (border and non-manifold edges have no dihedral term)
+            e = halfedge_edge[h]
+            if e < 0 or estamp[e] == mark:
+                continue
+            estamp[e] = mark
+            s = beta_scale[e]
+            if cut and s != 0.0:
+                s *= _kept_share(e, edge_faces, crease, tri)
+            if s != 0.0:
+                w = tri[f, (h - 3 * f + 1) % 3]  # the edge runs from v to the next corner of f
+                a00, a01, a02, a11, a12, a22 = _edge_term(vx, vy, vz, x[w] - px, y[w] - py, z[w] - pz, r2, s)
+                t00 += a00
+                t01 += a01
+                t02 += a02
+                t11 += a11
+                t12 += a12
+                t22 += a22
+    return t00, t01, t02, t11, t12, t22, area, hit
+
+
+@jit_parallel
+def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, half_scale, star, clean,
+               halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area, degenerate, border,
+               nonmanifold, cut, crease, normals, width, vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
         vectors = np.empty((4, 3))
         tensor = np.empty((3, 3))
         res = np.empty(8)
+        out_h, out_w, out_t = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width)
         queue, vstamp, estamp, fstamp = queues[t], vstamps[t], estamps[t], fstamps[t]
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
-            mark = p + 1  # the stamps start zeroed
-            r2 = radii[p] ** 2
+            r = radii[p]
+            r2 = r ** 2
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
-            # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle); area(B ∩ mesh). Faces touching a
-            # crease vertex are left out, and with them their halves of their edges' terms
-            t00 = t01 = t02 = t11 = t12 = t22 = 0.0  # in registers, not in a scratch array
-            area = 0.0
+            exact = True
             for i in range(count):
                 v = queue[i]
                 hit |= vertex_bits(v, border, nonmanifold)
-                vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
-                for j in range(vc_ptr[v], vc_ptr[v + 1]):
-                    h = vc[j]
-                    f = h // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
-                    if cut and crease[v]:
-                        if degenerate[f]:
-                            hit |= DEGENERATE_BIT
+                if not clean[v]:
+                    exact = False
+            # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle) and area(B ∩ mesh), in registers
+            t00 = t01 = t02 = t11 = t12 = t22 = 0.0
+            area = 0.0
+            if exact:
+                # every edge and face inside the ball whole: the support's star terms hold each edge
+                # twice by halves and each face thrice by thirds; an edge v -> w leaving the ball has
+                # one half in, and its face (v, w, u) one or two thirds: replace them by what is inside
+                for i in range(count):
+                    v = queue[i]
+                    t00 += star[v, 0]
+                    t01 += star[v, 1]
+                    t02 += star[v, 2]
+                    t11 += star[v, 3]
+                    t12 += star[v, 4]
+                    t22 += star[v, 5]
+                    area += star[v, 6]
+                inner = r * (1.0 - 1e-12)  # below rounding: every edge at v inside when |v - p| + longest <= r
+                for i in range(count):
+                    v = queue[i]
+                    vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
+                    qv = vx * vx + vy * vy + vz * vz
+                    reach = inner - longest[v]
+                    if reach > 0.0 and qv <= reach * reach:
                         continue
-                    if fstamp[f] != mark:
-                        fstamp[f] = mark
-                        if degenerate[f]:
-                            hit |= DEGENERATE_BIT
-                        elif not (cut and touches(crease, tri, f)):
-                            area += face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
-                    # the edge out of v in triangle f: on a consistently oriented mesh every interior
-                    # edge of v is one (border and non-manifold edges have no dihedral term)
-                    e = halfedge_edge[h]
-                    if e < 0 or estamp[e] == mark:
-                        continue
-                    estamp[e] = mark
-                    s = beta_scale[e]
-                    if cut and s != 0.0:
-                        s *= _kept_share(e, edge_faces, crease, tri)
-                    if s != 0.0:
-                        w = tri[f, (h - 3 * f + 1) % 3]  # the edge runs from v to the next corner of f
-                        a00, a01, a02, a11, a12, a22 = _edge_term(vx, vy, vz, x[w] - px, y[w] - py, z[w] - pz,
-                                                                  r2, s)
-                        t00 += a00
-                        t01 += a01
-                        t02 += a02
-                        t11 += a11
-                        t12 += a12
-                        t22 += a22
+                    # the halfedges leaving the ball from v, with their exits (a face with v alone
+                    # inside leaves along two of them)
+                    leaving = 0
+                    for j in range(vc_ptr[v], vc_ptr[v + 1]):
+                        h = vc[j]
+                        f = h // 3
+                        c = h - 3 * f
+                        w = tri[f, c + 1 if c < 2 else 0]
+                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+                        qw = wx * wx + wy * wy + wz * wz
+                        if qw > r2:
+                            out_h[leaving] = h
+                            out_w[leaving] = w
+                            out_t[leaving] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, r2)
+                            leaving += 1
+                    for a in range(leaving):
+                        h, w, tp = out_h[a], out_w[a], out_t[a]
+                        f = h // 3
+                        c = h - 3 * f
+                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+                        qw = wx * wx + wy * wy + wz * wz
+                        u = tri[f, c - 1 if c > 0 else 2]
+                        ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
+                        qu = ux * ux + uy * uy + uz * uz
+                        tu = 0.0
+                        if qu > r2:
+                            tu = -1.0
+                            for b in range(leaving):
+                                if out_w[b] == u:
+                                    tu = out_t[b]
+                            if tu < 0.0:  # v -> u is on no face at v (a border edge)
+                                tu = exit_fraction(vx, vy, vz, qv, ux, uy, uz, r2)
+                        s = half_scale[h]
+                        if s != 0.0:
+                            wt = s * (tp - 0.5)
+                            dx, dy, dz = wx - vx, wy - vy, wz - vz
+                            ex, ey = wt * dx, wt * dy
+                            t00 += ex * dx
+                            t01 += ex * dy
+                            t02 += ex * dz
+                            t11 += ey * dy
+                            t12 += ey * dz
+                            t22 += wt * dz * dz
+                        third = face_area[f] / 3.0
+                        area += crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area,
+                                              face_area, r2) - (third + third if qu <= r2 else third)
+            else:
+                t00, t01, t02, t11, t12, t22, area, bits = _walk_sums(
+                    p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri, vector_area,
+                    face_area, degenerate, cut, crease, estamp, fstamp)
+                hit |= bits
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
             singular = not (area > 0.0 and math.isfinite(t00 + t01 + t02 + t11 + t12 + t22))
@@ -312,7 +527,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     centres = all_centres(n, centres)
     x, y, z = coordinate_columns(mesh)
     # the mesh's connectivity may not be built yet: one piece per step, so that cancel stays prompt
-    for name in ("degenerate_faces", "face_vector_areas", "edges", "adjacency", "vertex_corners", "border_vertices",
+    for name in ("degenerate_faces", "face_vector_areas", "adjacency", "vertex_corners", "border_vertices",
                  "nonmanifold_vertices"):
         getattr(mesh, name)
         yield 0.0
@@ -320,24 +535,35 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     indptr, indices = expansion_adjacency(mesh, blocked)
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
     radii = np.ascontiguousarray(radii, dtype=np.float64)
-    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=True)[1] if region else None
-    beta_scale = edge_beta_scale(mesh, touched)
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[0] if region else None
+    half_scale, star, clean = star_terms(mesh, touched, crease)
     yield 0.0
+    # the edge table only where a support is not clean (or near a crease): they walk edge by edge
+    walk = not (clean.all() if touched is None else clean[touched].all())
+    if walk:
+        edges = mesh.edges
+        edge_ids = touched_elements(mesh, centres, radii, indptr, indices, edges=True)[2] if region else None
+        beta_scale = edge_beta_scale(mesh, edge_ids)
+        halfedge_edge, edge_faces = mesh.halfedge_edge, mesh.edge_faces
+        yield 0.0
+    else:
+        beta_scale, halfedge_edge, edge_faces = np.empty(0), np.empty(0, np.int64), np.empty((0, 2), np.int64)
     vc_ptr, vc = mesh.vertex_corners
+    width = corner_width(mesh)  # corners at a vertex, at most
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
-    edges = mesh.edges
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
     queues = new_queues(n, parts)
-    estamps = np.zeros((parts, edges.shape[0]), np.int32)  # vertex ids fit; half the cache lines
-    fstamps = np.zeros((parts, tri.shape[0]), np.int32)
+    estamps = np.zeros((parts, beta_scale.size), np.int32)  # vertex ids fit; half the cache lines
+    fstamps = np.zeros((parts, tri.shape[0] if walk else 0), np.int32)
     out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
 
     def run(lo: int, hi: int) -> None:
-        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, mesh.halfedge_edge,
-               beta_scale, mesh.edge_faces, tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces,
-               mesh.border_vertices, mesh.nonmanifold_vertices, blocked is not None, crease, normals, vstamps, queues,
-               estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
+        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, half_scale,
+               star, clean, halfedge_edge, beta_scale, edge_faces, tri, mesh.face_vector_areas,
+               mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
+               blocked is not None, crease,
+               normals, width, vstamps, queues, estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return out
@@ -349,5 +575,5 @@ register(EstimatorSpec(
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",
-    kernels=(_edge_beta_scale, _csm_chunk),
+    kernels=(_star_terms, _edge_beta_scale, _csm_chunk),
 ))

@@ -33,8 +33,15 @@ vertex noise the eigenvalues of M are the more robust (K from mu2 is the noisier
 noise of 0.1 mean edge lengths on the 3169-vertex patches, median e_rel at R4 0.09-0.25 from M
 against 0.15-0.68 from mu1 and mu2. :func:`icc_mean_gaussian` returns H and K themselves.
 
-Only the triangles that cross the sphere are clipped (all three corners inside: weight 1), and the
-measures of the triangles are computed once per call, for a region only those its supports touch.
+The measures of the triangles are computed once per call, and a third of them summed at each vertex
+(:func:`star_measures`); summed over a support, these hold every triangle inside the ball whole,
+by thirds. Only the triangles that cross the sphere are clipped: each is found once, as its one
+halfedge v -> w leaving the ball (v in the support), and its thirds in the sum are replaced by its
+area fraction (:func:`curv.estimators._ball_clipping.crossing_area`). Support vertices whose
+every edge stays inside the ball are not walked. A support holding a non-manifold vertex, a
+degenerate triangle or one without measures (with ``features``, one touching a crease) is summed
+the long way, face by face. For a region, the measures and the thirds are computed only for the
+triangles and vertices its supports touch.
 With ``features``, the triangles touching a crease vertex are left out of the sums: their normal
 field would use the crease vertex's normal (or its side's), tilted by O(h) from the surface's,
 which the normal differences turn into an O(1) error next to the crease.
@@ -58,12 +65,12 @@ from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertice
                              new_queues, new_scratch)
 from ..core.validity import Reason
 from ._local_fit import store_principal, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, element_list, face_in_ball_area, support_reason, touched_elements, touches,
-                             vertex_bits)
+from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, exit_fraction,
+                             face_in_ball_area, support_reason, touched_elements, touches, vertex_bits)
 from ._triangle_corners import unset_principal
 from .registry import EstimatorSpec, register
 
-__all__ = ["iter_icc", "icc_mean_gaussian", "face_measures"]
+__all__ = ["iter_icc", "icc_mean_gaussian", "face_measures", "star_measures"]
 
 
 EPS = float(np.finfo(np.float64).eps)
@@ -150,51 +157,197 @@ def _row_is_finite(a, r):
 
 
 @jit_parallel
-def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri, vector_area, face_area,
-               degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, vstamps, queues, fstamps,
-               k1, k2, d1, d2, mean, gaussian, reason):
+def _star_measures(ids, vc_ptr, vc, tri, measures, degenerate, nonmanifold, crease, star, clean):
+    for i in prange(ids.size):
+        v = ids[i]
+        ok = not nonmanifold[v]
+        for c in range(MEASURES):
+            star[v, c] = 0.0
+        for j in range(vc_ptr[v], vc_ptr[v + 1]):
+            f = vc[j] // 3
+            if degenerate[f] or not _row_is_finite(measures, f):
+                ok = False
+                continue
+            if touches(crease, tri, f):
+                ok = False  # the feature path leaves this face out
+            for c in range(MEASURES):
+                star[v, c] += measures[f, c] / 3.0
+        clean[v] = ok
+
+
+def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = None,
+                  crease: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """A third of the measures of every face at each vertex: what the centres whose support holds it share.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Triangle mesh.
+    measures : (m, 9) float64
+        :func:`face_measures`.
+    ids : (k,) int64, optional
+        Compute only these vertices (a region's supports); the other rows are left unset.
+    crease : (n,) bool, optional
+        Crease vertices (``features``): a vertex with a face touching one is not clean.
+
+    Returns
+    -------
+    star : (n, 9) float64
+        The sum over the faces at v of a third of their measures.
+    clean : (n,) bool
+        v's sums are exact: v is manifold (its support search expands through it, so every face
+        at v inside the ball has all its corners in the support) and no face at v is degenerate
+        or without measures, or touching a crease vertex.
+    """
+    n = mesh.n_vertices
+    vc_ptr, vc = mesh.vertex_corners
+    star = np.empty((n, MEASURES))
+    clean = np.empty(n, np.bool_)
+    crease = np.zeros(n, np.bool_) if crease is None else crease
+    launch(_star_measures, element_list(n, ids), vc_ptr, vc, np.ascontiguousarray(mesh.triangles), measures,
+           mesh.degenerate_faces, mesh.nonmanifold_vertices, crease, star, clean)
+    return star, clean
+
+
+@jit
+def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_area, degenerate, measures, cut,
+               crease, fstamp):
+    """The nine sums of a centre whose support is not clean (or that stops at creases), face by face.
+
+    Returns them and the DEGENERATE_BIT if a degenerate face or a face without measures was met.
+    """
+    mark = p + 1  # the stamps start zeroed
+    px, py, pz = x[p], y[p], z[p]
+    hit = 0
+    s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
+    for i in range(count):
+        v = queue[i]
+        for j in range(vc_ptr[v], vc_ptr[v + 1]):
+            f = vc[j] // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
+            if fstamp[f] == mark:
+                continue
+            fstamp[f] = mark
+            if degenerate[f]:
+                hit |= DEGENERATE_BIT
+                continue
+            if cut and touches(crease, tri, f):
+                continue  # the surface ends at a crease for this centre: its faces are left out
+            if not _row_is_finite(measures, f):
+                hit |= DEGENERATE_BIT  # a corner without a normal
+                continue
+            # weight: the fraction of the face's area inside B
+            inside = face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
+            w = min(inside / face_area[f], 1.0)
+            if w > 0.0:
+                s0 += w * measures[f, 0]
+                s1 += w * measures[f, 1]
+                s2 += w * measures[f, 2]
+                s3 += w * measures[f, 3]
+                s4 += w * measures[f, 4]
+                s5 += w * measures[f, 5]
+                s6 += w * measures[f, 6]
+                s7 += w * measures[f, 7]
+                s8 += w * measures[f, 8]
+    return s0, s1, s2, s3, s4, s5, s6, s7, s8, hit
+
+
+@jit_parallel
+def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, star, clean, tri, vector_area,
+               face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, width,
+               vstamps, queues, fstamps, k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
+        out_h, out_w, out_t = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width)
         queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
         for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
             p = centres[k]
-            mark = p + 1  # the stamps start zeroed
-            r2 = radii[p] ** 2
+            r = radii[p]
+            r2 = r ** 2
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
             px, py, pz = x[p], y[p], z[p]
             hit = 0
-            # the sums of the nine measures, in registers
-            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
-            mean[p] = gaussian[p] = math.nan
+            exact = True
             for i in range(count):
                 v = queue[i]
                 hit |= vertex_bits(v, border, nonmanifold)
-                for j in range(vc_ptr[v], vc_ptr[v + 1]):
-                    f = vc[j] // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
-                    if fstamp[f] == mark:
+                if not clean[v]:
+                    exact = False
+            mean[p] = gaussian[p] = math.nan
+            # the sums of the nine measures, in registers
+            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
+            if exact:
+                # the support's star sums hold every face inside the ball thrice by thirds; a face
+                # (v, w, u) leaving the ball along v -> w has one or two thirds in: replace them by
+                # the fraction of its area inside
+                for i in range(count):
+                    v = queue[i]
+                    s0 += star[v, 0]
+                    s1 += star[v, 1]
+                    s2 += star[v, 2]
+                    s3 += star[v, 3]
+                    s4 += star[v, 4]
+                    s5 += star[v, 5]
+                    s6 += star[v, 6]
+                    s7 += star[v, 7]
+                    s8 += star[v, 8]
+                inner = r * (1.0 - 1e-12)  # below rounding: every edge at v inside when |v - p| + longest <= r
+                for i in range(count):
+                    v = queue[i]
+                    vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
+                    qv = vx * vx + vy * vy + vz * vz
+                    reach = inner - longest[v]
+                    if reach > 0.0 and qv <= reach * reach:
                         continue
-                    fstamp[f] = mark
-                    if degenerate[f]:
-                        hit |= DEGENERATE_BIT
-                        continue
-                    if cut and touches(crease, tri, f):
-                        continue  # the surface ends at a crease for this centre: its faces are left out
-                    if not _row_is_finite(measures, f):
-                        hit |= DEGENERATE_BIT  # a corner without a normal
-                        continue
-                    # weight: the fraction of the face's area inside B
-                    inside = face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
-                    w = min(inside / face_area[f], 1.0)
-                    if w > 0.0:
-                        s0 += w * measures[f, 0]
-                        s1 += w * measures[f, 1]
-                        s2 += w * measures[f, 2]
-                        s3 += w * measures[f, 3]
-                        s4 += w * measures[f, 4]
-                        s5 += w * measures[f, 5]
-                        s6 += w * measures[f, 6]
-                        s7 += w * measures[f, 7]
-                        s8 += w * measures[f, 8]
+                    # the halfedges leaving the ball from v, with their exits (a face with v alone
+                    # inside leaves along two of them)
+                    leaving = 0
+                    for j in range(vc_ptr[v], vc_ptr[v + 1]):
+                        h = vc[j]
+                        f = h // 3
+                        c = h - 3 * f
+                        w = tri[f, c + 1 if c < 2 else 0]
+                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+                        qw = wx * wx + wy * wy + wz * wz
+                        if qw > r2:
+                            out_h[leaving] = h
+                            out_w[leaving] = w
+                            out_t[leaving] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, r2)
+                            leaving += 1
+                    for a in range(leaving):
+                        h, w, tp = out_h[a], out_w[a], out_t[a]
+                        f = h // 3
+                        c = h - 3 * f
+                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+                        qw = wx * wx + wy * wy + wz * wz
+                        u = tri[f, c - 1 if c > 0 else 2]
+                        ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
+                        qu = ux * ux + uy * uy + uz * uz
+                        tu = 0.0
+                        if qu > r2:
+                            tu = -1.0
+                            for b in range(leaving):
+                                if out_w[b] == u:
+                                    tu = out_t[b]
+                            if tu < 0.0:  # v -> u is on no face at v (a border edge)
+                                tu = exit_fraction(vx, vy, vz, qv, ux, uy, uz, r2)
+                        inside = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area,
+                                               face_area, r2)
+                        third = 1.0 / 3.0
+                        wt = min(inside / face_area[f], 1.0) - (third + third if qu <= r2 else third)
+                        s0 += wt * measures[f, 0]
+                        s1 += wt * measures[f, 1]
+                        s2 += wt * measures[f, 2]
+                        s3 += wt * measures[f, 3]
+                        s4 += wt * measures[f, 4]
+                        s5 += wt * measures[f, 5]
+                        s6 += wt * measures[f, 6]
+                        s7 += wt * measures[f, 7]
+                        s8 += wt * measures[f, 8]
+            else:
+                s0, s1, s2, s3, s4, s5, s6, s7, s8, bits = _walk_sums(
+                    p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_area, degenerate, measures, cut,
+                    crease, fstamp)
+                hit |= bits
             nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
             normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
             mu0 = s0
@@ -253,23 +406,26 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     indptr, indices = expansion_adjacency(mesh, blocked)
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
     radii = np.ascontiguousarray(radii, dtype=np.float64)
-    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[0] if region else None
-    measures = face_measures(mesh, normals, touched)
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False) if region else (None, None, None)
+    measures = face_measures(mesh, normals, touched[1])
+    star, clean = star_measures(mesh, measures, touched[0], crease)
+    walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
     vc_ptr, vc = mesh.vertex_corners
+    width = corner_width(mesh)  # corners at a vertex, at most
     parts = max(1, min(threads(), centres.size))
     vstamps = new_scratch(n, parts)
     queues = new_queues(n, parts)
-    fstamps = np.zeros((parts, tri.shape[0]), np.int32)
+    fstamps = np.zeros((parts, tri.shape[0] if walk else 0), np.int32)
     out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
     mean = np.empty(n)  # NaN at each centre before its sums (a region touches only its own pages)
     gaussian = np.empty(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, vc_ptr, vc, tri,
-               mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
-               mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, vstamps, queues, fstamps,
-               out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
+        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, star, clean,
+               tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
+               mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, width, vstamps, queues,
+               fstamps, out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return out, mean, gaussian
@@ -345,6 +501,6 @@ register(EstimatorSpec(
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
-    kernels=(_face_measures, _icc_chunk),
+    kernels=(_face_measures, _star_measures, _icc_chunk),
     options={"from_measures": (True, False)},
 ))
