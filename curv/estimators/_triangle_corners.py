@@ -16,8 +16,10 @@ import math
 import numpy as np
 
 from ..core.jit import jit
+from ..core.mesh import Mesh
 from ..core.result import Principal
 from ..core.validity import Reason
+from ..geometry.neighbourhood import all_centres
 
 __all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag", "unset_principal"]
 
@@ -158,6 +160,24 @@ def ring_reason(singular, border, degenerate, nonmanifold):
     if singular:
         return SINGULAR
     return OK
+
+
+def ring_run(mesh: Mesh, centres: np.ndarray | None) -> tuple:
+    """What a 1-ring estimator on triangles starts from: ``(centres, out, ring)``.
+
+    ``centres`` (c,) int64 (every vertex when None), ``out`` the unset outputs
+    (:func:`unset_principal`) and ``ring`` the mesh's corner arrays the ring kernels read, in their
+    order: vertex corners (indptr, corners), face indices, next and previous corner, corner face,
+    vertex positions, and the degenerate-face, border and non-manifold vertex flags. A
+    :class:`~curv.core.errors.MeshError` naming the polygon sizes when the mesh is not all triangles.
+    """
+    n = mesh.n_vertices
+    if not mesh.is_triangular:
+        mesh.triangles  # raises the MeshError that names the polygon sizes
+    indptr, corners = mesh.vertex_corners
+    ring = (indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face, mesh.vertices,
+            mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices)
+    return all_centres(n, centres), unset_principal(n), ring
 
 
 def unset_principal(n: int) -> Principal:

@@ -28,10 +28,9 @@ from ..core import connectivity
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.filled import filled
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import all_centres
 from ..geometry.normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
 from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
-from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, turn_by_corner, unset_principal
+from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, ring_run, turn_by_corner
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_meyer"]
@@ -168,11 +167,8 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
     Principal
     """
     n = mesh.n_vertices
-    centres = all_centres(n, centres)
-    out = unset_principal(n)
-    if not mesh.is_triangular:
-        mesh.triangles  # raises the MeshError that names the polygon sizes
-    indptr, corners = mesh.vertex_corners
+    centres, out, ring = ring_run(mesh, centres)
+    indptr = ring[0]
     own_normals = normals is None
     if own_normals:
         # NaN outside a region, at the cost of the region's rows
@@ -182,9 +178,7 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
         normals = np.asarray(normals, dtype=np.float64)  # any layout: no copy of the whole mesh
         unusable = np.zeros(0, bool)
     width = int((indptr[centres + 1] - indptr[centres]).max(initial=0)) + 1
-    args = (width, indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
-            mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices, unusable,
-            own_normals, normals, out.k1, out.k2, out.d1, out.d2, out.reason)
+    args = (width, *ring, unusable, own_normals, normals, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
         launch(_meyer, centres, lo, hi, max(1, min(threads(), hi - lo)), *args)

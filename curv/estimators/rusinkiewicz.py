@@ -25,9 +25,8 @@ import numpy as np
 from ..core import connectivity
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import all_centres
 from ._local_fit import solve_sym3, store_principal, tangent_frame
-from ._triangle_corners import corner_triangle, ring_flag, ring_reason, unset_principal
+from ._triangle_corners import corner_triangle, ring_flag, ring_reason, ring_run
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_ru"]
@@ -183,17 +182,10 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
     -------
     Principal
     """
-    n = mesh.n_vertices
-    centres = all_centres(n, centres)
-    out = unset_principal(n)
-    if not mesh.is_triangular:
-        mesh.triangles  # raises the MeshError that names the polygon sizes
-    indptr, corners = mesh.vertex_corners
+    centres, out, ring = ring_run(mesh, centres)
     crease = features.vertices if features is not None and features.any else np.zeros(0, bool)
     # normals in any memory layout: a copy would cost the whole mesh for a small region
-    args = (indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face,
-            mesh.vertices, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
-            np.asarray(normals, dtype=np.float64), crease, out.k1, out.k2, out.d1, out.d2, out.reason)
+    args = (*ring, np.asarray(normals, dtype=np.float64), crease, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
         launch(_ru, centres, lo, hi, *args)
