@@ -45,7 +45,7 @@ from ._pooling import pool_members, pool_rings, pool_standard_errors, rad_bias
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
-           "clear_parts", "store_parts", "ring_gradient", "gradient_column", "list_slot",
+           "clear_parts", "store_parts", "ring_gradient", "gradient_column", "list_room", "list_slot",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 MIN_TANGENT_LENGTH = 1e-9
@@ -357,9 +357,22 @@ def gradient_column(w, v, i00, i01, i11, sdu, sdv, x, y, z, ux, uy, uz, vx, vy, 
 
 
 @jit
+def list_room(v, queue, count, ring_ptr, touched, yv, jp):
+    """The short lists of vertex v's noise model (:func:`list_slot`), grown to hold every vertex its
+    support ``queue[:count]`` and their edge neighbours can bring. Returns ``(touched, yv, jp)``."""
+    need = 0
+    for i in range(count):
+        q = queue[i]
+        need += ring_ptr[q + 1] - ring_ptr[q] + 1
+    if need <= touched.size:
+        return touched, yv, jp
+    return np.empty(need, np.int64), np.empty((need, yv.shape[1])), np.empty((need, 2))
+
+
+@jit
 def list_slot(w, slots, touched, yv, jp, used):
     """The place of vertex w in the short lists of a vertex's noise model (added, with zero sums, when
-    new); the lists grow when full.
+    new; :func:`list_room` makes the room first).
 
     Parameters
     ----------
@@ -375,23 +388,16 @@ def list_slot(w, slots, touched, yv, jp, used):
 
     Returns
     -------
-    place, used, touched, yv, jp
+    place, used : int
     """
     s = slots[w]
     if s > 0:
-        return s - 1, used, touched, yv, jp
-    if used == touched.size:
-        bigger = 2 * touched.size
-        t2, y2, j2 = np.empty(bigger, np.int64), np.empty((bigger, yv.shape[1])), np.empty((bigger, 2))
-        t2[:used] = touched[:used]
-        y2[:used] = yv[:used]
-        j2[:used] = jp[:used]
-        touched, yv, jp = t2, y2, j2
+        return s - 1, used
     touched[used] = w
     yv[used, :] = 0.0
     jp[used, 0] = jp[used, 1] = 0.0
     slots[w] = used + 1
-    return used, used + 1, touched, yv, jp
+    return used, used + 1
 
 
 @jit

@@ -25,7 +25,7 @@ from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, cholesky_scaled, clear_parts, deviator_gradients,
-                         factor_whiten, finish_fit, gradient_column, list_slot, mark_degenerate, offset_in_frame,
+                         factor_whiten, finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame,
                          principal_gradients, ring_gradient, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3,
                          store_parts, store_se3, tangent_frame, SE_PARTS_BYTES, SLOT_BYTES)
 from .registry import EstimatorSpec, register
@@ -197,6 +197,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
     n0, n1, n2 = nx[p], ny[p], nz[p]
     tiny2 = MIN_TANGENT_LENGTH ** 2
     used = 0
+    touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
     var1 = var2 = vard = spare = 0.0
     agg[:, :] = 0.0  # Σ height rows, Σ height rows · U, · V, Σ u-slope rows, Σ v-slope rows
     pi00, pi01, pi11, psu, psv, ok = ring_gradient(p, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
@@ -206,7 +207,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
         for k in range(ring_ptr[p], ring_ptr[p + 1] + 1):
             w = p if k == ring_ptr[p + 1] else ring[k]
             c0, c1 = gradient_column(w, p, pi00, pi01, pi11, psu, psv, x, y, z, ux, uy, uz, vx, vy, vz)
-            s, used, touched, yv, jp = list_slot(w, slots, touched, yv, jp, used)
+            s, used = list_slot(w, slots, touched, yv, jp, used)
             jp[s, 0] = c0
             jp[s, 1] = c1
             p00 += c0 * c0
@@ -223,7 +224,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
             uu, uv, vv = u * u, u * v, v * v
             row[0], row[1], row[2] = 0.5 * uu, uv, 0.5 * vv
             row[3], row[4], row[5], row[6] = uu * u, uu * v, u * vv, vv * v
-            s, used, touched, yv, jp = list_slot(q, slots, touched, yv, jp, used)
+            s, used = list_slot(q, slots, touched, yv, jp, used)
             for j in range(7):
                 yv[s, j] += row[j] * inv_r
                 agg[0, j] += row[j]
@@ -259,7 +260,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
             for k in range(ring_ptr[q], ring_ptr[q + 1] + 1):
                 w = q if k == ring_ptr[q + 1] else ring[k]
                 c0, c1 = gradient_column(w, q, qi00, qi01, qi11, qsu, qsv, x, y, z, ux, uy, uz, vx, vy, vz)
-                s, used, touched, yv, jp = list_slot(w, slots, touched, yv, jp, used)
+                s, used = list_slot(w, slots, touched, yv, jp, used)
                 yv[s, 0] += ru0 * c0
                 yv[s, 1] += ru1 * c0 + rv1 * c1
                 yv[s, 2] += rv2 * c1

@@ -17,7 +17,7 @@ from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, SE_PARTS_BYTES, SLOT_BYTES, clear_parts, deviator_gradients,
-                         finish_fit, gradient_column, list_slot, mark_degenerate, offset_in_frame, principal_gradients,
+                         finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame, principal_gradients,
                          ring_gradient, run_fit, slice_bounds, solve_sym3, store_parts, store_se3, sym3_inverse,
                          tangent_frame)
 from .registry import EstimatorSpec, register
@@ -56,6 +56,7 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
     ux, uy, uz, vx, vy, vz = frame
     n0, n1, n2 = nx[p], ny[p], nz[p]
     used = 0
+    touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
     ok = True
     var1 = var2 = vard = spare = 0.0
     pi00, pi01, pi11, psu, psv, good = ring_gradient(p, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
@@ -67,7 +68,7 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
         for k in range(ring_ptr[p], ring_ptr[p + 1] + 1):
             w = p if k == ring_ptr[p + 1] else ring[k]
             c0, c1 = gradient_column(w, p, pi00, pi01, pi11, psu, psv, x, y, z, ux, uy, uz, vx, vy, vz)
-            s, used, touched, yv, jp = list_slot(w, slots, touched, yv, jp, used)
+            s, used = list_slot(w, slots, touched, yv, jp, used)
             jp[s, 0] = c0
             jp[s, 1] = c1
             jpn += c0 * c0 + c1 * c1
@@ -86,7 +87,7 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
             for k in range(ring_ptr[q], ring_ptr[q + 1] + 1):
                 w = q if k == ring_ptr[q + 1] else ring[k]
                 c0, c1 = gradient_column(w, q, qi00, qi01, qi11, qsu, qsv, x, y, z, ux, uy, uz, vx, vy, vz)
-                s, used, touched, yv, jp = list_slot(w, slots, touched, yv, jp, used)
+                s, used = list_slot(w, slots, touched, yv, jp, used)
                 # rows (u, v, 0) and (0, u, v) of the a and b equations
                 yv[s, 0] += u * c0
                 yv[s, 1] += v * c0 + u * c1
