@@ -692,11 +692,14 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     Principal
     """
     n = mesh.n_vertices
-    whole = centres is None or centres.size == n
+    given = centres is not None
     centres = all_centres(n, centres)
+    # each vertex once (the pooling pass updates its rows in place)
+    pooled = np.unique(centres) if given else centres
+    whole = pooled.size == n
     ring_ptr, ring = pool_rings(mesh)
     # a region's standard errors pool its neighbours' residuals too: fit them as well
-    fitted = centres if whole else pool_members(mesh, centres)
+    fitted = centres if whole else pool_members(mesh, pooled)
     adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
@@ -715,9 +718,9 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
                k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)
 
     yield from iter_chunks(fitted.size, run, chunk=chunk)
-    pool_standard_errors(centres, ring_ptr, ring, reason, parts, k1_se, k2_se)
+    pool_standard_errors(pooled, ring_ptr, ring, reason, parts, k1_se, k2_se)
     if not whole:
-        extra = np.setdiff1d(fitted, centres, assume_unique=True)
+        extra = np.setdiff1d(fitted, pooled, assume_unique=True)
         k1_se[extra] = np.nan
         k2_se[extra] = np.nan
     return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason, k1_se=k1_se, k2_se=k2_se)
