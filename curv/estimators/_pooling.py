@@ -27,7 +27,7 @@ from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
 from ..core.validity import Reason
 
-__all__ = ["pool_rings", "pool_members", "pool_standard_errors", "rad_bias"]
+__all__ = ["pool_rings", "pool_members", "pool_standard_errors", "rad_bias", "POOL_KERNEL"]
 
 _OK = np.uint8(Reason.OK)
 
@@ -81,6 +81,10 @@ def _pool_kernel(centres, ring_ptr, ring, reason, parts, k1_se, k2_se):
         bias = rad_bias(parts[p, 3], sigma2 * parts[p, 2])
         k1_se[p] = math.sqrt(sigma2 * k1_se[p] + bias * bias)
         k2_se[p] = math.sqrt(sigma2 * k2_se[p] + bias * bias)
+
+
+POOL_KERNEL = _pool_kernel
+"""The pooling pass's kernel (the fits list it among their kernels: a first run compiles it too)."""
 
 
 def pool_standard_errors(centres: np.ndarray, ring_ptr: np.ndarray, ring: np.ndarray, reason: np.ndarray,

@@ -28,6 +28,7 @@ from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, cholesky_scaled, clear_p
                          factor_whiten, finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame,
                          principal_gradients, ring_gradient, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3,
                          store_parts, store_se3, tangent_frame, SE_PARTS_BYTES, SLOT_BYTES)
+from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
 MIN_NORMAL_Z = 0.1
@@ -494,18 +495,18 @@ _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approxim
 register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_nc_kernel,),
+    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_nc_kernel, POOL_KERNEL),
     extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_qs_kernel,),
+    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_qs_kernel, POOL_KERNEL),
     extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_an_kernel,),
+    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_an_kernel, POOL_KERNEL),
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))

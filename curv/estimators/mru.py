@@ -20,6 +20,7 @@ from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, SE_PARTS_BYTES, SLOT_BYT
                          finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame, principal_gradients,
                          ring_gradient, run_fit, slice_bounds, solve_sym3, store_parts, store_se3, sym3_inverse,
                          tangent_frame)
+from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
 
@@ -216,6 +217,6 @@ register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
-    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel,),
+    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))
