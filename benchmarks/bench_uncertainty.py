@@ -15,8 +15,9 @@ for k1 and k2 pooled over the surfaces, samples and densities, and the median of
 over both. A Gaussian error of exactly the standard error's size would give 95 % and a median of 0.67;
 above that the standard error is too small, below it too large.
 
-``--normals``: an and mru at R2 and R3 with the default normals, ``normals="fit"`` and the exact
-normals, on six random trigonometric patches of 3169 vertices at 100 % noise (k1 only): their
+``an`` and ``mru`` run with each ``noise_model`` (the default independent equations, and
+``"normals"``). ``--normals``: an and mru (``noise_model="normals"``) at R2 and R3 with the default
+normals, ``normals="fit"`` and the exact normals, on six random trigonometric patches of 3169 vertices at 100 % noise (k1 only): their
 standard errors model the default normals (made from the noisy mesh).
 """
 
@@ -32,14 +33,17 @@ from curv.study.protocol import Task
 from curv.study.testmesh import build_test_mesh
 from curv.surfaces import PAPER_SURFACES
 
+_NORMALS = {"noise_model": "normals"}
 VARIANTS = (("nc", 1, {}), ("nc", 2, {}), ("nc", 4, {}), ("qs", 1, {}), ("qs", 2, {}), ("qs", 4, {}),
-            ("an", 2, {}), ("an", 3, {}), ("an", 4, {}), ("mru", 2, {}), ("mru", 3, {}), ("mru", 4, {}),
+            ("an", 2, {}), ("an", 3, {}), ("an", 4, {}), ("an", 2, _NORMALS), ("an", 3, _NORMALS), ("an", 4, _NORMALS),
+            ("mru", 2, {}), ("mru", 3, {}), ("mru", 4, {}),
+            ("mru", 2, _NORMALS), ("mru", 3, _NORMALS), ("mru", 4, _NORMALS),
             ("jet", 2, {}), ("jet", 3, {}), ("jet", 4, {}), ("jet", 4, {"degree": 4}))
 NOISE = (0.0, 0.33, 0.67, 1.0)
 
 
 def label(method: str, k: int, opts: dict) -> str:
-    return f"{method} R{k}" + (f" degree {opts['degree']}" if opts else "")
+    return f"{method} R{k}" + "".join(f" {name.replace('_', ' ')} {value}" for name, value in opts.items())
 
 
 def error_ratios(res, truth, evaluated) -> np.ndarray:
@@ -62,6 +66,7 @@ def normals_study(seed: int) -> None:
         for method, k in (("an", 2), ("an", 3), ("mru", 2), ("mru", 3)):
             for kind in kinds:
                 opts = {} if kind == "default" else {"normals": "fit" if kind == "fit" else tm.truth.normals}
+                opts["noise_model"] = "normals"
                 res = curv.estimate(tm.mesh, method, k, **opts)
                 ok = tm.evaluated & res.valid
                 with np.errstate(divide="ignore", invalid="ignore"):

@@ -34,6 +34,7 @@ from typing import Generator
 
 import numpy as np
 
+from ..core.errors import EstimatorError
 from ..core.filled import filled
 from ..core.jit import iter_chunks, jit, launch, threads
 from ..core.mesh import Mesh
@@ -649,6 +650,32 @@ def mark_degenerate(p, k1, k2, d1, d2, reason):
     d1[p, :] = math.nan
     d2[p, :] = math.nan
     reason[p] = DEGENERATE
+
+
+NOISE_MODELS = ("independent", "normals")
+"""How the standard errors of ``an`` and ``mru`` (the fits that read the neighbours' normals) take
+the errors of those normals (the curvatures do not depend on it):
+
+- ``"independent"`` (the default): every equation's error independent, the noise level read from the
+  vertex's own residuals (with the tilt of its own normal as two more unknowns). As cheap as the fit;
+  where the normals are made from noisy vertex positions, as a mesh's are, neighbouring normals
+  share faces and their errors are correlated, so ``± 2 se`` holds less than the nominal 95 %
+  (docs/UNCERTAINTY.md gives the figures).
+- ``"normals"``: the errors as the normals take them from independent height noise (each vertex
+  normal tilts by the least-squares height gradient of its ring), followed exactly through the fit
+  and pooled over the vertex's edge neighbours; calibrated on noisy meshes with their default
+  normals, and 3-4 times the whole call's time (it visits every neighbour's ring). A point cloud, or
+  a ring without a gradient, keeps the independent model."""
+
+DEFAULT_NOISE_MODEL = NOISE_MODELS[0]
+
+
+def models_normals(noise_model: str) -> bool:
+    """True for ``noise_model="normals"``; an :class:`~curv.core.errors.EstimatorError` naming the
+    choices for anything else but ``"independent"``."""
+    if noise_model not in NOISE_MODELS:
+        raise EstimatorError(f"noise_model must be one of {', '.join(NOISE_MODELS)}; got {noise_model!r}")
+    return noise_model == "normals"
 
 
 def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None,

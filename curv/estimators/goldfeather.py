@@ -24,10 +24,10 @@ import numpy as np
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, cholesky_scaled, clear_parts, deviator_gradients,
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, cholesky_scaled, clear_parts, deviator_gradients,
                          factor_whiten, finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame,
                          principal_gradients, ring_gradient, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3,
-                         store_parts, store_se3, tangent_frame, SE_PARTS_BYTES, SLOT_BYTES)
+                         models_normals, store_parts, store_se3, tangent_frame, SE_PARTS_BYTES, SLOT_BYTES)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
@@ -388,7 +388,7 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
         factor_whiten(ata0, ata0, 7, 7, grads)
         scale = inv_r * inv_r  # the variances in unscaled coordinates
-        if ring.size > 0 and not singular:
+        if slots.size > 0 and ring.size > 0 and not singular:  # slots given: noise_model="normals"
             var1, var2, var_dev, spare, ok, touched, yv, jp = _an_noise_model(
                 p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
                 ata0, grads, row, agg, wrow)
@@ -484,10 +484,13 @@ def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
 
 
 def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Adjacent-normal cubic fit over each vertex's support (7 unknowns, 3 equations per neighbour)."""
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+    """Adjacent-normal cubic fit over each vertex's support (7 unknowns, 3 equations per neighbour).
+
+    ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
+    take the errors of the neighbours' normals; the curvatures do not depend on it."""
     return (yield from run_fit(mesh, normals, radii, _an_kernel, chunk=chunk, centres=centres,
-                                 features=features, slot_maps=True))
+                                 features=features, slot_maps=models_normals(noise_model)))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
@@ -508,5 +511,6 @@ register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_an_kernel, POOL_KERNEL),
+    options={"noise_model": NOISE_MODELS},
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))

@@ -16,7 +16,7 @@ import numpy as np
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, SE_PARTS_BYTES, SLOT_BYTES, clear_parts, deviator_gradients,
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, NOISE_MODELS, models_normals, MIN_TANGENT_LENGTH, SE_PARTS_BYTES, SLOT_BYTES, clear_parts, deviator_gradients,
                          finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame, principal_gradients,
                          ring_gradient, run_fit, slice_bounds, solve_sym3, store_parts, store_se3, sym3_inverse,
                          tangent_frame)
@@ -163,7 +163,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
     e, f, g, singular = solve_sym3(suu, suv, 0.0, suu + svv, suv, svv, sau, sav + sbu, sbv)
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
     xatb = e * sau + f * (sav + sbu) + g * sbv
-    if ring.size > 0 and used > 3 and not singular:
+    if slots.size > 0 and ring.size > 0 and used > 3 and not singular:  # slots given: noise_model="normals"
         minv[0], minv[1], minv[2], minv[3], minv[4], minv[5] = sym3_inverse(suu, suv, 0.0, suu + svv, suv, svv)
         grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
         grads[2, 0], grads[2, 1], grads[2, 2], grads[3, 0], grads[3, 1], grads[3, 2] = deviator_gradients(e, f, g)
@@ -207,10 +207,13 @@ def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stam
 
 
 def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk)."""
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+    """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk).
+
+    ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
+    take the errors of the neighbours' normals; the curvatures do not depend on it."""
     return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk, centres=centres,
-                                 features=features, slot_maps=True))
+                                 features=features, slot_maps=models_normals(noise_model)))
 
 
 register(EstimatorSpec(
@@ -218,5 +221,6 @@ register(EstimatorSpec(
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
     summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
+    options={"noise_model": NOISE_MODELS},
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))
