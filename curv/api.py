@@ -11,6 +11,7 @@ import numpy as np
 
 from .core.errors import EstimatorError, MeshError
 from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
+from .estimators._pooling import pool_members
 from .core.jit import COMPILE_MESSAGE, Progress, compile_pending
 from .convert import as_mesh
 from .core.mesh import Mesh
@@ -103,7 +104,9 @@ def iter_estimate(
         work_mesh, used_normals, flags, fused = _mesh_setup(mesh, spec, normals, normal_weighting, smooth,
                                                             smooth_iterations, smooth_strength, fit_range, feats)
         normals_label = _normals_label(normals, normal_weighting, fit_range)
-    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=centres) if spec.has_support else None
+    # a region's fits also run at its neighbours, whose residuals its standard errors pool
+    fitted = centres if centres is None or isinstance(work_mesh, PointCloud) else pool_members(work_mesh, centres)
+    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
     if on_crease and used_normals is not None:

@@ -56,6 +56,18 @@ def test_jet_weights_flag_is_the_librarys_option(sphere_file, tmp_path, capsys):
     assert "has no option 'weights'" in capsys.readouterr().err
 
 
+def test_noise_model_flag_is_the_librarys_option(tmp_path):
+    noisy = curv.surfaces.make_surface("sphere", n_vertices=642, noise=0.05, seed=3).mesh
+    path, out = tmp_path / "noisy.ply", tmp_path / "mru.ply"
+    curv.save_ply(path, noisy, curv.estimate(noisy, "qs"))
+    assert main(["estimate", str(path), "-m", "mru", "-r", "2", "--noise-model", "normals", "-o", str(out), "-q"]) == 0
+    se = plyfile.PlyData.read(str(out))["vertex"]["k1_se"]
+    mesh = curv.load(path)
+    modelled = curv.estimate(mesh, "mru", 2, noise_model="normals").k1_se
+    np.testing.assert_allclose(se, modelled, rtol=1e-6)
+    assert not np.allclose(modelled, curv.estimate(mesh, "mru", 2).k1_se, rtol=0.05, equal_nan=True)
+
+
 def test_ply_export_has_shown_and_named_reasons(sphere_file, tmp_path):
     out = tmp_path / "o.ply"
     assert main(["estimate", str(sphere_file), "-m", "qs", "-q", "--quantity", "gaussian", "-o", str(out)]) == 0

@@ -18,7 +18,13 @@ with d_i = (c, s) its unit direction in (U, V); to first order ``dk_i = d_iᵀ d
 gradient over (e, f, g) is ``(c², 2cs, s²)`` for k1 and ``(s², -2cs, c²)`` for k2, and
 ``se(k_i)² = sigma² gᵀ (AᵀA)⁻¹ g``. nc and qs read sigma² from the residuals of the fit with the
 frame's tilt as two more unknowns (:func:`tilt_residual`), and the 3-unknown fits add the eigen
-step's bias (:func:`eigen_bias`) in quadrature.
+step's bias (:func:`eigen_bias`) in quadrature. mru and an, whose equations use the neighbours'
+normals, model their errors as those normals get them from noisy heights (neighbouring normals
+share vertices: :func:`ring_gradient`, the kernels' ``_noise_model``), on a mesh.
+
+The kernels write each vertex's parts (:func:`store_parts`: the propagation per unit noise
+variance, the residual sum of squares and its spare equations); :func:`run_fit` then pools the
+noise level over each vertex and its edge neighbours (:mod:`curv.estimators._pooling`).
 """
 
 from __future__ import annotations
@@ -28,17 +34,20 @@ from typing import Generator
 
 import numpy as np
 
+from ..core.errors import EstimatorError
 from ..core.filled import filled
 from ..core.jit import iter_chunks, jit, launch, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
 from ..core.result import Principal
 from ..core.validity import Reason
+from ._pooling import pool_members, pool_rings, pool_standard_errors, rad_bias
 
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
-           "MIN_TANGENT_LENGTH", "MIN_PAIRS", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
+           "clear_parts", "store_parts", "ring_gradient", "gradient_column", "list_room", "list_slot",
+           "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 MIN_TANGENT_LENGTH = 1e-9
 """Neighbours whose tangent-plane offset is below this fraction of the ball radius carry no direction."""
@@ -49,6 +58,12 @@ curvature unknowns)."""
 
 RCOND = 1e-10
 """A system is singular when its determinant is below this (scaled) bound."""
+
+SE_PARTS_BYTES = 16.0
+"""The standard errors' parts (4 float64 per vertex, :func:`store_parts`)
+per size unit (vertices + faces / 2, about 2 vertices on a triangle mesh)."""
+SLOT_BYTES = 16.0
+"""The noise model's vertex slots (an int64 per vertex and kernel thread, 4 threads) per size unit."""
 
 OK = np.uint8(Reason.OK)
 TOO_FEW = np.uint8(Reason.TOO_FEW_NEIGHBOURS)
@@ -265,8 +280,125 @@ def eigen_bias(e, f, g, var_deviator):
     large as the standard error itself. Estimated as ``rad - sqrt(max(rad² - var_deviator, 0))``
     (the debiased length of a noisy vector).
     """
-    rad = math.hypot(0.5 * (e - g), f)
-    return rad - math.sqrt(max(rad * rad - var_deviator, 0.0))
+    return rad_bias(math.hypot(0.5 * (e - g), f), var_deviator)
+
+
+@jit
+def clear_parts(p, parts):
+    """Row p of ``parts`` before a fit: no residual to pool (:func:`store_parts`)."""
+    parts[p, 0] = math.nan
+    parts[p, 1] = 0.0
+    parts[p, 2] = 0.0
+    parts[p, 3] = 0.0
+
+
+@jit
+def store_parts(p, k1_se, k2_se, parts, var1, var2, rss, dof, var_deviator, rad):
+    """Write what vertex p's standard errors need besides the noise level, which is pooled afterwards
+    over p and its neighbours (:func:`curv.estimators._pooling.pool_standard_errors`).
+
+    Parameters
+    ----------
+    p : int
+    k1_se, k2_se : (n,) float64
+        Row p gets ``var(k_i) / sigma²`` (the propagation through the fit and the eigen step);
+        the pooling replaces it by the standard error.
+    parts : (n, 4) float64
+        Row p gets ``(RSS, spare equations, var_deviator / sigma², rad)``: the residual sum of
+        squares and the (effective) number of spare equations it is spread over (0 when there is
+        none), and what :func:`rad_bias` needs.
+    """
+    k1_se[p] = var1
+    k2_se[p] = var2
+    parts[p, 0] = rss
+    parts[p, 1] = dof if dof > 0.0 else 0.0
+    parts[p, 2] = var_deviator
+    parts[p, 3] = rad
+
+
+@jit
+def ring_gradient(v, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz):
+    """The least-squares height gradient at vertex v from its edge neighbours, in the frame (U, V):
+    ``grad = G⁻¹ Σ_j d_j (h_j - h_v)`` with d_j the tangent offsets and ``G = Σ d_j d_jᵀ``.
+
+    Returns
+    -------
+    i00, i01, i11, sdu, sdv : float
+        G⁻¹ and ``Σ d_j`` (the column of h_v is ``-G⁻¹ Σ d_j``).
+    ok : bool
+        False when G is singular (fewer than two independent directions).
+    """
+    g00 = g01 = g11 = sdu = sdv = 0.0
+    for k in range(ring_ptr[v], ring_ptr[v + 1]):
+        w = ring[k]
+        dx, dy, dz = x[w] - x[v], y[w] - y[v], z[w] - z[v]
+        du = dx * ux + dy * uy + dz * uz
+        dv = dx * vx + dy * vy + dz * vz
+        g00 += du * du
+        g01 += du * dv
+        g11 += dv * dv
+        sdu += du
+        sdv += dv
+    det = g00 * g11 - g01 * g01
+    if not det > 1e-12 * g00 * g11:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, False
+    return g11 / det, -g01 / det, g00 / det, sdu, sdv, True
+
+
+@jit
+def gradient_column(w, v, i00, i01, i11, sdu, sdv, x, y, z, ux, uy, uz, vx, vy, vz):
+    """The column of vertex w (v itself or one of its edge neighbours) in :func:`ring_gradient`'s
+    gradient at v: ``G⁻¹ d_w``, or ``-G⁻¹ Σ d_j`` for v. Returns its two components."""
+    if w == v:
+        return -(i00 * sdu + i01 * sdv), -(i01 * sdu + i11 * sdv)
+    dx, dy, dz = x[w] - x[v], y[w] - y[v], z[w] - z[v]
+    du = dx * ux + dy * uy + dz * uz
+    dv = dx * vx + dy * vy + dz * vz
+    return i00 * du + i01 * dv, i01 * du + i11 * dv
+
+
+@jit
+def list_room(v, queue, count, ring_ptr, touched, yv, jp):
+    """The short lists of vertex v's noise model (:func:`list_slot`), grown to hold every vertex its
+    support ``queue[:count]`` and their edge neighbours can bring. Returns ``(touched, yv, jp)``."""
+    need = 0
+    for i in range(count):
+        q = queue[i]
+        need += ring_ptr[q + 1] - ring_ptr[q] + 1
+    if need <= touched.size:
+        return touched, yv, jp
+    return np.empty(need, np.int64), np.empty((need, yv.shape[1])), np.empty((need, 2))
+
+
+@jit
+def list_slot(w, slots, touched, yv, jp, used):
+    """The place of vertex w in the short lists of a vertex's noise model (added, with zero sums, when
+    new; :func:`list_room` makes the room first).
+
+    Parameters
+    ----------
+    w : int
+    slots : (n,) int64
+        ``slots[w]`` is 1 + w's place, 0 when absent (reset to 0 by the caller after each vertex).
+    touched : (cap,) int64
+        The vertices listed.
+    yv : (cap, K) float64
+    jp : (cap, 2) float64
+    used : int
+        Entries in use.
+
+    Returns
+    -------
+    place, used : int
+    """
+    s = slots[w]
+    if s > 0:
+        return s - 1, used
+    touched[used] = w
+    yv[used, :] = 0.0
+    jp[used, 0] = jp[used, 1] = 0.0
+    slots[w] = used + 1
+    return used, used + 1
 
 
 @jit
@@ -356,9 +488,10 @@ def tilt_residual(i00, i01, i02, i11, i12, i22, x0, x1, x2, s0, s1, s2, tilt):
 
 
 @jit
-def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, e, f, g, k1_se, k2_se,
+def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, e, f, g, k1_se, k2_se, parts,
               x0=0.0, x1=0.0, x2=0.0, tilt=None):
-    """Row p of the standard errors of a 3-unknown fit of W = [[e, f], [f, g]].
+    """Row p of the standard errors' parts of a 3-unknown fit of W = [[e, f], [f, g]]
+    (:func:`store_parts`; :func:`curv.estimators._pooling.pool_standard_errors` finishes them).
 
     With ``shared`` > 0, the centre's own height error enters every equation alike: the errors
     are modelled as ``eps_q + delta`` (independent, all of variance sigma²) and s = Σ rows. Then
@@ -390,6 +523,8 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
         The solution (with ``tilt`` only).
     tilt : (13,) float64, optional
         ``LᵀL`` (3), ``LᵀQ`` (6), ``Lᵀb`` (2), ``Σ L rows`` (2) of the two linear columns.
+    k1_se, k2_se, parts :
+        As in :func:`store_parts`.
     """
     i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
@@ -414,10 +549,7 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
         rss -= drop
         dof -= 2.0 + (extra if shared > 0 else 0.0)
         m -= 2
-    sigma2 = noise_variance(rss, 0.0, dof if m > 3 else 0.0)
-    bias = eigen_bias(e, f, g, sigma2 * vard)
-    k1_se[p] = math.sqrt(sigma2 * var1 + bias * bias)
-    k2_se[p] = math.sqrt(sigma2 * var2 + bias * bias)
+    store_parts(p, k1_se, k2_se, parts, var1, var2, rss, dof if m > 3 else 0.0, vard, math.hypot(0.5 * (e - g), f))
 
 
 @jit
@@ -520,8 +652,35 @@ def mark_degenerate(p, k1, k2, d1, d2, reason):
     reason[p] = DEGENERATE
 
 
+NOISE_MODELS = ("independent", "normals")
+"""How the standard errors of ``an`` and ``mru`` (the fits that read the neighbours' normals) take
+the errors of those normals (the curvatures do not depend on it):
+
+- ``"independent"`` (the default): every equation's error independent, the noise level read from the
+  vertex's own residuals (with the tilt of its own normal as two more unknowns). As cheap as the fit;
+  where the normals are made from noisy vertex positions, as a mesh's are, neighbouring normals
+  share faces and their errors are correlated, so ``± 2 se`` holds less than the nominal 95 %
+  (docs/UNCERTAINTY.md gives the figures).
+- ``"normals"``: the errors as the normals take them from independent height noise (each vertex
+  normal tilts by the least-squares height gradient of its ring), followed exactly through the fit
+  and pooled over the vertex's edge neighbours; calibrated on noisy meshes with their default
+  normals, and 3-4 times the whole call's time (it visits every neighbour's ring). A point cloud, or
+  a ring without a gradient, keeps the independent model."""
+
+DEFAULT_NOISE_MODEL = NOISE_MODELS[0]
+
+
+def models_normals(noise_model: str) -> bool:
+    """True for ``noise_model="normals"``; an :class:`~curv.core.errors.EstimatorError` naming the
+    choices for anything else but ``"independent"``."""
+    if noise_model not in NOISE_MODELS:
+        raise EstimatorError(f"noise_model must be one of {', '.join(NOISE_MODELS)}; got {noise_model!r}")
+    return noise_model == "normals"
+
+
 def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None) -> Generator[float, None, Principal]:
+            centres: np.ndarray | None = None, features=None, slot_maps: bool = False
+            ) -> Generator[float, None, Principal]:
     """Run a fit kernel over all (or some) vertices, a chunk of them per call, and assemble the result.
 
     Parameters
@@ -533,14 +692,22 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`).
     kernel : numba dispatcher
         ``kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2,
-        d1, d2, reason, k1_se, k2_se)`` estimates the vertices ``centres[lo:hi]``, splitting them into
-        ``stamps.shape[0]`` slices, each with its own row of the stamps and queues.
+        d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)`` estimates the vertices
+        ``centres[lo:hi]``, splitting them into ``stamps.shape[0]`` slices, each with its own row of the
+        stamps, queues and slots, and writes the parts of their standard errors (:func:`store_parts`);
+        ``ring_ptr, ring`` are the mesh's edge neighbours (none on a point cloud,
+        :func:`curv.estimators._pooling.pool_rings`).
     chunk : int, optional
         Vertices per call (default adaptive).
     centres : (c,) int64, optional
-        The vertices to estimate (default all); the other rows of the outputs are left unset.
+        The vertices to estimate (default all); the other rows of the outputs are left unset. On a
+        mesh the fits also run at their neighbours (:func:`curv.estimators._pooling.pool_members`;
+        ``radii`` must cover them), whose residuals the standard errors pool.
     features : curv.core.features.FeatureSet, optional
         The search does not expand through feature vertices.
+    slot_maps : bool
+        Give the kernel a zeroed (slices, n) int64 ``slots`` (vertex -> 1 + its place in a short list,
+        reset after each vertex) instead of an empty one.
 
     Yields
     ------
@@ -552,22 +719,35 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     Principal
     """
     n = mesh.n_vertices
+    given = centres is not None
     centres = all_centres(n, centres)
+    # each vertex once (the pooling pass updates its rows in place)
+    pooled = np.unique(centres) if given else centres
+    whole = pooled.size == n
+    ring_ptr, ring = pool_rings(mesh)
+    # a region's standard errors pool its neighbours' residuals too: fit them as well
+    fitted = centres if whole else pool_members(mesh, pooled)
     adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
     radius = np.ascontiguousarray(radii, dtype=np.float64)
-    stamps = new_scratch(n, max(1, min(threads(), centres.size)))
+    stamps = new_scratch(n, max(1, min(threads(), fitted.size)))
     queues = new_queues(n, stamps.shape[0])
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
-    whole = centres.size == n
     k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
+    parts = filled((n, 4), np.nan, most_written=whole)
+    slots = new_scratch(n if slot_maps else 0, stamps.shape[0])
 
     def run(lo: int, hi: int) -> None:
-        launch(kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
-               k1, k2, d1, d2, reason, k1_se, k2_se)
+        launch(kernel, fitted, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
+               k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)
 
-    yield from iter_chunks(centres.size, run, chunk=chunk)
+    yield from iter_chunks(fitted.size, run, chunk=chunk)
+    pool_standard_errors(pooled, ring_ptr, ring, reason, parts, k1_se, k2_se)
+    if not whole:
+        extra = np.setdiff1d(fitted, pooled, assume_unique=True)
+        k1_se[extra] = np.nan
+        k2_se[extra] = np.nan
     return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason, k1_se=k1_se, k2_se=k2_se)

@@ -24,9 +24,11 @@ import numpy as np
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, cholesky_scaled, factor_whiten, finish_fit, mark_degenerate,
-                         noise_variance, offset_in_frame, principal_gradients, row_dot, run_fit, slice_bounds,
-                         solve_scaled, solve_sym3, store_se3, tangent_frame, deviator_gradients, eigen_bias)
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, cholesky_scaled, clear_parts, deviator_gradients,
+                         factor_whiten, finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame,
+                         principal_gradients, ring_gradient, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3,
+                         models_normals, store_parts, store_se3, tangent_frame, SE_PARTS_BYTES, SLOT_BYTES)
+from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
 MIN_NORMAL_Z = 0.1
@@ -53,9 +55,10 @@ def _add_tilt(tilt, lu, lv, c0, c1, c2, rhs):
 
 
 @jit
-def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt):
+def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt):
     """Normal-curvature least squares at vertex p over its support ``queue[1:count]``; ``tilt``
     (13,) is scratch for the frame-tilt columns of the standard error (:func:`store_se3`)."""
+    clear_parts(p, se_parts)
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
         mark_degenerate(p, k1, k2, d1, d2, reason)
@@ -94,13 +97,14 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
     # p's own height error enters every kn (as if with equal weight: see docs/UNCERTAINTY.md)
     store_se3(p, a00, a01, a02, a11, a12, a22, bb, e * b0 + f * b1 + g * b2, used, used, s0, s1, s2,
-              e, f, g, k1_se, k2_se, e, f, g, tilt)
+              e, f, g, k1_se, k2_se, se_parts, e, f, g, tilt)
 
 
 @jit
-def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt):
+def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt):
     """Quadratic height fit at vertex p over its support ``queue[1:count]``; ``tilt`` (13,) is
     scratch for the frame-tilt columns of the standard error (:func:`store_se3`)."""
+    clear_parts(p, se_parts)
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
         mark_degenerate(p, k1, k2, d1, d2, reason)
@@ -138,7 +142,7 @@ def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     finish_fit(p, -A, -B, -C, singular, used, frame, k1, k2, d1, d2, reason)
     # every height is measured from p, so p's own height error is shared by all equations
     store_se3(p, a00, a01, a02, a11, a12, a22, bb, A * b0 + B * b1 + C * b2, used, used, s0, s1, s2,
-              -A, -B, -C, k1_se, k2_se, A, B, C, tilt)
+              -A, -B, -C, k1_se, k2_se, se_parts, A, B, C, tilt)
 
 
 @jit
@@ -154,23 +158,164 @@ def _accumulate(ata, atb, row, rhs):
 
 
 @jit
-def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, ata, atb, row, sol,
-           ata0, atb0, grads):
+def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
+                    factor, grads, row, agg, wrow):
+    """an's equations' errors as noisy heights make them (the model of mru's ``_noise_model``).
+
+    With independent height errors h (variance sigma_h²), vertex normals tilted by their ring's height
+    gradient (:func:`~curv.estimators._local_fit.ring_gradient`: ``J_v h``) and p's normal (the frame)
+    tilted by ``J_p h``, in the radius-scaled coordinates (U, V) = (u, v) / r:
+
+    - a height equation's error is ``(h_q - h_p) / r - (U, V) · J_p h`` (the frame's tilt moves every
+      height by its slope times the offset);
+    - a slope equation's is ``(J_q - J_p) h``, row u or v.
+
+    Neighbouring normals share vertices, and every equation shares p's height and normal, so the
+    errors are correlated; the propagation follows them: with ``y_j = Σ_eq A_eqᵀ J̃_eq,j`` the fit's
+    error is ``M⁻¹ Σ_j y_j h_j``, ``var(gᵀx) = sigma_h² Σ_j (gᵀM⁻¹y_j)²`` and ``E[RSS] = sigma_h²
+    (‖J̃‖² - Σ_j y_jᵀM⁻¹y_j)``.
+
+    Parameters
+    ----------
+    factor : (8, 7) float64
+        M's scaled Cholesky factor (:func:`~curv.estimators._local_fit.cholesky_scaled`, scales in row 7).
+    grads : (7, 7) float64
+        Rows 0, 1, 5, 6 whitened (:func:`~curv.estimators._local_fit.factor_whiten`): the gradients of
+        k1, k2 and the deviator's components over the 7 unknowns.
+    row : (7,), agg : (5, 7), wrow : (1, 7) float64
+        Scratch.
+
+    Returns
+    -------
+    var1, var2, var_dev, spare : float
+        ``var / sigma_h²`` (of the scaled unknowns) and ``E[RSS] / sigma_h²``.
+    ok : bool
+        False where a ring has no gradient.
+    touched, yv, jp :
+        The short lists (grown, perhaps).
+    """
+    ux, uy, uz, vx, vy, vz = frame
+    n0, n1, n2 = nx[p], ny[p], nz[p]
+    tiny2 = MIN_TANGENT_LENGTH ** 2
+    used = 0
+    touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
+    var1 = var2 = vard = spare = 0.0
+    agg[:, :] = 0.0  # Σ height rows, Σ height rows · U, · V, Σ u-slope rows, Σ v-slope rows
+    pi00, pi01, pi11, psu, psv, ok = ring_gradient(p, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
+    p00 = p01 = p11 = 0.0  # J_p's row products
+    sp = 0
+    if ok:
+        for k in range(ring_ptr[p], ring_ptr[p + 1] + 1):
+            w = p if k == ring_ptr[p + 1] else ring[k]
+            c0, c1 = gradient_column(w, p, pi00, pi01, pi11, psu, psv, x, y, z, ux, uy, uz, vx, vy, vz)
+            s, used = list_slot(w, slots, touched, yv, jp, used)
+            jp[s, 0] = c0
+            jp[s, 1] = c1
+            p00 += c0 * c0
+            p01 += c0 * c1
+            p11 += c1 * c1
+        sp = slots[p] - 1
+        for i in range(1, count):
+            q = queue[i]
+            dx, dy, dz = (x[q] - x[p]) * inv_r, (y[q] - y[p]) * inv_r, (z[q] - z[p]) * inv_r
+            u = dx * ux + dy * uy + dz * uz
+            v = dx * vx + dy * vy + dz * vz
+            if not (u * u + v * v > tiny2):
+                continue
+            uu, uv, vv = u * u, u * v, v * v
+            row[0], row[1], row[2] = 0.5 * uu, uv, 0.5 * vv
+            row[3], row[4], row[5], row[6] = uu * u, uu * v, u * vv, vv * v
+            s, used = list_slot(q, slots, touched, yv, jp, used)
+            for j in range(7):
+                yv[s, j] += row[j] * inv_r
+                agg[0, j] += row[j]
+                agg[1, j] += row[j] * u
+                agg[2, j] += row[j] * v
+            # ‖(e_q - e_p) / r - U J_p0 - V J_p1‖²
+            tq = u * jp[s, 0] + v * jp[s, 1]
+            tp = u * jp[sp, 0] + v * jp[sp, 1]
+            spare += (2.0 * inv_r * inv_r + uu * p00 + 2.0 * uv * p01 + vv * p11 - 2.0 * inv_r * (tq - tp))
+            a = nx[q] * ux + ny[q] * uy + nz[q] * uz
+            b = nx[q] * vx + ny[q] * vy + nz[q] * vz
+            c = nx[q] * n0 + ny[q] * n1 + nz[q] * n2
+            if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
+                continue
+            qi00, qi01, qi11, qsu, qsv, good = ring_gradient(q, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
+            if not good:
+                ok = False
+                break
+            # the slope rows (u, v, 0, 3uu, 2uv, vv, 0) and (0, u, v, 0, uu, 2uv, 3vv)
+            ru0, ru1, ru3, ru4, ru5 = u, v, 3.0 * uu, 2.0 * uv, vv
+            rv1, rv2, rv4, rv5, rv6 = u, v, uu, 2.0 * uv, 3.0 * vv
+            agg[3, 0] += ru0
+            agg[3, 1] += ru1
+            agg[3, 3] += ru3
+            agg[3, 4] += ru4
+            agg[3, 5] += ru5
+            agg[4, 1] += rv1
+            agg[4, 2] += rv2
+            agg[4, 4] += rv4
+            agg[4, 5] += rv5
+            agg[4, 6] += rv6
+            jqn = cross = 0.0
+            for k in range(ring_ptr[q], ring_ptr[q + 1] + 1):
+                w = q if k == ring_ptr[q + 1] else ring[k]
+                c0, c1 = gradient_column(w, q, qi00, qi01, qi11, qsu, qsv, x, y, z, ux, uy, uz, vx, vy, vz)
+                s, used = list_slot(w, slots, touched, yv, jp, used)
+                yv[s, 0] += ru0 * c0
+                yv[s, 1] += ru1 * c0 + rv1 * c1
+                yv[s, 2] += rv2 * c1
+                yv[s, 3] += ru3 * c0
+                yv[s, 4] += ru4 * c0 + rv4 * c1
+                yv[s, 5] += ru5 * c0 + rv5 * c1
+                yv[s, 6] += rv6 * c1
+                jqn += c0 * c0 + c1 * c1
+                cross += c0 * jp[s, 0] + c1 * jp[s, 1]
+            spare += jqn + p00 + p11 - 2.0 * cross
+    for s in range(used):
+        if ok:
+            # the shared parts: p's height (-Σ height rows / r) and p's normal, the frame's tilt
+            c0, c1 = jp[s, 0], jp[s, 1]
+            for j in range(7):
+                wrow[0, j] = yv[s, j] - (agg[1, j] + agg[3, j]) * c0 - (agg[2, j] + agg[4, j]) * c1
+                if s == sp:
+                    wrow[0, j] -= agg[0, j] * inv_r
+            factor_whiten(factor, factor, 7, 7, wrow)
+            spare -= row_dot(wrow, 0, 0, 7)
+            d1 = d2 = da = dh = 0.0
+            for j in range(7):
+                d1 += grads[0, j] * wrow[0, j]
+                d2 += grads[1, j] * wrow[0, j]
+                da += grads[5, j] * wrow[0, j]
+                dh += grads[6, j] * wrow[0, j]
+            var1 += d1 * d1
+            var2 += d2 * d2
+            vard += da * da + dh * dh
+        slots[touched[s]] = 0
+    return var1, var2, vard, spare, ok, touched, yv, jp
+
+
+@jit
+def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, ata, atb, row, sol,
+           ata0, atb0, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
     """Adjacent-normal cubic fit at vertex p.
 
     Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
     normal equations the solve overwrites; ``grads`` (7, 7): the k1, k2 gradients, the three shared
     columns, the deviator's two components (the eigen step's bias, as in ``store_se3``).
 
-    Heights and slopes enter the fit (and its noise variance) with equal weight in the
-    radius-scaled coordinates: ``sigma²`` pools the two kinds of residual. p's own height error is
-    shared by the height equations and the tilt of its normal by each kind of slope equation,
-    modelled as in :func:`~curv.estimators._local_fit.store_se3`.
+    Heights and slopes enter the fit with equal weight in the radius-scaled coordinates. On a mesh
+    the standard error models the equations' errors from the heights' (:func:`_an_noise_model`;
+    more scratch: ``slots``, ``touched``, ``yv``, ``jp``, ``agg``, ``wrow``, and returns the short
+    lists). Elsewhere (a point cloud, or a ring without a gradient) ``sigma²`` pools the two kinds of
+    residual; p's own height error is shared by the height equations and the tilt of its normal by
+    each kind of slope equation, modelled as in :func:`~curv.estimators._local_fit.store_se3`.
     """
+    clear_parts(p, se_parts)
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
         mark_degenerate(p, k1, k2, d1, d2, reason)
-        return
+        return touched, yv, jp
     frame = tangent_frame(n0, n1, n2)
     ux, uy, uz, vx, vy, vz = frame
     # Heights are lengths, slopes are not: fit in coordinates divided by the ball radius so the
@@ -242,29 +387,39 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     grads[5, 0], grads[5, 1], grads[5, 2], grads[6, 0], grads[6, 1], grads[6, 2] = deviator_gradients(e, f, g)
     if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
         factor_whiten(ata0, ata0, 7, 7, grads)
+        scale = inv_r * inv_r  # the variances in unscaled coordinates
+        if slots.size > 0 and ring.size > 0 and not singular:  # slots given: noise_model="normals"
+            var1, var2, var_dev, spare, ok, touched, yv, jp = _an_noise_model(
+                p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
+                ata0, grads, row, agg, wrow)
+            if ok and spare > 0.0:
+                store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, spare,
+                            var_dev * scale, math.hypot(0.5 * (e - g), f))
+                return touched, yv, jp
+        # no mesh rings (a point cloud) or a ring without a gradient: the equations' errors taken
+        # as independent but for p's shared height and normal; its noise level (of heights and
+        # slopes alike) is pooled with no other vertex's
         dof = (equations - 7 + used - row_dot(grads, 2, 2, 7)
                + sloped - row_dot(grads, 3, 3, 7) + sloped - row_dot(grads, 4, 4, 7))
-        sigma2 = noise_variance(bb, xatb, dof)
         var_dev = 0.0
         for i in range(5, 7):
             var_dev += row_dot(grads, i, i, 7)
             for shared in range(2, 5):
                 var_dev += row_dot(grads, i, shared, 7) ** 2
-        bias = eigen_bias(e, f, g, sigma2 * var_dev * inv_r * inv_r)
-        for i in range(2):
-            var = row_dot(grads, i, i, 7)
-            for shared in range(2, 5):
-                var += row_dot(grads, i, shared, 7) ** 2
-            se = math.sqrt(sigma2 * var * inv_r * inv_r + bias * bias)
-            if i == 0:
-                k1_se[p] = se
-            else:
-                k2_se[p] = se
+        var1 = row_dot(grads, 0, 0, 7)
+        var2 = row_dot(grads, 1, 1, 7)
+        for shared in range(2, 5):
+            var1 += row_dot(grads, 0, shared, 7) ** 2
+            var2 += row_dot(grads, 1, shared, 7) ** 2
+        store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, dof, var_dev * scale,
+                    math.hypot(0.5 * (e - g), f))
+        se_parts[p, 1] = -se_parts[p, 1]
+    return touched, yv, jp
 
 
 @jit_parallel
 def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se):
+                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -274,12 +429,12 @@ def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt)
+            _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt)
 
 
 @jit_parallel
 def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se):
+                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -289,12 +444,12 @@ def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, tilt)
+            _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt)
 
 
 @jit_parallel
 def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se):
+                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -302,12 +457,16 @@ def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamp
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, sol = np.empty(7), np.empty(7)
         ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
+        slot = slots[t]
+        touched, yv, jp = np.empty(64, np.int64), np.empty((64, 7)), np.empty((64, 2))
+        agg, wrow = np.empty((5, 7)), np.empty((1, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se,
-                   ata, atb, row, sol, ata0, atb0, grads)
+            touched, yv, jp = _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
+                                     k1_se, k2_se, se_parts, ata, atb, row, sol, ata0, atb0, grads, ring_ptr, ring,
+                                     slot, touched, yv, jp, agg, wrow)
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
@@ -325,10 +484,13 @@ def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
 
 
 def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Adjacent-normal cubic fit over each vertex's support (7 unknowns, 3 equations per neighbour)."""
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+    """Adjacent-normal cubic fit over each vertex's support (7 unknowns, 3 equations per neighbour).
+
+    ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
+    take the errors of the neighbours' normals; the curvatures do not depend on it."""
     return (yield from run_fit(mesh, normals, radii, _an_kernel, chunk=chunk, centres=centres,
-                                 features=features))
+                                 features=features, slot_maps=models_normals(noise_model)))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
@@ -336,15 +498,19 @@ _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approxim
 register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_nc_kernel,),
+    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_nc_kernel, POOL_KERNEL),
+    extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_qs_kernel,),
+    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_qs_kernel, POOL_KERNEL),
+    extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_an_kernel,),
+    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_an_kernel, POOL_KERNEL),
+    options={"noise_model": NOISE_MODELS},
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))

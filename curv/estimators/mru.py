@@ -16,23 +16,128 @@ import numpy as np
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (MIN_PAIRS, MIN_TANGENT_LENGTH, finish_fit, mark_degenerate, offset_in_frame, run_fit,
-                         slice_bounds, solve_sym3, store_se3, tangent_frame)
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, NOISE_MODELS, models_normals, MIN_TANGENT_LENGTH, SE_PARTS_BYTES, SLOT_BYTES, clear_parts, deviator_gradients,
+                         finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame, principal_gradients,
+                         ring_gradient, run_fit, slice_bounds, solve_sym3, store_parts, store_se3, sym3_inverse,
+                         tangent_frame)
+from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
 
 @jit
-def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se):
-    """Normal-difference least squares at vertex p over its support ``queue[1:count]``."""
+def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
+                 su, sv, minv, grads):
+    """The equations' errors as the neighbours' normals make them from noisy heights.
+
+    A vertex normal made from its faces tilts, to first order, by the height gradient of its ring
+    (for a regular ring the area- and Max-weighted normals are exactly the least-squares gradient,
+    :func:`~curv.estimators._local_fit.ring_gradient`), so with independent height errors h
+    (variance sigma_h²) the errors of the a (b) equations are ``-(J_q - J_p) h``, rows u (v): q's own
+    normal and the tilt of p's, the frame. Neighbouring normals share vertices, so the equations' errors are correlated; the
+    propagation follows them exactly: with ``y_j = Σ_eq A_eqᵀ J̃_eq,j`` the fit's error is
+    ``M⁻¹ Σ_j y_j h_j``, so ``var(gᵀx) = sigma_h² Σ_j (gᵀM⁻¹y_j)²`` and
+    ``E[RSS] = sigma_h² (‖J̃‖² - Σ_j y_jᵀM⁻¹y_j)``.
+
+    Parameters
+    ----------
+    minv : (6,) float64
+        M⁻¹'s entries (i00, i01, i02, i11, i12, i22).
+    grads : (4, 3) float64
+        The gradients of k1, k2 and of the deviator's two components over (e, f, g).
+
+    Returns
+    -------
+    var1, var2, var_dev, spare : float
+        ``var / sigma_h²`` and ``E[RSS] / sigma_h²``.
+    ok : bool
+        False where a ring has no gradient (the caller keeps the independent model).
+    touched, yv, jp :
+        The short lists (grown, perhaps).
+    """
+    ux, uy, uz, vx, vy, vz = frame
+    n0, n1, n2 = nx[p], ny[p], nz[p]
+    used = 0
+    touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
+    ok = True
+    var1 = var2 = vard = spare = 0.0
+    pi00, pi01, pi11, psu, psv, good = ring_gradient(p, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
+    if not good:
+        ok = False
+    jpn = 0.0
+    if ok:
+        # p's normal: the frame's tilt, shared by every equation
+        for k in range(ring_ptr[p], ring_ptr[p + 1] + 1):
+            w = p if k == ring_ptr[p + 1] else ring[k]
+            c0, c1 = gradient_column(w, p, pi00, pi01, pi11, psu, psv, x, y, z, ux, uy, uz, vx, vy, vz)
+            s, used = list_slot(w, slots, touched, yv, jp, used)
+            jp[s, 0] = c0
+            jp[s, 1] = c1
+            jpn += c0 * c0 + c1 * c1
+        for i in range(1, count):
+            q = queue[i]
+            u, v, _ = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
+            a = nx[q] * ux + ny[q] * uy + nz[q] * uz
+            b = nx[q] * vx + ny[q] * vy + nz[q] * vz
+            if not (u * u + v * v > tiny2) or not (math.isfinite(a) and math.isfinite(b)):
+                continue
+            qi00, qi01, qi11, qsu, qsv, good = ring_gradient(q, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
+            if not good:
+                ok = False
+                break
+            jqn = cross = 0.0
+            for k in range(ring_ptr[q], ring_ptr[q + 1] + 1):
+                w = q if k == ring_ptr[q + 1] else ring[k]
+                c0, c1 = gradient_column(w, q, qi00, qi01, qi11, qsu, qsv, x, y, z, ux, uy, uz, vx, vy, vz)
+                s, used = list_slot(w, slots, touched, yv, jp, used)
+                # rows (u, v, 0) and (0, u, v) of the a and b equations
+                yv[s, 0] += u * c0
+                yv[s, 1] += v * c0 + u * c1
+                yv[s, 2] += v * c1
+                jqn += c0 * c0 + c1 * c1
+                cross += c0 * jp[s, 0] + c1 * jp[s, 1]
+            spare += jqn + jpn - 2.0 * cross
+    i00, i01, i02, i11, i12, i22 = minv[0], minv[1], minv[2], minv[3], minv[4], minv[5]
+    for s in range(used):
+        if ok:
+            # the frame's share: minus p's gradient in every a (b) equation
+            c0, c1 = jp[s, 0], jp[s, 1]
+            y0 = yv[s, 0] - su * c0
+            y1 = yv[s, 1] - (sv * c0 + su * c1)
+            y2 = yv[s, 2] - sv * c1
+            t0 = i00 * y0 + i01 * y1 + i02 * y2
+            t1 = i01 * y0 + i11 * y1 + i12 * y2
+            t2 = i02 * y0 + i12 * y1 + i22 * y2
+            spare -= y0 * t0 + y1 * t1 + y2 * t2
+            d1 = grads[0, 0] * t0 + grads[0, 1] * t1 + grads[0, 2] * t2
+            d2 = grads[1, 0] * t0 + grads[1, 1] * t1 + grads[1, 2] * t2
+            da = grads[2, 0] * t0 + grads[2, 1] * t1 + grads[2, 2] * t2
+            dh = grads[3, 0] * t0 + grads[3, 1] * t1 + grads[3, 2] * t2
+            var1 += d1 * d1
+            var2 += d2 * d2
+            vard += da * da + dh * dh
+        slots[touched[s]] = 0
+    return var1, var2, vard, spare, ok, touched, yv, jp
+
+
+@jit
+def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt,
+            ring_ptr, ring, slots, touched, yv, jp, minv, grads):
+    """Normal-difference least squares at vertex p over its support ``queue[1:count]``.
+
+    Scratch: ``tilt`` (13,) for the frame-tilt columns of the independent model (:func:`store_se3`);
+    ``slots`` (n,) int64 zeros, ``touched``, ``yv``, ``jp``, ``minv``, ``grads`` for
+    :func:`_noise_model`. Returns the short lists (grown, perhaps).
+    """
+    clear_parts(p, se_parts)
     n0, n1, n2 = nx[p], ny[p], nz[p]
     if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
         mark_degenerate(p, k1, k2, d1, d2, reason)
-        return
+        return touched, yv, jp
     frame = tangent_frame(n0, n1, n2)
     ux, uy, uz, vx, vy, vz = frame
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     # normal equations of the two equation kinds: rows (u, v, 0) and (0, u, v)
-    suu = suv = svv = sau = sav = sbu = sbv = saa_bb = 0.0
+    suu = suv = svv = sau = sav = sbu = sbv = saa_bb = su = sv = sa = sb = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -50,38 +155,72 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         sbu += b * u
         sbv += b * v
         saa_bb += a * a + b * b
+        su += u
+        sv += v
+        sa += a
+        sb += b
     # AᵀA = [[uu, uv, 0], [uv, uu + vv, uv], [0, uv, vv]], Aᵀb = (au, av + bu, bv)
     e, f, g, singular = solve_sym3(suu, suv, 0.0, suu + svv, suv, svv, sau, sav + sbu, sbv)
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
-    # two equations per neighbour, errors taken as independent (docs/UNCERTAINTY.md)
-    store_se3(p, suu, suv, 0.0, suu + svv, suv, svv, saa_bb, e * sau + f * (sav + sbu) + g * sbv, 2 * used, 0,
-              0.0, 0.0, 0.0, e, f, g, k1_se, k2_se)
+    xatb = e * sau + f * (sav + sbu) + g * sbv
+    if slots.size > 0 and ring.size > 0 and used > 3 and not singular:  # slots given: noise_model="normals"
+        minv[0], minv[1], minv[2], minv[3], minv[4], minv[5] = sym3_inverse(suu, suv, 0.0, suu + svv, suv, svv)
+        grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
+        grads[2, 0], grads[2, 1], grads[2, 2], grads[3, 0], grads[3, 1], grads[3, 2] = deviator_gradients(e, f, g)
+        var1, var2, vard, spare, ok, touched, yv, jp = _noise_model(
+            p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
+            su, sv, minv, grads)
+        if ok and spare > 0.0:
+            store_parts(p, k1_se, k2_se, se_parts, var1, var2, saa_bb - xatb, spare, vard, math.hypot(0.5 * (e - g), f))
+            return touched, yv, jp
+    # no mesh rings (a point cloud) or a ring without a gradient: the equations' errors taken as
+    # independent; a tilt t of p's own normal (the frame) adds -t to every a (and b) equation, so the
+    # noise level is read from the residuals of the fit with those two constants as unknowns
+    tilt[0], tilt[1], tilt[2] = used, 0.0, used
+    tilt[3], tilt[4], tilt[5], tilt[6], tilt[7], tilt[8] = su, sv, 0.0, 0.0, su, sv
+    tilt[9], tilt[10], tilt[11], tilt[12] = sa, sb, used, used
+    store_se3(p, suu, suv, 0.0, suu + svv, suv, svv, saa_bb, xatb, 2 * used, 0,
+              0.0, 0.0, 0.0, e, f, g, k1_se, k2_se, se_parts, e, f, g, tilt)
+    # its noise level is of the normals, not of the heights: pooled with no other vertex's
+    se_parts[p, 1] = -se_parts[p, 1]
+    return touched, yv, jp
 
 
 @jit_parallel
 def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se):
+                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
+        slot = slots[t]
+        tilt = np.empty(13)
+        touched, yv, jp = np.empty(64, np.int64), np.empty((64, 3)), np.empty((64, 2))
+        minv, grads = np.empty(6), np.empty((4, 3))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se)
+            touched, yv, jp = _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
+                                      k1_se, k2_se, se_parts, tilt, ring_ptr, ring, slot, touched, yv, jp, minv,
+                                      grads)
 
 
 def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk)."""
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+    """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk).
+
+    ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
+    take the errors of the neighbours' normals; the curvatures do not depend on it."""
     return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk, centres=centres,
-                                 features=features))
+                                 features=features, slot_maps=models_normals(noise_model)))
 
 
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
-    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel,),
+    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
+    options={"noise_model": NOISE_MODELS},
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))
