@@ -377,6 +377,43 @@ def crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vec
 
 
 @jit
+def leaving_halfedges(v, vx, vy, vz, qv, vc_ptr, vc, tri, x, y, z, px, py, pz, radius2, out_h, out_w, out_t):
+    """The halfedges from support vertex v (inside the ball of centre (px, py, pz)) whose far end
+    lies outside it, with their exits; returns how many (``out_h[:count]`` the halfedges,
+    ``out_w`` their far ends, ``out_t`` the exit fractions, :func:`exit_fraction`).
+
+    ``(vx, vy, vz)`` and ``qv`` are v's offset from the centre and its squared length; ``vc_ptr``,
+    ``vc`` v's corners (halfedge ``h`` leaves corner ``h % 3`` of face ``h // 3`` of ``tri``). A
+    face with v alone inside leaves along two of them.
+    """
+    leaving = 0
+    for j in range(vc_ptr[v], vc_ptr[v + 1]):
+        h = vc[j]
+        f = h // 3
+        c = h - 3 * f
+        w = tri[f, c + 1 if c < 2 else 0]
+        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+        if wx * wx + wy * wy + wz * wz > radius2:
+            out_h[leaving] = h
+            out_w[leaving] = w
+            out_t[leaving] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, radius2)
+            leaving += 1
+    return leaving
+
+
+@jit
+def other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, radius2):
+    """The exit fraction along v -> u, the face's other edge from v (0 when u is inside the ball):
+    the one :func:`leaving_halfedges` found, or computed for a border edge that leaves no face at v."""
+    if not qu > radius2:
+        return 0.0
+    for b in range(leaving):
+        if out_w[b] == u:
+            return out_t[b]
+    return exit_fraction(vx, vy, vz, qv, ux, uy, uz, radius2)
+
+
+@jit
 def vertex_bits(v, border, nonmanifold):
     """The flags vertex v adds to a support it lies in (BORDER_BIT, NONMANIFOLD_BIT)."""
     bits = 0

@@ -65,7 +65,7 @@ from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertice
                              new_queues, new_scratch)
 from ..core.validity import Reason
 from ._local_fit import store_principal, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, exit_fraction,
+from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, leaving_halfedges, other_exit,
                              face_in_ball_area, support_reason, touched_elements, touches, vertex_bits)
 from ._triangle_corners import unset_principal
 from .registry import EstimatorSpec, register
@@ -298,21 +298,8 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                     reach = inner - longest[v]
                     if reach > 0.0 and qv <= reach * reach:
                         continue
-                    # the halfedges leaving the ball from v, with their exits (a face with v alone
-                    # inside leaves along two of them)
-                    leaving = 0
-                    for j in range(vc_ptr[v], vc_ptr[v + 1]):
-                        h = vc[j]
-                        f = h // 3
-                        c = h - 3 * f
-                        w = tri[f, c + 1 if c < 2 else 0]
-                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
-                        qw = wx * wx + wy * wy + wz * wz
-                        if qw > r2:
-                            out_h[leaving] = h
-                            out_w[leaving] = w
-                            out_t[leaving] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, r2)
-                            leaving += 1
+                    leaving = leaving_halfedges(v, vx, vy, vz, qv, vc_ptr, vc, tri, x, y, z, px, py, pz, r2,
+                                                out_h, out_w, out_t)
                     for a in range(leaving):
                         h, w, tp = out_h[a], out_w[a], out_t[a]
                         f = h // 3
@@ -322,14 +309,7 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                         u = tri[f, c - 1 if c > 0 else 2]
                         ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
                         qu = ux * ux + uy * uy + uz * uz
-                        tu = 0.0
-                        if qu > r2:
-                            tu = -1.0
-                            for b in range(leaving):
-                                if out_w[b] == u:
-                                    tu = out_t[b]
-                            if tu < 0.0:  # v -> u is on no face at v (a border edge)
-                                tu = exit_fraction(vx, vy, vz, qv, ux, uy, uz, r2)
+                        tu = other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, r2)
                         inside = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area,
                                                face_area, r2)
                         third = 1.0 / 3.0
