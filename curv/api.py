@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import inspect
 import time
 from dataclasses import dataclass
 from typing import Generator
@@ -389,25 +390,7 @@ def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     return (a1 * b2 - a2 * b1) * c0 + (a2 * b0 - a0 * b2) * c1 + (a0 * b1 - a1 * b0) * c2
 
 
-def estimate(
-    mesh: Mesh,
-    method: str = DEFAULT_ESTIMATOR,
-    range=None,
-    *,
-    radius: float | None = None,
-    normals: np.ndarray | None = None,
-    normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
-    smooth: Smoothing | str | None = None,
-    smooth_iterations: int = 1,
-    smooth_strength: float = 0.5,
-    fit_range=2,
-    block_size: int | None = None,
-    features=None,
-    vertices=None,
-    knn: int | None = None,
-    orient="up",
-    **options,
-) -> Curvature:
+def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
 
     Parameters
@@ -475,12 +458,13 @@ def estimate(
     MeshError
         A mesh the estimator cannot handle (e.g. quads for a triangle-only estimator).
     """
-    gen = iter_estimate(mesh, method, range, radius=radius, normals=normals, normal_weighting=normal_weighting,
-                        smooth=smooth, smooth_iterations=smooth_iterations,
-                        smooth_strength=smooth_strength, fit_range=fit_range, block_size=block_size,
-                        features=features, vertices=vertices, knn=knn, orient=orient, **options)
+    gen = iter_estimate(mesh, method, range, **keywords)
     while True:
         try:
             next(gen)
         except StopIteration as stop:
             return stop.value
+
+
+# the keywords and their defaults are iter_estimate's, written once; help() and editors show them here too
+estimate.__signature__ = inspect.signature(iter_estimate).replace(return_annotation="Curvature")

@@ -161,7 +161,7 @@ def test_bad_files_are_one_line_errors(tmp_path, capsys):
     path = tmp_path / "bad.xyz"
     path.write_text("0 0 0\n1 nan 0\n")
     code, _, err = _run(capsys, path, "-m", "qs")
-    assert code == 2 and err == f"curv: error: {path}: point 1 has a NaN or infinite coordinate"
+    assert code == 2 and err == f"curv: error: {path}: point 1 has a NaN coordinate"
     code, _, err = _run(capsys, tmp_path / "missing.pcd")
     assert code == 2 and err.endswith("missing.pcd: no such file")
 

@@ -386,6 +386,24 @@ def test_registry_names_and_defaults():
             assert p.low <= p.default <= p.high
 
 
+@pytest.mark.parametrize("name", sorted(SURFACES))
+def test_every_surface_takes_its_params_in_order_or_by_name(name):
+    cls = SURFACES[name]
+    values = [int(p.default) if p.default == int(p.default) else p.default for p in cls.params]
+    by_order, by_name = cls(*values), cls(**{p.name: v for p, v in zip(cls.params, values)})
+    assert by_order == by_name == cls()
+    assert all(type(getattr(by_order, p.name)) is float for p in cls.params)
+    with pytest.raises(TypeError, match="takes at most"):
+        cls(*values, 1.0)
+    with pytest.raises(TypeError, match="no parameter nosuch"):
+        cls(nosuch=1.0)
+    if cls.positive:  # lengths: a finite value > 0 or a one-line ValueError naming the parameter
+        first = cls.params[0].name
+        for bad in (0.0, -1.0, float("nan"), float("inf")):
+            with pytest.raises(ValueError, match=f"{first} must be a finite value > 0"):
+                cls(**{first: bad})
+
+
 @pytest.mark.parametrize("name", sorted(n for n, cls in SURFACES.items() if not issubclass(cls, CreasedSurface)))
 def test_make_surface_every_registered_surface(name):  # creased ones: tests/test_creased_surfaces.py
     s = make_surface(name, n_vertices=217 if issubclass(SURFACES[name], MongePatch) else 400)

@@ -27,7 +27,7 @@ import numpy as np
 from .jit import jit, jit_parallel, launch, prange, threads
 from .corner_normals import max_normal, unit
 
-__all__ = ["group_corners", "edge_table", "vertex_incidence", "longest_incident_edges", "vertex_face_incidence",
+__all__ = ["group_corners", "edge_table", "vertex_incidence", "vertex_face_incidence",
            "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
            "corner_links", "component_labels", "edge_counts", "EDGE_COUNTS", "KERNELS"]
 
@@ -152,47 +152,77 @@ def _slice(count, t, parts):
 
 
 @jit_parallel
-def _count_edges(indptr, corners, indices, corner_next, corner_prev, width, parts, low_edges):
-    # low_edges[u]: the distinct w > u around u, i.e. the edges (u, w) numbered at u
+def _walk_edges(ring, width, parts, low_edges, table, shape, totals):
+    """Every edge (u, w), w > u, once, at u from the halfedges around u (a slice of vertices per thread).
+
+    What it records depends on which outputs are given (None: not asked for; numba compiles each
+    combination on its own, without the branches it does not take):
+
+    - ``low_edges`` (n,): how many edges are numbered at u (the first pass of :func:`edge_table`);
+    - ``table = (edge_start (n + 1,), edges, halfedge_edge, face_count, edge_faces, edge_halfedges,
+      forward_count)``: the edge table, edges numbered from ``edge_start[u]`` at u (its second pass;
+      ``forward_count`` zeroed, the rest preset as :func:`edge_table` returns them where nothing is
+      written);
+    - ``totals`` (parts, 5): each thread's counts of :data:`EDGE_COUNTS`, the sharp edges among them
+      where ``shape = (vector_area, area, degenerate, sharp_angle)`` (as in :func:`edge_counts`) is given.
+
+    ``ring = (indptr, corners, indices, corner_next, corner_prev, corner_face)`` as in :func:`edge_table`;
+    ``width`` the scratch length (:func:`_ring_width`).
+    """
+    indptr, corners, indices, corner_next, corner_prev, corner_face = ring
+    if table is not None:
+        edge_start, edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count = table
+    if shape is not None:
+        vector_area, area, degenerate, sharp_angle = shape
     n = indptr.size - 1
     for t in prange(parts):
         key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
+        counted = np.zeros(len(EDGE_COUNTS), np.int64)
         lo, hi = _slice(n, t, parts)
         for u in range(lo, hi):
             k = _upper_halfedges(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, key,
                                  halfedge)
-            count = 0
-            for i in range(k):
-                if i == 0 or key[i] >> 1 != key[i - 1] >> 1:
-                    count += 1
-            low_edges[u] = count
-
-
-@jit_parallel
-def _number_edges(indptr, corners, indices, corner_next, corner_prev, corner_face, width, parts, edge_start,
-                  edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count):
-    n = indptr.size - 1
-    for t in prange(parts):
-        key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
-        lo, hi = _slice(n, t, parts)
-        for u in range(lo, hi):
-            k = _upper_halfedges(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, key,
-                                 halfedge)
-            e = edge_start[u] - 1
-            for i in range(k):
-                w = key[i] >> 1
-                if i == 0 or w != key[i - 1] >> 1:
-                    e += 1
+            count, start = 0, 0
+            for i in range(1, k + 1):
+                if i < k and key[i] >> 1 == key[start] >> 1:
+                    continue
+                # halfedges start .. i-1 are those of the edge (u, w), w > u: one per face
+                faces = i - start
+                if table is not None:  # row e of the edge table
+                    e = edge_start[u] + count
                     edges[e, 0] = u
-                    edges[e, 1] = w
-                h = halfedge[i]
-                halfedge_edge[h] = e
-                r = face_count[e]
-                if r < 2:
-                    edge_faces[e, r] = corner_face[h]
-                    edge_halfedges[e, r] = h
-                face_count[e] = r + 1
-                forward_count[e] += 1 - (key[i] & 1)
+                    edges[e, 1] = key[start] >> 1
+                    face_count[e] = faces
+                    for j in range(start, i):
+                        h = halfedge[j]
+                        halfedge_edge[h] = e
+                        if j - start < 2:
+                            edge_faces[e, j - start] = corner_face[h]
+                            edge_halfedges[e, j - start] = h
+                        forward_count[e] += 1 - (key[j] & 1)
+                if totals is not None:  # the counts of EDGE_COUNTS
+                    counted[0] += 1
+                    if faces == 1:
+                        counted[1] += 1
+                    elif faces > 2:
+                        counted[2] += 1
+                    else:
+                        if (key[start] & 1) == (key[start + 1] & 1):  # both run the same way
+                            counted[3] += 1
+                        f, g = corner_face[halfedge[start]], corner_face[halfedge[start + 1]]
+                        if shape is not None and not (degenerate[f] or degenerate[g]):
+                            # the unit normals as Mesh.face_normals divides them, without that (m, 3) array
+                            af, ag = area[f], area[g]
+                            nf = (vector_area[f, 0] / af, vector_area[f, 1] / af, vector_area[f, 2] / af)
+                            ng = (vector_area[g, 0] / ag, vector_area[g, 1] / ag, vector_area[g, 2] / ag)
+                            if _angle_between(nf, ng) > sharp_angle:
+                                counted[4] += 1
+                count += 1
+                start = i
+            if low_edges is not None:
+                low_edges[u] = count
+        if totals is not None:
+            totals[t] = counted
 
 
 def _ring_width(indptr: np.ndarray) -> int:
@@ -232,8 +262,9 @@ def edge_table(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, cor
     """
     n = indptr.size - 1
     width, parts = _ring_width(indptr), threads()
+    ring = (indptr, corners, indices, corner_next, corner_prev, corner_face)
     low_edges = np.empty(n, np.int64)
-    launch(_count_edges, indptr, corners, indices, corner_next, corner_prev, width, parts, low_edges)
+    launch(_walk_edges, ring, width, parts, low_edges, None, None, None)
     edge_start = np.zeros(n + 1, np.int64)
     np.cumsum(low_edges, out=edge_start[1:])
     ne = int(edge_start[-1])
@@ -243,8 +274,8 @@ def edge_table(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, cor
     edge_faces = np.full((ne, 2), -1, np.int64)
     edge_halfedges = np.full((ne, 2), -1, np.int64)
     forward_count = np.zeros(ne, np.int64)
-    launch(_number_edges, indptr, corners, indices, corner_next, corner_prev, corner_face, width, parts,
-           edge_start, edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count)
+    table = (edge_start, edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count)
+    launch(_walk_edges, ring, width, parts, None, table, None, None)
     return edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count
 
 
@@ -286,23 +317,6 @@ def vertex_incidence(edges, n):
     return indptr, neighbours, edge_ids
 
 
-@jit_parallel
-def longest_incident_edges(indptr, neighbours, vertices, out):
-    """``out[p]`` = max |q - p| over the neighbours q of p (0 without one)."""
-    for p in prange(indptr.size - 1):
-        longest = 0.0
-        for i in range(indptr[p], indptr[p + 1]):
-            q = neighbours[i]
-            # squares do not see the sign: the same length as Mesh.edge_lengths, to the bit
-            dx = vertices[q, 0] - vertices[p, 0]
-            dy = vertices[q, 1] - vertices[p, 1]
-            dz = vertices[q, 2] - vertices[p, 2]
-            length = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if length > longest:
-                longest = length
-        out[p] = longest
-
-
 @jit
 def vertex_face_incidence(indptr, corners, corner_face):
     """CSR of the faces at each vertex with the number of the vertex's corners in each.
@@ -322,19 +336,12 @@ def vertex_face_incidence(indptr, corners, corner_face):
     """
     n = indptr.size - 1
     face_ptr = np.zeros(n + 1, np.int64)
+    # a face's corners at v are consecutive (corners increase, and a face's corners are contiguous):
+    # one entry per run, at most one per corner
+    faces = np.empty(corners.size, np.int64)
+    counts = np.zeros(corners.size, np.int32)
+    k = -1
     for v in range(n):
-        distinct = 0
-        last = -1
-        for i in range(indptr[v], indptr[v + 1]):
-            f = corner_face[corners[i]]
-            if f != last:
-                distinct += 1
-                last = f
-        face_ptr[v + 1] = face_ptr[v] + distinct
-    faces = np.empty(face_ptr[n], np.int64)
-    counts = np.zeros(face_ptr[n], np.int32)
-    for v in range(n):
-        k = face_ptr[v] - 1
         last = -1
         for i in range(indptr[v], indptr[v + 1]):
             f = corner_face[corners[i]]
@@ -343,7 +350,8 @@ def vertex_face_incidence(indptr, corners, corner_face):
                 last = f
                 faces[k] = f
             counts[k] += 1
-    return face_ptr, faces, counts
+        face_ptr[v + 1] = k + 1
+    return face_ptr, faces[:k + 1], counts[:k + 1]
 
 
 @jit
@@ -655,41 +663,6 @@ EDGE_COUNTS = ("edges", "border", "nonmanifold", "inconsistent", "sharp")
 """The columns of :func:`edge_counts`."""
 
 
-@jit_parallel
-def _edge_counts(indptr, corners, indices, corner_next, corner_prev, corner_face, vector_area, area, degenerate,
-                 sharp_angle, width, parts, totals):
-    n = indptr.size - 1
-    for t in prange(parts):
-        key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
-        lo, hi = _slice(n, t, parts)
-        for u in range(lo, hi):
-            k = _upper_halfedges(u, corners[indptr[u]:indptr[u + 1]], indices, corner_next, corner_prev, key,
-                                 halfedge)
-            start = 0
-            for i in range(1, k + 1):
-                if i < k and key[i] >> 1 == key[start] >> 1:
-                    continue
-                # halfedges start .. i-1 are those of the edge (u, w), w > u: one per face
-                faces = i - start
-                totals[t, 0] += 1
-                if faces == 1:
-                    totals[t, 1] += 1
-                elif faces > 2:
-                    totals[t, 2] += 1
-                else:
-                    if (key[start] & 1) == (key[start + 1] & 1):  # both run the same way
-                        totals[t, 3] += 1
-                    f, g = corner_face[halfedge[start]], corner_face[halfedge[start + 1]]
-                    if not (degenerate[f] or degenerate[g]):
-                        # the unit normals as Mesh.face_normals divides them, without that (m, 3) array
-                        af, ag = area[f], area[g]
-                        nf = (vector_area[f, 0] / af, vector_area[f, 1] / af, vector_area[f, 2] / af)
-                        ng = (vector_area[g, 0] / ag, vector_area[g, 1] / ag, vector_area[g, 2] / ag)
-                        if _angle_between(nf, ng) > sharp_angle:
-                            totals[t, 4] += 1
-                start = i
-
-
 def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
                 corner_prev: np.ndarray, corner_face: np.ndarray, vector_area: np.ndarray, area: np.ndarray,
                 degenerate: np.ndarray, sharp_angle: float) -> dict[str, int]:
@@ -716,12 +689,12 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     """
     parts = max(1, min(threads(), indptr.size - 1))
     totals = np.zeros((parts, len(EDGE_COUNTS)), np.int64)
-    launch(_edge_counts, indptr, corners, indices, corner_next, corner_prev, corner_face, vector_area, area,
-           degenerate, float(sharp_angle), _ring_width(indptr), parts, totals)
+    ring = (indptr, corners, indices, corner_next, corner_prev, corner_face)
+    shape = (vector_area, area, degenerate, float(sharp_angle))
+    launch(_walk_edges, ring, _ring_width(indptr), parts, None, None, shape, totals)
     return dict(zip(EDGE_COUNTS, (int(c) for c in totals.sum(axis=0))))
 
 
-KERNELS = (group_corners, _count_edges, _number_edges, vertex_incidence, longest_incident_edges,
-           vertex_face_incidence, _corner_pass, _gather_neighbours, triangle_geometry, duplicate_positions,
-           dihedral_angles, corner_links, component_labels, _edge_counts)
+KERNELS = (group_corners, _walk_edges, vertex_incidence, vertex_face_incidence, _corner_pass, _gather_neighbours,
+           triangle_geometry, duplicate_positions, dihedral_angles, corner_links, component_labels)
 """The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 from . import connectivity as _kernels
 from .errors import MeshError
 from .jit import launch
+from .pointcloud import PointSet, as_positions
 from .wording import count_text
 
 __all__ = ["Mesh", "MeshReport"]
@@ -82,25 +83,6 @@ class MeshReport:
 _POLY_NAMES = {3: "triangles", 4: "quads", 5: "pentagons", 6: "hexagons"}
 
 
-def _as_vertices(vertices) -> np.ndarray:
-    try:
-        v = np.array(vertices, dtype=np.float64, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise MeshError(f"vertices are not numeric: {exc}") from None
-    if v.ndim != 2 or v.shape[1] != 3:
-        raise MeshError(f"vertices must have shape (n, 3), got {v.shape}")
-    if v.shape[0] == 0:
-        raise MeshError("mesh has no vertices")
-    bad = ~np.isfinite(v)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        kind = "a NaN" if np.isnan(v[row, col]) else "an infinite"
-        more = int(bad.any(axis=1).sum()) - 1
-        extra = f" (and {more} more vertices)" if more else ""
-        raise MeshError(f"vertex {row} has {kind} coordinate{extra}")
-    return v
-
-
 def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
     """Flatten ``faces`` into ``(indices, offsets)``; validate sizes and index range."""
     if isinstance(faces, np.ndarray) and faces.dtype != object:
@@ -153,7 +135,13 @@ def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
     return indices, offsets
 
 
-class Mesh:
+def _part(of: str, index: int, doc: str) -> property:
+    """A read-only attribute: item ``index`` of the tuple the (cached) attribute ``of`` holds, for the
+    arrays that one computation gives together (the corner links, the edge table, the corner pass)."""
+    return property(lambda mesh: getattr(mesh, of)[index], doc=doc)
+
+
+class Mesh(PointSet):
     """A polygon mesh with validated data and cached connectivity.
 
     Parameters
@@ -173,9 +161,8 @@ class Mesh:
     """
 
     def __init__(self, vertices, faces):
-        v = _as_vertices(vertices)
+        v = as_positions(vertices, "vertex", "vertices", "mesh")
         indices, offsets = _as_faces(faces, v.shape[0])
-        v.setflags(write=False)
         indices.setflags(write=False)
         offsets.setflags(write=False)
         self._vertices = v
@@ -186,11 +173,6 @@ class Mesh:
 
     # ------------------------------------------------------------------ basic data
     @property
-    def vertices(self) -> np.ndarray:
-        """(n, 3) float64 vertex positions (read-only)."""
-        return self._vertices
-
-    @property
     def face_indices(self) -> np.ndarray:
         """(sum of face sizes,) int64: the vertex indices of all faces, one after the other."""
         return self._indices
@@ -199,10 +181,6 @@ class Mesh:
     def face_offsets(self) -> np.ndarray:
         """(m + 1,) int64: face ``i`` is ``face_indices[face_offsets[i]:face_offsets[i + 1]]``."""
         return self._offsets
-
-    @property
-    def n_vertices(self) -> int:
-        return self._vertices.shape[0]
 
     @property
     def n_faces(self) -> int:
@@ -252,15 +230,10 @@ class Mesh:
         launch(_kernels.corner_links, self._offsets, nxt, prev)
         return nxt, prev
 
-    @property
-    def corner_next(self) -> np.ndarray:
-        """(h,) int32 (int64 beyond 2**31 corners) index (into ``face_indices``) of the next corner in the same face."""
-        return self._corner_links[0]
-
-    @property
-    def corner_prev(self) -> np.ndarray:
-        """(h,) int32 (int64 beyond 2**31 corners) index of the previous corner in the same face."""
-        return self._corner_links[1]
+    corner_next = _part("_corner_links", 0, "(h,) int32 (int64 beyond 2**31 corners) index (into ``face_indices``) "
+                                            "of the next corner in the same face.")
+    corner_prev = _part("_corner_links", 1, "(h,) int32 (int64 beyond 2**31 corners) index of the previous corner in "
+                                            "the same face.")
 
     @cached_property
     def vertex_corners(self) -> tuple[np.ndarray, np.ndarray]:
@@ -284,29 +257,16 @@ class Mesh:
         return _kernels.edge_table(indptr, corners, self._indices, self.corner_next, self.corner_prev,
                                    self.corner_face)
 
-    @cached_property
-    def edges(self) -> np.ndarray:
-        """(e, 2) int64 unique undirected edges, ``edges[:, 0] < edges[:, 1]``."""
-        return self._edge_data[0]
+    edges = _part("_edge_data", 0, "(e, 2) int64 unique undirected edges, ``edges[:, 0] < edges[:, 1]``.")
+    halfedge_edge = _part("_edge_data", 1, "(h,) int64 undirected edge of each halfedge, -1 for the null edge of a "
+                                           "repeated index.")
+    edge_face_count = _part("_edge_data", 2, "(e,) int64 number of faces using each edge (1 on a border, >2 where "
+                                             "non-manifold).")
+    edge_faces = _part("_edge_data", 3, """(e, 2) int64 the first two faces of each edge; -1 where there is none.
 
-    @cached_property
-    def halfedge_edge(self) -> np.ndarray:
-        """(h,) int64 undirected edge of each halfedge, -1 for the null edge of a repeated index."""
-        return self._edge_data[1]
-
-    @cached_property
-    def edge_face_count(self) -> np.ndarray:
-        """(e,) int64 number of faces using each edge (1 on a border, >2 where non-manifold)."""
-        return self._edge_data[2]
-
-    @cached_property
-    def edge_faces(self) -> np.ndarray:
-        """(e, 2) int64 the first two faces of each edge; -1 where there is none.
-
-        For a manifold interior edge, ``edge_faces[:, 0]`` is the face in which the edge runs
-        from ``edges[:, 0]`` to ``edges[:, 1]`` when orientation is consistent.
-        """
-        return self._edge_data[3]
+    For a manifold interior edge, ``edge_faces[:, 0]`` is the face in which the edge runs
+    from ``edges[:, 0]`` to ``edges[:, 1]`` when orientation is consistent.
+    """)
 
     @cached_property
     def edge_vectors(self) -> np.ndarray:
@@ -492,10 +452,7 @@ class Mesh:
         _kernels.duplicate_positions(self._vertices, self._vertices.view(np.uint64), out)
         return out
 
-    @cached_property
-    def border_vertices(self) -> np.ndarray:
-        """(n,) bool: vertices on a border edge or a non-manifold edge."""
-        return self._vertex_flags[1]
+    border_vertices = _part("corner_pass", 1, "(n,) bool: vertices on a border edge or a non-manifold edge.")
 
     @cached_property
     def isolated_vertices(self) -> np.ndarray:
@@ -503,26 +460,16 @@ class Mesh:
         indptr = self.vertex_corners[0]
         return indptr[1:] == indptr[:-1]
 
-    @cached_property
-    def nonmanifold_vertices(self) -> np.ndarray:
-        """(n,) bool: vertices whose faces do not form one fan (e.g. the tip of a bow tie).
+    # two corners at v are linked when their faces share an edge at v with exactly two faces;
+    # the linked groups are the fans (curv.core.connectivity.corner_pass)
+    nonmanifold_vertices = _part("corner_pass", 0, """(n,) bool: vertices whose faces do not form one fan (e.g. the tip of a bow tie).
 
-        Counted as: the faces around v, linked when they share an edge at v, form more than one
-        group. Vertices on non-manifold edges are included too.
-        """
-        # two corners at v are linked when their faces share an edge at v with exactly two faces;
-        # the linked groups are the fans (curv.core.connectivity.corner_pass)
-        return self._vertex_flags[0]
+    Counted as: the faces around v, linked when they share an edge at v, form more than one
+    group. Vertices on non-manifold edges are included too.
+    """)
 
-    @cached_property
-    def inconsistent_vertices(self) -> np.ndarray:
-        """(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of opposite orientation meet there)."""
-        return self._vertex_flags[2]
-
-    @property
-    def _vertex_flags(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(nonmanifold, border, inconsistent)`` vertex flags (:attr:`corner_pass`)."""
-        return self.corner_pass[:3]
+    inconsistent_vertices = _part("corner_pass", 2, "(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of "
+                                                    "opposite orientation meet there).")
 
     @cached_property
     def components(self) -> tuple[int, np.ndarray]:
@@ -582,7 +529,7 @@ class Mesh:
 
     def with_vertices(self, vertices) -> "Mesh":
         """A mesh with the same faces and new (validated) vertex positions of the same count."""
-        v = _as_vertices(vertices)
+        v = as_positions(vertices, "vertex", "vertices", "mesh")
         if v.shape[0] != self.n_vertices:
             raise MeshError(f"expected {self.n_vertices} vertices, got {v.shape[0]}")
         return Mesh._trusted(v, self._indices, self._offsets)

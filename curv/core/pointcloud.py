@@ -18,28 +18,62 @@ import scipy.sparse as sp
 from .errors import MeshError
 from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, symmetric_graph
 
-__all__ = ["PointCloud"]
+__all__ = ["PointCloud", "PointSet", "as_positions"]
 
 
-def _as_points(points) -> np.ndarray:
-    """(n, 3) float64 copy of ``points``; a one-line :class:`MeshError` for anything else."""
+def as_positions(data, one: str = "point", many: str = "points", whole: str = "point cloud") -> np.ndarray:
+    """(n, 3) float64 read-only copy of ``data``: the positions of a point cloud or of a mesh's vertices.
+
+    Parameters
+    ----------
+    data : (n, 3) array_like
+        Finite coordinates, at least one row.
+    one, many, whole : str
+        The words the errors use for one row, several rows and what they belong to
+        (``"vertex"``, ``"vertices"``, ``"mesh"`` for a mesh).
+
+    Raises
+    ------
+    MeshError
+        One line naming what is wrong: not numeric, not (n, 3), empty, or the first row with a NaN
+        or infinite coordinate.
+    """
     try:
-        p = np.array(points, dtype=np.float64, copy=True)
+        p = np.array(data, dtype=np.float64, copy=True)
     except (TypeError, ValueError) as exc:
-        raise MeshError(f"points are not numeric: {exc}") from None
+        raise MeshError(f"{many} are not numeric: {exc}") from None
     if p.ndim != 2 or p.shape[1] != 3:
-        raise MeshError(f"points must have shape (n, 3), got {p.shape}")
+        raise MeshError(f"{many} must have shape (n, 3), got {p.shape}")
     if p.shape[0] == 0:
-        raise MeshError("point cloud has no points")
-    bad = ~np.isfinite(p).all(axis=1)
+        raise MeshError(f"{whole} has no {many}")
+    bad = ~np.isfinite(p)
     if bad.any():
-        first = int(np.flatnonzero(bad)[0])
-        more = int(bad.sum()) - 1
-        raise MeshError(f"point {first} has a NaN or infinite coordinate" + (f" (and {more} more points)" if more else ""))
+        row, col = np.argwhere(bad)[0]
+        kind = "a NaN" if np.isnan(p[row, col]) else "an infinite"
+        more = int(bad.any(axis=1).sum()) - 1
+        extra = f" (and {more} more {many})" if more else ""
+        raise MeshError(f"{one} {row} has {kind} coordinate{extra}")
+    p.setflags(write=False)
     return p
 
 
-class PointCloud:
+class PointSet:
+    """Read-only (n, 3) positions: what a :class:`PointCloud` and a :class:`curv.Mesh` share, under the
+    names the estimators' kernels read (``vertices``, ``n_vertices``)."""
+
+    _vertices: np.ndarray
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64 positions (read-only)."""
+        return self._vertices
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self._vertices.shape[0])
+
+
+class PointCloud(PointSet):
     """Points sampled on a surface, with optional per-point normals (e.g. from the file).
 
     Parameters
@@ -54,46 +88,30 @@ class PointCloud:
     """
 
     def __init__(self, points, normals=None):
-        self._points = _as_points(points)
-        self._points.setflags(write=False)
+        self._vertices = as_positions(points)
         if normals is None:
             self._normals = None
         else:
             nrm = np.array(normals, dtype=np.float64, copy=True)
-            if nrm.shape != self._points.shape:
-                raise MeshError(f"normals must have shape {self._points.shape}, got {nrm.shape}")
+            if nrm.shape != self._vertices.shape:
+                raise MeshError(f"normals must have shape {self._vertices.shape}, got {nrm.shape}")
             nrm.setflags(write=False)
             self._normals = nrm
 
-    @property
-    def points(self) -> np.ndarray:
-        """(n, 3) float64 positions (read-only)."""
-        return self._points
-
-    @property
-    def vertices(self) -> np.ndarray:
-        """The points under the name the estimators' kernels read: (n, 3) float64."""
-        return self._points
+    points = PointSet.vertices
+    """(n, 3) float64 positions (read-only); ``vertices`` is the same array."""
+    n_points = PointSet.n_vertices
 
     @property
     def normals(self) -> np.ndarray | None:
         """(n, 3) float64 normals given with the points (read-only), or None."""
         return self._normals
 
-    @property
-    def n_points(self) -> int:
-        return int(self._points.shape[0])
-
-    @property
-    def n_vertices(self) -> int:
-        """Same as :attr:`n_points`, for code that handles meshes and point clouds alike."""
-        return self.n_points
-
     @cached_property
     def grid(self):
         """The uniform grid over the points (:func:`curv.core.knn.build_grid`), made once: it answers the
         nearest-neighbour queries and every ball support of an estimate."""
-        return build_grid(self._points, GRAPH_NEIGHBOURS)
+        return build_grid(self._vertices, GRAPH_NEIGHBOURS)
 
     def ball_grid(self, radii: np.ndarray):
         """A grid whose cells suit balls of these radii (cell edge ~1.25 x their median), cached.
@@ -110,7 +128,7 @@ class PointCloud:
         if step not in cache:
             if len(cache) >= 4:
                 cache.pop(next(iter(cache)))
-            cache[step] = build_grid(self._points, cell=2.0 ** (step / 4.0))
+            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0))
         return cache[step]
 
     @cached_property
@@ -124,7 +142,7 @@ class PointCloud:
         distances : (n, G) float64
             Ascending (inf with -1). Read-only.
         """
-        indices, distances = nearest_neighbours(self._points, GRAPH_NEIGHBOURS, self.grid)
+        indices, distances = nearest_neighbours(self._vertices, GRAPH_NEIGHBOURS, self.grid)
         for arr in (indices, distances):
             arr.setflags(write=False)
         return indices, distances
@@ -142,7 +160,7 @@ class PointCloud:
             if k <= GRAPH_NEIGHBOURS:
                 out = np.ascontiguousarray(self.nearest[1][:, k - 1])
             else:
-                out = np.ascontiguousarray(nearest_neighbours(self._points, k, self.grid)[1][:, -1])
+                out = np.ascontiguousarray(nearest_neighbours(self._vertices, k, self.grid)[1][:, -1])
             out.setflags(write=False)
             cache[k] = out
         return cache[k]

@@ -241,7 +241,15 @@ def _same(a, b) -> bool:
 
 
 @jit_parallel
-def _support_counts(centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, counts):
+def _search_supports(centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops, counts,
+                     flagged, out_ptr, out):
+    """The support of every centre, a slice of centres per thread (:func:`_search_setup`).
+
+    Writes ``counts[i]``, the support size of centre i (itself excluded); where ``flags`` (n,) has
+    entries, ``flagged[i]``: the support (the centre included) holds a flagged vertex; where
+    ``out_ptr`` (c + 1,) has entries, the members (BFS order, the centre left out) into
+    ``out[out_ptr[i]:out_ptr[i + 1]]``. An empty array is an output not asked for.
+    """
     for t in prange(starts.size):
         queue = queues[t]
         stamp = stamps[t]
@@ -249,34 +257,15 @@ def _support_counts(centres, radius2, indptr, indices, x, y, z, stamps, queues, 
             p = centres[i]
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
             counts[i] = count - 1
-
-
-@jit_parallel
-def _support_fill(centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, out_ptr, out):
-    for t in prange(starts.size):
-        queue = queues[t]
-        stamp = stamps[t]
-        for i in range(starts[t], stops[t]):
-            p = centres[i]
-            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
-            start = out_ptr[i]
-            for j in range(1, count):
-                out[start + j - 1] = queue[j]
-
-
-@jit_parallel
-def _support_sizes(centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops, counts, flagged):
-    for t in prange(starts.size):
-        queue = queues[t]
-        stamp = stamps[t]
-        for i in range(starts[t], stops[t]):
-            p = centres[i]
-            count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
-            counts[i] = count - 1
-            hit = False
-            for j in range(count):
-                hit = hit or flags[queue[j]]
-            flagged[i] = hit
+            if flags.size:
+                hit = False
+                for j in range(count):
+                    hit = hit or flags[queue[j]]
+                flagged[i] = hit
+            if out_ptr.size:
+                start = out_ptr[i]
+                for j in range(1, count):
+                    out[start + j - 1] = queue[j]
 
 
 def _search_setup(mesh, radii, vertices, blocked=None):
@@ -316,8 +305,9 @@ def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = N
     centres, radius2, indptr, indices, (x, y, z), stamps, queues, starts, stops = _search_setup(mesh, radii, vertices)
     counts = np.empty(centres.size, np.int64)
     flagged = np.empty(centres.size, np.bool_)
-    launch(_support_sizes, centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops,
-           counts, flagged)
+    none = np.empty(0, np.int64)
+    launch(_search_supports, centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops,
+           counts, flagged, none, none)
     return counts, flagged
 
 
@@ -327,11 +317,8 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, 
 
     Parameters
     ----------
-    mesh : Mesh
-    radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`).
-    vertices : (c,) int, optional
-        Centres; default all.
+    mesh, radii, vertices
+        As in :func:`support_sizes`.
     blocked : (n,) bool, optional
         Vertices the search reaches but does not expand through (the feature vertices of
         :mod:`curv.core.features`), as in :func:`expansion_adjacency`.
@@ -345,12 +332,15 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, 
     centres, radius2, indptr, indices, (x, y, z), stamps, queues, starts, stops = _search_setup(
         mesh, radii, vertices, blocked)
     counts = np.empty(centres.size, np.int64)
-    launch(_support_counts, centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, counts)
+    no_flags, none = np.empty(0, np.bool_), np.empty(0, np.int64)
+    launch(_search_supports, centres, radius2, indptr, indices, x, y, z, no_flags, stamps, queues, starts, stops,
+           counts, no_flags, none, none)
     out_ptr = np.zeros(centres.size + 1, np.int64)
     np.cumsum(counts, out=out_ptr[1:])
     out = np.empty(out_ptr[-1], np.int64)
     stamps.fill(0)
-    launch(_support_fill, centres, radius2, indptr, indices, x, y, z, stamps, queues, starts, stops, out_ptr, out)
+    launch(_search_supports, centres, radius2, indptr, indices, x, y, z, no_flags, stamps, queues, starts, stops,
+           counts, no_flags, out_ptr, out)
     return out_ptr, out
 
 

@@ -9,6 +9,7 @@ reader can judge them.
 from __future__ import annotations
 
 import enum
+import functools
 from dataclasses import dataclass
 from typing import Callable
 
@@ -60,6 +61,15 @@ def _f(x: float) -> str:
 
 def _not(reason: str) -> Verdict:
     return Verdict(Status.NOT_TESTED, reason)
+
+
+def _at_highest_noise(claim: Callable[[Analysis, float], Verdict]) -> Callable[[Analysis], Verdict]:
+    """A claim about the study's highest noise level: ``claim(an, hi)``, not tested unless ``hi > 0``."""
+    @functools.wraps(claim)
+    def check(an: Analysis) -> Verdict:
+        hi = max(an.noise_levels, default=0.0)
+        return claim(an, hi) if hi > 0.0 else _not("needs noisy meshes")
+    return check
 
 
 # ---------------------------------------------------------------------------------------- Table 1
@@ -298,10 +308,8 @@ def _ru_dense_irregular(an: Analysis) -> Verdict:
                    f"best R1 {best_r1_reg.label} {_f(e_r1_reg)} vs RU {_f(e_ru_reg)}{'' if b else ' ✗'}")
 
 
-def _noise_csm_then_mru(an: Analysis) -> Verdict:
-    hi = an.noise_max if an.noise_levels else 0.0
-    if hi == 0.0:
-        return _not("needs noisy meshes")
+@_at_highest_noise
+def _noise_csm_then_mru(an: Analysis, hi: float) -> Verdict:
     cells, csm_hits, mru_hits, total, mtotal = [], 0, 0, 0, 0
     for k in (2, 3, 4):
         group = [v for v in an.plain if v.range == k]
@@ -335,10 +343,10 @@ def _fig10_rows(an: Analysis):
     return d, out
 
 
-def _r3_vs_smoothing(an: Analysis) -> Verdict:
+@_at_highest_noise
+def _r3_vs_smoothing(an: Analysis, hi: float) -> Verdict:
     d, rows = _fig10_rows(an)
-    hi = an.noise_max if an.noise_levels else 0.0
-    if not rows or hi == 0.0 or 0.0 not in an.noise_levels:
+    if not rows or 0.0 not in an.noise_levels:
         return _not("needs R3 and R2SM/R2SV variants at noise 0 and a noisy level")
     quiet = noisy = 0
     cells = []
@@ -355,10 +363,10 @@ def _r3_vs_smoothing(an: Analysis) -> Verdict:
                    f"with noise for {noisy}/{n}: " + "; ".join(cells))
 
 
-def _mesh_beats_values(an: Analysis) -> Verdict:
+@_at_highest_noise
+def _mesh_beats_values(an: Analysis, hi: float) -> Verdict:
     d, rows = _fig10_rows(an)
-    hi = an.noise_max if an.noise_levels else 0.0
-    if not rows or hi == 0.0:
+    if not rows:
         return _not("needs R2SM and R2SV variants on noisy meshes")
     hits, cells = 0, []
     for m, _, _, sm, sv in rows:
@@ -387,10 +395,8 @@ def _range_differs_from_smoothing(an: Analysis) -> Verdict:
 
 
 # ---------------------------------------------------------------------------------------- §6
-def _larger_range_noise(an: Analysis) -> Verdict:
-    hi = an.noise_max if an.noise_levels else 0.0
-    if hi == 0.0:
-        return _not("needs noisy meshes")
+@_at_highest_noise
+def _larger_range_noise(an: Analysis, hi: float) -> Verdict:
     hits, cells = 0, []
     methods = [m for m in an.methods() if len(an.ranges(m)) >= 2]
     for m in methods:
@@ -426,9 +432,9 @@ def _ru_mru_best_irregular(an: Analysis) -> Verdict:
                    "no noise, same range: " + "; ".join(cells))
 
 
-def _mru_vs_csm(an: Analysis) -> Verdict:
-    hi = an.noise_max if an.noise_levels else 0.0
-    if hi == 0.0 or 0.0 not in an.noise_levels:
+@_at_highest_noise
+def _mru_vs_csm(an: Analysis, hi: float) -> Verdict:
+    if 0.0 not in an.noise_levels:
         return _not("needs noise-free and noisy meshes")
     quiet = noisy = total = 0
     cells = []

@@ -25,7 +25,8 @@ class Param:
     default : float
         Value used when the caller gives none.
     low, high : float
-        A sensible range to offer in a user interface (not enforced; the constructor validates).
+        A sensible range to offer in a user interface (not enforced; the constructor validates);
+        a Monge patch's random draw, unless it says otherwise, is uniform over it.
     doc : str
         One line saying what the parameter does.
     """
@@ -41,8 +42,9 @@ class Surface(ABC):
     """An analytic surface with exact curvature at any of its points.
 
     Subclasses declare ``name`` (registry key), ``title`` (human name) and ``params`` (one
-    :class:`Param` per constructor keyword, in order), store the parameters as attributes of the
-    same names, and implement :meth:`exact_at` and :meth:`mesh`.
+    :class:`Param` per constructor keyword, in order) and implement :meth:`exact_at` and
+    :meth:`mesh`; the constructor stores the parameters as attributes of the same names, and a
+    subclass whose parameters must satisfy more than ``positive`` checks them in :meth:`_check`.
     """
 
     name: ClassVar[str]
@@ -51,6 +53,36 @@ class Surface(ABC):
     closed: ClassVar[bool] = False
     """True for surfaces meshed without border (sphere, ellipsoid, torus)."""
     default_vertices: ClassVar[int] = 817
+    positive: ClassVar[bool] = False
+    """True where every parameter is a length: the constructor refuses values that are not finite and > 0."""
+
+    def __init__(self, *values, **named):
+        """Parameters in the order of :attr:`params` (or by name), as floats; defaults otherwise.
+
+        Raises
+        ------
+        TypeError
+            More values than parameters, or a name that is not one.
+        ValueError
+            A value the surface does not take (:attr:`positive`, :meth:`_check`).
+        """
+        names = [p.name for p in self.params]
+        if len(values) > len(names):
+            raise TypeError(f"{type(self).__name__} takes at most {len(names)} parameters ({', '.join(names)})")
+        unknown = sorted(set(named) - set(names))
+        if unknown:
+            raise TypeError(f"{type(self).__name__} has no parameter {', '.join(unknown)}")
+        given = {**dict(zip(names, values)), **named}
+        for p in self.params:
+            setattr(self, p.name, float(given.get(p.name, p.default)))
+        if self.positive:
+            for name, value in self.parameters.items():
+                if not (np.isfinite(value) and value > 0):
+                    raise ValueError(f"{name} must be a finite value > 0, got {value}")
+        self._check()
+
+    def _check(self) -> None:
+        """Raise ``ValueError`` for parameter values the surface cannot take (beyond :attr:`positive`)."""
 
     @property
     def parameters(self) -> dict[str, float]:

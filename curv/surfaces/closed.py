@@ -20,17 +20,12 @@ from .tessellate import geodesic_sphere, parameter_grid, sphere_frequency
 __all__ = ["ImplicitSurface", "Sphere", "Ellipsoid", "Torus", "Cylinder"]
 
 
-def _positive(**values) -> None:
-    for name, value in values.items():
-        if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a finite value > 0, got {value}")
-
-
 class ImplicitSurface(Surface):
     """A surface ``F = 0`` given by ``grad F`` and ``Hess F``; subclasses add the meshing."""
 
     closed: ClassVar[bool] = True
     default_vertices: ClassVar[int] = 2562
+    positive: ClassVar[bool] = True
 
     def implicit_derivatives(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``grad F`` (n, 3) and ``Hess F`` (n, 3, 3) at the points."""
@@ -71,10 +66,6 @@ class Sphere(ImplicitSurface):
     title = "Sphere"
     params = (Param("radius", 1.0, 0.1, 10.0, "radius"),)
 
-    def __init__(self, radius=1.0):
-        self.radius = float(radius)
-        _positive(radius=self.radius)
-
     def implicit_derivatives(self, points):
         return 2.0 * points, np.broadcast_to(2.0 * np.eye(3), (points.shape[0], 3, 3))
 
@@ -104,10 +95,6 @@ class Ellipsoid(ImplicitSurface):
         Param("b", 1.0, 0.1, 10.0, "semi-axis along y"),
         Param("c", 0.6, 0.1, 10.0, "semi-axis along z"),
     )
-
-    def __init__(self, a=1.2, b=1.0, c=0.6):
-        self.a, self.b, self.c = float(a), float(b), float(c)
-        _positive(a=self.a, b=self.b, c=self.c)
 
     def implicit_derivatives(self, points):
         inv2 = 1.0 / np.array([self.a, self.b, self.c]) ** 2
@@ -144,11 +131,9 @@ class Torus(ImplicitSurface):
         Param("minor", 0.4, 0.05, 5.0, "radius of the tube (< major)"),
     )
 
-    def __init__(self, major=1.0, minor=0.4):
-        self.major, self.minor = float(major), float(minor)
-        _positive(major=self.major, minor=self.minor)
+    def _check(self) -> None:
         if self.minor >= self.major:
-            raise ValueError(f"a ring torus needs minor < major, got minor={minor}, major={major}")
+            raise ValueError(f"a ring torus needs minor < major, got minor={self.minor:g}, major={self.major:g}")
 
     def implicit_derivatives(self, points):
         # F = (rho - R)^2 + z^2 - r^2, smooth away from the z axis (which is off the surface)
@@ -206,10 +191,6 @@ class Cylinder(ImplicitSurface):
         Param("radius", 1.0, 0.1, 10.0, "radius"),
         Param("height", 2.0, 0.1, 20.0, "length along z"),
     )
-
-    def __init__(self, radius=1.0, height=2.0):
-        self.radius, self.height = float(radius), float(height)
-        _positive(radius=self.radius, height=self.height)
 
     def implicit_derivatives(self, points):
         grad = 2.0 * points * np.array([1.0, 1.0, 0.0])

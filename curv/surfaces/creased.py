@@ -27,7 +27,6 @@ from ..core.mesh import Mesh
 from ..core.result import Curvature
 from ..core.validity import Reason
 from .base import Param, SampledSurface, Surface
-from .closed import _positive
 from .geometry import tangent_frame
 from .ring_mesh import box_lattice_mesh, revolution_mesh
 
@@ -155,19 +154,7 @@ class CreasedSurface(Surface):
 
     closed: ClassVar[bool] = True
     default_vertices: ClassVar[int] = 2562
-
-    def __init__(self, *values, **named):
-        """Parameters in the order of :attr:`params` (or by name), each a finite value > 0; defaults otherwise."""
-        names = [p.name for p in self.params]
-        if len(values) > len(names):
-            raise TypeError(f"{type(self).__name__} takes at most {len(names)} parameters ({', '.join(names)})")
-        unknown = sorted(set(named) - set(names))
-        if unknown:
-            raise TypeError(f"{type(self).__name__} has no parameter {', '.join(unknown)}")
-        given = {**dict(zip(names, values)), **named}
-        for p in self.params:
-            setattr(self, p.name, float(given.get(p.name, p.default)))
-        _positive(**self.parameters)
+    positive: ClassVar[bool] = True
 
     @property
     @abstractmethod

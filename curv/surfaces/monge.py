@@ -47,8 +47,10 @@ class MongePatch(Surface):
 
     @classmethod
     def random(cls, rng=None) -> "MongePatch":
-        """Parameters drawn as in the paper's §5.1."""
-        raise NotImplementedError
+        """Parameters drawn as in the paper's §5.1: here each uniform over its :class:`Param`'s
+        ``low .. high``, in declaration order; a patch whose draw differs says so."""
+        g = np.random.default_rng(rng)
+        return cls(*(g.uniform(p.low, p.high) for p in cls.params))
 
     def exact(self, x, y) -> Curvature:
         """Exact curvature at ``(x, y)``.
@@ -131,21 +133,10 @@ class QuadraticPatch(MongePatch):
 
     name = "quadratic"
     title = "Quadratic patch"
-    params = (
-        Param("A", 1.0, -2.0, 2.0, "x^2 coefficient"),
-        Param("B", 0.0, -2.0, 2.0, "x coefficient (slope)"),
-        Param("C", 0.5, -2.0, 2.0, "xy coefficient"),
-        Param("D", 0.0, -2.0, 2.0, "y coefficient (slope)"),
-        Param("E", -0.5, -2.0, 2.0, "y^2 coefficient"),
-    )
-
-    def __init__(self, A=1.0, B=0.0, C=0.5, D=0.0, E=-0.5):
-        self.A, self.B, self.C, self.D, self.E = (float(v) for v in (A, B, C, D, E))
-
-    @classmethod
-    def random(cls, rng=None) -> "QuadraticPatch":
-        """All five coefficients uniform in [-2, 2] (paper §5.1)."""
-        return cls(*np.random.default_rng(rng).uniform(-2.0, 2.0, 5))
+    # the paper draws all five coefficients uniformly in [-2, 2] (§5.1, :meth:`MongePatch.random`)
+    params = tuple(Param(name, default, -2.0, 2.0, doc) for name, default, doc in (
+        ("A", 1.0, "x^2 coefficient"), ("B", 0.0, "x coefficient (slope)"), ("C", 0.5, "xy coefficient"),
+        ("D", 0.0, "y coefficient (slope)"), ("E", -0.5, "y^2 coefficient")))
 
     def height(self, x, y):
         return self.A * x * x + self.B * x + self.C * x * y + self.D * y + self.E * y * y
@@ -173,12 +164,11 @@ class EllipsoidPatch(MongePatch):
         Param("C", 2.0, -10.0, 10.0, "height (negative: hanging down)"),
     )
 
-    def __init__(self, A=0.6, B=0.4, C=2.0):
-        self.A, self.B, self.C = float(A), float(B), float(C)
+    def _check(self) -> None:
         reach = float(np.max((self.A * HEXAGON_CORNERS[:, 0]) ** 2 + (self.B * HEXAGON_CORNERS[:, 1]) ** 2))
         if reach >= 1.0:
             raise ValueError(
-                f"EllipsoidPatch(A={A}, B={B}) is undefined on the unit hexagon: 1 - A²x² - B²y² reaches "
+                f"EllipsoidPatch(A={self.A:g}, B={self.B:g}) is undefined on the unit hexagon: 1 - A²x² - B²y² reaches "
                 f"{1 - reach:.3g} at a corner; it must stay > 0 (e.g. A² + B² < 1 with max(A², B²) < 1)"
             )
 
@@ -233,20 +223,12 @@ class TrigonometricPatch(MongePatch):
     name = "trigonometric"
     title = "Trigonometric patch"
     params = (
+        # drawn over these ranges: A in [1, 2], B in [-2, 2] (paper §5.1, :meth:`MongePatch.random`)
         Param("A", 1.5, 1.0, 2.0, "exponent of sin(u^A), u = 1 + x/2"),
         Param("B", 1.0, -2.0, 2.0, "frequency of cos(B y)"),
     )
     shift: ClassVar[float] = 1.0
     scale: ClassVar[float] = 0.5
-
-    def __init__(self, A=1.5, B=1.0):
-        self.A, self.B = float(A), float(B)
-
-    @classmethod
-    def random(cls, rng=None) -> "TrigonometricPatch":
-        """A uniform in [1, 2], B uniform in [-2, 2] (paper §5.1)."""
-        g = np.random.default_rng(rng)
-        return cls(g.uniform(1.0, 2.0), g.uniform(-2.0, 2.0))
 
     def _u(self, x):
         return self.shift + self.scale * x
@@ -281,9 +263,6 @@ class Saddle(MongePatch):
         Param("a", 1.0, -4.0, 4.0, "curvature -a along x at the origin"),
         Param("b", 1.0, -4.0, 4.0, "curvature +b along y at the origin"),
     )
-
-    def __init__(self, a=1.0, b=1.0):
-        self.a, self.b = float(a), float(b)
 
     @classmethod
     def random(cls, rng=None) -> "Saddle":
