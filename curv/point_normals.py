@@ -506,8 +506,8 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
 
 
 @jit
-def _tree_edges(indptr, neighbours, normal, finite):
-    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
+def _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight):
+    """Count (``rows`` None) or write the edges of :func:`_tree_edges`; returns their number."""
     n = indptr.size - 1
     m = 0
     for p in range(n):
@@ -515,22 +515,24 @@ def _tree_edges(indptr, neighbours, normal, finite):
             for j in range(indptr[p], indptr[p + 1]):
                 q = neighbours[j]
                 if q > p and finite[q]:
+                    if rows is not None:
+                        rows[m] = p
+                        cols[m] = q
+                        c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+                        # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
+                        weight[m] = 1.0 - abs(c) + 1e-9
                     m += 1
+    return m
+
+
+@jit
+def _tree_edges(indptr, neighbours, normal, finite):
+    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
+    m = _edge_pass(indptr, neighbours, normal, finite, None, None, None)
     rows = np.empty(m, np.int32)
     cols = np.empty(m, np.int32)
     weight = np.empty(m)
-    m = 0
-    for p in range(n):
-        if finite[p]:
-            for j in range(indptr[p], indptr[p + 1]):
-                q = neighbours[j]
-                if q > p and finite[q]:
-                    rows[m] = p
-                    cols[m] = q
-                    c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-                    # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
-                    weight[m] = 1.0 - abs(c) + 1e-9
-                    m += 1
+    _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight)
     return rows, cols, weight
 
 
