@@ -29,6 +29,12 @@
    unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
    as its reference: a fit turned the other way is the same fit with its sign changed exactly,
    so the normal is turned afterwards, once the orientation is known.
+6. **Grid order.** An estimate of a whole cloud runs on its twin in grid order
+   (:func:`grid_ordered`) and maps the rows back: the neighbour graph, the orientation and the
+   estimators' kernels then read neighbours that are near in memory too (a cloud saved in random
+   order made each of their neighbour reads a cache miss). The sort is stable and the twin's grid
+   has the same cells as the cloud's (the same cell size below 65,536 points), so coincident points
+   keep their order and the nearest neighbours are the same points, ties included.
 """
 
 from __future__ import annotations
@@ -46,16 +52,16 @@ from .estimators._small_linalg import sym3_eigen
 from .estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
 from .estimators.jet import _scratch as jet_scratch
 from .core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from .core.knn import grid_gather
+from .core.knn import GRAPH_NEIGHBOURS, build_grid, grid_gather
 from .geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                             latest_with_mesh, new_queues, new_scratch)
 from .core.pointcloud import PointCloud
-from .core.ranges import ball_radii, point_spacing, resolve
+from .core.ranges import ball_radii, point_spacing, resolve, share_spacing
 from .core.validity import Reason
 
 _FIT_OK = int(Reason.OK)
 
-__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "border_radii",
+__all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "border_points", "border_radii",
            "support_spread",
            "MIN_SPREAD", "ONE_SIDED_GAP", "BORDER_RANGE",
            "NORMAL_RANGE", "BORDER_GAP", "AGREE_COSINE", "GRAZING_COSINE", "NORMAL_METHODS"]
@@ -858,6 +864,28 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         oriented = fitted
     return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
                         border=gap > BORDER_GAP, method=method, label=rng.label)
+
+
+def grid_ordered(cloud: PointCloud):
+    """The cloud with its points in its grid's cell order, and that order (module notes, 6).
+
+    Returns
+    -------
+    (twin, order) or None
+        ``twin`` a :class:`PointCloud` of ``cloud.points[order]`` (and its normals), ``order``
+        (n,) int64 read-only; None for a twin itself (it is in that order). Made once per cloud
+        and kept with it, so that the twin's own caches (neighbours, frames, normals) serve every
+        estimate of the cloud.
+    """
+    def build():
+        order = build_grid(cloud.points, GRAPH_NEIGHBOURS)[0][3]
+        normals = None if cloud.normals is None else cloud.normals[order]
+        twin = PointCloud(cloud.points[order], normals)
+        cached_with_mesh(twin, "grid order", lambda: None)
+        share_spacing(cloud, twin, order)
+        return twin, order
+
+    return cached_with_mesh(cloud, "grid order", build)
 
 
 def border_points(cloud: PointCloud) -> np.ndarray:
