@@ -542,6 +542,42 @@ def _tree_edges(indptr, neighbours, normal, finite):
     return rows, cols, weight
 
 
+RADIX_BITS = 11
+"""Bits per pass of :func:`_stable_rank` (2048 buckets: their counts stay in the cache)."""
+
+
+@jit
+def _stable_rank(weight):
+    """(m,) int64 ``np.argsort(weight, kind="stable")`` of non-negative finite floats, by a
+    least-significant-digit radix sort of their bit patterns (which order such floats as their
+    values): each pass keeps the order of equal digits, so ties keep their order. Passes whose
+    digit is the same for every weight are skipped (the high bits of weights in [0, 2))."""
+    m = weight.size
+    keys = weight.view(np.int64).copy()
+    rank = np.arange(m)
+    spare_keys = np.empty(m, np.int64)
+    spare_rank = np.empty(m, np.int64)
+    buckets = 1 << RADIX_BITS
+    count = np.empty(buckets + 1, np.int64)
+    for shift in range(0, 64, RADIX_BITS):
+        count[:] = 0
+        for i in range(m):
+            count[((keys[i] >> shift) & (buckets - 1)) + 1] += 1
+        if count.max() == m:
+            continue
+        for d in range(buckets):
+            count[d + 1] += count[d]
+        for i in range(m):
+            d = (keys[i] >> shift) & (buckets - 1)
+            at = count[d]
+            count[d] = at + 1
+            spare_keys[at] = keys[i]
+            spare_rank[at] = rank[i]
+        keys, spare_keys = spare_keys, keys
+        rank, spare_rank = spare_rank, rank
+    return rank
+
+
 @jit
 def _spanning_forest(n, rank, rows, cols):
     """Kruskal: the edges of the minimum spanning forest, lightest first (``rank`` sorts the
@@ -666,7 +702,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tu
     safe = np.where(finite[:, None], out, 0.0)
     rows, cols, weight = _tree_edges(indptr, neighbours, safe, finite)
     # Kruskal in the order of the weights (stable: ties keep the edges' order)
-    ptr, adj, part = _spanning_forest(n, np.argsort(weight, kind="stable"), rows, cols)
+    ptr, adj, part = _spanning_forest(n, _stable_rank(weight), rows, cols)
     del rows, cols, weight
     # one root per part: its highest point (turned up), or the point farthest from its centroid (turned away)
     if orient == "up":

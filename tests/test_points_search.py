@@ -222,3 +222,13 @@ def test_a_cloud_reads_its_spacing_from_its_twin():
     got = point_spacing(cloud)
     assert np.array_equal(got, own)
     assert "nearest" in twin.__dict__ and "nearest" not in cloud.__dict__
+
+
+def test_stable_rank_is_the_stable_argsort():
+    """Kruskal's edge order: the radix sort gives numpy's stable argsort, ties in their order."""
+    from curv.point_normals import _stable_rank
+
+    rng = np.random.default_rng(3)
+    for w in (rng.random(3000), np.round(rng.random(5000), 2) + 1e-9, np.full(7, 1e-9), np.zeros(0),
+              1.0 - np.abs(rng.uniform(-1, 1, 20000)) + 1e-9, np.array([2.0 ** -40, 0.0, 1.5, 2.0 ** -40, 0.0])):
+        assert np.array_equal(_stable_rank(w), np.argsort(w, kind="stable"))
