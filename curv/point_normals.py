@@ -9,7 +9,7 @@
    unorganized points, §3.3): a minimum spanning tree of the neighbour graph with weights
    ``1 - |n_p . n_q|`` (so that the propagation crosses nearly parallel normals first), walked from
    one root per connected part, flipping each normal to agree with its parent. Kruskal's
-   algorithm in numba (the edges in the order of a stable sort of their weights, a union-find
+   algorithm in numba (the edges in the order of a stable radix sort of their weights, a union-find
    forest) and a breadth-first walk of each part's tree: no sparse matrices are built. The root of a part
    is its highest point, its normal turned up (+z), as in Hoppe; ``"outward"`` turns it away from
    the part's centroid instead (closed scans), and a viewpoint orients every normal towards it
@@ -547,16 +547,13 @@ RADIX_BITS = 11
 
 
 @jit
-def _stable_rank(weight):
-    """(m,) int64 ``np.argsort(weight, kind="stable")`` of non-negative finite floats, by a
-    least-significant-digit radix sort of their bit patterns (which order such floats as their
-    values): each pass keeps the order of equal digits, so ties keep their order. Passes whose
-    digit is the same for every weight are skipped (the high bits of weights in [0, 2))."""
+def _radix_rank(weight, rank, spare_rank):
+    """:func:`_stable_rank` into one of the two (m,) int scratch arrays, which it returns."""
     m = weight.size
     keys = weight.view(np.int64).copy()
-    rank = np.arange(m)
     spare_keys = np.empty(m, np.int64)
-    spare_rank = np.empty(m, np.int64)
+    for i in range(m):
+        rank[i] = i
     buckets = 1 << RADIX_BITS
     count = np.empty(buckets + 1, np.int64)
     for shift in range(0, 64, RADIX_BITS):
@@ -576,6 +573,16 @@ def _stable_rank(weight):
         keys, spare_keys = spare_keys, keys
         rank, spare_rank = spare_rank, rank
     return rank
+
+
+def _stable_rank(weight: np.ndarray) -> np.ndarray:
+    """(m,) ``np.argsort(weight, kind="stable")`` of non-negative finite floats (int32 below 2^31
+    weights), by a least-significant-digit radix sort of their bit patterns (which order such
+    floats as their values): each pass keeps the order of equal digits, so ties keep their order.
+    Passes whose digit is the same for every weight are skipped (the high bits of weights in [0, 2))."""
+    weight = np.ascontiguousarray(weight, dtype=np.float64)
+    dtype = np.int32 if weight.size < 2 ** 31 else np.int64
+    return _radix_rank(weight, np.empty(weight.size, dtype), np.empty(weight.size, dtype))
 
 
 @jit
