@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 import inspect
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Generator
 
 import numpy as np
@@ -89,6 +89,12 @@ def iter_estimate(
         raise MeshError(why_not)
     smooth = Smoothing(smooth or Smoothing.NONE)
     centres = _check_vertices(vertices, mesh.n_vertices)
+    twin = _grid_ordered(mesh)
+    if twin is not None:
+        # a point cloud runs in its grid's order; the rows go back at the end (curv.point_normals, notes 6)
+        mesh, rows = twin
+        normals = _rows_of(normals, rows)
+        centres = None if centres is None else _rank(rows)[centres]
     if centres is not None and smooth is Smoothing.VALUES:
         raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
     if isinstance(mesh, PointCloud) and (features is not None or smooth is not Smoothing.NONE):
@@ -175,7 +181,7 @@ def iter_estimate(
         k1, k2, d1, d2, reason, valid = _full_length(mesh.n_vertices, centres, k1, k2, d1, d2, reason, valid)
         k1_se, k2_se = (_scatter(mesh.n_vertices, centres, se) for se in (k1_se, k2_se))
     yield 1.0
-    return Curvature(
+    result = Curvature(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
         method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
@@ -186,6 +192,7 @@ def iter_estimate(
               "feature_edges": 0 if feats is None else feats.count,
               "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info},
     )
+    return result if twin is None else _rows_back(result, twin[1])
 
 
 @dataclass(frozen=True)
@@ -298,6 +305,41 @@ def _line_supports(cloud: PointCloud):
         return ~(spread >= MIN_SPREAD), Reason.SINGULAR
 
     return check
+
+
+def _grid_ordered(mesh):
+    """A point cloud's twin in grid order and that order (:func:`curv.point_normals.grid_ordered`);
+    None for a mesh or a twin."""
+    if not isinstance(mesh, PointCloud):
+        return None
+    from .point_normals import grid_ordered
+
+    return grid_ordered(mesh)
+
+
+def _rank(order: np.ndarray) -> np.ndarray:
+    """(n,) int64: the position of each row in ``order`` (its inverse)."""
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return rank
+
+
+def _rows_of(normals, order: np.ndarray):
+    """Given (n, 3) normals in ``order``; anything else as it is (its checks say the same)."""
+    if normals is None or isinstance(normals, str) or np.shape(normals) != (order.size, 3):
+        return normals
+    return np.asarray(normals)[order]
+
+
+def _rows_back(res: Curvature, order: np.ndarray) -> Curvature:
+    """A result computed on rows in ``order``, in the cloud's own order."""
+    def back(a):
+        out = np.empty_like(a)
+        out[order] = a
+        return out
+
+    return replace(res, **{f: back(getattr(res, f)) for f in
+                           ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se")})
 
 
 def _check_vertices(vertices, n: int) -> np.ndarray | None:

@@ -9,7 +9,7 @@
    unorganized points, §3.3): a minimum spanning tree of the neighbour graph with weights
    ``1 - |n_p . n_q|`` (so that the propagation crosses nearly parallel normals first), walked from
    one root per connected part, flipping each normal to agree with its parent. Kruskal's
-   algorithm in numba (the edges in the order of a stable sort of their weights, a union-find
+   algorithm in numba (the edges in the order of a stable radix sort of their weights, a union-find
    forest) and a breadth-first walk of each part's tree: no sparse matrices are built. The root of a part
    is its highest point, its normal turned up (+z), as in Hoppe; ``"outward"`` turns it away from
    the part's centroid instead (closed scans), and a viewpoint orients every normal towards it
@@ -29,6 +29,12 @@
    unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
    as its reference: a fit turned the other way is the same fit with its sign changed exactly,
    so the normal is turned afterwards, once the orientation is known.
+6. **Grid order.** An estimate of a whole cloud runs on its twin in grid order
+   (:func:`grid_ordered`) and maps the rows back: the neighbour graph, the orientation and the
+   estimators' kernels then read neighbours that are near in memory too (a cloud saved in random
+   order made each of their neighbour reads a cache miss). The sort is stable and the twin's grid
+   has the same cells as the cloud's (the same cell size below 65,536 points), so coincident points
+   keep their order and the nearest neighbours are the same points, ties included.
 """
 
 from __future__ import annotations
@@ -46,16 +52,16 @@ from .estimators._small_linalg import sym3_eigen
 from .estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
 from .estimators.jet import _scratch as jet_scratch
 from .core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
-from .core.knn import grid_gather
+from .core.knn import GRAPH_NEIGHBOURS, build_grid, grid_gather
 from .geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                             latest_with_mesh, new_queues, new_scratch)
 from .core.pointcloud import PointCloud
-from .core.ranges import ball_radii, point_spacing, resolve
+from .core.ranges import ball_radii, point_spacing, resolve, share_spacing
 from .core.validity import Reason
 
 _FIT_OK = int(Reason.OK)
 
-__all__ = ["PointNormals", "point_normals", "local_frames", "orient_normals", "border_points", "border_radii",
+__all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "border_points", "border_radii",
            "support_spread",
            "MIN_SPREAD", "ONE_SIDED_GAP", "BORDER_RANGE",
            "NORMAL_RANGE", "BORDER_GAP", "AGREE_COSINE", "GRAZING_COSINE", "NORMAL_METHODS"]
@@ -506,8 +512,8 @@ def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = No
 
 
 @jit
-def _tree_edges(indptr, neighbours, normal, finite):
-    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
+def _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight):
+    """Count (``rows`` None) or write the edges of :func:`_tree_edges`; returns their number."""
     n = indptr.size - 1
     m = 0
     for p in range(n):
@@ -515,23 +521,68 @@ def _tree_edges(indptr, neighbours, normal, finite):
             for j in range(indptr[p], indptr[p + 1]):
                 q = neighbours[j]
                 if q > p and finite[q]:
+                    if rows is not None:
+                        rows[m] = p
+                        cols[m] = q
+                        c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+                        # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
+                        weight[m] = 1.0 - abs(c) + 1e-9
                     m += 1
+    return m
+
+
+@jit
+def _tree_edges(indptr, neighbours, normal, finite):
+    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
+    m = _edge_pass(indptr, neighbours, normal, finite, None, None, None)
     rows = np.empty(m, np.int32)
     cols = np.empty(m, np.int32)
     weight = np.empty(m)
-    m = 0
-    for p in range(n):
-        if finite[p]:
-            for j in range(indptr[p], indptr[p + 1]):
-                q = neighbours[j]
-                if q > p and finite[q]:
-                    rows[m] = p
-                    cols[m] = q
-                    c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-                    # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
-                    weight[m] = 1.0 - abs(c) + 1e-9
-                    m += 1
+    _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight)
     return rows, cols, weight
+
+
+RADIX_BITS = 11
+"""Bits per pass of :func:`_stable_rank` (2048 buckets: their counts stay in the cache)."""
+
+
+@jit
+def _radix_rank(weight, rank, spare_rank):
+    """:func:`_stable_rank` into one of the two (m,) int scratch arrays, which it returns."""
+    m = weight.size
+    keys = weight.view(np.int64).copy()
+    spare_keys = np.empty(m, np.int64)
+    for i in range(m):
+        rank[i] = i
+    buckets = 1 << RADIX_BITS
+    count = np.empty(buckets + 1, np.int64)
+    for shift in range(0, 64, RADIX_BITS):
+        count[:] = 0
+        for i in range(m):
+            count[((keys[i] >> shift) & (buckets - 1)) + 1] += 1
+        if count.max() == m:
+            continue
+        for d in range(buckets):
+            count[d + 1] += count[d]
+        for i in range(m):
+            d = (keys[i] >> shift) & (buckets - 1)
+            at = count[d]
+            count[d] = at + 1
+            spare_keys[at] = keys[i]
+            spare_rank[at] = rank[i]
+        keys, spare_keys = spare_keys, keys
+        rank, spare_rank = spare_rank, rank
+    return rank
+
+
+def _stable_rank(weight: np.ndarray) -> np.ndarray:
+    """(m,) ``np.argsort(weight, kind="stable")`` of non-negative finite floats (int32 below 2^31
+    weights), by a least-significant-digit radix sort of their bit patterns (which order such
+    floats as their values): each pass keeps the order of equal digits, so ties keep their order.
+    Passes whose digit is the same for every weight are skipped (the high bits of weights in [0, 2))."""
+    weight = np.ascontiguousarray(weight, dtype=np.float64)
+    dtype = np.int32 if weight.size < 2 ** 31 else np.int64
+    return _radix_rank(weight, np.empty(weight.size, dtype), np.empty(weight.size, dtype))
 
 
 @jit
@@ -658,7 +709,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tu
     safe = np.where(finite[:, None], out, 0.0)
     rows, cols, weight = _tree_edges(indptr, neighbours, safe, finite)
     # Kruskal in the order of the weights (stable: ties keep the edges' order)
-    ptr, adj, part = _spanning_forest(n, np.argsort(weight, kind="stable"), rows, cols)
+    ptr, adj, part = _spanning_forest(n, _stable_rank(weight), rows, cols)
     del rows, cols, weight
     # one root per part: its highest point (turned up), or the point farthest from its centroid (turned away)
     if orient == "up":
@@ -856,6 +907,28 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         oriented = fitted
     return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
                         border=gap > BORDER_GAP, method=method, label=rng.label)
+
+
+def grid_ordered(cloud: PointCloud):
+    """The cloud with its points in its grid's cell order, and that order (module notes, 6).
+
+    Returns
+    -------
+    (twin, order) or None
+        ``twin`` a :class:`PointCloud` of ``cloud.points[order]`` (and its normals), ``order``
+        (n,) int64 read-only; None for a twin itself (it is in that order). Made once per cloud
+        and kept with it, so that the twin's own caches (neighbours, frames, normals) serve every
+        estimate of the cloud.
+    """
+    def build():
+        order = build_grid(cloud.points, GRAPH_NEIGHBOURS)[0][3]
+        normals = None if cloud.normals is None else cloud.normals[order]
+        twin = PointCloud(cloud.points[order], normals)
+        cached_with_mesh(twin, "grid order", lambda: None)
+        share_spacing(cloud, twin, order)
+        return twin, order
+
+    return cached_with_mesh(cloud, "grid order", build)
 
 
 def border_points(cloud: PointCloud) -> np.ndarray:

@@ -286,3 +286,28 @@ def test_whole_cloud_in_grid_order_equals_the_points_in_their_own_order(method):
     for name in ("k1", "k2", "d1", "d2", "reason"):
         assert np.array_equal(getattr(whole, name), getattr(listed, name), equal_nan=True), name
     assert whole.valid.mean() > 0.99
+
+
+@pytest.mark.parametrize("sampling", ["uniform", "rows"])
+def test_a_cloud_in_any_order_gives_each_point_its_own_estimate(sampling):
+    """The estimate runs on the cloud's twin in grid order and maps the rows back: the same points
+    in another order get the same decisions and, row for row, the same values (to rounding)."""
+    kwargs = {"ratio": 4} if sampling == "rows" else {}
+    cloud = sample_points(QuadraticPatch(), 3000, sampling=sampling, rng=6, **kwargs).cloud
+    perm = np.random.default_rng(1).permutation(cloud.n_points)
+    shuffled = curv.PointCloud(cloud.points[perm])
+    for method in ("qs", "mru"):
+        a, b = curv.estimate(cloud, method, 2), curv.estimate(shuffled, method, 2)
+        assert np.array_equal(a.reason[perm], b.reason), method
+        assert 200 < b.valid.sum() < b.n
+        np.testing.assert_allclose(b.k1, a.k1[perm], rtol=0, atol=1e-6 * np.nanmax(np.abs(a.k1)))
+        np.testing.assert_allclose(b.normals, a.normals[perm], rtol=0, atol=1e-6)
+        assert {k: a.info[k] for k in ("border_points", "ambiguous_normals")} == \
+               {k: b.info[k] for k in ("border_points", "ambiguous_normals")}
+    # given normals follow their points: turned inward, k1 and k2 swap and change sign
+    a = curv.estimate(cloud, "qs", 2)
+    c = curv.estimate(shuffled, "qs", 2, normals=-a.normals[perm])
+    ok = c.valid & a.valid[perm]
+    assert ok.sum() > 200
+    np.testing.assert_allclose(c.k2[ok], -a.k1[perm][ok], rtol=0, atol=1e-6 * np.nanmax(np.abs(a.k1)))
+    np.testing.assert_allclose(c.k1[ok], -a.k2[perm][ok], rtol=0, atol=1e-6 * np.nanmax(np.abs(a.k1)))

@@ -190,3 +190,45 @@ def test_a_support_along_a_bending_row_has_no_spread_and_a_patch_keeps_its_own()
     usable = np.abs(patch[:, 1]) < 1e-12
     thin = _run_gen(support_spread(curv.PointCloud(patch), np.full(len(patch), 2.0), centre, usable=usable))
     assert thin[centre[0]] < 1e-6
+
+
+@pytest.mark.parametrize("name,cloud", list(_clouds())[:3], ids=[c[0] for c in _clouds()][:3])
+def test_grid_ordered_twin_has_the_same_neighbours(name, cloud):
+    """The twin in grid order holds the cloud's points in that order, and its nearest neighbours are the
+    cloud's, ties included (the same cells, scanned in the same order)."""
+    from curv.point_normals import grid_ordered
+
+    shuffled = curv.PointCloud(cloud.points[np.random.default_rng(5).permutation(cloud.n_points)])
+    twin, order = grid_ordered(shuffled)
+    assert np.array_equal(np.sort(order), np.arange(shuffled.n_points))
+    assert np.array_equal(twin.points, shuffled.points[order])
+    assert grid_ordered(twin) is None and grid_ordered(shuffled)[0] is twin
+    assert np.array_equal(twin.grid[0][3], np.arange(twin.n_points))
+    idx, dist = shuffled.nearest
+    twin_idx, twin_dist = twin.nearest
+    assert np.array_equal(twin_dist, dist[order])
+    assert np.array_equal(np.where(twin_idx >= 0, order[np.maximum(twin_idx, 0)], -1), idx[order])
+
+
+def test_a_cloud_reads_its_spacing_from_its_twin():
+    """After an estimate (on the twin in grid order) the cloud's spacing is the twin's, row for row:
+    the same distances as its own search, without a second search."""
+    from curv.point_normals import grid_ordered
+
+    points = _sphere_points(3000, 7)
+    own = point_spacing(curv.PointCloud(points))
+    cloud = curv.PointCloud(points)
+    twin, order = grid_ordered(cloud)
+    got = point_spacing(cloud)
+    assert np.array_equal(got, own)
+    assert "nearest" in twin.__dict__ and "nearest" not in cloud.__dict__
+
+
+def test_stable_rank_is_the_stable_argsort():
+    """Kruskal's edge order: the radix sort gives numpy's stable argsort, ties in their order."""
+    from curv.point_normals import _stable_rank
+
+    rng = np.random.default_rng(3)
+    for w in (rng.random(3000), np.round(rng.random(5000), 2) + 1e-9, np.full(7, 1e-9), np.zeros(0),
+              1.0 - np.abs(rng.uniform(-1, 1, 20000)) + 1e-9, np.array([2.0 ** -40, 0.0, 1.5, 2.0 ** -40, 0.0])):
+        assert np.array_equal(_stable_rank(w), np.argsort(w, kind="stable"))

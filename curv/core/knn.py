@@ -249,6 +249,41 @@ def _ball_cells(px, py, pz, radius2, dims, origin):
 
 
 @jit
+def _ball_scan(px, py, pz, centre, radius2, cells, coords, names, queue, dist2):
+    """The points of the grid within ``sqrt(radius2)`` of (px, py, pz), but ``centre``, after it.
+
+    ``queue[0] = centre`` and ``queue[1:count]`` the ball's points in the scan order of the grid
+    (its cells, then their sorted positions): original indices (``names``, the grid's ``order``)
+    or sorted positions (``names`` None), the centre named the same way. ``dist2`` (n,) float64
+    receives their squared distances (0 at 0), unless None. Returns ``count``.
+    """
+    cell_keys, cell_start, dims, order = cells
+    origin, xs, ys, zs = coords
+    ny, nz = dims[1], dims[2]
+    x0, x1, y0, y1, z0, z1 = _ball_cells(px, py, pz, radius2, dims, origin)
+    queue[0] = centre
+    if dist2 is not None:
+        dist2[0] = 0.0
+    count = 1
+    for ix in range(x0, x1 + 1):
+        for iy in range(y0, y1 + 1):
+            base = (ix * ny + iy) * nz
+            a = _first_at_least(cell_keys, base + z0)
+            b = _first_at_least(cell_keys, base + z1 + 1)
+            for j in range(cell_start[a], cell_start[b]):
+                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+                d2 = dx * dx + dy * dy + dz * dz
+                if d2 <= radius2:
+                    q = j if names is None else names[j]
+                    if q != centre:
+                        queue[count] = q
+                        if dist2 is not None:
+                            dist2[count] = d2
+                        count += 1
+    return count
+
+
+@jit
 def grid_ball(p, radius2, cells, coords, x, y, z, queue):
     """Every point within ``sqrt(radius2)`` of point ``p`` (p excluded), through the grid.
 
@@ -270,26 +305,7 @@ def grid_ball(p, radius2, cells, coords, x, y, z, queue):
     count : int
         ``queue[1:count]`` is the ball.
     """
-    cell_keys, cell_start, dims, order = cells
-    origin, xs, ys, zs = coords
-    ny, nz = dims[1], dims[2]
-    px, py, pz = x[p], y[p], z[p]
-    x0, x1, y0, y1, z0, z1 = _ball_cells(px, py, pz, radius2, dims, origin)
-    queue[0] = p
-    count = 1
-    for ix in range(x0, x1 + 1):
-        for iy in range(y0, y1 + 1):
-            base = (ix * ny + iy) * nz
-            a = _first_at_least(cell_keys, base + z0)
-            b = _first_at_least(cell_keys, base + z1 + 1)
-            for j in range(cell_start[a], cell_start[b]):
-                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
-                if dx * dx + dy * dy + dz * dz <= radius2:
-                    q = order[j]
-                    if q != p:
-                        queue[count] = q
-                        count += 1
-    return count
+    return _ball_scan(x[p], y[p], z[p], p, radius2, cells, coords, cells[3], queue, None)
 
 
 @jit
@@ -318,27 +334,8 @@ def grid_gather(i, radius2, cells, coords, queue, dist2):
     count : int
         ``queue[1:count]`` is the ball (the centre excluded).
     """
-    cell_keys, cell_start, dims, order = cells
-    origin, xs, ys, zs = coords
-    ny, nz = dims[1], dims[2]
-    px, py, pz = xs[i], ys[i], zs[i]
-    x0, x1, y0, y1, z0, z1 = _ball_cells(px, py, pz, radius2, dims, origin)
-    queue[0] = i
-    dist2[0] = 0.0
-    count = 1
-    for ix in range(x0, x1 + 1):
-        for iy in range(y0, y1 + 1):
-            base = (ix * ny + iy) * nz
-            a = _first_at_least(cell_keys, base + z0)
-            b = _first_at_least(cell_keys, base + z1 + 1)
-            for j in range(cell_start[a], cell_start[b]):
-                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
-                d2 = dx * dx + dy * dy + dz * dz
-                if d2 <= radius2 and j != i:
-                    queue[count] = j
-                    dist2[count] = d2
-                    count += 1
-    return count
+    xs, ys, zs = coords[1], coords[2], coords[3]
+    return _ball_scan(xs[i], ys[i], zs[i], i, radius2, cells, coords, None, queue, dist2)
 
 
 @jit
