@@ -11,24 +11,17 @@ import math
 
 import numpy as np
 
-from numba import njit
-
 from ..core.jit import jit, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, cached_with_mesh, coordinate_columns,
                                       expansion_adjacency, new_queues, new_scratch)
+from ._local_fit import jit_inlined
 from ._triangle_corners import unset_principal
 from ..core.validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs", "clipping_scratch",
            "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
            "corner_width", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row", "vertex_normal", "unset_row"]
-
-_jit_inlined = njit(cache=True, nogil=True, error_model="numpy", inline="always")
-"""``@jit`` inlined by numba into its callers: for a helper called from a kernel's per-vertex loop
-with many of the mesh's arrays. As a plain call (arguments passed array by array), csm and icc took
-25-50 % more CPU time at R4 (100k-vertex sphere, one thread); inlined, the same as with the loop
-written in the kernel."""
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
@@ -442,7 +435,7 @@ def may_leave(v, px, py, pz, radius, x, y, z, longest):
     return not (reach > 0.0 and vx * vx + vy * vy + vz * vz <= reach * reach)
 
 
-@_jit_inlined
+@jit_inlined
 def crossing_faces(v, px, py, pz, radius, x, y, z, longest, vc_ptr, vc, tri, vector_area, area, out_h, out_w, out_t,
                    out_area, out_in):
     """The faces that cross the sphere along a halfedge leaving it from support vertex v, each found
