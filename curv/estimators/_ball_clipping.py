@@ -11,13 +11,17 @@ import math
 
 import numpy as np
 
-from ..core.jit import jit
+from ..core.jit import jit, threads
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import ball_support, cached_with_mesh, coordinate_columns
+from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, cached_with_mesh, coordinate_columns,
+                                      expansion_adjacency, new_queues, new_scratch)
+from ._local_fit import jit_inlined
+from ._triangle_corners import unset_principal
 from ..core.validity import Reason
 
-__all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area",
-           "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list", "corner_width"]
+__all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs", "clipping_scratch",
+           "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
+           "corner_width", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row", "vertex_normal", "unset_row"]
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
@@ -414,6 +418,132 @@ def other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, radius2
 
 
 @jit
+def crossing_scratch(width):
+    """Per-thread scratch of :func:`crossing_faces` for vertices of at most ``width`` corners:
+    ``(out_h, out_w, out_t, out_area, out_in)``."""
+    return (np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width), np.empty(width),
+            np.empty(width, np.int64))
+
+
+@jit
+def may_leave(v, px, py, pz, radius, x, y, z, longest):
+    """Whether an edge at vertex v may leave the ball of centre (px, py, pz) and radius ``radius``:
+    not when ``|v - p| + longest[v] <= radius`` (less rounding). A test cheap enough to run at every
+    support vertex before the call of :func:`crossing_faces`."""
+    vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
+    reach = radius * (1.0 - 1e-12) - longest[v]
+    return not (reach > 0.0 and vx * vx + vy * vy + vz * vz <= reach * reach)
+
+
+@jit_inlined
+def crossing_faces(v, px, py, pz, radius, x, y, z, longest, vc_ptr, vc, tri, vector_area, area, out_h, out_w, out_t,
+                   out_area, out_in):
+    """The faces that cross the sphere along a halfedge leaving it from support vertex v, each found
+    once (its one halfedge from inside to outside), with what the star sums must trade for them.
+
+    Parameters
+    ----------
+    v : int
+        A vertex inside the ball of centre (px, py, pz) and radius ``radius`` whose edges may leave
+        it (:func:`may_leave`).
+    x, y, z, longest, vc_ptr, vc, tri, vector_area, area :
+        The mesh (:func:`leaving_halfedges`, :func:`crossing_area`).
+    out_h, out_w, out_t, out_area, out_in : (width,)
+        :func:`crossing_scratch`. Entry a of the result: the halfedge ``out_h[a]`` (face
+        ``out_h[a] // 3``) leaving towards ``out_w[a]`` at the fraction ``out_t[a]``
+        (:func:`exit_fraction`), the face's exact area inside the ball ``out_area[a]``
+        (:func:`crossing_area`) and how many of its corners are inside, ``out_in[a]`` (1 or 2: the
+        thirds of it a sum of per-vertex thirds holds).
+
+    Returns
+    -------
+    int
+        How many faces.
+    """
+    radius2 = radius ** 2
+    vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
+    qv = vx * vx + vy * vy + vz * vz
+    leaving = leaving_halfedges(v, vx, vy, vz, qv, vc_ptr, vc, tri, x, y, z, px, py, pz, radius2, out_h, out_w, out_t)
+    for a in range(leaving):
+        h, w, tp = out_h[a], out_w[a], out_t[a]
+        f = h // 3
+        c = h - 3 * f
+        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
+        qw = wx * wx + wy * wy + wz * wz
+        u = tri[f, c - 1 if c > 0 else 2]
+        ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
+        qu = ux * ux + uy * uy + uz * uz
+        tu = other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, radius2)
+        out_area[a] = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area, area,
+                                    radius2)
+        out_in[a] = 2 if qu <= radius2 else 1
+    return leaving
+
+
+@jit
+def star_support(p, radius, indptr, indices, x, y, z, stamp, queue, border, nonmanifold, clean, star, sums):
+    """The support of centre p in the ball of radius ``radius``
+    (:func:`~curv.geometry.neighbourhood.ball_support`), what it touches
+    and, where every vertex of it is ``clean``, the sum of their rows of ``star`` (per-vertex shares
+    of the elements around them, exact for the elements inside the ball).
+
+    Parameters
+    ----------
+    star : (n, K) float64
+    sums : (k,) float64, k <= K
+        Set to 0, then to the sum of ``star[v, :k]`` over the support when it is clean.
+
+    Returns
+    -------
+    count : int
+    queue : (>= count,) int64
+        The support.
+    hit : int
+        The :func:`vertex_bits` of its vertices.
+    exact : bool
+        Every support vertex is ``clean`` (else ``sums`` stays 0: the caller walks face by face).
+    """
+    count, queue = ball_support(p, radius ** 2, indptr, indices, x, y, z, stamp, queue)
+    hit = 0
+    exact = True
+    for i in range(count):
+        v = queue[i]
+        hit |= vertex_bits(v, border, nonmanifold)
+        if not clean[v]:
+            exact = False
+    for c in range(sums.size):
+        # column by column, in a register: the support's rows stay in cache between the columns
+        acc = 0.0
+        if exact:
+            for i in range(count):
+                acc += star[queue[i], c]
+        sums[c] = acc
+    return count, queue, hit, exact
+
+
+@jit
+def add_row(sums, weight, rows, r):
+    """``sums += weight * rows[r, :sums.size]``."""
+    for c in range(sums.size):
+        sums[c] += weight * rows[r, c]
+
+
+@jit
+def vertex_normal(normals, p):
+    """Row p of ``normals`` and whether it is finite: ``(nx, ny, nz, ok)``."""
+    nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
+    return nx, ny, nz, math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
+
+
+@jit
+def unset_row(p, k1, k2, d1, d2):
+    """NaN curvatures and directions at vertex p."""
+    k1[p] = k2[p] = math.nan
+    for c in range(3):
+        d1[p, c] = d2[p, c] = math.nan
+
+
+@jit
 def vertex_bits(v, border, nonmanifold):
     """The flags vertex v adds to a support it lies in (BORDER_BIT, NONMANIFOLD_BIT)."""
     bits = 0
@@ -514,6 +644,78 @@ def touched_elements(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr:
                                          edges, halfedge, np.zeros(n, np.int64), np.empty(n, np.int64),
                                          np.zeros(n, np.bool_), np.zeros(mesh.n_faces, np.bool_), eseen)
     return vertices, faces, (edge_ids if edges else None)
+
+
+def clipping_inputs(mesh: Mesh, centres: np.ndarray | None, radii: np.ndarray, features):
+    """What ``csm`` and ``icc`` read before their per-vertex sums, a generator: it yields 0.0 after
+    each piece of connectivity the mesh builds (one per step, so that cancel stays prompt).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Triangle mesh (:class:`~curv.core.errors.MeshError` on polygons).
+    centres : (c,) int64 or None
+        The vertices to estimate (None: all).
+    radii : (n,) float64
+        Ball radius of every vertex.
+    features : curv.core.features.FeatureSet or None
+        The supports stop at its vertices.
+
+    Returns
+    -------
+    tri : (m, 3) int64
+    centres : (c,) int64
+    x, y, z : (n,) float64
+    indptr, indices : (n+1,), (a,) int64
+        :func:`~curv.geometry.neighbourhood.expansion_adjacency` through the vertices not blocked.
+    cut : bool
+        Some vertices are blocked (creases).
+    crease : (n,) bool
+        The blocked vertices.
+    radii : (n,) float64
+        Contiguous.
+    touched : tuple
+        For a region, :func:`touched_elements` without the edges; else ``(None, None, None)``.
+    """
+    tri = np.ascontiguousarray(mesh.triangles)
+    n = mesh.n_vertices
+    region = centres is not None
+    centres = all_centres(n, centres)
+    for name in ("degenerate_faces", "face_vector_areas", "adjacency", "vertex_corners", "border_vertices",
+                 "nonmanifold_vertices"):
+        getattr(mesh, name)
+        yield 0.0
+    x, y, z = coordinate_columns(mesh)
+    blocked = blocked_vertices(features)
+    indptr, indices = expansion_adjacency(mesh, blocked)
+    crease = np.zeros(n, np.bool_) if blocked is None else blocked
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False) if region else (None, None, None)
+    return tri, centres, x, y, z, indptr, indices, blocked is not None, crease, radii, touched
+
+
+def clipping_scratch(mesh: Mesh, centres: np.ndarray, walk: bool):
+    """The per-call arrays of a ``csm`` or ``icc`` kernel over ``centres``.
+
+    Returns
+    -------
+    vc_ptr, vc : (n+1,), (3 m,) int64
+        :attr:`curv.Mesh.vertex_corners`.
+    width : int
+        :func:`corner_width`.
+    vstamps, queues : (parts, n) int64
+        A row per thread slice (:func:`~curv.geometry.neighbourhood.new_scratch`, ``new_queues``).
+    fstamps : (parts, m or 0) int32
+        Zeroed face stamps of the face-by-face walk (none without ``walk``; vertex ids fit, half the
+        cache lines).
+    out : Principal
+        Unset: the kernel writes every centre's row, a region touches only its own pages.
+    """
+    vc_ptr, vc = mesh.vertex_corners
+    parts = max(1, min(threads(), centres.size))
+    fstamps = np.zeros((parts, mesh.n_faces if walk else 0), np.int32)
+    return (vc_ptr, vc, corner_width(mesh), new_scratch(mesh.n_vertices, parts), new_queues(mesh.n_vertices, parts),
+            fstamps, unset_principal(mesh.n_vertices))
 
 
 def element_list(count: int, touched: np.ndarray | None) -> np.ndarray:

@@ -22,6 +22,16 @@ INVERSE_STEPS = 3
 
 
 @jit
+def _rotate_columns(m, p, q, c, s):
+    """Rotate columns p and q of the first three rows of ``m`` by the angle with cosine c and sine s."""
+    for k in range(3):
+        mkp = m[k, p]
+        mkq = m[k, q]
+        m[k, p] = c * mkp - s * mkq
+        m[k, q] = s * mkp + c * mkq
+
+
+@jit
 def sym3_eigen(a, vecs):
     """Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations.
 
@@ -54,21 +64,14 @@ def sym3_eigen(a, vecs):
                     t = -t
                 c = 1.0 / math.sqrt(t * t + 1.0)
                 s = t * c
-                for k in range(3):
-                    akp = a[k, p]
-                    akq = a[k, q]
-                    a[k, p] = c * akp - s * akq
-                    a[k, q] = s * akp + c * akq
+                # A <- Jᵀ A J and V <- V J with the rotation J in the plane (p, q)
+                _rotate_columns(a, p, q, c, s)
                 for k in range(3):
                     apk = a[p, k]
                     aqk = a[q, k]
                     a[p, k] = c * apk - s * aqk
                     a[q, k] = s * apk + c * aqk
-                for k in range(3):
-                    vkp = vecs[k, p]
-                    vkq = vecs[k, q]
-                    vecs[k, p] = c * vkp - s * vkq
-                    vecs[k, q] = s * vkp + c * vkq
+                _rotate_columns(vecs, p, q, c, s)
     for i in range(3):
         vecs[3, i] = a[i, i]
     # insertion sort of three eigenpairs, ascending

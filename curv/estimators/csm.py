@@ -49,12 +49,12 @@ import numpy as np
 
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
-                             new_queues, new_scratch)
-from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, leaving_halfedges, other_exit,
-                             face_in_ball_area, support_reason, touched_elements, touches, vertex_bits)
+from ..geometry.neighbourhood import coordinate_columns
+from ._ball_clipping import (DEGENERATE_BIT, clipping_inputs, clipping_scratch, corner_width, crossing_faces, may_leave,
+                             crossing_scratch, element_list, face_in_ball_area, star_support, support_reason,
+                             touched_elements, touches, unset_row, vertex_normal)
+from ._local_fit import slice_bounds
 from ._small_linalg import sym3_eigen
-from ._triangle_corners import unset_principal
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_csm", "segment_in_ball", "edge_beta_scale", "star_terms"]
@@ -120,6 +120,19 @@ def _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, out):
 
 
 # ---------------------------------------------------------------------------- per-mesh arrays
+@jit
+def _dihedral_scale(f0, f1, dx, dy, dz, length, vector_area, area):
+    """``beta / |e|`` of the edge d = (dx, dy, dz) of length ``length`` between faces f0 and f1, with
+    beta the signed angle from f0's normal to f1's about d (f0: the face where the edge runs along d)."""
+    n0x, n0y, n0z = vector_area[f0, 0] / area[f0], vector_area[f0, 1] / area[f0], vector_area[f0, 2] / area[f0]
+    n1x, n1y, n1z = vector_area[f1, 0] / area[f1], vector_area[f1, 1] / area[f1], vector_area[f1, 2] / area[f1]
+    sx = n0y * n1z - n0z * n1y
+    sy = n0z * n1x - n0x * n1z
+    sz = n0x * n1y - n0y * n1x
+    beta = math.atan2((sx * dx + sy * dy + sz * dz) / length, n0x * n1x + n0y * n1y + n0z * n1z)
+    return beta / length
+
+
 @jit_parallel
 def _edge_beta_scale(ids, edges, edge_faces, face_count, x, y, z, vector_area, area, degenerate, out):
     for i in prange(ids.size):
@@ -135,14 +148,8 @@ def _edge_beta_scale(ids, edges, edge_faces, face_count, x, y, z, vector_area, a
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
         if not length > 0.0:
             continue
-        n0x, n0y, n0z = vector_area[f0, 0] / area[f0], vector_area[f0, 1] / area[f0], vector_area[f0, 2] / area[f0]
-        n1x, n1y, n1z = vector_area[f1, 0] / area[f1], vector_area[f1, 1] / area[f1], vector_area[f1, 2] / area[f1]
-        # beta = signed angle from n0 to n1 about the edge (slot 0: the face where it runs a -> b)
-        sx = n0y * n1z - n0z * n1y
-        sy = n0z * n1x - n0x * n1z
-        sz = n0x * n1y - n0y * n1x
-        beta = math.atan2((sx * dx + sy * dy + sz * dz) / length, n0x * n1x + n0y * n1y + n0z * n1z)
-        scale = beta / length  # beta |e| ê êᵀ = beta / |e| d dᵀ
+        # slot 0: the face where the edge runs a -> b; beta |e| ê êᵀ = beta / |e| d dᵀ
+        scale = _dihedral_scale(f0, f1, dx, dy, dz, length, vector_area, area)
         if math.isfinite(scale):
             out[e] = scale
 
@@ -164,19 +171,29 @@ def edge_beta_scale(mesh: Mesh, ids: np.ndarray | None = None) -> np.ndarray:
 
 # ---------------------------------------------------------------------------- the kernel
 @jit
-def _edge_term(ax, ay, az, bx, by, bz, r2, scale):
-    """``beta(e) |e ∩ B| ê êᵀ`` (upper triangle, ``scale * frac * d dᵀ``) of the edge a -> b.
+def _add_outer(sums, w, dx, dy, dz):
+    """Add ``w d dᵀ`` (upper triangle: xx, xy, xz, yy, yz, zz) to ``sums[:6]``."""
+    wx, wy = w * dx, w * dy
+    sums[0] += wx * dx
+    sums[1] += wx * dy
+    sums[2] += wx * dz
+    sums[3] += wy * dy
+    sums[4] += wy * dz
+    sums[5] += w * dz * dz
+
+
+@jit
+def _add_edge_term(sums, ax, ay, az, bx, by, bz, r2, scale):
+    """Add ``beta(e) |e ∩ B| ê êᵀ`` (``scale * frac * d dᵀ``, :func:`_add_outer`) of the edge a -> b.
 
     ``a`` and ``b`` are the ends' offsets from the ball's centre, ``a`` inside the ball; ``scale``
-    is ``beta(e) / |e|``. Returns the six terms xx, xy, xz, yy, yz, zz.
+    is ``beta(e) / |e|``.
     """
     dx, dy, dz = bx - ax, by - ay, bz - az
     frac = 1.0  # both ends in the (convex) ball: all of e
     if bx * bx + by * by + bz * bz > r2:
         frac = segment_in_ball(ax, ay, az, dx, dy, dz, r2)
-    w = scale * frac
-    wx, wy = w * dx, w * dy
-    return wx * dx, wx * dy, wx * dz, wy * dy, wy * dz, w * dz * dz
+    _add_outer(sums, scale * frac, dx, dy, dz)
 
 
 @jit
@@ -238,13 +255,7 @@ def _star_terms(ids, parts, width, vc_ptr, vc, tri, x, y, z, vector_area, area, 
                 length = math.sqrt(dx * dx + dy * dy + dz * dz)
                 if not length > 0.0:
                     continue
-                n0x, n0y, n0z = vector_area[f, 0] / area[f], vector_area[f, 1] / area[f], vector_area[f, 2] / area[f]
-                n1x, n1y, n1z = vector_area[g, 0] / area[g], vector_area[g, 1] / area[g], vector_area[g, 2] / area[g]
-                sx = n0y * n1z - n0z * n1y
-                sy = n0z * n1x - n0x * n1z
-                sz = n0x * n1y - n0y * n1x
-                beta = math.atan2((sx * dx + sy * dy + sz * dz) / length, n0x * n1x + n0y * n1y + n0z * n1z)
-                scale = beta / length
+                scale = _dihedral_scale(f, g, dx, dy, dz, length, vector_area, area)
                 if not math.isfinite(scale):
                     continue
                 half_scale[h] = scale
@@ -312,16 +323,15 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None, crease: np.ndarray | N
 
 @jit
 def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri, vector_area,
-               face_area, degenerate, cut, crease, estamp, fstamp):
+               face_area, degenerate, cut, crease, estamp, fstamp, sums):
     """The sums of a centre whose support is not clean (or that stops at creases), face by face and edge by edge.
 
-    Returns the upper triangle of T, the area and the DEGENERATE_BIT if a degenerate face was met.
+    Adds the upper triangle of T and the area to ``sums`` (as :func:`_csm_chunk` has them); returns
+    the DEGENERATE_BIT if a degenerate face was met.
     """
     mark = p + 1  # the stamps start zeroed
     px, py, pz = x[p], y[p], z[p]
     hit = 0
-    t00 = t01 = t02 = t11 = t12 = t22 = 0.0
-    area = 0.0
     for i in range(count):
         v = queue[i]
         vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
@@ -337,7 +347,7 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_sca
                 if degenerate[f]:
                     hit |= DEGENERATE_BIT
                 elif not (cut and touches(crease, tri, f)):
-                    area += face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
+                    sums[6] += face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
             # the edge out of v in triangle f: on a consistently oriented mesh every interior
             # edge of v is one (border and non-manifold edges have no dihedral term)
             e = halfedge_edge[h]
@@ -349,14 +359,8 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_sca
                 s *= _kept_share(e, edge_faces, crease, tri)
             if s != 0.0:
                 w = tri[f, (h - 3 * f + 1) % 3]  # the edge runs from v to the next corner of f
-                a00, a01, a02, a11, a12, a22 = _edge_term(vx, vy, vz, x[w] - px, y[w] - py, z[w] - pz, r2, s)
-                t00 += a00
-                t01 += a01
-                t02 += a02
-                t11 += a11
-                t12 += a12
-                t22 += a22
-    return t00, t01, t02, t11, t12, t22, area, hit
+                _add_edge_term(sums, vx, vy, vz, x[w] - px, y[w] - py, z[w] - pz, r2, s)
+    return hit
 
 
 @jit_parallel
@@ -368,85 +372,46 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
         vectors = np.empty((4, 3))
         tensor = np.empty((3, 3))
         res = np.empty(8)
-        out_h, out_w, out_t = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width)
+        sums = np.empty(7)  # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle), area(B ∩ mesh)
+        out_h, out_w, out_t, out_area, out_in = crossing_scratch(width)
         queue, vstamp, estamp, fstamp = queues[t], vstamps[t], estamps[t], fstamps[t]
-        for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for k in range(start, stop):
             p = centres[k]
-            r = radii[p]
-            r2 = r ** 2
-            count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
+            count, queue, hit, exact = star_support(p, radii[p], indptr, indices, x, y, z, vstamp, queue, border,
+                                                    nonmanifold, clean, star, sums)
             px, py, pz = x[p], y[p], z[p]
-            hit = 0
-            exact = True
-            for i in range(count):
-                v = queue[i]
-                hit |= vertex_bits(v, border, nonmanifold)
-                if not clean[v]:
-                    exact = False
-            # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle) and area(B ∩ mesh), in registers
-            t00 = t01 = t02 = t11 = t12 = t22 = 0.0
-            area = 0.0
             if exact:
                 # every edge and face inside the ball whole: the support's star terms hold each edge
                 # twice by halves and each face thrice by thirds; an edge v -> w leaving the ball has
                 # one half in, and its face (v, w, u) one or two thirds: replace them by what is inside
                 for i in range(count):
                     v = queue[i]
-                    t00 += star[v, 0]
-                    t01 += star[v, 1]
-                    t02 += star[v, 2]
-                    t11 += star[v, 3]
-                    t12 += star[v, 4]
-                    t22 += star[v, 5]
-                    area += star[v, 6]
-                inner = r * (1.0 - 1e-12)  # below rounding: every edge at v inside when |v - p| + longest <= r
-                for i in range(count):
-                    v = queue[i]
-                    vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
-                    qv = vx * vx + vy * vy + vz * vz
-                    reach = inner - longest[v]
-                    if reach > 0.0 and qv <= reach * reach:
+                    if not may_leave(v, px, py, pz, radii[p], x, y, z, longest):
                         continue
-                    leaving = leaving_halfedges(v, vx, vy, vz, qv, vc_ptr, vc, tri, x, y, z, px, py, pz, r2,
-                                                out_h, out_w, out_t)
+                    leaving = crossing_faces(v, px, py, pz, radii[p], x, y, z, longest, vc_ptr, vc, tri, vector_area,
+                                             face_area, out_h, out_w, out_t, out_area, out_in)
                     for a in range(leaving):
-                        h, w, tp = out_h[a], out_w[a], out_t[a]
+                        h, w = out_h[a], out_w[a]
                         f = h // 3
-                        c = h - 3 * f
-                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
-                        qw = wx * wx + wy * wy + wz * wz
-                        u = tri[f, c - 1 if c > 0 else 2]
-                        ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
-                        qu = ux * ux + uy * uy + uz * uz
-                        tu = other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, r2)
                         s = half_scale[h]
                         if s != 0.0:
-                            wt = s * (tp - 0.5)
-                            dx, dy, dz = wx - vx, wy - vy, wz - vz
-                            ex, ey = wt * dx, wt * dy
-                            t00 += ex * dx
-                            t01 += ex * dy
-                            t02 += ex * dz
-                            t11 += ey * dy
-                            t12 += ey * dz
-                            t22 += wt * dz * dz
-                        third = face_area[f] / 3.0
-                        area += crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area,
-                                              face_area, r2) - (third + third if qu <= r2 else third)
+                            vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
+                            _add_outer(sums, s * (out_t[a] - 0.5), (x[w] - px) - vx, (y[w] - py) - vy, (z[w] - pz) - vz)
+                        sums[6] += out_area[a] - out_in[a] * (face_area[f] / 3.0)
             else:
-                t00, t01, t02, t11, t12, t22, area, bits = _walk_sums(
-                    p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri, vector_area,
-                    face_area, degenerate, cut, crease, estamp, fstamp)
-                hit |= bits
-            nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
-            normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
-            singular = not (area > 0.0 and math.isfinite(t00 + t01 + t02 + t11 + t12 + t22))
+                hit |= _walk_sums(p, count, queue, radii[p] ** 2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale,
+                                  edge_faces, tri, vector_area, face_area, degenerate, cut, crease, estamp, fstamp,
+                                  sums)
+            nx, ny, nz, normal_ok = vertex_normal(normals, p)
+            area = sums[6]
+            singular = not (area > 0.0 and math.isfinite(sums[0] + sums[1] + sums[2] + sums[3] + sums[4] + sums[5]))
             if not singular and normal_ok:
                 inv = 1.0 / area
-                tensor[0, 0], tensor[1, 1], tensor[2, 2] = t00 * inv, t11 * inv, t22 * inv
-                tensor[0, 1] = tensor[1, 0] = t01 * inv
-                tensor[0, 2] = tensor[2, 0] = t02 * inv
-                tensor[1, 2] = tensor[2, 1] = t12 * inv
+                tensor[0, 0], tensor[1, 1], tensor[2, 2] = sums[0] * inv, sums[3] * inv, sums[5] * inv
+                tensor[0, 1] = tensor[1, 0] = sums[1] * inv
+                tensor[0, 2] = tensor[2, 0] = sums[2] * inv
+                tensor[1, 2] = tensor[2, 1] = sums[4] * inv
                 _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, res)
                 k1[p], k2[p] = res[0], res[1]
                 for c in range(3):
@@ -455,9 +420,7 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                 if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
                     singular = True
             else:
-                k1[p] = k2[p] = math.nan
-                for c in range(3):
-                    d1[p, c] = d2[p, c] = math.nan
+                unset_row(p, k1, k2, d1, d2)
             reason[p] = support_reason(singular, hit, normal_ok)
 
 
@@ -501,21 +464,10 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         ``k1 <= k2`` as the tensor gives them; ``reason`` BORDER, DEGENERATE, NONMANIFOLD or
         SINGULAR where the estimate is not usable.
     """
-    tri = np.ascontiguousarray(mesh.triangles)  # MeshError on polygons
-    n = mesh.n_vertices
     region = centres is not None
-    centres = all_centres(n, centres)
-    x, y, z = coordinate_columns(mesh)
-    # the mesh's connectivity may not be built yet: one piece per step, so that cancel stays prompt
-    for name in ("degenerate_faces", "face_vector_areas", "adjacency", "vertex_corners", "border_vertices",
-                 "nonmanifold_vertices"):
-        getattr(mesh, name)
-        yield 0.0
-    blocked = blocked_vertices(features)
-    indptr, indices = expansion_adjacency(mesh, blocked)
-    crease = np.zeros(n, np.bool_) if blocked is None else blocked
-    radii = np.ascontiguousarray(radii, dtype=np.float64)
-    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False)[0] if region else None
+    tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
+        mesh, centres, radii, features)
+    touched = touched[0]
     half_scale, star, clean = star_terms(mesh, touched, crease)
     yield 0.0
     # the edge table only where a support is not clean (or near a crease): they walk edge by edge
@@ -528,21 +480,15 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         yield 0.0
     else:
         beta_scale, halfedge_edge, edge_faces = np.empty(0), np.empty(0, np.int64), np.empty((0, 2), np.int64)
-    vc_ptr, vc = mesh.vertex_corners
-    width = corner_width(mesh)  # corners at a vertex, at most
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
-    parts = max(1, min(threads(), centres.size))
-    vstamps = new_scratch(n, parts)
-    queues = new_queues(n, parts)
-    estamps = np.zeros((parts, beta_scale.size), np.int32)  # vertex ids fit; half the cache lines
-    fstamps = np.zeros((parts, tri.shape[0] if walk else 0), np.int32)
-    out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
+    vc_ptr, vc, width, vstamps, queues, fstamps, out = clipping_scratch(mesh, centres, walk)
+    estamps = np.zeros((vstamps.shape[0], beta_scale.size), np.int32)  # vertex ids fit; half the cache lines
 
     def run(lo: int, hi: int) -> None:
         launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, half_scale,
                star, clean, halfedge_edge, beta_scale, edge_faces, tri, mesh.face_vector_areas,
                mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
-               blocked is not None, crease,
+               cut, crease,
                normals, width, vstamps, queues, estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)

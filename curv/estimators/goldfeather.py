@@ -18,16 +18,18 @@ neighbour by neighbour (:mod:`curv.estimators._local_fit`).
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, cholesky_scaled, clear_parts, deviator_gradients,
-                         factor_whiten, finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame,
-                         principal_gradients, ring_gradient, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3,
-                         models_normals, store_parts, store_se3, tangent_frame, SE_PARTS_BYTES, SLOT_BYTES)
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
+                         add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
+                         fit_frame, jit_inlined, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
+                         principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
+                         store_se3)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
@@ -54,16 +56,14 @@ def _add_tilt(tilt, lu, lv, c0, c1, c2, rhs):
     tilt[12] += lv
 
 
-@jit
-def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt):
-    """Normal-curvature least squares at vertex p over its support ``queue[1:count]``; ``tilt``
-    (13,) is scratch for the frame-tilt columns of the standard error (:func:`store_se3`)."""
-    clear_parts(p, se_parts)
-    n0, n1, n2 = nx[p], ny[p], nz[p]
-    if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
-        mark_degenerate(p, k1, k2, d1, d2, reason)
+@jit_inlined
+def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt, nc):
+    """The 3-unknown fit at vertex p over its support ``queue[1:count]``: normal-curvature least
+    squares (``nc`` True) or the quadratic height fit; ``tilt`` (13,) is scratch for the frame-tilt
+    columns of the standard error (:func:`store_se3`)."""
+    n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
+    if not ok:
         return
-    frame = tangent_frame(n0, n1, n2)
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
     tilt[:] = 0.0
@@ -75,74 +75,63 @@ def _nc_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         if not (l2 > tiny2):
             continue
         used += 1
-        kn = -2.0 * w / (l2 + w * w)
-        # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
-        c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
-        # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
-        _add_tilt(tilt, u / l2, v / l2, c0, c1, c2, kn)
+        if nc:
+            rhs = -2.0 * w / (l2 + w * w)  # kn
+            # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
+            c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
+            # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
+            _add_tilt(tilt, u / l2, v / l2, c0, c1, c2, rhs)
+        else:
+            rhs = w  # w = A/2 u^2 + B uv + C/2 v^2
+            c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
+            # a tilt of the frame adds a linear term to w (the standard error's columns)
+            _add_tilt(tilt, u, v, c0, c1, c2, w)
         a00 += c0 * c0
         a01 += c0 * c1
         a02 += c0 * c2
         a11 += c1 * c1
         a12 += c1 * c2
         a22 += c2 * c2
-        b0 += c0 * kn
-        b1 += c1 * kn
-        b2 += c2 * kn
-        bb += kn * kn
+        b0 += c0 * rhs
+        b1 += c1 * rhs
+        b2 += c2 * rhs
+        bb += rhs * rhs
         s0 += c0
         s1 += c1
         s2 += c2
-    e, f, g, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
+    x0, x1, x2, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
+    # nc solves for W = (e, f, g); qs for the Hessian of the height along N, W = -(A, B, C)
+    sign = 1.0 if nc else -1.0
+    e, f, g = sign * x0, sign * x1, sign * x2
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
-    # p's own height error enters every kn (as if with equal weight: see docs/UNCERTAINTY.md)
-    store_se3(p, a00, a01, a02, a11, a12, a22, bb, e * b0 + f * b1 + g * b2, used, used, s0, s1, s2,
-              e, f, g, k1_se, k2_se, se_parts, e, f, g, tilt)
+    # p's own height error enters every equation (nc: as if with equal weight, docs/UNCERTAINTY.md)
+    store_se3(p, a00, a01, a02, a11, a12, a22, bb, x0 * b0 + x1 * b1 + x2 * b2, used, used, s0, s1, s2,
+              e, f, g, k1_se, k2_se, se_parts, x0, x1, x2, tilt)
 
 
 @jit
-def _qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt):
-    """Quadratic height fit at vertex p over its support ``queue[1:count]``; ``tilt`` (13,) is
-    scratch for the frame-tilt columns of the standard error (:func:`store_se3`)."""
-    clear_parts(p, se_parts)
-    n0, n1, n2 = nx[p], ny[p], nz[p]
-    if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
-        mark_degenerate(p, k1, k2, d1, d2, reason)
-        return
-    frame = tangent_frame(n0, n1, n2)
-    tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
-    a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
-    tilt[:] = 0.0
-    used = 0
-    for i in range(1, count):
-        q = queue[i]
-        u, v, w = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
-        if not (u * u + v * v > tiny2):
-            continue
-        used += 1
-        # w = A/2 u^2 + B uv + C/2 v^2
-        c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
-        # a tilt of the frame adds a linear term to w (the standard error's columns)
-        _add_tilt(tilt, u, v, c0, c1, c2, w)
-        a00 += c0 * c0
-        a01 += c0 * c1
-        a02 += c0 * c2
-        a11 += c1 * c1
-        a12 += c1 * c2
-        a22 += c2 * c2
-        b0 += c0 * w
-        b1 += c1 * w
-        b2 += c2 * w
-        bb += w * w
-        s0 += c0
-        s1 += c1
-        s2 += c2
-    A, B, C, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
-    # W = -Hessian of the height along N
-    finish_fit(p, -A, -B, -C, singular, used, frame, k1, k2, d1, d2, reason)
-    # every height is measured from p, so p's own height error is shared by all equations
-    store_se3(p, a00, a01, a02, a11, a12, a22, bb, A * b0 + B * b1 + C * b2, used, used, s0, s1, s2,
-              -A, -B, -C, k1_se, k2_se, se_parts, A, B, C, tilt)
+def _scaled_offset(p, q, x, y, z, inv_r, frame, n0, n1, n2):
+    """The offset ``(q - p) / r`` in p's frame (U, V, N = (n0, n1, n2)): ``(u, v, w)``."""
+    ux, uy, uz, vx, vy, vz = frame
+    dx, dy, dz = (x[q] - x[p]) * inv_r, (y[q] - y[p]) * inv_r, (z[q] - z[p]) * inv_r
+    return dx * ux + dy * uy + dz * uz, dx * vx + dy * vy + dz * vz, dx * n0 + dy * n1 + dz * n2
+
+
+@jit
+def _height_row(u, v, row):
+    """``row`` (7,): the height equation's ``(u²/2, uv, v²/2, u³, u²v, uv², v³)``."""
+    uu, uv, vv = u * u, u * v, v * v
+    row[0], row[1], row[2] = 0.5 * uu, uv, 0.5 * vv
+    row[3], row[4], row[5], row[6] = uu * u, uu * v, u * vv, vv * v
+
+
+@jit
+def _slope_rows(u, v, ru, rv):
+    """``ru``, ``rv`` (7,): the slope equations' rows, ``w_u``: (u, v, 0, 3u², 2uv, v², 0) and
+    ``w_v``: (0, u, v, 0, u², 2uv, 3v²)."""
+    uu, uv, vv = u * u, u * v, v * v
+    ru[0], ru[1], ru[2], ru[3], ru[4], ru[5], ru[6] = u, v, 0.0, 3.0 * uu, 2.0 * uv, vv, 0.0
+    rv[0], rv[1], rv[2], rv[3], rv[4], rv[5], rv[6] = 0.0, u, v, 0.0, uu, 2.0 * uv, 3.0 * vv
 
 
 @jit
@@ -159,7 +148,7 @@ def _accumulate(ata, atb, row, rhs):
 
 @jit
 def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
-                    factor, grads, row, agg, wrow):
+                    factor, grads, row, ru, rv, agg, wrow):
     """an's equations' errors as noisy heights make them (the model of mru's ``_noise_model``).
 
     With independent height errors h (variance sigma_h²), vertex normals tilted by their ring's height
@@ -182,7 +171,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
     grads : (7, 7) float64
         Rows 0, 1, 5, 6 whitened (:func:`~curv.estimators._local_fit.factor_whiten`): the gradients of
         k1, k2 and the deviator's components over the 7 unknowns.
-    row : (7,), agg : (5, 7), wrow : (1, 7) float64
+    row, ru, rv : (7,), agg : (5, 7), wrow : (1, 7) float64
         Scratch.
 
     Returns
@@ -194,37 +183,21 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
     touched, yv, jp :
         The short lists (grown, perhaps).
     """
-    ux, uy, uz, vx, vy, vz = frame
     n0, n1, n2 = nx[p], ny[p], nz[p]
     tiny2 = MIN_TANGENT_LENGTH ** 2
-    used = 0
     touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
     var1 = var2 = vard = spare = 0.0
     agg[:, :] = 0.0  # Σ height rows, Σ height rows · U, · V, Σ u-slope rows, Σ v-slope rows
-    pi00, pi01, pi11, psu, psv, ok = ring_gradient(p, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
-    p00 = p01 = p11 = 0.0  # J_p's row products
-    sp = 0
+    used, ok, p00, p01, p11, _ = centre_columns(p, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp)
+    sp = slots[p] - 1 if ok else 0
     if ok:
-        for k in range(ring_ptr[p], ring_ptr[p + 1] + 1):
-            w = p if k == ring_ptr[p + 1] else ring[k]
-            c0, c1 = gradient_column(w, p, pi00, pi01, pi11, psu, psv, x, y, z, ux, uy, uz, vx, vy, vz)
-            s, used = list_slot(w, slots, touched, yv, jp, used)
-            jp[s, 0] = c0
-            jp[s, 1] = c1
-            p00 += c0 * c0
-            p01 += c0 * c1
-            p11 += c1 * c1
-        sp = slots[p] - 1
         for i in range(1, count):
             q = queue[i]
-            dx, dy, dz = (x[q] - x[p]) * inv_r, (y[q] - y[p]) * inv_r, (z[q] - z[p]) * inv_r
-            u = dx * ux + dy * uy + dz * uz
-            v = dx * vx + dy * vy + dz * vz
+            u, v, _ = _scaled_offset(p, q, x, y, z, inv_r, frame, n0, n1, n2)
             if not (u * u + v * v > tiny2):
                 continue
             uu, uv, vv = u * u, u * v, v * v
-            row[0], row[1], row[2] = 0.5 * uu, uv, 0.5 * vv
-            row[3], row[4], row[5], row[6] = uu * u, uu * v, u * vv, vv * v
+            _height_row(u, v, row)
             s, used = list_slot(q, slots, touched, yv, jp, used)
             for j in range(7):
                 yv[s, j] += row[j] * inv_r
@@ -235,42 +208,17 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
             tq = u * jp[s, 0] + v * jp[s, 1]
             tp = u * jp[sp, 0] + v * jp[sp, 1]
             spare += (2.0 * inv_r * inv_r + uu * p00 + 2.0 * uv * p01 + vv * p11 - 2.0 * inv_r * (tq - tp))
-            a = nx[q] * ux + ny[q] * uy + nz[q] * uz
-            b = nx[q] * vx + ny[q] * vy + nz[q] * vz
-            c = nx[q] * n0 + ny[q] * n1 + nz[q] * n2
+            a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
             if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
                 continue
-            qi00, qi01, qi11, qsu, qsv, good = ring_gradient(q, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
-            if not good:
-                ok = False
+            _slope_rows(u, v, ru, rv)
+            for j in range(7):
+                agg[3, j] += ru[j]
+                agg[4, j] += rv[j]
+            used, ok, jqn, cross = add_ring_columns(q, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp, used,
+                                                    ru, rv)
+            if not ok:
                 break
-            # the slope rows (u, v, 0, 3uu, 2uv, vv, 0) and (0, u, v, 0, uu, 2uv, 3vv)
-            ru0, ru1, ru3, ru4, ru5 = u, v, 3.0 * uu, 2.0 * uv, vv
-            rv1, rv2, rv4, rv5, rv6 = u, v, uu, 2.0 * uv, 3.0 * vv
-            agg[3, 0] += ru0
-            agg[3, 1] += ru1
-            agg[3, 3] += ru3
-            agg[3, 4] += ru4
-            agg[3, 5] += ru5
-            agg[4, 1] += rv1
-            agg[4, 2] += rv2
-            agg[4, 4] += rv4
-            agg[4, 5] += rv5
-            agg[4, 6] += rv6
-            jqn = cross = 0.0
-            for k in range(ring_ptr[q], ring_ptr[q + 1] + 1):
-                w = q if k == ring_ptr[q + 1] else ring[k]
-                c0, c1 = gradient_column(w, q, qi00, qi01, qi11, qsu, qsv, x, y, z, ux, uy, uz, vx, vy, vz)
-                s, used = list_slot(w, slots, touched, yv, jp, used)
-                yv[s, 0] += ru0 * c0
-                yv[s, 1] += ru1 * c0 + rv1 * c1
-                yv[s, 2] += rv2 * c1
-                yv[s, 3] += ru3 * c0
-                yv[s, 4] += ru4 * c0 + rv4 * c1
-                yv[s, 5] += ru5 * c0 + rv5 * c1
-                yv[s, 6] += rv6 * c1
-                jqn += c0 * c0 + c1 * c1
-                cross += c0 * jp[s, 0] + c1 * jp[s, 1]
             spare += jqn + p00 + p11 - 2.0 * cross
     for s in range(used):
         if ok:
@@ -296,11 +244,11 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
 
 
 @jit
-def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, ata, atb, row, sol,
-           ata0, atb0, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
+def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, ata, atb, row, ru,
+           rv, sol, ata0, atb0, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
     """Adjacent-normal cubic fit at vertex p.
 
-    Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
+    Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``ru``, ``rv``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
     normal equations the solve overwrites; ``grads`` (7, 7): the k1, k2 gradients, the three shared
     columns, the deviator's two components (the eigen step's bias, as in ``store_se3``).
 
@@ -311,13 +259,9 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     residual; p's own height error is shared by the height equations and the tilt of its normal by
     each kind of slope equation, modelled as in :func:`~curv.estimators._local_fit.store_se3`.
     """
-    clear_parts(p, se_parts)
-    n0, n1, n2 = nx[p], ny[p], nz[p]
-    if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
-        mark_degenerate(p, k1, k2, d1, d2, reason)
+    n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
+    if not ok:
         return touched, yv, jp
-    frame = tangent_frame(n0, n1, n2)
-    ux, uy, uz, vx, vy, vz = frame
     # Heights are lengths, slopes are not: fit in coordinates divided by the ball radius so the
     # balance of the two kinds of equation (and so the result) does not depend on the mesh's scale.
     inv_r = 1.0 / r
@@ -331,36 +275,27 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     used = 0
     for i in range(1, count):
         q = queue[i]
-        dx, dy, dz = (x[q] - x[p]) * inv_r, (y[q] - y[p]) * inv_r, (z[q] - z[p]) * inv_r
-        u = dx * ux + dy * uy + dz * uz
-        v = dx * vx + dy * vy + dz * vz
-        w = dx * n0 + dy * n1 + dz * n2
+        u, v, w = _scaled_offset(p, q, x, y, z, inv_r, frame, n0, n1, n2)
         if not (u * u + v * v > tiny2):
             continue
         used += 1
-        uu, uv, vv = u * u, u * v, v * v
         # height: w = A/2 u^2 + B uv + C/2 v^2 + D u^3 + E u^2 v + F u v^2 + G v^3
-        row[0], row[1], row[2] = 0.5 * uu, uv, 0.5 * vv
-        row[3], row[4], row[5], row[6] = uu * u, uu * v, u * vv, vv * v
+        _height_row(u, v, row)
         _accumulate(ata, atb, row, w)
         bb += w * w
         equations += 1
         for j in range(7):
             grads[2, j] += row[j]
-        a = nx[q] * ux + ny[q] * uy + nz[q] * uz
-        b = nx[q] * vx + ny[q] * vy + nz[q] * vz
-        c = nx[q] * n0 + ny[q] * n1 + nz[q] * n2
+        a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
         if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
             continue
         # slopes of the neighbour's normal: w_u = -a/c, w_v = -b/c
-        row[0], row[1], row[2], row[3], row[4], row[5], row[6] = u, v, 0.0, 3.0 * uu, 2.0 * uv, vv, 0.0
-        _accumulate(ata, atb, row, -a / c)
+        _slope_rows(u, v, ru, rv)
+        _accumulate(ata, atb, ru, -a / c)
+        _accumulate(ata, atb, rv, -b / c)
         for j in range(7):
-            grads[3, j] += row[j]
-        row[0], row[1], row[2], row[3], row[4], row[5], row[6] = 0.0, u, v, 0.0, uu, 2.0 * uv, 3.0 * vv
-        _accumulate(ata, atb, row, -b / c)
-        for j in range(7):
-            grads[4, j] += row[j]
+            grads[3, j] += ru[j]
+            grads[4, j] += rv[j]
         bb += (a * a + b * b) / (c * c)
         equations += 2
         sloped += 1
@@ -391,7 +326,7 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         if slots.size > 0 and ring.size > 0 and not singular:  # slots given: noise_model="normals"
             var1, var2, var_dev, spare, ok, touched, yv, jp = _an_noise_model(
                 p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
-                ata0, grads, row, agg, wrow)
+                ata0, grads, row, ru, rv, agg, wrow)
             if ok and spare > 0.0:
                 store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, spare,
                             var_dev * scale, math.hypot(0.5 * (e - g), f))
@@ -417,70 +352,51 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     return touched, yv, jp
 
 
+NC, QS, AN = 0, 1, 2
+"""The ``method`` of :func:`_fit_kernel`."""
+
+
 @jit_parallel
-def _nc_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
+def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2,
+                reason, k1_se, k2_se, se_parts, ring_ptr, ring, slots):
+    """The kernel of :func:`~curv.estimators._local_fit.run_fit` for the three fits (``method``:
+    :data:`NC`, :data:`QS` or :data:`AN`); each slice of vertices has its own scratch."""
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
         stamp = stamps[t]
-        tilt = np.empty(13)
-        start, stop = slice_bounds(lo, hi, t, parts)
-        for i in range(start, stop):
-            p = centres[i]
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _nc_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt)
-
-
-@jit_parallel
-def _qs_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
-    parts = stamps.shape[0]
-    for t in prange(parts):
-        queue = queues[t]
-        stamp = stamps[t]
-        tilt = np.empty(13)
-        start, stop = slice_bounds(lo, hi, t, parts)
-        for i in range(start, stop):
-            p = centres[i]
-            count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            _qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt)
-
-
-@jit_parallel
-def _an_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
-    parts = stamps.shape[0]
-    for t in prange(parts):
-        queue = queues[t]
-        stamp = stamps[t]
-        ata, atb = np.empty((7, 7)), np.empty(7)
-        row, sol = np.empty(7), np.empty(7)
-        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         slot = slots[t]
+        tilt = np.empty(13)
+        ata, atb = np.empty((7, 7)), np.empty(7)
+        row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
+        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         touched, yv, jp = np.empty(64, np.int64), np.empty((64, 7)), np.empty((64, 2))
         agg, wrow = np.empty((5, 7)), np.empty((1, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            touched, yv, jp = _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
-                                     k1_se, k2_se, se_parts, ata, atb, row, sol, ata0, atb0, grads, ring_ptr, ring,
-                                     slot, touched, yv, jp, agg, wrow)
+            if method == AN:
+                touched, yv, jp = _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
+                                         k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, ata0, atb0, grads,
+                                         ring_ptr, ring, slot, touched, yv, jp, agg, wrow)
+            else:
+                _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se,
+                          se_parts, tilt, method == NC)
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
             centres: np.ndarray | None = None, features=None):
     """Normal-curvature least squares over each vertex's support (3 unknowns, 1 equation per neighbour)."""
-    return (yield from run_fit(mesh, normals, radii, _nc_kernel, chunk=chunk, centres=centres,
-                                 features=features))
+    return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, NC), chunk=chunk, centres=centres,
+                               features=features))
 
 
 def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
             centres: np.ndarray | None = None, features=None):
     """Quadratic height fit over each vertex's support (3 unknowns, 1 equation per neighbour)."""
-    return (yield from run_fit(mesh, normals, radii, _qs_kernel, chunk=chunk, centres=centres,
-                                 features=features))
+    return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, QS), chunk=chunk, centres=centres,
+                               features=features))
 
 
 def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
@@ -489,8 +405,8 @@ def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
 
     ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
     take the errors of the neighbours' normals; the curvatures do not depend on it."""
-    return (yield from run_fit(mesh, normals, radii, _an_kernel, chunk=chunk, centres=centres,
-                                 features=features, slot_maps=models_normals(noise_model)))
+    return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, AN), chunk=chunk, centres=centres,
+                               features=features, slot_maps=models_normals(noise_model)))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
@@ -498,19 +414,19 @@ _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approxim
 register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_nc_kernel, POOL_KERNEL),
+    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_fit_kernel, POOL_KERNEL),
     extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_qs_kernel, POOL_KERNEL),
+    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_fit_kernel, POOL_KERNEL),
     extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_an_kernel, POOL_KERNEL),
+    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL),
     options={"noise_model": NOISE_MODELS},
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))

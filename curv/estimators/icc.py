@@ -59,15 +59,14 @@ import math
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
-                             new_queues, new_scratch)
+from ..geometry.neighbourhood import coordinate_columns
 from ..core.validity import Reason
-from ._local_fit import store_principal, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, corner_width, crossing_area, element_list, leaving_halfedges, other_exit,
-                             face_in_ball_area, support_reason, touched_elements, touches, vertex_bits)
-from ._triangle_corners import unset_principal
+from ._local_fit import slice_bounds, store_principal, sym3_bilinear, tangent_frame
+from ._ball_clipping import (DEGENERATE_BIT, add_row, clipping_inputs, clipping_scratch, crossing_faces, may_leave,
+                             crossing_scratch, element_list, face_in_ball_area, star_support, support_reason, touches,
+                             unset_row, vertex_normal)
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures", "star_measures"]
@@ -185,10 +184,8 @@ def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = Non
         Triangle mesh.
     measures : (m, 9) float64
         :func:`face_measures`.
-    ids : (k,) int64, optional
-        Compute only these vertices (a region's supports); the other rows are left unset.
-    crease : (n,) bool, optional
-        Crease vertices (``features``): a vertex with a face touching one is not clean.
+    ids, crease : optional
+        A region's vertices, the crease vertices: as in :func:`curv.estimators.csm.star_terms`.
 
     Returns
     -------
@@ -211,15 +208,15 @@ def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = Non
 
 @jit
 def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_area, degenerate, measures, cut,
-               crease, fstamp):
+               crease, fstamp, sums):
     """The nine sums of a centre whose support is not clean (or that stops at creases), face by face.
 
-    Returns them and the DEGENERATE_BIT if a degenerate face or a face without measures was met.
+    Adds them to ``sums`` (9,); returns the DEGENERATE_BIT if a degenerate face or a face without
+    measures was met.
     """
     mark = p + 1  # the stamps start zeroed
     px, py, pz = x[p], y[p], z[p]
     hit = 0
-    s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
     for i in range(count):
         v = queue[i]
         for j in range(vc_ptr[v], vc_ptr[v + 1]):
@@ -239,16 +236,8 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_
             inside = face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
             w = min(inside / face_area[f], 1.0)
             if w > 0.0:
-                s0 += w * measures[f, 0]
-                s1 += w * measures[f, 1]
-                s2 += w * measures[f, 2]
-                s3 += w * measures[f, 3]
-                s4 += w * measures[f, 4]
-                s5 += w * measures[f, 5]
-                s6 += w * measures[f, 6]
-                s7 += w * measures[f, 7]
-                s8 += w * measures[f, 8]
-    return s0, s1, s2, s3, s4, s5, s6, s7, s8, hit
+                add_row(sums, w, measures, f)
+    return hit
 
 
 @jit_parallel
@@ -257,96 +246,46 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                vstamps, queues, fstamps, k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
-        out_h, out_w, out_t = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width)
+        sums = np.empty(MEASURES)
+        out_h, out_w, out_t, out_area, out_in = crossing_scratch(width)
         queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
-        for k in range(lo + (t * (hi - lo)) // parts, lo + ((t + 1) * (hi - lo)) // parts):
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for k in range(start, stop):
             p = centres[k]
-            r = radii[p]
-            r2 = r ** 2
-            count, queue = ball_support(p, r2, indptr, indices, x, y, z, vstamp, queue)
+            count, queue, hit, exact = star_support(p, radii[p], indptr, indices, x, y, z, vstamp, queue, border,
+                                                    nonmanifold, clean, star, sums)
             px, py, pz = x[p], y[p], z[p]
-            hit = 0
-            exact = True
-            for i in range(count):
-                v = queue[i]
-                hit |= vertex_bits(v, border, nonmanifold)
-                if not clean[v]:
-                    exact = False
             mean[p] = gaussian[p] = math.nan
-            # the sums of the nine measures, in registers
-            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
             if exact:
                 # the support's star sums hold every face inside the ball thrice by thirds; a face
                 # (v, w, u) leaving the ball along v -> w has one or two thirds in: replace them by
                 # the fraction of its area inside
                 for i in range(count):
-                    v = queue[i]
-                    s0 += star[v, 0]
-                    s1 += star[v, 1]
-                    s2 += star[v, 2]
-                    s3 += star[v, 3]
-                    s4 += star[v, 4]
-                    s5 += star[v, 5]
-                    s6 += star[v, 6]
-                    s7 += star[v, 7]
-                    s8 += star[v, 8]
-                inner = r * (1.0 - 1e-12)  # below rounding: every edge at v inside when |v - p| + longest <= r
-                for i in range(count):
-                    v = queue[i]
-                    vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
-                    qv = vx * vx + vy * vy + vz * vz
-                    reach = inner - longest[v]
-                    if reach > 0.0 and qv <= reach * reach:
+                    if not may_leave(queue[i], px, py, pz, radii[p], x, y, z, longest):
                         continue
-                    leaving = leaving_halfedges(v, vx, vy, vz, qv, vc_ptr, vc, tri, x, y, z, px, py, pz, r2,
-                                                out_h, out_w, out_t)
+                    leaving = crossing_faces(queue[i], px, py, pz, radii[p], x, y, z, longest, vc_ptr, vc, tri,
+                                             vector_area, face_area, out_h, out_w, out_t, out_area, out_in)
                     for a in range(leaving):
-                        h, w, tp = out_h[a], out_w[a], out_t[a]
-                        f = h // 3
-                        c = h - 3 * f
-                        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
-                        qw = wx * wx + wy * wy + wz * wz
-                        u = tri[f, c - 1 if c > 0 else 2]
-                        ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
-                        qu = ux * ux + uy * uy + uz * uz
-                        tu = other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, r2)
-                        inside = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area,
-                                               face_area, r2)
-                        third = 1.0 / 3.0
-                        wt = min(inside / face_area[f], 1.0) - (third + third if qu <= r2 else third)
-                        s0 += wt * measures[f, 0]
-                        s1 += wt * measures[f, 1]
-                        s2 += wt * measures[f, 2]
-                        s3 += wt * measures[f, 3]
-                        s4 += wt * measures[f, 4]
-                        s5 += wt * measures[f, 5]
-                        s6 += wt * measures[f, 6]
-                        s7 += wt * measures[f, 7]
-                        s8 += wt * measures[f, 8]
+                        f = out_h[a] // 3
+                        add_row(sums, min(out_area[a] / face_area[f], 1.0) - out_in[a] * (1.0 / 3.0), measures, f)
             else:
-                s0, s1, s2, s3, s4, s5, s6, s7, s8, bits = _walk_sums(
-                    p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_area, degenerate, measures, cut,
-                    crease, fstamp)
-                hit |= bits
-            nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
-            normal_ok = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
-            mu0 = s0
-            singular = not (mu0 > 0.0 and math.isfinite(s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7 + s8))
+                hit |= _walk_sums(p, count, queue, radii[p] ** 2, x, y, z, vc_ptr, vc, tri, vector_area, face_area,
+                                  degenerate, measures, cut, crease, fstamp, sums)
+            nx, ny, nz, normal_ok = vertex_normal(normals, p)
+            mu0, s1, s2 = sums[0], sums[1], sums[2]
+            total = 0.0
+            for c in range(MEASURES):
+                total += sums[c]
+            singular = not (mu0 > 0.0 and math.isfinite(total))
             if not singular and normal_ok:
                 mean[p] = 0.5 * s1 / mu0
                 gaussian[p] = s2 / mu0
                 # W = M / mu0 in the tangent frame (U, V) of the vertex normal
                 ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
-                m00, m01, m02, m11, m12, m22 = s3, s4, s5, s6, s7, s8
-                mux = m00 * ux + m01 * uy + m02 * uz
-                muy = m01 * ux + m11 * uy + m12 * uz
-                muz = m02 * ux + m12 * uy + m22 * uz
-                mvx = m00 * vx + m01 * vy + m02 * vz
-                mvy = m01 * vx + m11 * vy + m12 * vz
-                mvz = m02 * vx + m12 * vy + m22 * vz
-                e = (ux * mux + uy * muy + uz * muz) / mu0
-                f_ = (ux * mvx + uy * mvy + uz * mvz) / mu0
-                g = (vx * mvx + vy * mvy + vz * mvz) / mu0
+                m00, m01, m02, m11, m12, m22 = sums[3], sums[4], sums[5], sums[6], sums[7], sums[8]
+                e = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, ux, uy, uz) / mu0
+                f_ = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, vx, vy, vz) / mu0
+                g = sym3_bilinear(m00, m01, m02, m11, m12, m22, vx, vy, vz, vx, vy, vz) / mu0
                 store_principal(p, e, f_, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2)
                 if from_measures:
                     # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
@@ -362,49 +301,29 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                 if not (math.isfinite(k1[p]) and math.isfinite(k2[p])):
                     singular = True
             else:
-                k1[p] = k2[p] = math.nan
-                for c in range(3):
-                    d1[p, c] = d2[p, c] = math.nan
+                unset_row(p, k1, k2, d1, d2)
             reason[p] = support_reason(singular, hit, normal_ok)
 
 
 def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: int | None,
                    from_measures: bool = True, centres: np.ndarray | None = None, features=None):
     """Run the kernel over chunks of vertices; returns ``(Principal, mean (n,), gaussian (n,))``."""
-    tri = np.ascontiguousarray(mesh.triangles)  # MeshError on polygons
-    n = mesh.n_vertices
-    region = centres is not None
-    centres = all_centres(n, centres)
-    # the mesh's connectivity may not be built yet: one piece per step, so that cancel stays prompt
-    for name in ("degenerate_faces", "face_vector_areas", "adjacency", "vertex_corners", "border_vertices",
-                 "nonmanifold_vertices"):
-        getattr(mesh, name)
-        yield 0.0
+    tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
+        mesh, centres, radii, features)
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
-    x, y, z = coordinate_columns(mesh)
-    blocked = blocked_vertices(features)
-    indptr, indices = expansion_adjacency(mesh, blocked)
-    crease = np.zeros(n, np.bool_) if blocked is None else blocked
-    radii = np.ascontiguousarray(radii, dtype=np.float64)
-    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False) if region else (None, None, None)
     measures = face_measures(mesh, normals, touched[1])
     star, clean = star_measures(mesh, measures, touched[0], crease)
     walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
-    vc_ptr, vc = mesh.vertex_corners
-    width = corner_width(mesh)  # corners at a vertex, at most
-    parts = max(1, min(threads(), centres.size))
-    vstamps = new_scratch(n, parts)
-    queues = new_queues(n, parts)
-    fstamps = np.zeros((parts, tri.shape[0] if walk else 0), np.int32)
-    out = unset_principal(n)  # the kernel writes every centre's row; a region touches only its own pages
+    vc_ptr, vc, width, vstamps, queues, fstamps, out = clipping_scratch(mesh, centres, walk)
+    n = mesh.n_vertices
     mean = np.empty(n)  # NaN at each centre before its sums (a region touches only its own pages)
     gaussian = np.empty(n)
 
     def run(lo: int, hi: int) -> None:
         launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, star, clean,
                tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
-               mesh.nonmanifold_vertices, blocked is not None, crease, normals, from_measures, width, vstamps, queues,
+               mesh.nonmanifold_vertices, cut, crease, normals, from_measures, width, vstamps, queues,
                fstamps, out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
@@ -434,15 +353,8 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         (a crease vertex's normal, or its side's, tilts them: an error that does not shrink with
         the mesh).
 
-    Yields
-    ------
-    float
-        Fraction done (the points where a caller may cancel).
-
-    Returns
-    -------
-    Principal
-        ``k1 >= k2``; reasons as in the module notes.
+    It yields the fraction done and returns the :class:`~curv.core.result.Principal` (:data:`~curv.estimators.registry.EstimatorFunction`):
+    ``k1 >= k2``, reasons as in the module notes.
     """
     principal, _, _ = yield from _iter_measures(mesh, normals, radii, chunk, from_measures, centres, features)
     return principal

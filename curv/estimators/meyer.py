@@ -152,19 +152,10 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
         the Max-weighted normals from the same corners (returned in ``Principal.normals``, NaN
         where :func:`curv.geometry.normals.unusable_normal_vertices`; identical to
         :func:`curv.geometry.normals.vertex_normals` there).
-    radii : None
-        Unused (the estimator has no range support).
-    chunk : int, optional
-        Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
 
-    Yields
-    ------
-    float
-        Fraction done.
-
-    Returns
-    -------
-    Principal
+    ``radii`` (no range support: None), ``chunk``, the fractions done it yields and the
+    :class:`~curv.core.result.Principal` it returns are those of every estimator
+    (:data:`~curv.estimators.registry.EstimatorFunction`).
     """
     n = mesh.n_vertices
     centres, out, ring = ring_run(mesh, centres)

@@ -16,17 +16,27 @@ import numpy as np
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, NOISE_MODELS, models_normals, MIN_TANGENT_LENGTH, SE_PARTS_BYTES, SLOT_BYTES, clear_parts, deviator_gradients,
-                         finish_fit, gradient_column, list_room, list_slot, mark_degenerate, offset_in_frame, principal_gradients,
-                         ring_gradient, run_fit, slice_bounds, solve_sym3, store_parts, store_se3, sym3_inverse,
-                         tangent_frame)
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
+                         add_ring_columns, centre_columns, deviator_gradients, finish_fit, fit_frame, list_room,
+                         models_normals, normal_in_frame, offset_in_frame, principal_gradients, run_fit, slice_bounds,
+                         solve_sym3, store_parts, store_se3, sym3_inverse)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
 
 @jit
+def _neighbour(p, q, x, y, z, nx, ny, nz, frame, n0, n1, n2, tiny2):
+    """q's tangent offset (u, v) in p's frame and the tangent part (a, b) of its normal; ``ok`` when
+    the offset carries a direction (:data:`~curv.estimators._local_fit.MIN_TANGENT_LENGTH`) and the
+    normal is finite. Returns ``(u, v, a, b, ok)``."""
+    u, v, _ = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
+    a, b, _ = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
+    return u, v, a, b, u * u + v * v > tiny2 and math.isfinite(a) and math.isfinite(b)
+
+
+@jit
 def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
-                 su, sv, minv, grads):
+                 su, sv, minv, grads, ru, rv):
     """The equations' errors as the neighbours' normals make them from noisy heights.
 
     A vertex normal made from its faces tilts, to first order, by the height gradient of its ring
@@ -44,6 +54,8 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
         M⁻¹'s entries (i00, i01, i02, i11, i12, i22).
     grads : (4, 3) float64
         The gradients of k1, k2 and of the deviator's two components over (e, f, g).
+    ru, rv : (3,) float64
+        Scratch.
 
     Returns
     -------
@@ -54,47 +66,23 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
     touched, yv, jp :
         The short lists (grown, perhaps).
     """
-    ux, uy, uz, vx, vy, vz = frame
     n0, n1, n2 = nx[p], ny[p], nz[p]
-    used = 0
     touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
-    ok = True
     var1 = var2 = vard = spare = 0.0
-    pi00, pi01, pi11, psu, psv, good = ring_gradient(p, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
-    if not good:
-        ok = False
-    jpn = 0.0
+    # p's normal: the frame's tilt, shared by every equation
+    used, ok, _, _, _, jpn = centre_columns(p, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp)
     if ok:
-        # p's normal: the frame's tilt, shared by every equation
-        for k in range(ring_ptr[p], ring_ptr[p + 1] + 1):
-            w = p if k == ring_ptr[p + 1] else ring[k]
-            c0, c1 = gradient_column(w, p, pi00, pi01, pi11, psu, psv, x, y, z, ux, uy, uz, vx, vy, vz)
-            s, used = list_slot(w, slots, touched, yv, jp, used)
-            jp[s, 0] = c0
-            jp[s, 1] = c1
-            jpn += c0 * c0 + c1 * c1
         for i in range(1, count):
-            q = queue[i]
-            u, v, _ = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
-            a = nx[q] * ux + ny[q] * uy + nz[q] * uz
-            b = nx[q] * vx + ny[q] * vy + nz[q] * vz
-            if not (u * u + v * v > tiny2) or not (math.isfinite(a) and math.isfinite(b)):
+            u, v, _, _, usable = _neighbour(p, queue[i], x, y, z, nx, ny, nz, frame, n0, n1, n2, tiny2)
+            if not usable:
                 continue
-            qi00, qi01, qi11, qsu, qsv, good = ring_gradient(q, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
-            if not good:
-                ok = False
+            # rows (u, v, 0) and (0, u, v) of the a and b equations
+            ru[0], ru[1], ru[2] = u, v, 0.0
+            rv[0], rv[1], rv[2] = 0.0, u, v
+            used, ok, jqn, cross = add_ring_columns(queue[i], ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp,
+                                                    used, ru, rv)
+            if not ok:
                 break
-            jqn = cross = 0.0
-            for k in range(ring_ptr[q], ring_ptr[q + 1] + 1):
-                w = q if k == ring_ptr[q + 1] else ring[k]
-                c0, c1 = gradient_column(w, q, qi00, qi01, qi11, qsu, qsv, x, y, z, ux, uy, uz, vx, vy, vz)
-                s, used = list_slot(w, slots, touched, yv, jp, used)
-                # rows (u, v, 0) and (0, u, v) of the a and b equations
-                yv[s, 0] += u * c0
-                yv[s, 1] += v * c0 + u * c1
-                yv[s, 2] += v * c1
-                jqn += c0 * c0 + c1 * c1
-                cross += c0 * jp[s, 0] + c1 * jp[s, 1]
             spare += jqn + jpn - 2.0 * cross
     i00, i01, i02, i11, i12, i22 = minv[0], minv[1], minv[2], minv[3], minv[4], minv[5]
     for s in range(used):
@@ -121,30 +109,23 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
 
 @jit
 def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt,
-            ring_ptr, ring, slots, touched, yv, jp, minv, grads):
+            ring_ptr, ring, slots, touched, yv, jp, minv, grads, ru, rv):
     """Normal-difference least squares at vertex p over its support ``queue[1:count]``.
 
     Scratch: ``tilt`` (13,) for the frame-tilt columns of the independent model (:func:`store_se3`);
-    ``slots`` (n,) int64 zeros, ``touched``, ``yv``, ``jp``, ``minv``, ``grads`` for
+    ``slots`` (n,) int64 zeros, ``touched``, ``yv``, ``jp``, ``minv``, ``grads``, ``ru``, ``rv`` (3,) for
     :func:`_noise_model`. Returns the short lists (grown, perhaps).
     """
-    clear_parts(p, se_parts)
-    n0, n1, n2 = nx[p], ny[p], nz[p]
-    if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
-        mark_degenerate(p, k1, k2, d1, d2, reason)
+    n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
+    if not ok:
         return touched, yv, jp
-    frame = tangent_frame(n0, n1, n2)
-    ux, uy, uz, vx, vy, vz = frame
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     # normal equations of the two equation kinds: rows (u, v, 0) and (0, u, v)
     suu = suv = svv = sau = sav = sbu = sbv = saa_bb = su = sv = sa = sb = 0.0
     used = 0
     for i in range(1, count):
-        q = queue[i]
-        u, v, _ = offset_in_frame(p, q, x, y, z, frame, n0, n1, n2)
-        a = nx[q] * ux + ny[q] * uy + nz[q] * uz
-        b = nx[q] * vx + ny[q] * vy + nz[q] * vz
-        if not (u * u + v * v > tiny2) or not (math.isfinite(a) and math.isfinite(b)):
+        u, v, a, b, usable = _neighbour(p, queue[i], x, y, z, nx, ny, nz, frame, n0, n1, n2, tiny2)
+        if not usable:
             continue
         used += 1
         suu += u * u
@@ -169,7 +150,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         grads[2, 0], grads[2, 1], grads[2, 2], grads[3, 0], grads[3, 1], grads[3, 2] = deviator_gradients(e, f, g)
         var1, var2, vard, spare, ok, touched, yv, jp = _noise_model(
             p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
-            su, sv, minv, grads)
+            su, sv, minv, grads, ru, rv)
         if ok and spare > 0.0:
             store_parts(p, k1_se, k2_se, se_parts, var1, var2, saa_bb - xatb, spare, vard, math.hypot(0.5 * (e - g), f))
             return touched, yv, jp
@@ -205,14 +186,14 @@ def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stam
         slot = slots[t]
         tilt = np.empty(13)
         touched, yv, jp = np.empty(64, np.int64), np.empty((64, 3)), np.empty((64, 2))
-        minv, grads = np.empty(6), np.empty((4, 3))
+        minv, grads, ru, rv = np.empty(6), np.empty((4, 3)), np.empty(3), np.empty(3)
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             touched, yv, jp = _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
                                       k1_se, k2_se, se_parts, tilt, ring_ptr, ring, slot, touched, yv, jp, minv,
-                                      grads)
+                                      grads, ru, rv)
 
 
 def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,

@@ -164,23 +164,12 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
         Closed triangle mesh (vertices with an open or non-manifold 1-ring are marked invalid).
     normals : (n, 3) float64
         Unit vertex normals, used for the normal differences and as the vertex frames.
-    radii : None
-        Unused (the estimator has no range support).
-    chunk : int, optional
-        Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
     centres : (c,) int64, optional
         The vertices to estimate (default all).
     features : curv.core.features.FeatureSet, optional
         The faces that touch a feature vertex are left out of the average (the module's notes).
 
-    Yields
-    ------
-    float
-        Fraction done.
-
-    Returns
-    -------
-    Principal
+    ``radii``, ``chunk``, the yields and the result: as :func:`~curv.estimators.meyer.iter_meyer`.
     """
     centres, out, ring = ring_run(mesh, centres)
     crease = features.vertices if features is not None and features.any else np.zeros(0, bool)
