@@ -15,7 +15,7 @@ from ..core.jit import jit, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, cached_with_mesh, coordinate_columns,
                                       expansion_adjacency, new_queues, new_scratch)
-from ._local_fit import jit_inlined
+from ..core.jit import jit_inlined
 from ._triangle_corners import unset_principal
 from ..core.validity import Reason
 

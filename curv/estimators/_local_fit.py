@@ -33,29 +33,23 @@ import math
 from typing import Generator
 
 import numpy as np
-from numba import njit
 
 from ..core.errors import EstimatorError
 from ..core.filled import filled
-from ..core.jit import iter_chunks, jit, launch, threads
+from ..core.jit import iter_chunks, jit, jit_inlined, launch, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
 from ..core.result import Principal
 from ..core.validity import Reason
 from ._pooling import pool_members, pool_rings, pool_standard_errors, rad_bias
 
-__all__ = ["run_fit", "jit_inlined", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
+__all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
            "clear_parts", "store_parts", "ring_gradient", "gradient_column", "list_room", "list_slot", "centre_columns",
            "add_ring_columns", "fit_frame", "normal_in_frame",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
-jit_inlined = njit(cache=True, nogil=True, error_model="numpy", inline="always")
-"""``@jit`` (:mod:`curv.core.jit`) inlined by numba into its callers: for a per-vertex helper a
-kernel calls with many of the mesh's arrays, which a plain call passes array by array. csm and icc
-took 25-50 % more CPU time at R4 with their crossing faces' helper as a plain call (100k-vertex
-sphere, one thread); inlined, the same as with the loop written in the kernel."""
 
 MIN_TANGENT_LENGTH = 1e-9
 """Neighbours whose tangent-plane offset is below this fraction of the ball radius carry no direction."""

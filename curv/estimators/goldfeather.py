@@ -22,12 +22,12 @@ from functools import partial
 
 import numpy as np
 
-from ..core.jit import jit, jit_parallel, prange
+from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
-                         fit_frame, jit_inlined, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
+                         fit_frame, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
                          store_se3)
 from ._pooling import POOL_KERNEL
