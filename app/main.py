@@ -201,6 +201,9 @@ def main(argv: list[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    from app.heap import tune_allocator
+
+    tune_allocator()  # before the first large buffer (the preload's), so that each is returned when freed
     preloaded = _preload(args)
     try:
         from PySide6.QtCore import QSettings

@@ -15,6 +15,7 @@ from curv.api import iter_estimate
 from PySide6.QtCore import QObject, QThreadPool, Signal
 from superqt.utils import create_worker
 
+from app.heap import release_free_memory
 from app.model import AdviceRecord, Document, count_text
 from app.model.inputs import item_word, items_word
 
@@ -141,6 +142,7 @@ class Controller(QObject):
         self._report_due = out.report is None
         self.doc.set_mesh(out.source, out.mesh, out.truth, report=out.report, repairs=out.repairs,
                           geometry=out.prepared)
+        release_free_memory()  # the reader's buffers (a previous mesh's too, now unreferenced)
         size = "; ".join(out.report[:2]) if out.report else count_text(
             out.mesh.n_vertices, "vertex", "vertices") + ", " + count_text(out.mesh.n_faces, "face", "faces")
         self.message.emit(f"{out.source.label}: {size}")
@@ -194,6 +196,7 @@ class Controller(QObject):
         self._report_job = None
         if gen == self._generation:
             self.doc.set_report(lines)
+        release_free_memory()
         self._update_busy()
         if not self.busy and self._last_message:  # the status bar showed the check: back to the last news
             self.message.emit(self._last_message)
@@ -252,6 +255,7 @@ class Controller(QObject):
             return
         self._forget(key)
         self.doc.set_result(key, result)
+        release_free_memory()  # the estimate's and the frame's freed buffers, before the report's come
         # after the coloured frame, not beside it: VTK holds the GIL while it draws, so the report
         # gained no time there, and its temporaries piled onto the frame's buffers (0.9 GB at 10M)
         self._start_report_when_due()

@@ -43,7 +43,7 @@ def test_cancel_reverts_header_selector_and_picture_together_and_reselecting_com
     _choose_method(window, "icc")
     assert doc.panes[0].method == "icc" and window.controller.busy
     window.action_cancel.trigger()                           # before the result can arrive
-    qtbot.waitUntil(lambda: not window.controller.busy, timeout=5000)
+    qtbot.waitUntil(lambda: not window.controller.busy, timeout=TIMEOUT_MS)
     assert doc.panes[0] == good                              # the pane shows its last result again ...
     assert window.inspect.method.currentData() == good.method          # ... the selector says so ...
     assert good.title in _header(window) and "cancelled" not in _header(window)   # ... and the header
@@ -59,7 +59,7 @@ def test_cancel_with_nothing_to_go_back_to_says_so_and_reselecting_the_same_comp
     window.open_surface(SurfaceSource(name="torus", n_vertices=20000))
     qtbot.waitUntil(lambda: window.doc.mesh is not None and window.doc.source.name == "torus", timeout=TIMEOUT_MS)
     window.action_cancel.trigger()                           # the first estimate on this mesh
-    qtbot.waitUntil(lambda: not window.controller.busy, timeout=5000)
+    qtbot.waitUntil(lambda: not window.controller.busy, timeout=TIMEOUT_MS)  # the mesh's report still runs
     doc = window.doc
     method = doc.panes[0].method
     assert doc.result(0) is None and "cancelled" in _header(window)

@@ -221,3 +221,20 @@ def test_none_survives_the_render_paths_reference_drain():
     assert out.returncode == 0, out.stderr[-2000:]
     if sys.version_info < (3, 12):
         assert int(out.stdout.split()[-1]) > 2_000_000
+
+
+def test_freed_memory_goes_back_after_the_first_frame_and_after_the_report(qtbot, window, ui, monkeypatch):
+    import app.controller.jobs as jobs
+
+    ui.open_surface("sphere", n_vertices=642)
+    doc, calls = window.doc, []
+    monkeypatch.setattr(jobs, "release_free_memory", lambda: calls.append(
+        (doc.result(0) is not None, window.grid.viewports[0].plotter.frames, doc.report is not None)))
+    frames = window.grid.viewports[0].plotter.frames
+    window.open_surface(SurfaceSource(name="torus", n_vertices=2000))
+    ui.wait_ready()
+    qtbot.waitUntil(lambda: doc.report is not None)
+    # the new mesh, its first coloured frame (before its report starts), its report
+    assert [(has_result, has_report) for has_result, _, has_report in calls] == [
+        (False, False), (True, False), (True, True)]
+    assert calls[1][1] > frames
