@@ -56,7 +56,7 @@ from .core.knn import GRAPH_NEIGHBOURS, build_grid, grid_gather
 from .geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                             latest_with_mesh, new_queues, new_scratch)
 from .core.pointcloud import PointCloud
-from .core.ranges import ball_radii, point_spacing, resolve, share_spacing
+from .core.ranges import ball_radii, point_spacing, resolve
 from .core.validity import Reason
 
 _FIT_OK = int(Reason.OK)
@@ -925,7 +925,7 @@ def grid_ordered(cloud: PointCloud):
         normals = None if cloud.normals is None else cloud.normals[order]
         twin = PointCloud(cloud.points[order], normals)
         cached_with_mesh(twin, "grid order", lambda: None)
-        share_spacing(cloud, twin, order)
+        cloud.same_points_as(twin, order)
         return twin, order
 
     return cached_with_mesh(cloud, "grid order", build)

@@ -147,17 +147,28 @@ class PointCloud(PointSet):
             arr.setflags(write=False)
         return indices, distances
 
+    def same_points_as(self, twin: "PointCloud", order: np.ndarray) -> None:
+        """Read this cloud's distances to its nearest points from ``twin``, the same points in another
+        order (twin row i is this cloud's row ``order[i]``, an (n,) int array): the distances are the
+        same, so a search made on the twin serves this cloud too instead of being made again."""
+        self.__dict__["_twin"] = (twin, np.asarray(order))
+
     def kth_distance(self, k: int) -> np.ndarray:
         """(n,) float64 distance from every point to its k-th nearest other point (inf if none).
 
-        Cached per k (read-only); k up to :data:`~curv.core.knn.GRAPH_NEIGHBOURS` reads :attr:`nearest`.
+        Cached per k (read-only); k up to :data:`~curv.core.knn.GRAPH_NEIGHBOURS` reads :attr:`nearest`,
+        or the twin's distances after :meth:`same_points_as`.
         """
         k = int(k)
         if k < 1:
             raise ValueError(f"k must be >= 1, got {k}")
         cache = self.__dict__.setdefault("_kth", {})
         if k not in cache:
-            if k <= GRAPH_NEIGHBOURS:
+            twin = self.__dict__.get("_twin")
+            if twin is not None:
+                out = np.empty(self.n_points)
+                out[twin[1]] = twin[0].kth_distance(k)
+            elif k <= GRAPH_NEIGHBOURS:
                 out = np.ascontiguousarray(self.nearest[1][:, k - 1])
             else:
                 out = np.ascontiguousarray(nearest_neighbours(self._vertices, k, self.grid)[1][:, -1])

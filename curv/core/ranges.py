@@ -24,7 +24,6 @@ Everything else (the API, the CLI, the viewer, the memory model, the study) asks
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +34,7 @@ from .pointcloud import PointCloud
 
 __all__ = ["describe_spacing", "Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
            "default_range", "smallest_range", "takes_any_range", "canonical_k", "nearest_allowed",
-           "allowed_paper_ranges", "describe_ranges", "unit_lengths", "point_spacing", "share_spacing", "TIE_TOLERANCE",
+           "allowed_paper_ranges", "describe_ranges", "unit_lengths", "point_spacing", "TIE_TOLERANCE",
            "PAPER_RANGES", "FORMS", "SPACING_NEIGHBOUR", "MIN_KNN"]
 
 SPACING_NEIGHBOUR = 6
@@ -237,30 +236,9 @@ def resolve(spec, range=None, radius=None, knn=None) -> Range:
     return Range(k=k)
 
 
-_SAME_POINTS: "weakref.WeakKeyDictionary[PointCloud, list]" = weakref.WeakKeyDictionary()
-
-
-def share_spacing(cloud: PointCloud, twin: PointCloud, order: np.ndarray) -> None:
-    """Let ``cloud``'s spacing come from ``twin``, the same points in ``order`` (twin row i is cloud
-    row ``order[i]``; :func:`curv.point_normals.grid_ordered`): an estimate finds the twin's
-    nearest neighbours anyway, and the distances are the same, so the cloud's own search (a second
-    one, as costly) is not made after it."""
-    _SAME_POINTS[cloud] = [twin, order, None]
-
-
 def point_spacing(cloud: PointCloud) -> np.ndarray:
-    """(n,) float64 spacing of every point: the distance to its :data:`SPACING_NEIGHBOUR`-th nearest
-    (read-only; from the cloud's twin when it has one, :func:`share_spacing`)."""
-    held = _SAME_POINTS.get(cloud)
-    if held is None:
-        return cloud.kth_distance(SPACING_NEIGHBOUR)
-    if held[2] is None:
-        twin, order = held[0], held[1]
-        out = np.empty(cloud.n_points)
-        out[order] = point_spacing(twin)
-        out.setflags(write=False)
-        held[2] = out
-    return held[2]
+    """(n,) float64 spacing of every point: the distance to its :data:`SPACING_NEIGHBOUR`-th nearest."""
+    return cloud.kth_distance(SPACING_NEIGHBOUR)
 
 
 def describe_spacing(cloud: PointCloud) -> str:
