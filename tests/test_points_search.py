@@ -224,6 +224,24 @@ def test_a_cloud_reads_its_spacing_from_its_twin():
     assert "nearest" in twin.__dict__ and "nearest" not in cloud.__dict__
 
 
+def test_a_cloud_reads_its_coincident_and_isolated_points_from_its_twin():
+    """A cloud with a grid-ordered twin finds its coincident points (the first of each group stands
+    for it, by this cloud's own indices) and isolated points from the twin's search, as its own
+    search finds them, and makes no search of its own."""
+    from curv.point_normals import grid_ordered
+
+    points = _sphere_points(3000, 11)
+    points[[40, 900, 2500]] = points[[2999, 5, 1200]]  # repeats before and after their original
+    points = np.vstack([points, [[9.0, 9.0, 9.0]]])    # far from the rest, but not alone in a cloud
+    own = curv.PointCloud(points)
+    cloud = curv.PointCloud(points)
+    grid_ordered(cloud)
+    assert np.array_equal(cloud.coincident_points, own.coincident_points)
+    assert own.coincident_points.sum() == 3 and not own.coincident_points[[5, 1200]].any()
+    assert np.array_equal(cloud.isolated_vertices, own.isolated_vertices)
+    assert "nearest" not in cloud.__dict__
+
+
 def test_stable_rank_is_the_stable_argsort():
     """Kruskal's edge order: the radix sort gives numpy's stable argsort, ties in their order."""
     from curv.point_normals import _stable_rank

@@ -11,6 +11,7 @@ import numpy as np
 from curv.api import iter_estimate
 from curv.io import is_point_file, load
 from curv.geometry.normals import cached_max_normals
+from curv.point_normals import grid_ordered
 from curv.surfaces import SURFACES, make_surface, sample_points
 
 from app.model.inputs import cloud_report, is_points
@@ -162,8 +163,12 @@ def prepare_source(source, prepare=None, loaded: Future | None = None) -> Loaded
     estimate, so the estimate starts seconds earlier on a large mesh and the report costs little.
     """
     source, mesh, truth = load_source(source) if loaded is None else loaded.result()
-    # a cloud's facts need its neighbour search: done here, the cloud keeps it for its estimates
-    report = cloud_report(mesh) if is_points(mesh) else None
+    report = None
+    if is_points(mesh):
+        # the cloud's facts need its neighbour search: made once, on the grid-ordered twin that its
+        # whole-cloud estimates run on, so that they find it done
+        grid_ordered(mesh)
+        report = cloud_report(mesh)
     repairs = list(mesh.info.get("repairs", [])) if isinstance(getattr(mesh, "info", None), dict) else []
     return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh), repairs)
 

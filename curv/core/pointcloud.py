@@ -150,7 +150,8 @@ class PointCloud(PointSet):
     def same_points_as(self, twin: "PointCloud", order: np.ndarray) -> None:
         """Read this cloud's distances to its nearest points from ``twin``, the same points in another
         order (twin row i is this cloud's row ``order[i]``, an (n,) int array): the distances are the
-        same, so a search made on the twin serves this cloud too instead of being made again."""
+        same, so a search made on the twin serves this cloud too instead of being made again
+        (:meth:`kth_distance`, :attr:`isolated_vertices`, :attr:`coincident_points`)."""
         self.__dict__["_twin"] = (twin, np.asarray(order))
 
     def kth_distance(self, k: int) -> np.ndarray:
@@ -197,7 +198,12 @@ class PointCloud(PointSet):
     @cached_property
     def isolated_vertices(self) -> np.ndarray:
         """(n,) bool: points without any other point (a cloud of one point)."""
-        out = self.nearest[0][:, 0] < 0
+        twin = self.__dict__.get("_twin")
+        if twin is not None:
+            out = np.empty(self.n_points, dtype=bool)
+            out[twin[1]] = twin[0].isolated_vertices
+        else:
+            out = self.nearest[0][:, 0] < 0
         out.setflags(write=False)
         return out
 
@@ -209,9 +215,16 @@ class PointCloud(PointSet):
         information of their own (``Reason.DEGENERATE`` in an estimate, and the fits skip them as
         neighbours since their offset has no tangent part).
         """
-        indices, distances = self.nearest
-        ahead = (distances == 0.0) & (indices >= 0) & (indices < np.arange(self.n_points)[:, None])
-        out = ahead.any(axis=1)
+        twin = self.__dict__.get("_twin")
+        if twin is None:
+            indices, distances = self.nearest
+            rows = np.arange(self.n_points)
+        else:  # the twin's search, its rows and neighbours named by this cloud's indices
+            (indices, distances), rows = twin[0].nearest, twin[1]
+            indices = np.where(indices >= 0, rows[indices], -1)
+        ahead = (distances == 0.0) & (indices >= 0) & (indices < rows[:, None])
+        out = np.empty(self.n_points, dtype=bool)
+        out[rows] = ahead.any(axis=1)
         out.setflags(write=False)
         return out
 

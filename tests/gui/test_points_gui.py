@@ -205,6 +205,7 @@ def test_open_point_files_by_path_and_drop(qtbot, window, ui, tmp_path):
     np.testing.assert_allclose(doc.mesh.normals, p / SPHERE_R)
     assert "1,200 points" in window.mesh_panel.text.text() and "normals from the file" in window.mesh_panel.text.text() and not window.mesh_panel.reload.isEnabled()
     assert np.nanmedian(doc.result(0).mean) == pytest.approx(1 / SPHERE_R, rel=0.1)
+    assert "nearest" not in doc.mesh.__dict__   # report and estimate shared one search, in grid order
     assert not window.inspect.layer.model().item(list(Layer).index(Layer.E_REL)).isEnabled()
     ply = tmp_path / "dots.ply"
     with open(ply, "w") as f:                                         # a vertex-only PLY is a point cloud too
