@@ -96,7 +96,8 @@ class Analysis:
 
     @property
     def noise_max(self) -> float:
-        return max(self.noise_levels)
+        """The highest noise level of the study; 0.0 when it has none (nothing noisy to report on)."""
+        return max(self.noise_levels, default=0.0)
 
     def levels(self, column: str) -> list:
         if column in AXES:

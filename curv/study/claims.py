@@ -67,8 +67,7 @@ def _at_highest_noise(claim: Callable[[Analysis, float], Verdict]) -> Callable[[
     """A claim about the study's highest noise level: ``claim(an, hi)``, not tested unless ``hi > 0``."""
     @functools.wraps(claim)
     def check(an: Analysis) -> Verdict:
-        hi = max(an.noise_levels, default=0.0)
-        return claim(an, hi) if hi > 0.0 else _not("needs noisy meshes")
+        return claim(an, an.noise_max) if an.noise_max > 0.0 else _not("needs noisy meshes")
     return check
 
 

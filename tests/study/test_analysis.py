@@ -10,7 +10,7 @@ import pytest
 
 from curv.study import StudySettings
 from curv.study.analysis import Analysis, table1
-from curv.study.claims import CLAIMS, Status, check
+from curv.study.claims import CLAIMS, Status, check, check_all
 from curv.study.report import report_markdown
 from curv.study.table import Table
 from curv.study.uncertainty import interval, resamples, stability
@@ -140,3 +140,14 @@ def test_report_has_intervals_stability_and_the_early_verdicts():
     assert "Best estimator per setting" in text and "JET (R2)" in text
     assert "Estimators marked * are beyond the paper" in text
     assert "% [" in text  # Table 1 cells carry intervals
+
+
+def test_a_study_without_results_reports_no_noise_level():
+    """An empty results table (a study stopped before its first task) has no noise levels: the
+    highest level reads 0, nothing noisy is claimed, and the report is still written."""
+    an = Analysis(Table.from_rows([]), settings(2, tuple(VARIANTS)))
+    assert an.noise_levels == [] and an.noise_max == 0.0
+    noisy = [v for c, v in check_all(an) if c.check.__name__ in {"_noise_csm_then_mru", "_mru_vs_csm"}]
+    assert len(noisy) == 2 and all(v.status is Status.NOT_TESTED and v.measured == "needs noisy meshes" for v in noisy)
+    text = report_markdown(Table.from_rows([]), settings(2, tuple(VARIANTS)))
+    assert text.startswith("# curvlab study report") and "@ noise 100%" not in text
