@@ -22,7 +22,14 @@ from app.model.inputs import item_word, items_word
 from .advice import advice_compile_note, advise_mesh
 from .sources import mesh_report, prepare_source
 
-__all__ = ["Controller"]
+__all__ = ["Controller", "JOB_THREADS"]
+
+JOB_THREADS = 8
+"""Threads the controller's jobs may hold at once: a source, up to four panes' estimates, the report
+and the advisor, with room to spare. Qt's default is one per core, two on a 2-core machine, and work
+that cannot stop midway (a kernel's first compile, a report, the advisor) keeps its thread after a
+cancel: the next source must not queue behind it. The kernels themselves run one launch at a time
+(``curv.core.jit.launch``), so more threads here do not oversubscribe the cores."""
 
 
 class Controller(QObject):
@@ -58,6 +65,8 @@ class Controller(QObject):
 
     def __init__(self, document: Document, parent: QObject | None = None, *, prepare=None) -> None:
         super().__init__(parent)
+        pool = QThreadPool.globalInstance()  # superqt's workers all run on it
+        pool.setMaxThreadCount(max(pool.maxThreadCount(), JOB_THREADS))
         self.doc = document
         self.prepare = prepare
         self._generation = 0

@@ -156,6 +156,37 @@ def test_cancel_midway_and_supersede(qtbot, window, ui):
     assert window.doc.source.name == "sphere" and window.doc.mesh.n_vertices < 2000
 
 
+def test_a_new_source_loads_beside_estimates_that_cannot_stop(qtbot, window, ui, monkeypatch):
+    """Two estimates held where a cancel cannot reach them (as a kernel's first compile holds its
+    thread until it ends) do not keep the next source from loading: the job pool has threads
+    beside them, also on a 2-core machine, where Qt's default pool has two."""
+    import threading
+
+    import app.controller.jobs as jobs
+
+    ui.open_surface("saddle")
+    real, release, held = jobs.iter_estimate, threading.Event(), []
+
+    def compiling(mesh, method, **kw):
+        held.append(method)
+        release.wait(300)  # no yield before it: nothing can stop this call
+        return (yield from real(mesh, method, **kw))
+
+    monkeypatch.setattr(jobs, "iter_estimate", compiling)
+    try:
+        window.doc.set_pane_count(2)
+        window.doc.set_pane(0, method="qs")
+        window.doc.set_pane(1, method="nc")
+        qtbot.waitUntil(lambda: len(held) >= 2, timeout=TIMEOUT_MS)
+        window.open_surface(SurfaceSource(name="sphere", n_vertices=642))
+        qtbot.waitUntil(lambda: window.doc.source.name == "sphere", timeout=TIMEOUT_MS)
+        assert not release.is_set() and window.doc.mesh.n_vertices == 642
+    finally:
+        release.set()
+    ui.wait_ready()
+    assert window.doc.result(0) is not None and window.doc.result(1) is not None
+
+
 def test_switch_quantities_and_layers(qtbot, window, ui):
     ui.open_surface("saddle", n_vertices=817)
     res, truth = window.doc.result(0), window.doc.truth
