@@ -58,7 +58,19 @@ the second's ``--out``). The fill ran 150 meshes (5036 estimates) in 151 s wall 
 the coarse fill 630 meshes (42,840 estimates) in about 2 minutes wall with 2 workers, the refeature
 measures every mesh (1764 of them took 192 s wall, 102 CPU-s, with 1 worker) and chose the axes in
 about 7 minutes more on the loaded machine (two leave-one-outs per trial; a rerun over the same
-``--work`` only chooses). The coarse rows are
+``--work`` only chooses).
+
+Then the option candidates are run on the patches of samples 1 and 2 at 817, 1801 and 3169
+vertices (their option columns were empty: an option call was weighed on other meshes than a named
+call), closed surfaces of about 480 vertices (between the coarse 362 and the grid's 642; three
+random shapes, every candidate) are added as rows, and the extra columns and axes are measured and
+chosen again (the rows of the meshes measured before come from the same ``--work``)::
+
+    python -m curv.advice.table fill --table shipped.json --out options.json --kinds quadratic ellipsoid_patch trigonometric --sizes 817 1801 3169 --work /tmp/advisor-options --workers 1
+    python -m curv.advice.table fill --table options.json --out closed.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 --work /tmp/advisor-closed --workers 1
+    python -m curv.advice.table refeature --table closed.json --work /tmp/advisor-refeature --workers 1
+
+(504 meshes, 20,160 estimates, 356 CPU-s; 63 meshes, 105 CPU-s; with 1 worker each.) The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
