@@ -345,8 +345,10 @@ def test_the_packaged_table_is_what_the_documented_commands_write():
     fill = meta["fill_commands"][-1].split()
     assert fill[:4] == ["python", "-m", "curv.advice.table", "fill"] and "--coarse-samples" in fill
     samples = int(fill[fill.index("--coarse-samples") + 1])
-    n_coarse = len(at.coarse_jobs({**table, "truth": {"key": []}}, samples))  # every coarse mesh of those samples
-    assert n_coarse == samples * 315
+    sizes = meta["coarse"]["closed_vertices"]
+    assert set(at.COARSE_CLOSED_VERTICES) <= set(sizes)
+    n_coarse = len(at.coarse_jobs({**table, "truth": {"key": []}}, samples, sizes))  # every coarse mesh of those samples
+    assert n_coarse == samples * (3 * len(at.COARSE_DENSITIES) * 4 * 7 + 3 * len(sizes) * 7)
     assert meta["n_meshes"] == len(table["points"]) == n_base + n_coarse
     assert f"--coarse-samples {samples}" in doc
     assert table["variants"] == [v.id for v in at.table_settings().variants()] + at.option_variants()
@@ -693,3 +695,49 @@ def test_fill_adds_coarse_surfaces_as_rows_measured_with_the_calibration(monkeyp
     assert out["points"][1] == pytest.approx([0.25, noise / 0.1, irr], rel=1e-3)
     assert out["columns"] == ["density", "noise_level", "irregularity_deg"] and len(out["points"][0]) == 3
     assert out["metadata"]["fill_commands"][0] == "python -m curv.advice.table fill"
+
+
+def test_fill_runs_the_empty_cells_of_the_chosen_kinds_and_sizes_and_keeps_the_extra_columns():
+    import curv.advice.table as at
+
+    keys = [[0, "quadratic", 817, 0.0, 0.0, 1], [0, "quadratic", 12481, 0.0, 0.0, 1],
+            [0, "sphere", 642, 0.0, 0.0, 1], [0, "trigonometric", 817, 8.0, 0.2, 0]]
+    table = {"variants": ["nc:R1", "jet:R2;degree=4"], "columns": ["density", "noise_level", "irregularity_deg",
+                                                                     "valence_sd"],
+             "points": [[0.1, 0.0, 20.0, 0.3], [0.02, 0.0, 20.0, 0.3], [0.2, 0.0, 0.0, 0.07], [0.1, 0.2, 9.0, 0.3]],
+             "median_erel": [[0.01, None], [0.02, None], [0.03, None], [0.04, 0.05]],
+             "truth": {"key": keys}, "metadata": {"fill_command": "python -m curv.advice.table fill"},
+             "calibration": {}}
+    jobs = at.fill_jobs(table, kinds=("quadratic", "trigonometric"), sizes=(817, 1801))
+    assert jobs == [(keys[0], ("jet:R2;degree=4",))]  # not the 12481 patch, nor the sphere, nor a full row
+    assert len(at.fill_jobs(table, kinds=("quadratic", "trigonometric"))) == 2
+    done = {at._key_text(keys[0]): [{}, {"jet:R2;degree=4": 0.006}]}
+    out = at.fill_table(table, done, command="python -m curv.advice.table fill --sizes 817")
+    assert out["median_erel"][0] == [0.01, 0.006] and out["median_erel"][1] == [0.02, None]
+    # no new rows: the measured extra columns and the kernel's columns stay as they were
+    assert out["columns"] == table["columns"] and out["points"] == table["points"]
+
+
+def test_fill_adds_closed_surfaces_of_a_new_coarse_size_only():
+    import curv.advice.table as at
+
+    settings = {"functions": ["quadratic"], "irregularity": [0.0], "noise": [0.0]}
+    have = [[0, "quadratic", d, 0.0, 0.0, 0] for d in at.COARSE_DENSITIES]
+    have += [[0, nm, n, 0.0, 0.0, 0] for nm in at.DEFAULT_CLOSED for n in at.COARSE_CLOSED_VERTICES]
+    table = {"variants": ["nc:R1"], "metadata": {"settings": settings}, "truth": {"key": have}}
+    assert at.coarse_jobs(table, 1) == []
+    jobs = at.coarse_jobs(table, 1, (*at.COARSE_CLOSED_VERTICES, 482))
+    assert [j[0] for j in jobs] == [[0, nm, 482, 0.0, 0.0, 0] for nm in at.DEFAULT_CLOSED]
+    row = {"key": jobs[0][0], "noise_true": 0.0, "irregularity_planar": float("nan"), "density_true": 0.3,
+           "noise_raw": 0.001, "irregularity_raw": 4.0, "density": 0.3, "n_evaluated": 492}
+    table.update(calibration={"noise_floor": 0.0, "noise_gain": 1.2, "noise_density4": 0.01,
+                              "irregularity_noise_deg": 10.0},
+                 points=[[0.1, 0.0, 20.0]] * len(have), median_erel=[[0.01]] * len(have),
+                 truth={"key": have, "noise_true": [0.0] * len(have), "irregularity_planar": [0.0] * len(have),
+                        "density_true": [0.1] * len(have), "n_evaluated": [40] * len(have)})
+    table["metadata"]["coarse"] = {"densities": list(at.COARSE_DENSITIES), "closed_vertices": [162, 252, 362]}
+    out = at.fill_table(table, {at._key_text(jobs[0][0]): [row, {"nc:R1": 0.002}]}, new_keys=[j[0] for j in jobs],
+                        closed_vertices=[162, 252, 362, 482])
+    assert out["truth"]["key"][-1] == jobs[0][0] and len(out["points"]) == len(have) + 1
+    assert out["metadata"]["coarse"]["closed_vertices"] == [162, 252, 362, 482]
+    assert out["metadata"]["coarse"]["densities"] == list(at.COARSE_DENSITIES)

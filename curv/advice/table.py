@@ -58,7 +58,19 @@ the second's ``--out``). The fill ran 150 meshes (5036 estimates) in 151 s wall 
 the coarse fill 630 meshes (42,840 estimates) in about 2 minutes wall with 2 workers, the refeature
 measures every mesh (1764 of them took 192 s wall, 102 CPU-s, with 1 worker) and chose the axes in
 about 7 minutes more on the loaded machine (two leave-one-outs per trial; a rerun over the same
-``--work`` only chooses). The coarse rows are
+``--work`` only chooses).
+
+Then the option candidates are run on the patches of samples 1 and 2 at 817, 1801 and 3169
+vertices (their option columns were empty: an option call was weighed on other meshes than a named
+call), closed surfaces of about 480 vertices (between the coarse 362 and the grid's 642; three
+random shapes, every candidate) are added as rows, and the extra columns and axes are measured and
+chosen again (the rows of the meshes measured before come from the same ``--work``)::
+
+    python -m curv.advice.table fill --table shipped.json --out options.json --kinds quadratic ellipsoid_patch trigonometric --sizes 817 1801 3169 --work /tmp/advisor-options --workers 1
+    python -m curv.advice.table fill --table options.json --out closed.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 --work /tmp/advisor-closed --workers 1
+    python -m curv.advice.table refeature --table closed.json --work /tmp/advisor-refeature --workers 1
+
+(504 meshes, 20,160 estimates, 356 CPU-s; 63 meshes, 105 CPU-s; with 1 worker each.) The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
@@ -778,28 +790,30 @@ def load_base(path) -> dict:
 
 
 # ---------------------------------------------------------------------------- filling a table's empty cells
-def fill_jobs(table: dict, *, kinds=DEFAULT_CLOSED) -> list[tuple]:
+def fill_jobs(table: dict, *, kinds=DEFAULT_CLOSED, sizes=None) -> list[tuple]:
     """Jobs (:func:`candidate_point`) for the empty cells of ``table``'s meshes of ``kinds`` (closed
-    surface names or Monge functions): each such mesh with the variants it has no value for. Largest
-    meshes first (load balance)."""
+    surface names or Monge functions) and, if given, of ``sizes`` (a key's density or vertex count):
+    each such mesh with the variants it has no value for. Largest meshes first (load balance)."""
     variants = table["variants"]
     jobs = []
     for key, row in zip(table["truth"]["key"], table["median_erel"]):
         missing = tuple(v for v, x in zip(variants, row) if x is None)
-        if key[1] in kinds and missing:
+        if key[1] in kinds and missing and (sizes is None or key[2] in sizes):
             jobs.append((list(key), missing))
     jobs.sort(key=lambda j: -j[0][2] * len(j[1]))
     return jobs
 
 
-def coarse_jobs(table: dict, samples: int) -> list[tuple]:
+def coarse_jobs(table: dict, samples: int, closed_vertices=None) -> list[tuple]:
     """Jobs (:func:`candidate_point`, every variant of ``table``) for the coarse meshes
-    (:data:`COARSE_DENSITIES` patches, :data:`COARSE_CLOSED_VERTICES` closed surfaces) of the samples
-    below ``samples`` that ``table`` does not hold yet: more random surfaces per coarse setting, where
-    the best call changes fastest with the surface."""
+    (:data:`COARSE_DENSITIES` patches, closed surfaces of ``closed_vertices``, default
+    :data:`COARSE_CLOSED_VERTICES`) of the samples below ``samples`` that ``table`` does not hold
+    yet: more random surfaces per coarse setting, where the best call changes fastest with the
+    surface, and closed sizes between the grid's."""
     settings = table["metadata"]["settings"]
     have = {_key_text(k) for k in table["truth"]["key"]}
     every = tuple(table["variants"])
+    closed_vertices = COARSE_CLOSED_VERTICES if closed_vertices is None else closed_vertices
     jobs = []
     for s in range(samples):
         for fn in settings["functions"]:
@@ -808,17 +822,18 @@ def coarse_jobs(table: dict, samples: int) -> list[tuple]:
                     for lv in settings["noise"]:
                         jobs.append(([0, fn, d, float(irr), float(lv), s], every))
         for nm in DEFAULT_CLOSED:
-            for n in COARSE_CLOSED_VERTICES:
+            for n in closed_vertices:
                 for lv in settings["noise"]:
-                    jobs.append(([0, nm, n, 0.0, float(lv), s], every))
+                    jobs.append(([0, nm, int(n), 0.0, float(lv), s], every))
     return [j for j in jobs if _key_text(j[0]) not in have]
 
 
-def fill_table(table: dict, done: dict, *, command: str = "", new_keys=()) -> dict:
+def fill_table(table: dict, done: dict, *, command: str = "", new_keys=(), closed_vertices=None) -> dict:
     """``table`` with the values of ``done`` (:func:`run_extension`'s results) in its empty cells and
     the meshes of ``new_keys`` (keys of ``done`` the table does not hold, :func:`coarse_jobs`) as new
     rows (their base columns measured with the table's calibration); calibration and kernel unchanged
-    (refit with ``refeature``)."""
+    (refit with ``refeature``). ``closed_vertices``: the coarse closed sizes now in the table (stored
+    in ``metadata["coarse"]``)."""
     variants = table["variants"]
     col = {v: j for j, v in enumerate(variants)}
     erel = [list(row) for row in table["median_erel"]]
@@ -832,11 +847,12 @@ def fill_table(table: dict, done: dict, *, command: str = "", new_keys=()) -> di
             if j is not None and erel[i][j] is None and x is not None and np.isfinite(x) and x > 0:
                 erel[i][j] = _round(x, EREL_DIGITS)
                 filled += 1
-    base = [p[:3] for p in table["points"]]  # the extra columns are measured by refeature
-    points, truth = [list(p) for p in base], {k: list(v) for k, v in table["truth"].items()}
     new_rows = [done[_key_text(k)] for k in new_keys if _key_text(k) in done]
+    # with new rows the extra columns are measured by refeature; without, the table keeps them
+    base = [p[:3] for p in table["points"]] if new_rows else table["points"]
+    points, truth = [list(p) for p in base], {k: list(v) for k, v in table["truth"].items()}
     extra = _append_rows(new_rows, table["calibration"], col, points, truth)
-    added = np.array(points[len(base):], float).reshape(-1, 3)
+    added = np.array(points[len(base):], float).reshape(-1, len(points[0]) if points else 3)
     keep = np.all(np.isfinite(added), axis=1) & np.isfinite(extra).any(axis=1)
     for r in np.nonzero(keep)[0]:
         erel.append([_round(x, EREL_DIGITS) if np.isfinite(x) else None for x in extra[r]])
@@ -848,6 +864,8 @@ def fill_table(table: dict, done: dict, *, command: str = "", new_keys=()) -> di
     meta.update(fill_command=command, filled_cells=filled, n_meshes=len(points), added_meshes=int(keep.sum()),
                 fill_commands=[*meta.get("fill_commands", [meta["fill_command"]] if "fill_command" in meta else []),
                                command])
+    if closed_vertices is not None:
+        meta["coarse"] = {**meta.get("coarse", {}), "closed_vertices": [int(n) for n in closed_vertices]}
     out = {**table, "median_erel": erel, "metadata": meta, "points": points, "truth": truth}
     if new_rows:  # the extra columns of the old rows no longer match the new rows: refeature measures them
         out["columns"] = ["density", "noise_level", "irregularity_deg"]
@@ -866,18 +884,25 @@ def fill_main(argv) -> int:
                         help="kinds of mesh whose empty cells are run (none: only --coarse-samples)")
     parser.add_argument("--coarse-samples", type=int, default=1,
                         help="random surfaces per coarse setting: the missing ones are added as new rows")
+    parser.add_argument("--sizes", type=int, nargs="+", default=None,
+                        help="fill only the meshes of these densities / vertex counts (default all)")
+    parser.add_argument("--coarse-closed-vertices", type=int, nargs="+", default=None,
+                        help="coarse closed-surface sizes (default the table's, else "
+                             f"{' '.join(map(str, COARSE_CLOSED_VERTICES))}): sizes it lacks are added")
     parser.add_argument("--dry-run", action="store_true", help="count the jobs and stop")
     args = parser.parse_args(argv)
     with open(args.table) as fh:
         table = json.load(fh)
-    new = coarse_jobs(table, args.coarse_samples)
-    jobs = fill_jobs(table, kinds=tuple(args.kinds)) + new
+    sizes = args.coarse_closed_vertices or table.get("metadata", {}).get("coarse", {}).get(
+        "closed_vertices", list(COARSE_CLOSED_VERTICES))
+    new = coarse_jobs(table, args.coarse_samples, sizes)
+    jobs = fill_jobs(table, kinds=tuple(args.kinds), sizes=args.sizes) + new
     if args.dry_run:
         print(f"{len(jobs)} jobs, {sum(len(j[1]) for j in jobs)} estimates")
         return 0
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
     out = fill_table(table, done, command="python -m curv.advice.table fill " + " ".join(argv),
-                     new_keys=[j[0] for j in new])
+                     new_keys=[j[0] for j in new], closed_vertices=sizes)
     with open(args.out, "w") as fh:
         json.dump(out, fh, separators=(",", ":"))
     print(f"wrote {args.out}: {out['metadata']['filled_cells']} cells filled", flush=True)
