@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .jit import jit, jit_parallel, launch, prange, threads
-from .corner_normals import max_normal, unit
+from .corner_normals import corner_term, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "vertex_face_incidence",
            "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
@@ -363,70 +363,180 @@ def find_root(parent, i):
     return i
 
 
+@jit
+def _one_fan(u, d, lead, trail, match):
+    """The fans at u when its fan is clean, else 0.
+
+    Clean: no face repeats u, and every edge (u, w) has exactly one halfedge leaving u (some corner's
+    next vertex is w) and one arriving at u (some corner's previous vertex is w), so every edge has
+    two faces that run it in opposite directions. Then corner i and the corner ``match[i]`` whose
+    previous vertex is ``lead[i]`` share the edge (u, lead[i]), and the fans are the cycles of that
+    permutation. Quadratic in the (small) corner count, with no sort.
+
+    Parameters
+    ----------
+    u, d : int
+        The vertex and its number of corners.
+    lead, trail : (>= d,) int64
+        The next and the previous vertex of each corner's face.
+    match : (>= d,) int64
+        Scratch.
+
+    Returns
+    -------
+    int
+        The number of fans (cycles), 0 when the fan is not clean (or u has no corner).
+    """
+    if d == 0:
+        return 0
+    for i in range(d):
+        match[i] = -1
+    for i in range(d):
+        w = lead[i]
+        if w == u or trail[i] == u:
+            return 0
+        found = -1
+        for j in range(d):
+            if trail[j] == w:
+                if found >= 0:
+                    return 0
+                found = j
+        if found < 0 or match[found] >= 0:
+            return 0
+        match[found] = i  # match is filled backwards: match[j] = the corner whose lead is trail[j]
+    fans = 0
+    for i in range(d):
+        if match[i] >= 0:
+            fans += 1
+            j = i
+            while match[j] >= 0:
+                k = match[j]
+                match[j] = -1
+                j = k
+    return fans
+
+
+@jit
+def _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, other, corner, parent, spread):
+    """Flags, distinct neighbours and longest edge of u from its halfedges sorted by other endpoint.
+
+    The halfedges at u (leaving or arriving at each of its corners), sorted by other endpoint, are
+    those of the edges (u, w), one per face. Any fan (a border, a non-manifold edge or vertex,
+    faces of opposite orientation, a repeated index).
+
+    Returns
+    -------
+    nonmanifold, border, inconsistent : bool
+    distinct : int
+        Number of neighbours, written sorted to ``spread[2 * first:]``.
+    far : float
+        The longest edge (0 without one).
+    """
+    # corner[k] = 2 (position of the corner at u) + (1 if the halfedge leaves u)
+    k = 0
+    for i in range(last - first):
+        c = corners[first + i]
+        w = indices[corner_next[c]]
+        if w != u:
+            other[k], corner[k] = w, 2 * i + 1
+            k += 1
+        w = indices[corner_prev[c]]
+        if w != u:
+            other[k], corner[k] = w, 2 * i
+            k += 1
+        parent[i] = i
+    _sort_pairs(other, corner, k)
+    fans = last - first
+    on_border = on_nonmanifold_edge = on_inconsistent_edge = False
+    distinct = 0
+    far = 0.0
+    start = 0
+    for i in range(1, k + 1):
+        if i < k and other[i] == other[start]:
+            continue
+        # halfedges start .. i-1 are those of edge (u, w): one per face
+        w = other[start]
+        spread[2 * first + distinct] = w
+        distinct += 1
+        far = _farther(x, u, w, far)
+        faces = i - start
+        if faces == 2:
+            # the two faces are one fan at u; opposite orientation if both run the same way
+            a, b = find_root(parent, corner[start] >> 1), find_root(parent, corner[start + 1] >> 1)
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+                fans -= 1
+            if (corner[start] & 1) == (corner[start + 1] & 1):
+                on_inconsistent_edge = True
+        elif faces == 1:
+            on_border = True
+        else:
+            on_nonmanifold_edge = True
+        start = i
+    return fans > 1 or on_nonmanifold_edge, on_border or on_nonmanifold_edge, on_inconsistent_edge, distinct, far
+
+
+@jit
+def _farther(x, u, w, far):
+    """The larger of ``far`` and the length of edge (u, w)."""
+    # squares do not see the sign: the same length as Mesh.edge_lengths, to the bit
+    dx = x[w, 0] - x[u, 0]
+    dy = x[w, 1] - x[u, 1]
+    dz = x[w, 2] - x[u, 2]
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    return length if length > far else far
+
+
 @jit_parallel
 def _corner_pass(indptr, corners, indices, corner_next, corner_prev, x, width, parts, nonmanifold, border,
                  inconsistent, counts, spread, longest, normals):
     n = indptr.size - 1
     for t in prange(parts):
         other, corner, parent = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
+        lead, trail = np.empty(width, np.int64), np.empty(width, np.int64)
         lo, hi = _slice(n, t, parts)
         for u in range(lo, hi):
             first, last = indptr[u], indptr[u + 1]
-            sx, sy, sz = max_normal(u, first, last, corners, indices, corner_next, corner_prev, x)
-            normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
-            # the halfedges at u (leaving or arriving at each of its corners), by other endpoint;
-            # corner[k] = 2 (position of the corner at u) + (1 if the halfedge leaves u)
-            k = 0
-            for i in range(last - first):
+            d = last - first
+            # the next and previous vertex of each corner, and the Max normal from them
+            sx, sy, sz = 0.0, 0.0, 0.0
+            for i in range(d):
                 c = corners[first + i]
-                w = indices[corner_next[c]]
-                if w != u:
-                    other[k], corner[k] = w, 2 * i + 1
-                    k += 1
-                w = indices[corner_prev[c]]
-                if w != u:
-                    other[k], corner[k] = w, 2 * i
-                    k += 1
-                parent[i] = i
-            _sort_pairs(other, corner, k)
-            fans = last - first
-            on_border = on_nonmanifold_edge = on_inconsistent_edge = False
-            distinct = 0
-            far = 0.0
-            start = 0
-            for i in range(1, k + 1):
-                if i < k and other[i] == other[start]:
-                    continue
-                # halfedges start .. i-1 are those of edge (u, w): one per face
-                w = other[start]
-                spread[2 * first + distinct] = w
-                distinct += 1
-                # squares do not see the sign: the same length as Mesh.edge_lengths, to the bit
-                dx = x[w, 0] - x[u, 0]
-                dy = x[w, 1] - x[u, 1]
-                dz = x[w, 2] - x[u, 2]
-                length = math.sqrt(dx * dx + dy * dy + dz * dz)
-                if length > far:
-                    far = length
-                faces = i - start
-                if faces == 2:
-                    # the two faces are one fan at u; opposite orientation if both run the same way
-                    a, b = find_root(parent, corner[start] >> 1), find_root(parent, corner[start + 1] >> 1)
-                    if a != b:
-                        parent[max(a, b)] = min(a, b)
-                        fans -= 1
-                    if (corner[start] & 1) == (corner[start + 1] & 1):
-                        on_inconsistent_edge = True
-                elif faces == 1:
-                    on_border = True
-                else:
-                    on_nonmanifold_edge = True
-                start = i
-            nonmanifold[u] = fans > 1 or on_nonmanifold_edge
-            border[u] = on_border or on_nonmanifold_edge
-            inconsistent[u] = on_inconsistent_edge
-            counts[u] = distinct
-            longest[u] = far
+                b, q = indices[corner_next[c]], indices[corner_prev[c]]
+                lead[i], trail[i] = b, q
+                wx, wy, wz = corner_term(x, u, b, q)
+                sx += wx
+                sy += wy
+                sz += wz
+            normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
+            fans = _one_fan(u, d, lead, trail, parent)
+            if fans > 0:
+                # the usual vertex: its neighbours are the next vertices of its corners, each once
+                _insertion_sort(lead, d)
+                far = 0.0
+                for i in range(d):
+                    spread[2 * first + i] = lead[i]
+                    far = _farther(x, u, lead[i], far)
+                nonmanifold[u] = fans > 1
+                border[u] = inconsistent[u] = False
+                counts[u] = d
+                longest[u] = far
+            else:
+                (nonmanifold[u], border[u], inconsistent[u], counts[u],
+                 longest[u]) = _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, other,
+                                           corner, parent, spread)
+
+
+@jit
+def _insertion_sort(a, k):
+    """Sort ``a[:k]`` in place (k small)."""
+    for i in range(1, k):
+        v = a[i]
+        j = i - 1
+        while j >= 0 and a[j] > v:
+            a[j + 1] = a[j]
+            j -= 1
+        a[j + 1] = v
 
 
 @jit_parallel
