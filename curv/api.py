@@ -226,11 +226,14 @@ def _mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_iter
         work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
         if normals is not None and not _asks_for_fit(normals):
             raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
+    # an estimator that visits every corner anyway computes the default normals on the way
+    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
+    if spec.has_support or not fused:
+        # it will read the neighbours or the normals: the one walk over the corners gives the flags too
+        mesh.corner_pass
     # Where the faces around a vertex are not one consistently oriented fan, its normal averages
     # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
     meaningless = unusable_normal_vertices(mesh)
-    # an estimator that visits every corner anyway computes the default normals on the way
-    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
     if fused:
         used_normals = None
     else:

@@ -28,7 +28,7 @@ from .jit import jit, jit_parallel, launch, prange, threads
 from .corner_normals import corner_term, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "vertex_face_incidence",
-           "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
+           "corner_pass", "CornerPass", "fan_flags", "next_corner", "prev_corner", "triangle_geometry", "duplicate_positions", "dihedral_angles",
            "corner_links", "component_labels", "edge_counts", "EDGE_COUNTS", "KERNELS"]
 
 SMALL_GROUP = 32
@@ -364,6 +364,23 @@ def find_root(parent, i):
 
 
 @jit
+def next_corner(c, corner_next):
+    """The next corner of corner c in its face: ``corner_next[c]``, or by arithmetic when ``corner_next`` is
+    empty (a triangle mesh, :attr:`curv.Mesh.corner_steps`: face f has the corners 3f, 3f + 1, 3f + 2)."""
+    if corner_next.size:
+        return np.int64(corner_next[c])
+    return c - 2 if c % 3 == 2 else c + 1
+
+
+@jit
+def prev_corner(c, corner_prev):
+    """The previous corner of corner c in its face (as :func:`next_corner`)."""
+    if corner_prev.size:
+        return np.int64(corner_prev[c])
+    return c + 2 if c % 3 == 0 else c - 1
+
+
+@jit
 def _one_fan(u, d, lead, trail, match):
     """The fans at u when its fan is clean, else 0.
 
@@ -428,7 +445,7 @@ def _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, o
     -------
     nonmanifold, border, inconsistent : bool
     distinct : int
-        Number of neighbours, written sorted to ``spread[2 * first:]``.
+        Number of neighbours, written sorted to ``spread[2 * first:]`` (unless ``spread`` is empty).
     far : float
         The longest edge (0 without one).
     """
@@ -436,11 +453,11 @@ def _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, o
     k = 0
     for i in range(last - first):
         c = corners[first + i]
-        w = indices[corner_next[c]]
+        w = indices[next_corner(c, corner_next)]
         if w != u:
             other[k], corner[k] = w, 2 * i + 1
             k += 1
-        w = indices[corner_prev[c]]
+        w = indices[prev_corner(c, corner_prev)]
         if w != u:
             other[k], corner[k] = w, 2 * i
             k += 1
@@ -456,7 +473,8 @@ def _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, o
             continue
         # halfedges start .. i-1 are those of edge (u, w): one per face
         w = other[start]
-        spread[2 * first + distinct] = w
+        if spread.size:
+            spread[2 * first + distinct] = w
         distinct += 1
         far = _farther(x, u, w, far)
         faces = i - start
@@ -502,7 +520,7 @@ def _corner_pass(indptr, corners, indices, corner_next, corner_prev, x, width, p
             sx, sy, sz = 0.0, 0.0, 0.0
             for i in range(d):
                 c = corners[first + i]
-                b, q = indices[corner_next[c]], indices[corner_prev[c]]
+                b, q = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
                 lead[i], trail[i] = b, q
                 wx, wy, wz = corner_term(x, u, b, q)
                 sx += wx
@@ -525,6 +543,48 @@ def _corner_pass(indptr, corners, indices, corner_next, corner_prev, x, width, p
                 (nonmanifold[u], border[u], inconsistent[u], counts[u],
                  longest[u]) = _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, other,
                                            corner, parent, spread)
+
+
+@jit_parallel
+def _fan_flags(indptr, corners, indices, corner_next, corner_prev, x, width, parts, nonmanifold, border,
+               inconsistent):
+    n = indptr.size - 1
+    nothing = np.empty(0, np.int64)
+    for t in prange(parts):
+        other, corner, parent = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
+        lead, trail = np.empty(width, np.int64), np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            first, last = indptr[u], indptr[u + 1]
+            d = last - first
+            for i in range(d):
+                c = corners[first + i]
+                lead[i], trail[i] = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
+            fans = _one_fan(u, d, lead, trail, parent)
+            if fans > 0:
+                nonmanifold[u] = fans > 1
+                border[u] = inconsistent[u] = False
+            else:
+                nonmanifold[u], border[u], inconsistent[u], _, _ = _sorted_fan(
+                    u, first, last, corners, indices, corner_next, corner_prev, x, other, corner, parent, nothing)
+
+
+def fan_flags(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+              corner_prev: np.ndarray, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The vertex flags of :func:`corner_pass` alone (the same arrays, to the bit), for a caller that
+    needs neither the neighbours nor the normals (meyer computes its own normals from the corners).
+
+    Parameters as in :func:`corner_pass`.
+
+    Returns
+    -------
+    nonmanifold, border, inconsistent : (n,) bool
+    """
+    n = indptr.size - 1
+    nonmanifold, border, inconsistent = np.empty(n, np.bool_), np.empty(n, np.bool_), np.empty(n, np.bool_)
+    launch(_fan_flags, indptr, corners, indices, corner_next, corner_prev, vertices, _ring_width(indptr),
+           max(1, min(threads(), n)), nonmanifold, border, inconsistent)
+    return nonmanifold, border, inconsistent
 
 
 @jit
@@ -581,8 +641,10 @@ def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     ----------
     indptr, corners : (n + 1,), (h,) int64
         Corners grouped by vertex (:func:`group_corners`).
-    indices, corner_next, corner_prev : (h,) int64
-        Vertex of each corner, next and previous corner in its face.
+    indices : (h,) int64
+        Vertex of each corner.
+    corner_next, corner_prev : (h,) int32 or int64, or both empty
+        Next and previous corner in its face; empty on a triangle mesh (:func:`next_corner`).
     vertices : (n, 3) float64
 
     Returns
@@ -805,6 +867,7 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     return dict(zip(EDGE_COUNTS, (int(c) for c in totals.sum(axis=0))))
 
 
-KERNELS = (group_corners, _walk_edges, vertex_incidence, vertex_face_incidence, _corner_pass, _gather_neighbours,
+KERNELS = (group_corners, _walk_edges, vertex_incidence, vertex_face_incidence, _corner_pass, _fan_flags,
+           _gather_neighbours,
            triangle_geometry, duplicate_positions, dihedral_angles, corner_links, component_labels)
 """The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""
