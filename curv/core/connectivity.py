@@ -36,9 +36,11 @@ SMALL_GROUP = 32
 huge fan) by a heap sort, so that no vertex costs quadratic time."""
 
 
-@jit
-def group_corners(vertex_of, n):
-    """Stable counting sort of items by their vertex.
+def group_corners(vertex_of: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Stable counting sort of items by their vertex, a slice of the items per thread.
+
+    Each thread counts its slice's items per vertex; a thread's items at v go after those of the
+    earlier slices, so the order within a vertex stays increasing.
 
     Parameters
     ----------
@@ -52,18 +54,50 @@ def group_corners(vertex_of, n):
     items : (h,) int64
         The items of vertex v are ``items[indptr[v]:indptr[v + 1]]``, in increasing order.
     """
-    indptr = np.zeros(n + 1, np.int64)
-    for c in range(vertex_of.size):
-        indptr[vertex_of[c] + 1] += 1
-    for v in range(n):
-        indptr[v + 1] += indptr[v]
-    fill = indptr[:-1].copy()
+    parts = max(1, min(threads(), vertex_of.size // 65536))
+    slots = np.zeros((parts, n), np.int64)
+    launch(_count_by_vertex, vertex_of, slots)
+    indptr = np.empty(n + 1, np.int64)
+    _first_slots(slots, indptr)
     items = np.empty(vertex_of.size, np.int64)
-    for c in range(vertex_of.size):
-        v = vertex_of[c]
-        items[fill[v]] = c
-        fill[v] += 1
+    launch(_place_by_vertex, vertex_of, slots, items)
     return indptr, items
+
+
+@jit_parallel
+def _count_by_vertex(vertex_of, counts):
+    parts = counts.shape[0]
+    for t in prange(parts):
+        lo, hi = _slice(vertex_of.size, t, parts)
+        row = counts[t]
+        for c in range(lo, hi):
+            row[vertex_of[c]] += 1
+
+
+@jit
+def _first_slots(counts, indptr):
+    """Turn the per-slice counts (parts, n) into each slice's first slot at each vertex, in place; fill indptr."""
+    parts, n = counts.shape
+    total = 0
+    for v in range(n):
+        indptr[v] = total
+        for t in range(parts):
+            k = counts[t, v]
+            counts[t, v] = total
+            total += k
+    indptr[n] = total
+
+
+@jit_parallel
+def _place_by_vertex(vertex_of, slots, items):
+    parts = slots.shape[0]
+    for t in prange(parts):
+        lo, hi = _slice(vertex_of.size, t, parts)
+        row = slots[t]
+        for c in range(lo, hi):
+            v = vertex_of[c]
+            items[row[v]] = c
+            row[v] += 1
 
 
 @jit
@@ -867,7 +901,7 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     return dict(zip(EDGE_COUNTS, (int(c) for c in totals.sum(axis=0))))
 
 
-KERNELS = (group_corners, _walk_edges, vertex_incidence, vertex_face_incidence, _corner_pass, _fan_flags,
+KERNELS = (_count_by_vertex, _first_slots, _place_by_vertex, _walk_edges, vertex_incidence, vertex_face_incidence, _corner_pass, _fan_flags,
            _gather_neighbours,
            triangle_geometry, duplicate_positions, dihedral_angles, corner_links, component_labels)
 """The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""
