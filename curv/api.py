@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 import inspect
+import math
 import time
 from dataclasses import dataclass, replace
 from typing import Generator
@@ -13,7 +14,7 @@ import numpy as np
 from .core.errors import EstimatorError, MeshError
 from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
 from .estimators._pooling import pool_members
-from .core.jit import COMPILE_MESSAGE, Progress, compile_pending
+from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, jit_parallel, launch, prange
 from .convert import as_mesh
 from .core.mesh import Mesh
 from .core.pointcloud import PointCloud
@@ -156,15 +157,10 @@ def iter_estimate(
     # in the order of precedence: the first that applies to a vertex names it
     for mask, code in flags.marks:
         reason[(reason == Reason.OK) & at(mask)] = code
-    reason[(reason == Reason.OK) & ~(np.isfinite(k1) & np.isfinite(k2))] = Reason.SINGULAR
-    # the estimators order k1 >= k2 already; repair in place (the arrays are this call's own) the
-    # rare rows they did not
-    swap = np.flatnonzero(k2 > k1)
-    k1[swap], k2[swap] = k2[swap], k1[swap]
-    d1[swap], d2[swap] = d2[swap], d1[swap]
-    k1_se[swap], k2_se[swap] = k2_se[swap], k1_se[swap]
-    # keep (d1, d2, N) right-handed so results are reproducible
-    d2[_triple_product(d1, d2, at(used_normals)) < 0] *= -1.0
+    # non-finite values are SINGULAR; k1 >= k2 (the estimators order them already: the rare rows they
+    # did not are repaired in place, the arrays are this call's own); (d1, d2, N) right-handed so
+    # results are reproducible. One parallel pass over the rows.
+    launch(_settle, k1, k2, d1, d2, k1_se, k2_se, used_normals, _NO_ROWS if centres is None else centres, reason)
     if smooth is Smoothing.VALUES:
         ok = reason == Reason.OK
         k1, k2 = smooth_values(mesh, np.stack([k1, k2], axis=1), ok,
@@ -226,11 +222,14 @@ def _mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_iter
         work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
         if normals is not None and not _asks_for_fit(normals):
             raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
+    # an estimator that visits every corner anyway computes the default normals on the way
+    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
+    if spec.has_support or not fused:
+        # it will read the neighbours or the normals: the one walk over the corners gives the flags too
+        mesh.corner_pass
     # Where the faces around a vertex are not one consistently oriented fan, its normal averages
     # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
     meaningless = unusable_normal_vertices(mesh)
-    # an estimator that visits every corner anyway computes the default normals on the way
-    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
     if fused:
         used_normals = None
     else:
@@ -424,12 +423,41 @@ def _normals_label(normals, weighting, fit_range) -> str:
     return "given"
 
 
-def _triple_product(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Row-wise ``(a x b) . c`` of three (n, 3) arrays: (n,); NaN where a row has a NaN."""
-    a0, a1, a2 = a.T
-    b0, b1, b2 = b.T
-    c0, c1, c2 = c.T
-    return (a1 * b2 - a2 * b1) * c0 + (a2 * b0 - a0 * b2) * c1 + (a0 * b1 - a1 * b0) * c2
+_NO_ROWS = np.empty(0, np.int64)
+_OK, _SINGULAR = np.uint8(Reason.OK), np.uint8(Reason.SINGULAR)
+
+
+@jit_parallel
+def _settle(k1, k2, d1, d2, k1_se, k2_se, normals, rows, reason):
+    """In place, per row i of this call's outputs: ``reason`` SINGULAR where it is OK but k1 or k2 is not
+    finite; k1 >= k2 (k1, k2, d1, d2 and the standard errors swapped where k2 > k1); d2 negated where
+    ``(d1 x d2) . N < 0`` (N the row's normal, NaN: left as it is).
+
+    Parameters
+    ----------
+    k1, k2, k1_se, k2_se : (c,) float64
+    d1, d2 : (c, 3) float64
+    normals : (n, 3) float64
+        Row i's normal is ``normals[rows[i]]``, or ``normals[i]`` when ``rows`` is empty.
+    rows : (c,) or (0,) int64
+    reason : (c,) uint8
+    """
+    for i in prange(k1.size):
+        if reason[i] == _OK and not (math.isfinite(k1[i]) and math.isfinite(k2[i])):
+            reason[i] = _SINGULAR
+        if k2[i] > k1[i]:
+            k1[i], k2[i] = k2[i], k1[i]
+            k1_se[i], k2_se[i] = k2_se[i], k1_se[i]
+            for j in range(3):
+                d1[i, j], d2[i, j] = d2[i, j], d1[i, j]
+        p = np.int64(i)
+        if rows.size:
+            p = np.int64(rows[i])
+        a0, a1, a2 = d1[i, 0], d1[i, 1], d1[i, 2]
+        b0, b1, b2 = d2[i, 0], d2[i, 1], d2[i, 2]
+        c0, c1, c2 = normals[p, 0], normals[p, 1], normals[p, 2]
+        if (a1 * b2 - a2 * b1) * c0 + (a2 * b0 - a0 * b2) * c1 + (a0 * b1 - a1 * b0) * c2 < 0:
+            d2[i, 0], d2[i, 1], d2[i, 2] = -b0, -b1, -b2
 
 
 def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords) -> Curvature:

@@ -82,3 +82,35 @@ def test_dihedral_angles_kernel_matches_numpy():
     n0, n1 = mesh.face_normals[faces[:, 0]], mesh.face_normals[faces[:, 1]]
     expected = np.degrees(np.arctan2(np.linalg.norm(np.cross(n0, n1), axis=1), np.einsum("ij,ij->i", n0, n1)))
     assert np.allclose(mesh.dihedral_angles, expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("mesh", MESHES + [_grid_soup(s) for s in range(10)])
+def test_flags_from_the_fans_alone_are_the_corner_pass_flags(mesh):
+    # a fresh mesh asked only for its flags (meyer) skips the neighbours and normals
+    fresh = curv.Mesh(mesh.vertices, mesh.faces if not mesh.is_triangular else mesh.triangles)
+    alone = (fresh.nonmanifold_vertices, fresh.border_vertices, fresh.inconsistent_vertices)
+    assert "corner_pass" not in fresh.__dict__
+    walked = fresh.corner_pass
+    for got, want in zip(alone, (walked.nonmanifold, walked.border, walked.inconsistent)):
+        assert np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("mesh", MESHES + [_grid_soup(s) for s in range(10)])
+def test_triangle_corners_step_by_arithmetic(mesh):
+    steps = mesh.corner_steps
+    if not mesh.is_triangular:
+        assert steps[0] is mesh.corner_next and steps[1] is mesh.corner_prev
+        return
+    assert steps[0].size == steps[1].size == 0
+    c = np.arange(mesh.face_indices.size)
+    nxt = np.array([connectivity.next_corner.py_func(int(k), steps[0]) for k in c])
+    prv = np.array([connectivity.prev_corner.py_func(int(k), steps[1]) for k in c])
+    assert np.array_equal(nxt, mesh.corner_next) and np.array_equal(prv, mesh.corner_prev)
+
+
+@pytest.mark.parametrize("h, n", [(0, 4), (7, 60), (200_000, 3), (300_000, 70_000)])
+def test_grouping_by_vertex_is_a_stable_sort(h, n):
+    keys = np.random.default_rng(h).integers(0, n, h)
+    indptr, items = connectivity.group_corners(keys, n)
+    assert np.array_equal(items, np.argsort(keys, kind="stable"))
+    assert np.array_equal(indptr, np.concatenate([[0], np.cumsum(np.bincount(keys, minlength=n))]))

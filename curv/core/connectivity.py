@@ -25,10 +25,10 @@ from typing import NamedTuple
 import numpy as np
 
 from .jit import jit, jit_parallel, launch, prange, threads
-from .corner_normals import max_normal, unit
+from .corner_normals import corner_term, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "vertex_face_incidence",
-           "corner_pass", "CornerPass", "triangle_geometry", "duplicate_positions", "dihedral_angles",
+           "corner_pass", "CornerPass", "fan_flags", "next_corner", "prev_corner", "triangle_geometry", "duplicate_positions", "dihedral_angles",
            "corner_links", "component_labels", "edge_counts", "EDGE_COUNTS", "KERNELS"]
 
 SMALL_GROUP = 32
@@ -36,9 +36,11 @@ SMALL_GROUP = 32
 huge fan) by a heap sort, so that no vertex costs quadratic time."""
 
 
-@jit
-def group_corners(vertex_of, n):
-    """Stable counting sort of items by their vertex.
+def group_corners(vertex_of: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Stable counting sort of items by their vertex, a slice of the items per thread.
+
+    Each thread counts its slice's items per vertex; a thread's items at v go after those of the
+    earlier slices, so the order within a vertex stays increasing.
 
     Parameters
     ----------
@@ -52,18 +54,50 @@ def group_corners(vertex_of, n):
     items : (h,) int64
         The items of vertex v are ``items[indptr[v]:indptr[v + 1]]``, in increasing order.
     """
-    indptr = np.zeros(n + 1, np.int64)
-    for c in range(vertex_of.size):
-        indptr[vertex_of[c] + 1] += 1
-    for v in range(n):
-        indptr[v + 1] += indptr[v]
-    fill = indptr[:-1].copy()
+    parts = max(1, min(threads(), vertex_of.size // 65536))
+    slots = np.zeros((parts, n), np.int64)
+    launch(_count_by_vertex, vertex_of, slots)
+    indptr = np.empty(n + 1, np.int64)
+    _first_slots(slots, indptr)
     items = np.empty(vertex_of.size, np.int64)
-    for c in range(vertex_of.size):
-        v = vertex_of[c]
-        items[fill[v]] = c
-        fill[v] += 1
+    launch(_place_by_vertex, vertex_of, slots, items)
     return indptr, items
+
+
+@jit_parallel
+def _count_by_vertex(vertex_of, counts):
+    parts = counts.shape[0]
+    for t in prange(parts):
+        lo, hi = _slice(vertex_of.size, t, parts)
+        row = counts[t]
+        for c in range(lo, hi):
+            row[vertex_of[c]] += 1
+
+
+@jit
+def _first_slots(counts, indptr):
+    """Turn the per-slice counts (parts, n) into each slice's first slot at each vertex, in place; fill indptr."""
+    parts, n = counts.shape
+    total = 0
+    for v in range(n):
+        indptr[v] = total
+        for t in range(parts):
+            k = counts[t, v]
+            counts[t, v] = total
+            total += k
+    indptr[n] = total
+
+
+@jit_parallel
+def _place_by_vertex(vertex_of, slots, items):
+    parts = slots.shape[0]
+    for t in prange(parts):
+        lo, hi = _slice(vertex_of.size, t, parts)
+        row = slots[t]
+        for c in range(lo, hi):
+            v = vertex_of[c]
+            items[row[v]] = c
+            row[v] += 1
 
 
 @jit
@@ -363,70 +397,240 @@ def find_root(parent, i):
     return i
 
 
+@jit
+def next_corner(c, corner_next):
+    """The next corner of corner c in its face: ``corner_next[c]``, or by arithmetic when ``corner_next`` is
+    empty (a triangle mesh, :attr:`curv.Mesh.corner_steps`: face f has the corners 3f, 3f + 1, 3f + 2)."""
+    if corner_next.size:
+        return np.int64(corner_next[c])
+    return c - 2 if c % 3 == 2 else c + 1
+
+
+@jit
+def prev_corner(c, corner_prev):
+    """The previous corner of corner c in its face (as :func:`next_corner`)."""
+    if corner_prev.size:
+        return np.int64(corner_prev[c])
+    return c + 2 if c % 3 == 0 else c - 1
+
+
+@jit
+def _one_fan(u, d, lead, trail, match):
+    """The fans at u when its fan is clean, else 0.
+
+    Clean: no face repeats u, and every edge (u, w) has exactly one halfedge leaving u (some corner's
+    next vertex is w) and one arriving at u (some corner's previous vertex is w), so every edge has
+    two faces that run it in opposite directions. Then corner i and the corner ``match[i]`` whose
+    previous vertex is ``lead[i]`` share the edge (u, lead[i]), and the fans are the cycles of that
+    permutation. Quadratic in the (small) corner count, with no sort.
+
+    Parameters
+    ----------
+    u, d : int
+        The vertex and its number of corners.
+    lead, trail : (>= d,) int64
+        The next and the previous vertex of each corner's face.
+    match : (>= d,) int64
+        Scratch.
+
+    Returns
+    -------
+    int
+        The number of fans (cycles), 0 when the fan is not clean (or u has no corner).
+    """
+    if d == 0:
+        return 0
+    for i in range(d):
+        match[i] = -1
+    for i in range(d):
+        w = lead[i]
+        if w == u or trail[i] == u:
+            return 0
+        found = -1
+        for j in range(d):
+            if trail[j] == w:
+                if found >= 0:
+                    return 0
+                found = j
+        if found < 0 or match[found] >= 0:
+            return 0
+        match[found] = i  # match is filled backwards: match[j] = the corner whose lead is trail[j]
+    fans = 0
+    for i in range(d):
+        if match[i] >= 0:
+            fans += 1
+            j = i
+            while match[j] >= 0:
+                k = match[j]
+                match[j] = -1
+                j = k
+    return fans
+
+
+@jit
+def _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, other, corner, parent, spread):
+    """Flags, distinct neighbours and longest edge of u from its halfedges sorted by other endpoint.
+
+    The halfedges at u (leaving or arriving at each of its corners), sorted by other endpoint, are
+    those of the edges (u, w), one per face. Any fan (a border, a non-manifold edge or vertex,
+    faces of opposite orientation, a repeated index).
+
+    Returns
+    -------
+    nonmanifold, border, inconsistent : bool
+    distinct : int
+        Number of neighbours, written sorted to ``spread[2 * first:]`` (unless ``spread`` is empty).
+    far : float
+        The longest edge (0 without one).
+    """
+    # corner[k] = 2 (position of the corner at u) + (1 if the halfedge leaves u)
+    k = 0
+    for i in range(last - first):
+        c = corners[first + i]
+        w = indices[next_corner(c, corner_next)]
+        if w != u:
+            other[k], corner[k] = w, 2 * i + 1
+            k += 1
+        w = indices[prev_corner(c, corner_prev)]
+        if w != u:
+            other[k], corner[k] = w, 2 * i
+            k += 1
+        parent[i] = i
+    _sort_pairs(other, corner, k)
+    fans = last - first
+    on_border = on_nonmanifold_edge = on_inconsistent_edge = False
+    distinct = 0
+    far = 0.0
+    start = 0
+    for i in range(1, k + 1):
+        if i < k and other[i] == other[start]:
+            continue
+        # halfedges start .. i-1 are those of edge (u, w): one per face
+        w = other[start]
+        if spread.size:
+            spread[2 * first + distinct] = w
+        distinct += 1
+        far = _farther(x, u, w, far)
+        faces = i - start
+        if faces == 2:
+            # the two faces are one fan at u; opposite orientation if both run the same way
+            a, b = find_root(parent, corner[start] >> 1), find_root(parent, corner[start + 1] >> 1)
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+                fans -= 1
+            if (corner[start] & 1) == (corner[start + 1] & 1):
+                on_inconsistent_edge = True
+        elif faces == 1:
+            on_border = True
+        else:
+            on_nonmanifold_edge = True
+        start = i
+    return fans > 1 or on_nonmanifold_edge, on_border or on_nonmanifold_edge, on_inconsistent_edge, distinct, far
+
+
+@jit
+def _farther(x, u, w, far):
+    """The larger of ``far`` and the length of edge (u, w)."""
+    # squares do not see the sign: the same length as Mesh.edge_lengths, to the bit
+    dx = x[w, 0] - x[u, 0]
+    dy = x[w, 1] - x[u, 1]
+    dz = x[w, 2] - x[u, 2]
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    return length if length > far else far
+
+
 @jit_parallel
 def _corner_pass(indptr, corners, indices, corner_next, corner_prev, x, width, parts, nonmanifold, border,
                  inconsistent, counts, spread, longest, normals):
     n = indptr.size - 1
     for t in prange(parts):
         other, corner, parent = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
+        lead, trail = np.empty(width, np.int64), np.empty(width, np.int64)
         lo, hi = _slice(n, t, parts)
         for u in range(lo, hi):
             first, last = indptr[u], indptr[u + 1]
-            sx, sy, sz = max_normal(u, first, last, corners, indices, corner_next, corner_prev, x)
-            normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
-            # the halfedges at u (leaving or arriving at each of its corners), by other endpoint;
-            # corner[k] = 2 (position of the corner at u) + (1 if the halfedge leaves u)
-            k = 0
-            for i in range(last - first):
+            d = last - first
+            # the next and previous vertex of each corner, and the Max normal from them
+            sx, sy, sz = 0.0, 0.0, 0.0
+            for i in range(d):
                 c = corners[first + i]
-                w = indices[corner_next[c]]
-                if w != u:
-                    other[k], corner[k] = w, 2 * i + 1
-                    k += 1
-                w = indices[corner_prev[c]]
-                if w != u:
-                    other[k], corner[k] = w, 2 * i
-                    k += 1
-                parent[i] = i
-            _sort_pairs(other, corner, k)
-            fans = last - first
-            on_border = on_nonmanifold_edge = on_inconsistent_edge = False
-            distinct = 0
-            far = 0.0
-            start = 0
-            for i in range(1, k + 1):
-                if i < k and other[i] == other[start]:
-                    continue
-                # halfedges start .. i-1 are those of edge (u, w): one per face
-                w = other[start]
-                spread[2 * first + distinct] = w
-                distinct += 1
-                # squares do not see the sign: the same length as Mesh.edge_lengths, to the bit
-                dx = x[w, 0] - x[u, 0]
-                dy = x[w, 1] - x[u, 1]
-                dz = x[w, 2] - x[u, 2]
-                length = math.sqrt(dx * dx + dy * dy + dz * dz)
-                if length > far:
-                    far = length
-                faces = i - start
-                if faces == 2:
-                    # the two faces are one fan at u; opposite orientation if both run the same way
-                    a, b = find_root(parent, corner[start] >> 1), find_root(parent, corner[start + 1] >> 1)
-                    if a != b:
-                        parent[max(a, b)] = min(a, b)
-                        fans -= 1
-                    if (corner[start] & 1) == (corner[start + 1] & 1):
-                        on_inconsistent_edge = True
-                elif faces == 1:
-                    on_border = True
-                else:
-                    on_nonmanifold_edge = True
-                start = i
-            nonmanifold[u] = fans > 1 or on_nonmanifold_edge
-            border[u] = on_border or on_nonmanifold_edge
-            inconsistent[u] = on_inconsistent_edge
-            counts[u] = distinct
-            longest[u] = far
+                b, q = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
+                lead[i], trail[i] = b, q
+                wx, wy, wz = corner_term(x, u, b, q)
+                sx += wx
+                sy += wy
+                sz += wz
+            normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
+            fans = _one_fan(u, d, lead, trail, parent)
+            if fans > 0:
+                # the usual vertex: its neighbours are the next vertices of its corners, each once
+                _insertion_sort(lead, d)
+                far = 0.0
+                for i in range(d):
+                    spread[2 * first + i] = lead[i]
+                    far = _farther(x, u, lead[i], far)
+                nonmanifold[u] = fans > 1
+                border[u] = inconsistent[u] = False
+                counts[u] = d
+                longest[u] = far
+            else:
+                (nonmanifold[u], border[u], inconsistent[u], counts[u],
+                 longest[u]) = _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, other,
+                                           corner, parent, spread)
+
+
+@jit_parallel
+def _fan_flags(indptr, corners, indices, corner_next, corner_prev, x, width, parts, nonmanifold, border,
+               inconsistent):
+    n = indptr.size - 1
+    nothing = np.empty(0, np.int64)
+    for t in prange(parts):
+        other, corner, parent = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
+        lead, trail = np.empty(width, np.int64), np.empty(width, np.int64)
+        lo, hi = _slice(n, t, parts)
+        for u in range(lo, hi):
+            first, last = indptr[u], indptr[u + 1]
+            d = last - first
+            for i in range(d):
+                c = corners[first + i]
+                lead[i], trail[i] = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
+            fans = _one_fan(u, d, lead, trail, parent)
+            if fans > 0:
+                nonmanifold[u] = fans > 1
+                border[u] = inconsistent[u] = False
+            else:
+                nonmanifold[u], border[u], inconsistent[u], _, _ = _sorted_fan(
+                    u, first, last, corners, indices, corner_next, corner_prev, x, other, corner, parent, nothing)
+
+
+def fan_flags(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
+              corner_prev: np.ndarray, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The vertex flags of :func:`corner_pass` alone (the same arrays, to the bit), for a caller that
+    needs neither the neighbours nor the normals (meyer computes its own normals from the corners).
+
+    Parameters as in :func:`corner_pass`.
+
+    Returns
+    -------
+    nonmanifold, border, inconsistent : (n,) bool
+    """
+    n = indptr.size - 1
+    nonmanifold, border, inconsistent = np.empty(n, np.bool_), np.empty(n, np.bool_), np.empty(n, np.bool_)
+    launch(_fan_flags, indptr, corners, indices, corner_next, corner_prev, vertices, _ring_width(indptr),
+           max(1, min(threads(), n)), nonmanifold, border, inconsistent)
+    return nonmanifold, border, inconsistent
+
+
+@jit
+def _insertion_sort(a, k):
+    """Sort ``a[:k]`` in place (k small)."""
+    for i in range(1, k):
+        v = a[i]
+        j = i - 1
+        while j >= 0 and a[j] > v:
+            a[j + 1] = a[j]
+            j -= 1
+        a[j + 1] = v
 
 
 @jit_parallel
@@ -471,8 +675,10 @@ def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     ----------
     indptr, corners : (n + 1,), (h,) int64
         Corners grouped by vertex (:func:`group_corners`).
-    indices, corner_next, corner_prev : (h,) int64
-        Vertex of each corner, next and previous corner in its face.
+    indices : (h,) int64
+        Vertex of each corner.
+    corner_next, corner_prev : (h,) int32 or int64, or both empty
+        Next and previous corner in its face; empty on a triangle mesh (:func:`next_corner`).
     vertices : (n, 3) float64
 
     Returns
@@ -695,6 +901,7 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     return dict(zip(EDGE_COUNTS, (int(c) for c in totals.sum(axis=0))))
 
 
-KERNELS = (group_corners, _walk_edges, vertex_incidence, vertex_face_incidence, _corner_pass, _gather_neighbours,
+KERNELS = (_count_by_vertex, _first_slots, _place_by_vertex, _walk_edges, vertex_incidence, vertex_face_incidence, _corner_pass, _fan_flags,
+           _gather_neighbours,
            triangle_geometry, duplicate_positions, dihedral_angles, corner_links, component_labels)
 """The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""

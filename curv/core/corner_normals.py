@@ -11,7 +11,7 @@ import math
 
 from .jit import jit
 
-__all__ = ["max_normal", "max_weight", "unit"]
+__all__ = ["max_normal", "max_weight", "corner_term", "unit"]
 
 
 @jit
@@ -28,15 +28,26 @@ def max_normal(p, lo, hi, corners, indices, corner_next, corner_prev, x):
     sx, sy, sz = 0.0, 0.0, 0.0
     for i in range(lo, hi):
         c = corners[i]
-        b, q = indices[corner_next[c]], indices[corner_prev[c]]
-        ax, ay, az = x[b, 0] - x[p, 0], x[b, 1] - x[p, 1], x[b, 2] - x[p, 2]
-        bx, by, bz = x[q, 0] - x[p, 0], x[q, 1] - x[p, 1], x[q, 2] - x[p, 2]
-        wx, wy, wz = max_weight(ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx,
-                                ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
+        wx, wy, wz = corner_term(x, p, indices[corner_next[c]], indices[corner_prev[c]])
         sx += wx
         sy += wy
         sz += wz
     return sx, sy, sz
+
+
+@jit
+def corner_term(x, p, b, q):
+    """The Max normal term of the corner at p whose face's next vertex is b and previous vertex q:
+    ``(a x b) / (|a|^2 |b|^2)`` with the edges ``a = x[b] - x[p]``, ``b = x[q] - x[p]``.
+
+    Returns
+    -------
+    wx, wy, wz : float
+    """
+    ax, ay, az = x[b, 0] - x[p, 0], x[b, 1] - x[p, 1], x[b, 2] - x[p, 2]
+    bx, by, bz = x[q, 0] - x[p, 0], x[q, 1] - x[p, 1], x[q, 2] - x[p, 2]
+    return max_weight(ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx,
+                      ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
 
 
 @jit

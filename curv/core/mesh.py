@@ -20,6 +20,10 @@ from .wording import count_text
 
 __all__ = ["Mesh", "MeshReport"]
 
+_NO_STEPS = (np.empty(0, np.int32), np.empty(0, np.int32))
+for _steps in _NO_STEPS:
+    _steps.setflags(write=False)
+
 
 @dataclass(frozen=True)
 class MeshReport:
@@ -235,6 +239,15 @@ class Mesh(PointSet):
     corner_prev = _part("_corner_links", 1, "(h,) int32 (int64 beyond 2**31 corners) index of the previous corner in "
                                             "the same face.")
 
+    @property
+    def corner_steps(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(corner_next, corner_prev)`` as the kernels take them: two empty int32 arrays on a triangle mesh,
+        whose corners step by arithmetic (:func:`curv.core.connectivity.next_corner`), so that a fresh
+        estimate neither builds nor reads the two (h,) arrays."""
+        if self.is_triangular:
+            return _NO_STEPS
+        return self.corner_next, self.corner_prev
+
     @cached_property
     def vertex_corners(self) -> tuple[np.ndarray, np.ndarray]:
         """The corners grouped by vertex: ``(indptr (n+1,) int64, corners (h,) int64)``.
@@ -295,8 +308,7 @@ class Mesh(PointSet):
         the corners around each vertex (:func:`curv.core.connectivity.corner_pass`; no edge table, so a
         fresh estimate never builds it). The arrays are read-only; the properties below expose them."""
         indptr, corners = self.vertex_corners
-        out = _kernels.corner_pass(indptr, corners, self._indices, self.corner_next, self.corner_prev,
-                                   self._vertices)
+        out = _kernels.corner_pass(indptr, corners, self._indices, *self.corner_steps, self._vertices)
         for arr in out:
             arr.setflags(write=False)
         return out
@@ -452,7 +464,21 @@ class Mesh(PointSet):
         _kernels.duplicate_positions(self._vertices, self._vertices.view(np.uint64), out)
         return out
 
-    border_vertices = _part("corner_pass", 1, "(n,) bool: vertices on a border edge or a non-manifold edge.")
+    @cached_property
+    def _fan_flags(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(nonmanifold, border, inconsistent)`` (n,) bool, read-only: the corner pass's flags when it
+        has run, else the same flags from the fans alone (:func:`curv.core.connectivity.fan_flags`),
+        without the neighbours and normals an estimator like meyer never reads."""
+        if "corner_pass" in self.__dict__:
+            cp = self.corner_pass
+            return cp.nonmanifold, cp.border, cp.inconsistent
+        indptr, corners = self.vertex_corners
+        out = _kernels.fan_flags(indptr, corners, self._indices, *self.corner_steps, self._vertices)
+        for arr in out:
+            arr.setflags(write=False)
+        return out
+
+    border_vertices = _part("_fan_flags", 1, "(n,) bool: vertices on a border edge or a non-manifold edge.")
 
     @cached_property
     def isolated_vertices(self) -> np.ndarray:
@@ -462,13 +488,13 @@ class Mesh(PointSet):
 
     # two corners at v are linked when their faces share an edge at v with exactly two faces;
     # the linked groups are the fans (curv.core.connectivity.corner_pass)
-    nonmanifold_vertices = _part("corner_pass", 0, """(n,) bool: vertices whose faces do not form one fan (e.g. the tip of a bow tie).
+    nonmanifold_vertices = _part("_fan_flags", 0, """(n,) bool: vertices whose faces do not form one fan (e.g. the tip of a bow tie).
 
     Counted as: the faces around v, linked when they share an edge at v, form more than one
     group. Vertices on non-manifold edges are included too.
     """)
 
-    inconsistent_vertices = _part("corner_pass", 2, "(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of "
+    inconsistent_vertices = _part("_fan_flags", 2, "(n,) bool: endpoints of :attr:`inconsistent_edges` (faces of "
                                                     "opposite orientation meet there).")
 
     @cached_property

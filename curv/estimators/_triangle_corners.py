@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from ..core.connectivity import next_corner, prev_corner
 from ..core.jit import jit
 from ..core.mesh import Mesh
 from ..core.result import Principal
@@ -134,12 +135,14 @@ def angle_sum(re, im, turns):
 @jit
 def ring_flag(p, lo, hi, corners, indices, corner_next, corner_prev, flags):
     """Whether ``flags`` is set at p or at an edge neighbour of p (the next and previous vertices
-    of the corners ``corners[lo:hi]`` at p)."""
+    of the corners ``corners[lo:hi]`` at p); an empty ``flags`` is set nowhere."""
+    if flags.size == 0:
+        return False
     if flags[p]:
         return True
     for i in range(lo, hi):
         c = corners[i]
-        if flags[indices[corner_next[c]]] or flags[indices[corner_prev[c]]]:
+        if flags[indices[next_corner(c, corner_next)]] or flags[indices[prev_corner(c, corner_prev)]]:
             return True
     return False
 
@@ -167,16 +170,19 @@ def ring_run(mesh: Mesh, centres: np.ndarray | None) -> tuple:
 
     ``centres`` (c,) int64 (every vertex when None), ``out`` the unset outputs
     (:func:`unset_principal`) and ``ring`` the mesh's corner arrays the ring kernels read, in their
-    order: vertex corners (indptr, corners), face indices, next and previous corner, corner face,
-    vertex positions, and the degenerate-face, border and non-manifold vertex flags. A
+    order: vertex corners (indptr, corners), face indices, next and previous corner
+    (:attr:`curv.Mesh.corner_steps`: empty, the kernels step by arithmetic), vertex positions, and
+    the degenerate-face, border (empty when no vertex is on a border: nothing to look up) and
+    non-manifold vertex flags (the face of corner c is c // 3: no corner-to-face array is built). A
     :class:`~curv.core.errors.MeshError` naming the polygon sizes when the mesh is not all triangles.
     """
     n = mesh.n_vertices
     if not mesh.is_triangular:
         mesh.triangles  # raises the MeshError that names the polygon sizes
     indptr, corners = mesh.vertex_corners
-    ring = (indptr, corners, mesh.face_indices, mesh.corner_next, mesh.corner_prev, mesh.corner_face, mesh.vertices,
-            mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices)
+    border = mesh.border_vertices
+    ring = (indptr, corners, mesh.face_indices, *mesh.corner_steps, mesh.vertices,
+            mesh.degenerate_faces, border if border.any() else border[:0], mesh.nonmanifold_vertices)
     return all_centres(n, centres), unset_principal(n), ring
 
 

@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from ..core import connectivity
+from ..core.connectivity import next_corner, prev_corner
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.filled import filled
 from ..core.mesh import Mesh
@@ -43,7 +44,7 @@ TINY2 = MIN_TANGENT_LENGTH**2
 
 
 @jit_parallel
-def _meyer(centres, lo, hi, parts, width, indptr, corners, indices, corner_next, corner_prev, corner_face, x,
+def _meyer(centres, lo, hi, parts, width, indptr, corners, indices, corner_next, corner_prev, x,
            degenerate_faces, border, nonmanifold, unusable, own_normals, normals, k1, k2, d1, d2, reason):
     for t in prange(parts):
         # the leaving edges ab of the current vertex's corners, for the direction fit
@@ -59,10 +60,11 @@ def _meyer(centres, lo, hi, parts, width, indptr, corners, indices, corner_next,
             touches_degenerate = False
             for i in range(c_lo, c_hi):
                 c = corners[i]
-                bad = degenerate_faces[corner_face[c]]
+                bad = degenerate_faces[c // 3]  # a triangle mesh: face f has the corners 3f .. 3f + 2
                 touches_degenerate |= bad
                 (abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, ac2, twice_area, cos_a, cot_b, cot_c,
-                 area) = corner_triangle(x, p, indices[corner_next[c]], indices[corner_prev[c]], bad)
+                 area) = corner_triangle(x, p, indices[next_corner(c, corner_next)],
+                                                indices[prev_corner(c, corner_prev)], bad)
                 # (a - b) cot c + (a - c) cot b
                 kx += -(cot_c * abx + cot_b * acx)
                 ky += -(cot_c * aby + cot_b * acy)

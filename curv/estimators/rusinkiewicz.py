@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from ..core import connectivity
+from ..core.connectivity import next_corner, prev_corner
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
 from ._local_fit import solve_sym3, store_principal, tangent_frame
@@ -36,7 +37,7 @@ MIN_ROTATION_COS = -1.0 + 1e-9
 
 
 @jit_parallel
-def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, corner_face, x, degenerate_faces,
+def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, x, degenerate_faces,
         border, nonmanifold, normals, crease, k1, k2, d1, d2, reason):
     for j in prange(lo, hi):
         p = centres[j]
@@ -47,10 +48,10 @@ def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, cor
         any_bad = any_opposite = touches_degenerate = False
         for i in range(c_lo, c_hi):
             c = corners[i]
-            b, q = indices[corner_next[c]], indices[corner_prev[c]]
+            b, q = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
             if crease.size and (crease[b] or crease[q]):
                 continue  # no normal of this face's crease vertex belongs to p's side
-            degenerate = degenerate_faces[corner_face[c]]
+            degenerate = degenerate_faces[c // 3]  # a triangle mesh: face f has the corners 3f .. 3f + 2
             touches_degenerate |= degenerate
             nbx, nby, nbz = normals[b, 0], normals[b, 1], normals[b, 2]
             ncx, ncy, ncz = normals[q, 0], normals[q, 1], normals[q, 2]
