@@ -102,7 +102,7 @@ def iter_estimate(
         raise EstimatorError("features= and smooth= need a mesh's edges and faces; a point cloud takes neither")
     feats = None if features is None else _feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
-    yield Progress(0.0, COMPILE_MESSAGE if compile_pending(spec.kernels) else "")
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*spec.kernels, _settle)) else "")
     t0 = time.perf_counter()
     if isinstance(mesh, PointCloud):
         work_mesh = mesh
