@@ -21,7 +21,8 @@ from ..core.validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs", "clipping_scratch",
            "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
-           "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row", "vertex_normal", "unset_row"]
+           "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row",
+           "vertex_normal", "unset_row"]
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""

@@ -31,7 +31,8 @@ edge twice by halves and each face thrice by thirds; the only elements left to c
 that cross the sphere. They are found as the halfedges v -> w leaving the ball (v in the support,
 w outside): each crossing edge once, and each crossing face (v, w, u) once, its one halfedge that
 goes from inside to outside (each vertex's ring read once, :func:`curv.estimators._ball_clipping.corner_rings`:
-a neighbour's offset, distance and exit serve both faces at its edge). The edge's half is replaced by its exact part ``|e ∩ B|``
+a neighbour's offset, distance and exit serve both faces at its edge). The edge's half is replaced by its
+exact part ``|e ∩ B|``
 (:func:`curv.estimators._ball_clipping.exit_fraction`) and the face's thirds by its exact area
 in the ball (:func:`curv.estimators._ball_clipping.crossing_area`, which reuses the edge's exit).
 Support vertices whose every edge stays inside the ball (``|v - p| + longest edge <= r``) are not
@@ -51,8 +52,8 @@ import numpy as np
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
-from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, clipping_inputs, clipping_scratch, corner_rings, corner_width, crossing_faces,
-                             may_leave,
+from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, clipping_inputs, clipping_scratch, corner_rings, corner_width,
+                             crossing_faces, may_leave,
                              crossing_scratch, element_list, face_in_ball_area, star_support, support_reason,
                              touched_elements, touches, unset_row, vertex_normal)
 from ._local_fit import slice_bounds
@@ -366,7 +367,8 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_sca
 
 
 @jit_parallel
-def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, half_scale, star, clean,
+def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, half_scale, star,
+               clean,
                halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area, degenerate, border,
                nonmanifold, cut, crease, normals, width, vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
@@ -501,7 +503,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 register(EstimatorSpec(
     name="csm", title="Cohen-Steiner & Morvan normal cycle", ranges=(1, 2, 3, 4), function=iter_csm,
-    extra_bytes_per_unit=500.0,  # at 1M vertices csm peaked 0.96 GB above the fits (benchmarks/bench_estimators.py)
+    # at 1M vertices csm peaked 0.96 GB above the fits (benchmarks/bench_estimators.py); 24 more: the corner rings
+    extra_bytes_per_unit=524.0,
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",

@@ -65,8 +65,8 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ..core.validity import Reason
 from ._local_fit import slice_bounds, store_principal, sym3_bilinear, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_row, clipping_inputs, clipping_scratch, corner_rings, crossing_faces,
-                             may_leave,
+from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_row, clipping_inputs, clipping_scratch, corner_rings,
+                             crossing_faces, may_leave,
                              crossing_scratch, element_list, face_in_ball_area, star_support, support_reason, touches,
                              unset_row, vertex_normal)
 from .registry import EstimatorSpec, register
@@ -391,7 +391,8 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
 
 register(EstimatorSpec(
     name="icc", in_paper=False, title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4),
-    function=iter_icc, extra_bytes_per_unit=400.0,  # at 1M vertices icc peaked 0.62 GB above the fits (benchmarks/bench_estimators.py)
+    # at 1M vertices icc peaked 0.62 GB above the fits (benchmarks/bench_estimators.py); 24 more: the corner rings
+    function=iter_icc, extra_bytes_per_unit=424.0,
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Lachaud, Romon, Thibert & Coeurjolly 2020, Interpolated corrected curvature measures for "
               "polygonal surfaces (SGP)",
