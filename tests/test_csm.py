@@ -240,3 +240,52 @@ def test_star_sums_equal_the_edge_by_edge_walk(k, monkeypatch):
     scale = np.abs(walked.k2).max()
     np.testing.assert_allclose(fast.k1, walked.k1, rtol=0, atol=1e-12 * scale)
     np.testing.assert_allclose(fast.k2, walked.k2, rtol=0, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("k", [1.0, 2.0, 4.0])
+def test_star_sums_equal_the_walk_on_an_open_patch(k, monkeypatch):
+    # next to the border a face's edge v -> u may have no face at v beyond it: the crossing faces
+    # then read u itself instead of v's ring (curv.estimators._ball_clipping.crossing_faces)
+    from curv.estimators import csm
+    from tests.meshes import hex_plane
+
+    flat = hex_plane(16)
+    xy = flat.vertices[:, :2]
+    mesh = curv.Mesh(np.column_stack([xy, 0.4 * np.sin(3 * xy[:, 0]) * np.cos(2 * xy[:, 1])]), flat.triangles)
+    fast, _ = _csm(mesh, k)
+    real = csm.star_terms
+
+    def unclean(*args, **kwargs):
+        half, star, clean = real(*args, **kwargs)
+        return half, star, np.zeros_like(clean)
+
+    monkeypatch.setattr(csm, "star_terms", unclean)
+    walked, _ = _csm(mesh, k)
+    np.testing.assert_array_equal(fast.reason, walked.reason)
+    assert (fast.reason == Reason.BORDER).any() and (fast.reason == Reason.OK).any()
+    scale = np.nanmax(np.abs(walked.k2))
+    np.testing.assert_allclose(fast.k1, walked.k1, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(fast.k2, walked.k2, rtol=0, atol=1e-12 * scale)
+
+
+def test_corner_rings_name_each_corners_far_end_and_its_faces_other_edge():
+    from curv.estimators._ball_clipping import corner_rings
+    from tests.meshes import hex_plane
+
+    mesh = hex_plane(5)
+    after, link = corner_rings(mesh)
+    ptr, corners = mesh.vertex_corners
+    tri = mesh.triangles
+    border_edges = 0
+    for v in range(mesh.n_vertices):
+        for j in range(ptr[v], ptr[v + 1]):
+            f, c = divmod(int(corners[j]), 3)
+            assert tri[f, c] == v and after[j] == tri[f, (c + 1) % 3]
+            u = tri[f, (c + 2) % 3]
+            ring = list(after[ptr[v]:ptr[v + 1]])
+            if u in ring:
+                assert link[j] == ring.index(u)
+            else:
+                assert link[j] == -1
+                border_edges += 1
+    assert border_edges == 6 * 5  # each border edge once, from the end it leaves

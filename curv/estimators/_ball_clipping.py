@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..core.jit import jit, threads
+from ..core.jit import jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, cached_with_mesh, coordinate_columns,
                                       expansion_adjacency, new_queues, new_scratch)
@@ -21,7 +21,8 @@ from ..core.validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs", "clipping_scratch",
            "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
-           "corner_width", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row", "vertex_normal", "unset_row"]
+           "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row",
+           "vertex_normal", "unset_row"]
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
@@ -380,49 +381,70 @@ def crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vec
     return part if math.isfinite(part) else 0.0
 
 
-@jit
-def leaving_halfedges(v, vx, vy, vz, qv, vc_ptr, vc, tri, x, y, z, px, py, pz, radius2, out_h, out_w, out_t):
-    """The halfedges from support vertex v (inside the ball of centre (px, py, pz)) whose far end
-    lies outside it, with their exits; returns how many (``out_h[:count]`` the halfedges,
-    ``out_w`` their far ends, ``out_t`` the exit fractions, :func:`exit_fraction`).
+@jit_parallel
+def _corner_rings(ids, vc_ptr, vc, tri, after, link):
+    for i in prange(ids.size):
+        v = ids[i]
+        first, last = vc_ptr[v], vc_ptr[v + 1]
+        for j in range(first, last):
+            h = vc[j]
+            f = h // 3
+            c = h - 3 * f
+            after[j] = tri[f, c + 1 if c < 2 else 0]
+        for j in range(first, last):
+            h = vc[j]
+            f = h // 3
+            c = h - 3 * f
+            u = tri[f, c - 1 if c > 0 else 2]
+            m = -1
+            for k in range(first, last):
+                if after[k] == u:
+                    m = k - first
+                    break
+            link[j] = m
 
-    ``(vx, vy, vz)`` and ``qv`` are v's offset from the centre and its squared length; ``vc_ptr``,
-    ``vc`` v's corners (halfedge ``h`` leaves corner ``h % 3`` of face ``h // 3`` of ``tri``). A
-    face with v alone inside leaves along two of them.
+
+def corner_rings(mesh: Mesh, ids: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The far end of each corner's outgoing edge and the corner that shares its face's other edge.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Triangle mesh.
+    ids : (k,) int64, optional
+        Fill only the corners of these vertices (a region's supports); the other entries are unset.
+
+    Returns
+    -------
+    after : (3 m,) int32 (int64 beyond 2**31 vertices)
+        Aligned with ``mesh.vertex_corners[1]``: for corner slot j of vertex v (halfedge v -> w of
+        face f), w.
+    link : (3 m,) int32
+        For the same slot, the slot (counted from v's first) whose ``after`` is u, the third corner
+        of f (so the face's edge v -> u is that slot's edge); -1 where there is none (the edge v -> u
+        is a border edge). The first such slot where several are (a non-manifold vertex).
+
+    Notes
+    -----
+    With them :func:`crossing_faces` reads a vertex's ring once: each neighbour's offset from the
+    centre, its squared distance and its exit are computed once and shared by the two faces at the
+    edge, without looking up the triangles.
     """
-    leaving = 0
-    for j in range(vc_ptr[v], vc_ptr[v + 1]):
-        h = vc[j]
-        f = h // 3
-        c = h - 3 * f
-        w = tri[f, c + 1 if c < 2 else 0]
-        wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
-        if wx * wx + wy * wy + wz * wz > radius2:
-            out_h[leaving] = h
-            out_w[leaving] = w
-            out_t[leaving] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, radius2)
-            leaving += 1
-    return leaving
-
-
-@jit
-def other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, radius2):
-    """The exit fraction along v -> u, the face's other edge from v (0 when u is inside the ball):
-    the one :func:`leaving_halfedges` found, or computed for a border edge that leaves no face at v."""
-    if not qu > radius2:
-        return 0.0
-    for b in range(leaving):
-        if out_w[b] == u:
-            return out_t[b]
-    return exit_fraction(vx, vy, vz, qv, ux, uy, uz, radius2)
+    vc_ptr, vc = mesh.vertex_corners
+    kind = np.int32 if mesh.n_vertices < 2**31 else np.int64
+    after = np.empty(vc.size, kind)
+    link = np.empty(vc.size, np.int32)
+    launch(_corner_rings, element_list(mesh.n_vertices, ids), vc_ptr, vc, np.ascontiguousarray(mesh.triangles), after,
+           link)
+    return after, link
 
 
 @jit
 def crossing_scratch(width):
     """Per-thread scratch of :func:`crossing_faces` for vertices of at most ``width`` corners:
-    ``(out_h, out_w, out_t, out_area, out_in)``."""
+    ``(out_h, out_w, out_t, out_area, out_in, ring)``, ``ring`` (5, width) float64."""
     return (np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width), np.empty(width),
-            np.empty(width, np.int64))
+            np.empty(width, np.int64), np.empty((5, width)))
 
 
 @jit
@@ -436,8 +458,8 @@ def may_leave(v, px, py, pz, radius, x, y, z, longest):
 
 
 @jit_inlined
-def crossing_faces(v, px, py, pz, radius, x, y, z, longest, vc_ptr, vc, tri, vector_area, area, out_h, out_w, out_t,
-                   out_area, out_in):
+def crossing_faces(v, px, py, pz, radius, x, y, z, vc_ptr, vc, after, link, tri, vector_area, area, out_h, out_w,
+                   out_t, out_area, out_in, ring):
     """The faces that cross the sphere along a halfedge leaving it from support vertex v, each found
     once (its one halfedge from inside to outside), with what the star sums must trade for them.
 
@@ -446,37 +468,71 @@ def crossing_faces(v, px, py, pz, radius, x, y, z, longest, vc_ptr, vc, tri, vec
     v : int
         A vertex inside the ball of centre (px, py, pz) and radius ``radius`` whose edges may leave
         it (:func:`may_leave`).
-    x, y, z, longest, vc_ptr, vc, tri, vector_area, area :
-        The mesh (:func:`leaving_halfedges`, :func:`crossing_area`).
-    out_h, out_w, out_t, out_area, out_in : (width,)
+    x, y, z : (n,) float64
+        Vertex coordinates.
+    vc_ptr, vc : (n+1,), (3 m,) int64
+        :attr:`curv.Mesh.vertex_corners`.
+    after, link : (3 m,) int
+        :func:`corner_rings`.
+    tri, vector_area, area :
+        The mesh (:func:`crossing_area`).
+    out_h, out_w, out_t, out_area, out_in, ring :
         :func:`crossing_scratch`. Entry a of the result: the halfedge ``out_h[a]`` (face
         ``out_h[a] // 3``) leaving towards ``out_w[a]`` at the fraction ``out_t[a]``
         (:func:`exit_fraction`), the face's exact area inside the ball ``out_area[a]``
         (:func:`crossing_area`) and how many of its corners are inside, ``out_in[a]`` (1 or 2: the
-        thirds of it a sum of per-vertex thirds holds).
+        thirds of it a sum of per-vertex thirds holds). ``ring`` holds v's neighbours' offsets,
+        squared distances and exits.
 
     Returns
     -------
     int
         How many faces.
+
+    Notes
+    -----
+    v's ring is read once: each neighbour w's offset, squared distance and (outside) exit along
+    v -> w. A face (v, w, u) leaving along v -> w finds u's in the slot ``link`` names; only where
+    v -> u is a border edge are they computed from u itself.
     """
     radius2 = radius ** 2
     vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
     qv = vx * vx + vy * vy + vz * vz
-    leaving = leaving_halfedges(v, vx, vy, vz, qv, vc_ptr, vc, tri, x, y, z, px, py, pz, radius2, out_h, out_w, out_t)
-    for a in range(leaving):
-        h, w, tp = out_h[a], out_w[a], out_t[a]
-        f = h // 3
-        c = h - 3 * f
+    first = vc_ptr[v]
+    corners = vc_ptr[v + 1] - first
+    for a in range(corners):
+        w = after[first + a]
         wx, wy, wz = x[w] - px, y[w] - py, z[w] - pz
         qw = wx * wx + wy * wy + wz * wz
-        u = tri[f, c - 1 if c > 0 else 2]
-        ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
-        qu = ux * ux + uy * uy + uz * uz
-        tu = other_exit(u, qu, ux, uy, uz, vx, vy, vz, qv, leaving, out_w, out_t, radius2)
-        out_area[a] = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area, area,
-                                    radius2)
-        out_in[a] = 2 if qu <= radius2 else 1
+        ring[0, a], ring[1, a], ring[2, a], ring[3, a] = wx, wy, wz, qw
+        if qw > radius2:
+            ring[4, a] = exit_fraction(vx, vy, vz, qv, wx, wy, wz, radius2)
+    leaving = 0
+    for a in range(corners):
+        qw = ring[3, a]
+        if not qw > radius2:
+            continue
+        j = first + a
+        h = vc[j]
+        f = h // 3
+        wx, wy, wz, tp = ring[0, a], ring[1, a], ring[2, a], ring[4, a]
+        m = link[j]
+        if m >= 0:
+            ux, uy, uz, qu = ring[0, m], ring[1, m], ring[2, m], ring[3, m]
+            tu = ring[4, m] if qu > radius2 else 0.0
+        else:  # v -> u is a border edge: no slot of v has u
+            c = h - 3 * f
+            u = tri[f, c - 1 if c > 0 else 2]
+            ux, uy, uz = x[u] - px, y[u] - py, z[u] - pz
+            qu = ux * ux + uy * uy + uz * uz
+            tu = exit_fraction(vx, vy, vz, qv, ux, uy, uz, radius2) if qu > radius2 else 0.0
+        out_h[leaving] = h
+        out_w[leaving] = after[j]
+        out_t[leaving] = tp
+        out_area[leaving] = crossing_area(f, vx, vy, vz, qv, wx, wy, wz, qw, ux, uy, uz, qu, tp, tu, vector_area, area,
+                                          radius2)
+        out_in[leaving] = 2 if qu <= radius2 else 1
+        leaving += 1
     return leaving
 
 

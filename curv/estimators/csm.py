@@ -30,7 +30,9 @@ faces. Summed over a support, these hold every edge and face inside the (convex)
 edge twice by halves and each face thrice by thirds; the only elements left to correct are those
 that cross the sphere. They are found as the halfedges v -> w leaving the ball (v in the support,
 w outside): each crossing edge once, and each crossing face (v, w, u) once, its one halfedge that
-goes from inside to outside. The edge's half is replaced by its exact part ``|e ∩ B|``
+goes from inside to outside (each vertex's ring read once, :func:`curv.estimators._ball_clipping.corner_rings`:
+a neighbour's offset, distance and exit serve both faces at its edge). The edge's half is replaced by its
+exact part ``|e ∩ B|``
 (:func:`curv.estimators._ball_clipping.exit_fraction`) and the face's thirds by its exact area
 in the ball (:func:`curv.estimators._ball_clipping.crossing_area`, which reuses the edge's exit).
 Support vertices whose every edge stays inside the ball (``|v - p| + longest edge <= r``) are not
@@ -50,7 +52,8 @@ import numpy as np
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
-from ._ball_clipping import (DEGENERATE_BIT, clipping_inputs, clipping_scratch, corner_width, crossing_faces, may_leave,
+from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, clipping_inputs, clipping_scratch, corner_rings, corner_width,
+                             crossing_faces, may_leave,
                              crossing_scratch, element_list, face_in_ball_area, star_support, support_reason,
                              touched_elements, touches, unset_row, vertex_normal)
 from ._local_fit import slice_bounds
@@ -364,7 +367,8 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_sca
 
 
 @jit_parallel
-def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, half_scale, star, clean,
+def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, half_scale, star,
+               clean,
                halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area, degenerate, border,
                nonmanifold, cut, crease, normals, width, vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
@@ -373,7 +377,7 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
         tensor = np.empty((3, 3))
         res = np.empty(8)
         sums = np.empty(7)  # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle), area(B ∩ mesh)
-        out_h, out_w, out_t, out_area, out_in = crossing_scratch(width)
+        out_h, out_w, out_t, out_area, out_in, ring = crossing_scratch(width)
         queue, vstamp, estamp, fstamp = queues[t], vstamps[t], estamps[t], fstamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for k in range(start, stop):
@@ -389,8 +393,8 @@ def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                     v = queue[i]
                     if not may_leave(v, px, py, pz, radii[p], x, y, z, longest):
                         continue
-                    leaving = crossing_faces(v, px, py, pz, radii[p], x, y, z, longest, vc_ptr, vc, tri, vector_area,
-                                             face_area, out_h, out_w, out_t, out_area, out_in)
+                    leaving = crossing_faces(v, px, py, pz, radii[p], x, y, z, vc_ptr, vc, after, link, tri,
+                                             vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
                     for a in range(leaving):
                         h, w = out_h[a], out_w[a]
                         f = h // 3
@@ -469,6 +473,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         mesh, centres, radii, features)
     touched = touched[0]
     half_scale, star, clean = star_terms(mesh, touched, crease)
+    after, link = corner_rings(mesh, touched)
     yield 0.0
     # the edge table only where a support is not clean (or near a crease): they walk edge by edge
     walk = not (clean.all() if touched is None else clean[touched].all())
@@ -485,7 +490,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     estamps = np.zeros((vstamps.shape[0], beta_scale.size), np.int32)  # vertex ids fit; half the cache lines
 
     def run(lo: int, hi: int) -> None:
-        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, half_scale,
+        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, after, link,
+               half_scale,
                star, clean, halfedge_edge, beta_scale, edge_faces, tri, mesh.face_vector_areas,
                mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
                cut, crease,
@@ -497,9 +503,10 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 register(EstimatorSpec(
     name="csm", title="Cohen-Steiner & Morvan normal cycle", ranges=(1, 2, 3, 4), function=iter_csm,
-    extra_bytes_per_unit=500.0,  # at 1M vertices csm peaked 0.96 GB above the fits (benchmarks/bench_estimators.py)
+    # at 1M vertices csm peaked 0.96 GB above the fits (benchmarks/bench_estimators.py); 24 more: the corner rings
+    extra_bytes_per_unit=524.0,
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",
-    kernels=(_star_terms, _edge_beta_scale, _csm_chunk),
+    kernels=(_star_terms, _corner_rings, _edge_beta_scale, _csm_chunk),
 ))

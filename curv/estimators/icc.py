@@ -36,7 +36,8 @@ against 0.15-0.68 from mu1 and mu2. :func:`icc_mean_gaussian` returns H and K th
 The measures of the triangles are computed once per call, and a third of them summed at each vertex
 (:func:`star_measures`); summed over a support, these hold every triangle inside the ball whole,
 by thirds. Only the triangles that cross the sphere are clipped: each is found once, as its one
-halfedge v -> w leaving the ball (v in the support), and its thirds in the sum are replaced by its
+halfedge v -> w leaving the ball (v in the support; each vertex's ring read once,
+:func:`curv.estimators._ball_clipping.corner_rings`), and its thirds in the sum are replaced by its
 area fraction (:func:`curv.estimators._ball_clipping.crossing_area`). Support vertices whose
 every edge stays inside the ball are not walked. A support holding a non-manifold vertex, a
 degenerate triangle or one without measures (with ``features``, one touching a crease) is summed
@@ -64,7 +65,8 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ..core.validity import Reason
 from ._local_fit import slice_bounds, store_principal, sym3_bilinear, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, add_row, clipping_inputs, clipping_scratch, crossing_faces, may_leave,
+from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_row, clipping_inputs, clipping_scratch, corner_rings,
+                             crossing_faces, may_leave,
                              crossing_scratch, element_list, face_in_ball_area, star_support, support_reason, touches,
                              unset_row, vertex_normal)
 from .registry import EstimatorSpec, register
@@ -241,13 +243,14 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_
 
 
 @jit_parallel
-def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, star, clean, tri, vector_area,
+def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, star, clean, tri,
+               vector_area,
                face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, width,
                vstamps, queues, fstamps, k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
     for t in prange(parts):
         sums = np.empty(MEASURES)
-        out_h, out_w, out_t, out_area, out_in = crossing_scratch(width)
+        out_h, out_w, out_t, out_area, out_in, ring = crossing_scratch(width)
         queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for k in range(start, stop):
@@ -263,8 +266,8 @@ def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr
                 for i in range(count):
                     if not may_leave(queue[i], px, py, pz, radii[p], x, y, z, longest):
                         continue
-                    leaving = crossing_faces(queue[i], px, py, pz, radii[p], x, y, z, longest, vc_ptr, vc, tri,
-                                             vector_area, face_area, out_h, out_w, out_t, out_area, out_in)
+                    leaving = crossing_faces(queue[i], px, py, pz, radii[p], x, y, z, vc_ptr, vc, after, link, tri,
+                                             vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
                     for a in range(leaving):
                         f = out_h[a] // 3
                         add_row(sums, min(out_area[a] / face_area[f], 1.0) - out_in[a] * (1.0 / 3.0), measures, f)
@@ -313,6 +316,7 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
     measures = face_measures(mesh, normals, touched[1])
     star, clean = star_measures(mesh, measures, touched[0], crease)
+    after, link = corner_rings(mesh, touched[0])
     walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
     vc_ptr, vc, width, vstamps, queues, fstamps, out = clipping_scratch(mesh, centres, walk)
@@ -321,7 +325,8 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     gaussian = np.empty(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, star, clean,
+        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, after, link,
+               star, clean,
                tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
                mesh.nonmanifold_vertices, cut, crease, normals, from_measures, width, vstamps, queues,
                fstamps, out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
@@ -386,13 +391,14 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
 
 register(EstimatorSpec(
     name="icc", in_paper=False, title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4),
-    function=iter_icc, extra_bytes_per_unit=400.0,  # at 1M vertices icc peaked 0.62 GB above the fits (benchmarks/bench_estimators.py)
+    # at 1M vertices icc peaked 0.62 GB above the fits (benchmarks/bench_estimators.py); 24 more: the corner rings
+    function=iter_icc, extra_bytes_per_unit=424.0,
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Lachaud, Romon, Thibert & Coeurjolly 2020, Interpolated corrected curvature measures for "
               "polygonal surfaces (SGP)",
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
-    kernels=(_face_measures, _star_measures, _icc_chunk),
+    kernels=(_face_measures, _star_measures, _corner_rings, _icc_chunk),
     options={"from_measures": (True, False)},
 ))
