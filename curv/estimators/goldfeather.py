@@ -29,7 +29,7 @@ from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOI
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
-                         store_se3)
+                         store_se3, store_se3_weighted)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
@@ -56,17 +56,51 @@ def _add_tilt(tilt, lu, lv, c0, c1, c2, rhs):
     tilt[12] += lv
 
 
+@jit
+def _add_meat(meat, c, lu, lv, c0, c1, c2):
+    """Add one normal-curvature equation, whose error is ``c`` times its heights' difference, to the
+    weighted sums of :func:`~curv.estimators._local_fit.store_se3_weighted`: its quadratic row
+    (c0, c1, c2) and linear columns (lu, lv)."""
+    cc = c * c
+    meat[0] += cc
+    meat[1] += c * c0
+    meat[2] += c * c1
+    meat[3] += c * c2
+    meat[4] += c * lu
+    meat[5] += c * lv
+    w0, w1, w2 = cc * c0, cc * c1, cc * c2
+    meat[6] += w0 * c0
+    meat[7] += w0 * c1
+    meat[8] += w0 * c2
+    meat[9] += w1 * c1
+    meat[10] += w1 * c2
+    meat[11] += w2 * c2
+    meat[12] += lu * w0
+    meat[13] += lu * w1
+    meat[14] += lu * w2
+    meat[15] += lv * w0
+    meat[16] += lv * w1
+    meat[17] += lv * w2
+    meat[18] += cc * lu * lu
+    meat[19] += cc * lu * lv
+    meat[20] += cc * lv * lv
+
+
 @jit_inlined
-def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt, nc):
+def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt, meat,
+              nc):
     """The 3-unknown fit at vertex p over its support ``queue[1:count]``: normal-curvature least
-    squares (``nc`` True) or the quadratic height fit; ``tilt`` (13,) is scratch for the frame-tilt
-    columns of the standard error (:func:`store_se3`)."""
+    squares (``nc`` True) or the quadratic height fit; ``tilt`` (13,) and ``meat`` (21,) are scratch
+    for the frame-tilt columns of the standard error (:func:`store_se3`) and nc's weighted sums
+    (:func:`store_se3_weighted`)."""
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
         return
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
     tilt[:] = 0.0
+    if nc:
+        meat[:] = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -76,11 +110,14 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
             continue
         used += 1
         if nc:
-            rhs = -2.0 * w / (l2 + w * w)  # kn
+            dd = l2 + w * w
+            rhs = -2.0 * w / dd  # kn
             # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
             c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
             # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
             _add_tilt(tilt, u / l2, v / l2, c0, c1, c2, rhs)
+            # kn moves by 2 / l² per unit height of q (or of p, the other way)
+            _add_meat(meat, 2.0 / dd, u / l2, v / l2, c0, c1, c2)
         else:
             rhs = w  # w = A/2 u^2 + B uv + C/2 v^2
             c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
@@ -104,7 +141,12 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
     sign = 1.0 if nc else -1.0
     e, f, g = sign * x0, sign * x1, sign * x2
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
-    # p's own height error enters every equation (nc: as if with equal weight, docs/UNCERTAINTY.md)
+    if nc:
+        # each equation's error is its heights' difference times 2 / l² (docs/UNCERTAINTY.md)
+        store_se3_weighted(p, a00, a01, a02, a11, a12, a22, bb, x0 * b0 + x1 * b1 + x2 * b2, used, e, f, g, x0, x1,
+                           x2, tilt, meat, k1_se, k2_se, se_parts)
+        return
+    # p's own height error enters every equation alike (docs/UNCERTAINTY.md)
     store_se3(p, a00, a01, a02, a11, a12, a22, bb, x0 * b0 + x1 * b1 + x2 * b2, used, used, s0, s1, s2,
               e, f, g, k1_se, k2_se, se_parts, x0, x1, x2, tilt)
 
@@ -366,7 +408,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
         queue = queues[t]
         stamp = stamps[t]
         slot = slots[t]
-        tilt = np.empty(13)
+        tilt, meat = np.empty(13), np.empty(21)
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
         ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
@@ -382,7 +424,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
                                          ring_ptr, ring, slot, touched, yv, jp, agg, wrow)
             else:
                 _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se,
-                          se_parts, tilt, method == NC)
+                          se_parts, tilt, meat, method == NC)
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
