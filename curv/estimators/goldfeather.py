@@ -25,7 +25,8 @@ import numpy as np
 from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
+from ._local_fit import (DEFAULT_NOISE_MODEL, GRADIENT_BYTES, GRADIENT_KERNELS, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS,
+                         SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
@@ -37,70 +38,22 @@ MIN_NORMAL_Z = 0.1
 """A neighbour normal tilted more than ~84 degrees from the centre normal gives no slope equation."""
 
 
-@jit
-def _add_tilt(tilt, lu, lv, c0, c1, c2, rhs):
-    """Add one equation's linear columns (lu, lv) to the tilt sums of :func:`store_se3`: ``LᵀL``,
-    ``LᵀQ`` against the quadratic row (c0, c1, c2), ``Lᵀb`` and the row sums."""
-    tilt[0] += lu * lu
-    tilt[1] += lu * lv
-    tilt[2] += lv * lv
-    tilt[3] += lu * c0
-    tilt[4] += lu * c1
-    tilt[5] += lu * c2
-    tilt[6] += lv * c0
-    tilt[7] += lv * c1
-    tilt[8] += lv * c2
-    tilt[9] += lu * rhs
-    tilt[10] += lv * rhs
-    tilt[11] += lu
-    tilt[12] += lv
-
-
-@jit
-def _add_meat(meat, c, lu, lv, c0, c1, c2):
-    """Add one normal-curvature equation, whose error is ``c`` times its heights' difference, to the
-    weighted sums of :func:`~curv.estimators._local_fit.store_se3_weighted`: its quadratic row
-    (c0, c1, c2) and linear columns (lu, lv)."""
-    cc = c * c
-    meat[0] += cc
-    meat[1] += c * c0
-    meat[2] += c * c1
-    meat[3] += c * c2
-    meat[4] += c * lu
-    meat[5] += c * lv
-    w0, w1, w2 = cc * c0, cc * c1, cc * c2
-    meat[6] += w0 * c0
-    meat[7] += w0 * c1
-    meat[8] += w0 * c2
-    meat[9] += w1 * c1
-    meat[10] += w1 * c2
-    meat[11] += w2 * c2
-    meat[12] += lu * w0
-    meat[13] += lu * w1
-    meat[14] += lu * w2
-    meat[15] += lv * w0
-    meat[16] += lv * w1
-    meat[17] += lv * w2
-    meat[18] += cc * lu * lu
-    meat[19] += cc * lu * lv
-    meat[20] += cc * lv * lv
-
-
 @jit_inlined
 def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt, meat,
               nc):
     """The 3-unknown fit at vertex p over its support ``queue[1:count]``: normal-curvature least
     squares (``nc`` True) or the quadratic height fit; ``tilt`` (13,) and ``meat`` (21,) are scratch
     for the frame-tilt columns of the standard error (:func:`store_se3`) and nc's weighted sums
-    (:func:`store_se3_weighted`)."""
+    (:func:`store_se3_weighted`), written once after the loop."""
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
         return
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
-    tilt[:] = 0.0
-    if nc:
-        meat[:] = 0.0
+    # the standard error's sums in local scalars (array entries cost a load and a store per neighbour):
+    # the tilt columns' ``LᵀL``, ``LᵀQ``, ``Lᵀb`` and row sums (t0-t12,
+    # :func:`~curv.estimators._local_fit.tilt_residual`)
+    t0 = t1 = t2 = t3 = t4 = t5 = t6 = t7 = t8 = t9 = t10 = t11 = t12 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -115,14 +68,25 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
             # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
             c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
             # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
-            _add_tilt(tilt, u / l2, v / l2, c0, c1, c2, rhs)
-            # kn moves by 2 / l² per unit height of q (or of p, the other way)
-            _add_meat(meat, 2.0 / dd, u / l2, v / l2, c0, c1, c2)
+            lu, lv = u / l2, v / l2
         else:
             rhs = w  # w = A/2 u^2 + B uv + C/2 v^2
             c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
             # a tilt of the frame adds a linear term to w (the standard error's columns)
-            _add_tilt(tilt, u, v, c0, c1, c2, w)
+            lu, lv = u, v
+        t0 += lu * lu
+        t1 += lu * lv
+        t2 += lv * lv
+        t3 += lu * c0
+        t4 += lu * c1
+        t5 += lu * c2
+        t6 += lv * c0
+        t7 += lv * c1
+        t8 += lv * c2
+        t9 += lu * rhs
+        t10 += lv * rhs
+        t11 += lu
+        t12 += lv
         a00 += c0 * c0
         a01 += c0 * c1
         a02 += c0 * c2
@@ -136,6 +100,48 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         s0 += c0
         s1 += c1
         s2 += c2
+    tilt[0], tilt[1], tilt[2], tilt[3], tilt[4], tilt[5], tilt[6] = t0, t1, t2, t3, t4, t5, t6
+    tilt[7], tilt[8], tilt[9], tilt[10], tilt[11], tilt[12] = t7, t8, t9, t10, t11, t12
+    if nc:
+        # nc's weighted sums (:func:`~curv.estimators._local_fit.store_se3_weighted`) in a second pass
+        # over the support, whose offsets are in cache: kn = 2 h / l² moves by c = 2 / l² per unit
+        # height of q (or of p, the other way), and with ρ = 1 / l² the rows are a = ρ (u², 2uv, v²)
+        # and L = ρ (u, v), so the sums are 18 moments of u and v weighted by ρ² and ρ⁴
+        m0 = p20 = p11 = p02 = p10 = p01 = 0.0
+        q40 = q31 = q22 = q13 = q04 = k30 = k21 = k12 = k03 = l20 = l11 = l02 = 0.0
+        for i in range(1, count):
+            u, v, _ = offset_in_frame(p, queue[i], x, y, z, frame, n0, n1, n2)
+            l2 = u * u + v * v
+            if not (l2 > tiny2):
+                continue
+            rho = 1.0 / l2
+            r2 = rho * rho
+            r4 = r2 * r2
+            uu, uv, vv = u * u, u * v, v * v
+            m0 += r2
+            p20 += r2 * uu
+            p11 += r2 * uv
+            p02 += r2 * vv
+            p10 += r2 * u
+            p01 += r2 * v
+            fu, fv, fuu, fuv, fvv = r4 * u, r4 * v, r4 * uu, r4 * uv, r4 * vv
+            q40 += fuu * uu
+            q31 += fuu * uv
+            q22 += fuu * vv
+            q13 += fuv * vv
+            q04 += fvv * vv
+            k30 += fuu * u
+            k21 += fuu * v
+            k12 += fu * vv
+            k03 += fvv * v
+            l20 += fuu
+            l11 += fuv
+            l02 += fvv
+        # Σ c², s = Σ c a, s_L = Σ c L, B_QQ = Σ c² a aᵀ, B_LQ = Σ c² L aᵀ, B_LL = Σ c² L Lᵀ
+        meat[0], meat[1], meat[2], meat[3], meat[4], meat[5] = 4.0 * m0, 2.0 * p20, 4.0 * p11, 2.0 * p02, 2.0 * p10, 2.0 * p01
+        meat[6], meat[7], meat[8], meat[9], meat[10], meat[11] = 4.0 * q40, 8.0 * q31, 4.0 * q22, 16.0 * q22, 8.0 * q13, 4.0 * q04
+        meat[12], meat[13], meat[14], meat[15], meat[16], meat[17] = 4.0 * k30, 8.0 * k21, 4.0 * k12, 4.0 * k21, 8.0 * k12, 4.0 * k03
+        meat[18], meat[19], meat[20] = 4.0 * l20, 4.0 * l11, 4.0 * l02
     x0, x1, x2, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
     # nc solves for W = (e, f, g); qs for the Hessian of the height along N, W = -(A, B, C)
     sign = 1.0 if nc else -1.0
@@ -189,7 +195,7 @@ def _accumulate(ata, atb, row, rhs):
 
 
 @jit
-def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
+def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, cols, has, slots, touched, yv, jp,
                     factor, grads, row, ru, rv, agg, wrow):
     """an's equations' errors as noisy heights make them (the model of mru's ``_noise_model``).
 
@@ -230,7 +236,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
     touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
     var1 = var2 = vard = spare = 0.0
     agg[:, :] = 0.0  # Σ height rows, Σ height rows · U, · V, Σ u-slope rows, Σ v-slope rows
-    used, ok, p00, p01, p11, _ = centre_columns(p, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp)
+    used, ok, p00, p01, p11, _ = centre_columns(p, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched, yv, jp)
     sp = slots[p] - 1 if ok else 0
     if ok:
         for i in range(1, count):
@@ -257,8 +263,8 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
             for j in range(7):
                 agg[3, j] += ru[j]
                 agg[4, j] += rv[j]
-            used, ok, jqn, cross = add_ring_columns(q, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp, used,
-                                                    ru, rv)
+            used, ok, jqn, cross = add_ring_columns(q, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched, yv,
+                                                    jp, used, ru, rv)
             if not ok:
                 break
             spare += jqn + p00 + p11 - 2.0 * cross
@@ -287,7 +293,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
 
 @jit
 def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, ata, atb, row, ru,
-           rv, sol, ata0, atb0, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
+           rv, sol, ata0, atb0, grads, ring_ptr, ring, cols, has, slots, touched, yv, jp, agg, wrow):
     """Adjacent-normal cubic fit at vertex p.
 
     Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``ru``, ``rv``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
@@ -367,7 +373,7 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         scale = inv_r * inv_r  # the variances in unscaled coordinates
         if slots.size > 0 and ring.size > 0 and not singular:  # slots given: noise_model="normals"
             var1, var2, var_dev, spare, ok, touched, yv, jp = _an_noise_model(
-                p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
+                p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, cols, has, slots, touched, yv, jp,
                 ata0, grads, row, ru, rv, agg, wrow)
             if ok and spare > 0.0:
                 store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, spare,
@@ -400,7 +406,7 @@ NC, QS, AN = 0, 1, 2
 
 @jit_parallel
 def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2,
-                reason, k1_se, k2_se, se_parts, ring_ptr, ring, slots):
+                reason, k1_se, k2_se, se_parts, ring_ptr, ring, slots, cols, has):
     """The kernel of :func:`~curv.estimators._local_fit.run_fit` for the three fits (``method``:
     :data:`NC`, :data:`QS` or :data:`AN`); each slice of vertices has its own scratch."""
     parts = stamps.shape[0]
@@ -421,7 +427,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
             if method == AN:
                 touched, yv, jp = _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
                                          k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, ata0, atb0, grads,
-                                         ring_ptr, ring, slot, touched, yv, jp, agg, wrow)
+                                         ring_ptr, ring, cols, has, slot, touched, yv, jp, agg, wrow)
             else:
                 _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se,
                           se_parts, tilt, meat, method == NC)
@@ -468,7 +474,7 @@ register(EstimatorSpec(
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL),
+    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL) + GRADIENT_KERNELS,
     options={"noise_model": NOISE_MODELS},
-    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES + GRADIENT_BYTES,
 ))
