@@ -40,14 +40,17 @@ MIN_NORMAL_Z = 0.1
 
 @jit_inlined
 def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt, meat,
-              nc):
+              offs, nc):
     """The 3-unknown fit at vertex p over its support ``queue[1:count]``: normal-curvature least
     squares (``nc`` True) or the quadratic height fit; ``tilt`` (13,) and ``meat`` (21,) are scratch
     for the frame-tilt columns of the standard error (:func:`store_se3`) and nc's weighted sums
-    (:func:`store_se3_weighted`), written once after the loop."""
+    (:func:`store_se3_weighted`), written once after the loop; ``offs`` (rows, 2) keeps nc's tangent
+    offsets for its second pass (grown, perhaps, and returned)."""
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
-        return
+        return offs
+    if nc and offs.shape[0] < count:
+        offs = np.empty((count, 2))
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
     # the standard error's sums in local scalars (array entries cost a load and a store per neighbour):
@@ -61,10 +64,12 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         l2 = u * u + v * v
         if not (l2 > tiny2):
             continue
+        if nc:
+            offs[used, 0] = u
+            offs[used, 1] = v
         used += 1
         if nc:
-            dd = l2 + w * w
-            rhs = -2.0 * w / dd  # kn
+            rhs = -2.0 * w / (l2 + w * w)  # kn
             # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
             c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
             # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
@@ -104,17 +109,14 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
     tilt[7], tilt[8], tilt[9], tilt[10], tilt[11], tilt[12] = t7, t8, t9, t10, t11, t12
     if nc:
         # nc's weighted sums (:func:`~curv.estimators._local_fit.store_se3_weighted`) in a second pass
-        # over the support, whose offsets are in cache: kn = 2 h / l² moves by c = 2 / l² per unit
+        # over the support's offsets (kept in the first): kn = 2 h / l² moves by c = 2 / l² per unit
         # height of q (or of p, the other way), and with ρ = 1 / l² the rows are a = ρ (u², 2uv, v²)
         # and L = ρ (u, v), so the sums are 18 moments of u and v weighted by ρ² and ρ⁴
         m0 = p20 = p11 = p02 = p10 = p01 = 0.0
         q40 = q31 = q22 = q13 = q04 = k30 = k21 = k12 = k03 = l20 = l11 = l02 = 0.0
-        for i in range(1, count):
-            u, v, _ = offset_in_frame(p, queue[i], x, y, z, frame, n0, n1, n2)
-            l2 = u * u + v * v
-            if not (l2 > tiny2):
-                continue
-            rho = 1.0 / l2
+        for j in range(used):
+            u, v = offs[j, 0], offs[j, 1]
+            rho = 1.0 / (u * u + v * v)
             r2 = rho * rho
             r4 = r2 * r2
             uu, uv, vv = u * u, u * v, v * v
@@ -151,10 +153,11 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         # each equation's error is its heights' difference times 2 / l² (docs/UNCERTAINTY.md)
         store_se3_weighted(p, a00, a01, a02, a11, a12, a22, bb, x0 * b0 + x1 * b1 + x2 * b2, used, e, f, g, x0, x1,
                            x2, tilt, meat, k1_se, k2_se, se_parts)
-        return
+        return offs
     # p's own height error enters every equation alike (docs/UNCERTAINTY.md)
     store_se3(p, a00, a01, a02, a11, a12, a22, bb, x0 * b0 + x1 * b1 + x2 * b2, used, used, s0, s1, s2,
               e, f, g, k1_se, k2_se, se_parts, x0, x1, x2, tilt)
+    return offs
 
 
 @jit
@@ -414,7 +417,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
         queue = queues[t]
         stamp = stamps[t]
         slot = slots[t]
-        tilt, meat = np.empty(13), np.empty(21)
+        tilt, meat, offs = np.empty(13), np.empty(21), np.empty((64, 2))
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
         ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
@@ -429,8 +432,8 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
                                          k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, ata0, atb0, grads,
                                          ring_ptr, ring, cols, has, slot, touched, yv, jp, agg, wrow)
             else:
-                _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se,
-                          se_parts, tilt, meat, method == NC)
+                offs = _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se,
+                                 k2_se, se_parts, tilt, meat, offs, method == NC)
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
