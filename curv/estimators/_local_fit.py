@@ -36,9 +36,9 @@ import numpy as np
 
 from ..core.errors import EstimatorError
 from ..core.filled import filled
-from ..core.jit import iter_chunks, jit, jit_inlined, jit_parallel, launch, prange, threads
+from ..core.jit import iter_chunks, jit, jit_inlined, launch, threads
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
+from ..geometry.neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
 from ..core.result import Principal
 from ..core.validity import Reason
 from ._pooling import pool_members, pool_rings, pool_standard_errors, rad_bias
@@ -47,8 +47,7 @@ __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_s
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
            "clear_parts", "store_parts", "store_se3_weighted", "sym3_sandwich", "ring_gradient", "gradient_column", "list_room", "list_slot", "centre_columns",
-           "add_ring_columns", "fit_frame", "normal_in_frame", "ring_gradients", "frame_turn", "GRADIENT_KERNELS",
-           "GRADIENT_BYTES",
+           "add_ring_columns", "fit_frame", "normal_in_frame",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 
@@ -67,9 +66,6 @@ SE_PARTS_BYTES = 16.0
 per size unit (vertices + faces / 2, about 2 vertices on a triangle mesh)."""
 SLOT_BYTES = 16.0
 """The noise model's vertex slots (an int64 per vertex and kernel thread, 4 threads) per size unit."""
-GRADIENT_BYTES = 25.0
-"""The noise model's ring gradients (:func:`ring_gradients`: two float32 per edge end, about 6 per
-vertex, and a byte per vertex) per size unit."""
 
 OK = np.uint8(Reason.OK)
 TOO_FEW = np.uint8(Reason.TOO_FEW_NEIGHBOURS)
@@ -374,83 +370,11 @@ def gradient_column(w, v, i00, i01, i11, sdu, sdv, x, y, z, ux, uy, uz, vx, vy, 
     return i00 * du + i01 * dv, i01 * du + i11 * dv
 
 
-@jit_parallel
-def _ring_gradients_kernel(verts, ring_ptr, ring, x, y, z, nx, ny, nz, cols, has):
-    for i in prange(verts.size):
-        v = verts[i]
-        has[v] = 0
-        n0, n1, n2 = nx[v], ny[v], nz[v]
-        if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
-            continue
-        ux, uy, uz, vx, vy, vz = tangent_frame(n0, n1, n2)
-        i00, i01, i11, sdu, sdv, ok = ring_gradient(v, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
-        if not ok:
-            continue
-        for k in range(ring_ptr[v], ring_ptr[v + 1]):
-            c0, c1 = gradient_column(ring[k], v, i00, i01, i11, sdu, sdv, x, y, z, ux, uy, uz, vx, vy, vz)
-            cols[k, 0] = c0
-            cols[k, 1] = c1
-        has[v] = 1
-
-
-def ring_gradients(mesh: Mesh, normals_xyz, verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every vertex's ring gradient (:func:`ring_gradient`) in its own tangent frame, once, for the
-    noise model of the normals (:func:`centre_columns`, :func:`add_ring_columns`).
-
-    Parameters
-    ----------
-    mesh : Mesh
-    normals_xyz : tuple of three (n,) float64
-        The normals' columns (the frames).
-    verts : (v,) int64
-        The vertices whose gradients are needed (the others' rows are left unset).
-
-    Returns
-    -------
-    cols : (a, 2) float32
-        Row k (an entry of the mesh's edge neighbours, :func:`curv.estimators._pooling.pool_rings`):
-        the column ``G⁻¹ d_w`` of that neighbour w in its vertex v's gradient, in v's frame
-        (:func:`tangent_frame` of v's normal); v's own column is minus their sum.
-    has : (n,) uint8
-        1 where the vertex's gradient is defined (a finite normal and two independent directions).
-    """
-    ring_ptr, ring = pool_rings(mesh)
-    x, y, z = coordinate_columns(mesh)
-    cols = np.empty((ring.size, 2), np.float32)
-    has = np.zeros(mesh.n_vertices, np.uint8)
-    launch(_ring_gradients_kernel, np.ascontiguousarray(verts, dtype=np.int64), ring_ptr, ring, x, y, z,
-           *normals_xyz, cols, has)
-    return cols, has
-
-
-@jit_parallel
-def _support_marks_kernel(centres, radius, adj_ptr, adj, x, y, z, stamps, queues, mark):
-    parts = stamps.shape[0]
-    for t in prange(parts):
-        queue = queues[t]
-        stamp = stamps[t]
-        start, stop = slice_bounds(0, centres.size, t, parts)
-        for i in range(start, stop):
-            count, queue = ball_support(centres[i], radius[centres[i]] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
-            for j in range(count):
-                mark[queue[j]] = 1
-
-
 @jit
-def frame_turn(q, nx, ny, nz, frame):
-    """The 2x2 map from q's own tangent frame (:func:`tangent_frame` of q's normal) to the frame
-    (U, V): ``(U_q·U, V_q·U, U_q·V, V_q·V)``."""
-    qx, qy, qz, wx, wy, wz = tangent_frame(nx[q], ny[q], nz[q])
-    ux, uy, uz, vx, vy, vz = frame
-    return (qx * ux + qy * uy + qz * uz, wx * ux + wy * uy + wz * uz,
-            qx * vx + qy * vy + qz * vz, wx * vx + wy * vy + wz * vz)
-
-
-@jit
-def centre_columns(p, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched, yv, jp):
-    """The columns of p's own ring gradient (:func:`gradient_column`, read from :func:`ring_gradients`),
-    J_p: the tilt of p's normal, the frame every equation of its fit shares; written to ``jp`` at each
-    vertex's place in the short lists (:func:`list_slot`, starting empty).
+def centre_columns(p, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp):
+    """The columns of p's own ring gradient (:func:`gradient_column`), J_p: the tilt of p's normal,
+    the frame every equation of its fit shares; written to ``jp`` at each vertex's place in the
+    short lists (:func:`list_slot`, starting empty).
 
     Returns
     -------
@@ -463,21 +387,15 @@ def centre_columns(p, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touch
     jpn : float
         ``‖J_p‖² = Σ (c0² + c1²)``.
     """
+    ux, uy, uz, vx, vy, vz = frame
+    pi00, pi01, pi11, psu, psv, ok = ring_gradient(p, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
     used = 0
     p00 = p01 = p11 = jpn = 0.0
-    ok = has[p] != 0
     if not ok:
         return used, ok, p00, p01, p11, jpn
-    r00, r01, r10, r11 = frame_turn(p, nx, ny, nz, frame)
-    t0 = t1 = 0.0
     for k in range(ring_ptr[p], ring_ptr[p + 1] + 1):
-        if k == ring_ptr[p + 1]:
-            w, a0, a1 = p, -t0, -t1
-        else:
-            w, a0, a1 = ring[k], float(cols[k, 0]), float(cols[k, 1])
-            t0 += a0
-            t1 += a1
-        c0, c1 = r00 * a0 + r01 * a1, r10 * a0 + r11 * a1
+        w = p if k == ring_ptr[p + 1] else ring[k]
+        c0, c1 = gradient_column(w, p, pi00, pi01, pi11, psu, psv, x, y, z, ux, uy, uz, vx, vy, vz)
         s, used = list_slot(w, slots, touched, yv, jp, used)
         jp[s, 0] = c0
         jp[s, 1] = c1
@@ -489,10 +407,10 @@ def centre_columns(p, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touch
 
 
 @jit
-def add_ring_columns(q, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched, yv, jp, used, ru, rv):
+def add_ring_columns(q, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp, used, ru, rv):
     """Add a neighbour q's two slope equations to the noise model's sums: their rows ``ru``, ``rv``
-    (K,) times the columns (c0, c1) of q's ring gradient (:func:`ring_gradients`, turned into the
-    frame (U, V)), to ``yv`` at each ring vertex's place (:func:`list_slot`).
+    (K,) times the columns (c0, c1) of q's ring gradient (:func:`gradient_column`), to ``yv`` at
+    each ring vertex's place (:func:`list_slot`).
 
     Returns
     -------
@@ -503,20 +421,14 @@ def add_ring_columns(q, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, tou
     jqn, cross : float
         ``‖J_q‖²`` and ``J_q · J_p`` (``jp``, :func:`centre_columns`).
     """
+    ux, uy, uz, vx, vy, vz = frame
+    qi00, qi01, qi11, qsu, qsv, ok = ring_gradient(q, ring_ptr, ring, x, y, z, ux, uy, uz, vx, vy, vz)
     jqn = cross = 0.0
-    ok = has[q] != 0
     if not ok:
         return used, ok, jqn, cross
-    r00, r01, r10, r11 = frame_turn(q, nx, ny, nz, frame)
-    t0 = t1 = 0.0
     for k in range(ring_ptr[q], ring_ptr[q + 1] + 1):
-        if k == ring_ptr[q + 1]:
-            w, a0, a1 = q, -t0, -t1
-        else:
-            w, a0, a1 = ring[k], float(cols[k, 0]), float(cols[k, 1])
-            t0 += a0
-            t1 += a1
-        c0, c1 = r00 * a0 + r01 * a1, r10 * a0 + r11 * a1
+        w = q if k == ring_ptr[q + 1] else ring[k]
+        c0, c1 = gradient_column(w, q, qi00, qi01, qi11, qsu, qsv, x, y, z, ux, uy, uz, vx, vy, vz)
         s, used = list_slot(w, slots, touched, yv, jp, used)
         for j in range(ru.size):
             yv[s, j] += ru[j] * c0 + rv[j] * c1
@@ -563,8 +475,7 @@ def list_slot(w, slots, touched, yv, jp, used):
     if s > 0:
         return s - 1, used
     touched[used] = w
-    for j in range(yv.shape[1]):
-        yv[used, j] = 0.0
+    yv[used, :] = 0.0
     jp[used, 0] = jp[used, 1] = 0.0
     slots[w] = used + 1
     return used, used + 1
@@ -957,11 +868,11 @@ the errors of those normals (the curvatures do not depend on it):
   share faces and their errors are correlated, so ``± 2 se`` holds less than the nominal 95 %
   (docs/UNCERTAINTY.md gives the figures).
 - ``"normals"``: the errors as the normals take them from independent height noise (each vertex
-  normal tilts by the least-squares height gradient of its ring, :func:`ring_gradients`, computed
-  once per vertex), followed exactly through the fit and pooled over the vertex's edge neighbours;
-  calibrated on noisy meshes with their default normals. It gathers every support vertex's ring
-  into a short list per vertex, which costs several times the fit (docs/UNCERTAINTY.md, Cost). A
-  point cloud, or a ring without a gradient, keeps the independent model."""
+  normal tilts by the least-squares height gradient of its ring), followed exactly through the fit
+  and pooled over the vertex's edge neighbours; calibrated on noisy meshes with their default
+  normals, and 3-4 times the whole call's time (it visits every neighbour's ring: docs/UNCERTAINTY.md,
+  Cost, says where the time goes). A point cloud, or a ring without a gradient, keeps the
+  independent model."""
 
 DEFAULT_NOISE_MODEL = NOISE_MODELS[0]
 
@@ -989,12 +900,11 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     kernel : callable
         A numba kernel (or a :func:`functools.partial` of one, binding its leading arguments):
         ``kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2,
-        d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots, cols, has)`` estimates the vertices
+        d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)`` estimates the vertices
         ``centres[lo:hi]``, splitting them into ``stamps.shape[0]`` slices, each with its own row of the
         stamps, queues and slots, and writes the parts of their standard errors (:func:`store_parts`);
         ``ring_ptr, ring`` are the mesh's edge neighbours (none on a point cloud,
-        :func:`curv.estimators._pooling.pool_rings`); ``cols, has`` the ring gradients of the noise
-        model of the normals (:func:`ring_gradients`; empty without ``slot_maps`` or rings).
+        :func:`curv.estimators._pooling.pool_rings`).
     chunk : int, optional
         Vertices per call (default adaptive).
     centres : (c,) int64, optional
@@ -1005,8 +915,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         The search does not expand through feature vertices.
     slot_maps : bool
         Give the kernel a zeroed (slices, n) int64 ``slots`` (vertex -> 1 + its place in a short list,
-        reset after each vertex) instead of an empty one, and on a mesh the ring gradients of every
-        vertex the fits' supports reach (:func:`ring_gradients`, computed once before the fits).
+        reset after each vertex) instead of an empty one.
 
     It yields the fraction of vertices done and returns the :class:`~curv.core.result.Principal`,
     as the estimators' functions do (:data:`~curv.estimators.registry.EstimatorFunction`).
@@ -1032,20 +941,10 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
     parts = filled((n, 4), np.nan, most_written=whole)
     slots = new_scratch(n if slot_maps else 0, stamps.shape[0])
-    cols, has = np.empty((0, 2), np.float32), np.empty(0, np.uint8)
-    if slot_maps and ring.size > 0:
-        if whole:
-            reached = np.arange(n, dtype=np.int64)
-        else:
-            # a region: the gradients of the vertices its fits' supports reach, at the region's cost
-            mark = np.zeros(n, np.uint8)
-            launch(_support_marks_kernel, fitted, radius, adj_ptr, adj, x, y, z, stamps, queues, mark)
-            reached = np.flatnonzero(mark)
-        cols, has = ring_gradients(mesh, (nx, ny, nz), reached)
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, fitted, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
-               k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots, cols, has)
+               k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)
 
     yield from iter_chunks(fitted.size, run, chunk=chunk)
     pool_standard_errors(pooled, ring_ptr, ring, reason, parts, k1_se, k2_se)
@@ -1054,7 +953,3 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         k1_se[extra] = np.nan
         k2_se[extra] = np.nan
     return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason, k1_se=k1_se, k2_se=k2_se)
-
-
-GRADIENT_KERNELS = (_ring_gradients_kernel, _support_marks_kernel)
-"""The ring gradients' kernels (the fits with the noise model of the normals list them among theirs)."""

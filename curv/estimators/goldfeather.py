@@ -25,8 +25,7 @@ import numpy as np
 from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (DEFAULT_NOISE_MODEL, GRADIENT_BYTES, GRADIENT_KERNELS, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS,
-                         SE_PARTS_BYTES, SLOT_BYTES,
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
@@ -198,7 +197,7 @@ def _accumulate(ata, atb, row, rhs):
 
 
 @jit
-def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, cols, has, slots, touched, yv, jp,
+def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
                     factor, grads, row, ru, rv, agg, wrow):
     """an's equations' errors as noisy heights make them (the model of mru's ``_noise_model``).
 
@@ -239,7 +238,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
     touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
     var1 = var2 = vard = spare = 0.0
     agg[:, :] = 0.0  # Σ height rows, Σ height rows · U, · V, Σ u-slope rows, Σ v-slope rows
-    used, ok, p00, p01, p11, _ = centre_columns(p, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched, yv, jp)
+    used, ok, p00, p01, p11, _ = centre_columns(p, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp)
     sp = slots[p] - 1 if ok else 0
     if ok:
         for i in range(1, count):
@@ -266,8 +265,8 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
             for j in range(7):
                 agg[3, j] += ru[j]
                 agg[4, j] += rv[j]
-            used, ok, jqn, cross = add_ring_columns(q, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched, yv,
-                                                    jp, used, ru, rv)
+            used, ok, jqn, cross = add_ring_columns(q, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp, used,
+                                                    ru, rv)
             if not ok:
                 break
             spare += jqn + p00 + p11 - 2.0 * cross
@@ -296,7 +295,7 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
 
 @jit
 def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, ata, atb, row, ru,
-           rv, sol, ata0, atb0, grads, ring_ptr, ring, cols, has, slots, touched, yv, jp, agg, wrow):
+           rv, sol, ata0, atb0, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
     """Adjacent-normal cubic fit at vertex p.
 
     Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``ru``, ``rv``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
@@ -376,7 +375,7 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         scale = inv_r * inv_r  # the variances in unscaled coordinates
         if slots.size > 0 and ring.size > 0 and not singular:  # slots given: noise_model="normals"
             var1, var2, var_dev, spare, ok, touched, yv, jp = _an_noise_model(
-                p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, cols, has, slots, touched, yv, jp,
+                p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
                 ata0, grads, row, ru, rv, agg, wrow)
             if ok and spare > 0.0:
                 store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, spare,
@@ -409,7 +408,7 @@ NC, QS, AN = 0, 1, 2
 
 @jit_parallel
 def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2,
-                reason, k1_se, k2_se, se_parts, ring_ptr, ring, slots, cols, has):
+                reason, k1_se, k2_se, se_parts, ring_ptr, ring, slots):
     """The kernel of :func:`~curv.estimators._local_fit.run_fit` for the three fits (``method``:
     :data:`NC`, :data:`QS` or :data:`AN`); each slice of vertices has its own scratch."""
     parts = stamps.shape[0]
@@ -430,7 +429,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
             if method == AN:
                 touched, yv, jp = _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
                                          k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, ata0, atb0, grads,
-                                         ring_ptr, ring, cols, has, slot, touched, yv, jp, agg, wrow)
+                                         ring_ptr, ring, slot, touched, yv, jp, agg, wrow)
             else:
                 offs = _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se,
                                  k2_se, se_parts, tilt, meat, offs, method == NC)
@@ -477,7 +476,7 @@ register(EstimatorSpec(
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL) + GRADIENT_KERNELS,
+    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL),
     options={"noise_model": NOISE_MODELS},
-    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES + GRADIENT_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))

@@ -16,8 +16,7 @@ import numpy as np
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
-from ._local_fit import (DEFAULT_NOISE_MODEL, GRADIENT_BYTES, GRADIENT_KERNELS, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS,
-                         SE_PARTS_BYTES, SLOT_BYTES,
+from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, deviator_gradients, finish_fit, fit_frame, list_room,
                          models_normals, normal_in_frame, offset_in_frame, principal_gradients, run_fit, slice_bounds,
                          solve_sym3, store_parts, store_se3, sym3_inverse)
@@ -36,7 +35,7 @@ def _neighbour(p, q, x, y, z, nx, ny, nz, frame, n0, n1, n2, tiny2):
 
 
 @jit
-def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, cols, has, slots, touched, yv, jp,
+def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
                  su, sv, minv, grads, ru, rv):
     """The equations' errors as the neighbours' normals make them from noisy heights.
 
@@ -71,7 +70,7 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
     touched, yv, jp = list_room(p, queue, count, ring_ptr, touched, yv, jp)
     var1 = var2 = vard = spare = 0.0
     # p's normal: the frame's tilt, shared by every equation
-    used, ok, _, _, _, jpn = centre_columns(p, ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched, yv, jp)
+    used, ok, _, _, _, jpn = centre_columns(p, ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp)
     if ok:
         for i in range(1, count):
             u, v, _, _, usable = _neighbour(p, queue[i], x, y, z, nx, ny, nz, frame, n0, n1, n2, tiny2)
@@ -80,8 +79,8 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
             # rows (u, v, 0) and (0, u, v) of the a and b equations
             ru[0], ru[1], ru[2] = u, v, 0.0
             rv[0], rv[1], rv[2] = 0.0, u, v
-            used, ok, jqn, cross = add_ring_columns(queue[i], ring_ptr, ring, cols, has, nx, ny, nz, frame, slots, touched,
-                                                    yv, jp, used, ru, rv)
+            used, ok, jqn, cross = add_ring_columns(queue[i], ring_ptr, ring, x, y, z, frame, slots, touched, yv, jp,
+                                                    used, ru, rv)
             if not ok:
                 break
             spare += jqn + jpn - 2.0 * cross
@@ -110,7 +109,7 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
 
 @jit
 def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt,
-            ring_ptr, ring, cols, has, slots, touched, yv, jp, minv, grads, ru, rv):
+            ring_ptr, ring, slots, touched, yv, jp, minv, grads, ru, rv):
     """Normal-difference least squares at vertex p over its support ``queue[1:count]``.
 
     Scratch: ``tilt`` (13,) for the frame-tilt columns of the independent model (:func:`store_se3`);
@@ -150,7 +149,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         grads[0, 0], grads[0, 1], grads[0, 2], grads[1, 0], grads[1, 1], grads[1, 2] = principal_gradients(e, f, g)
         grads[2, 0], grads[2, 1], grads[2, 2], grads[3, 0], grads[3, 1], grads[3, 2] = deviator_gradients(e, f, g)
         var1, var2, vard, spare, ok, touched, yv, jp = _noise_model(
-            p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, cols, has, slots, touched, yv, jp,
+            p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
             su, sv, minv, grads, ru, rv)
         if ok and spare > 0.0:
             store_parts(p, k1_se, k2_se, se_parts, var1, var2, saa_bb - xatb, spare, vard, math.hypot(0.5 * (e - g), f))
@@ -179,7 +178,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
 
 @jit_parallel
 def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, k1, k2, d1, d2, reason,
-                k1_se, k2_se, se_parts, ring_ptr, ring, slots, cols, has):
+                k1_se, k2_se, se_parts, ring_ptr, ring, slots):
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -193,7 +192,7 @@ def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stam
             p = centres[i]
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             touched, yv, jp = _mru_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
-                                      k1_se, k2_se, se_parts, tilt, ring_ptr, ring, cols, has, slot, touched, yv, jp, minv,
+                                      k1_se, k2_se, se_parts, tilt, ring_ptr, ring, slot, touched, yv, jp, minv,
                                       grads, ru, rv)
 
 
@@ -211,7 +210,7 @@ register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
-    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL) + GRADIENT_KERNELS,
+    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
     options={"noise_model": NOISE_MODELS},
-    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES + GRADIENT_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))
