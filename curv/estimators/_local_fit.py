@@ -46,7 +46,7 @@ from ._pooling import pool_members, pool_rings, pool_standard_errors, rad_bias
 __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
-           "clear_parts", "store_parts", "ring_gradient", "gradient_column", "list_room", "list_slot", "centre_columns",
+           "clear_parts", "store_parts", "store_se3_weighted", "sym3_sandwich", "ring_gradient", "gradient_column", "list_room", "list_slot", "centre_columns",
            "add_ring_columns", "fit_frame", "normal_in_frame",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
@@ -628,6 +628,107 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
 
 
 @jit
+def sym3_sandwich(i00, i01, i02, i11, i12, i22, meat, g0, g1, g2):
+    """``tᵀ B t + (tᵀ s)²`` with ``t = M⁻¹ g`` (M⁻¹'s entries i00 .. i22; B, s the weighted sums in
+    ``meat``, :func:`store_se3_weighted`): the variance of ``gᵀx`` per unit height variance."""
+    t0 = i00 * g0 + i01 * g1 + i02 * g2
+    t1 = i01 * g0 + i11 * g1 + i12 * g2
+    t2 = i02 * g0 + i12 * g1 + i22 * g2
+    shared = t0 * meat[1] + t1 * meat[2] + t2 * meat[3]
+    return (t0 * (meat[6] * t0 + meat[7] * t1 + meat[8] * t2) + t1 * (meat[7] * t0 + meat[9] * t1 + meat[10] * t2)
+            + t2 * (meat[8] * t0 + meat[10] * t1 + meat[11] * t2) + shared * shared)
+
+
+@jit
+def store_se3_weighted(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, e, f, g, x0, x1, x2, tilt, meat, k1_se, k2_se,
+                       parts):
+    """Row p of the standard errors' parts of a 3-unknown fit whose equations' errors are known
+    multiples of height errors: equation j's error is ``c_j (h_q - h_p)``, with h the heights' errors
+    (independent, one variance sigma_h²) and q its neighbour (nc: a normal curvature ``2 w / l²``
+    moves by ``c_j = 2 / l²`` per unit height, so its noise grows toward the near neighbours).
+
+    The errors' covariance is ``sigma_h² (C² + c cᵀ)`` (C = diag(c), the centre's height shared by
+    all), so with the sandwich ``B = Σ c_j² a_j a_jᵀ`` and ``s = Σ c_j a_j``:
+
+    - ``var(gᵀx) = sigma_h² (gᵀM⁻¹BM⁻¹g + (gᵀM⁻¹s)²)``;
+    - ``E[RSS] = sigma_h² tr((I - H)(C² + c cᵀ)) = sigma_h² (2 Σ c² - tr(M⁻¹B) - sᵀM⁻¹s)``.
+
+    The noise level is read, as in :func:`store_se3`, from the residuals of the fit with the frame's
+    tilt as two more unknowns (L their columns; whatever the tilt, it leaves no trace in them):
+    ``RSS₅ = RSS₃ - r_Lᵀ S⁻¹ r_L``, and the hat matrix grows by ``Kᵀ S⁻¹ K`` with ``K = [-T, I]``,
+    ``T = LᵀQ M⁻¹``, which takes ``tr(S⁻¹ K B₅ Kᵀ) + d_Lᵀ S⁻¹ d_L`` (``d_L = s_L - T s``) more from
+    ``E[RSS] / sigma_h²``. ``sigma_h²`` is a height variance, so it pools across vertices in one unit.
+
+    Parameters
+    ----------
+    a00 .. a22 : float
+        M = AᵀA (unweighted: the fit's own normal equations).
+    bb, xatb : float
+        bᵀb and xᵀAᵀb.
+    m : int
+        Equations.
+    e, f, g : float
+        The fitted W; ``x0, x1, x2`` the solution.
+    tilt : (13,) float64
+        The tilt columns' sums (:func:`tilt_residual`).
+    meat : (21,) float64
+        ``Σ c²``, ``s = Σ c a`` (3), ``s_L = Σ c L`` (2), ``B_QQ = Σ c² a aᵀ`` (upper triangle, 6),
+        ``B_LQ = Σ c² L aᵀ`` (row u: 3, row v: 3), ``B_LL = Σ c² L Lᵀ`` (3).
+    k1_se, k2_se, parts :
+        As in :func:`store_parts`.
+    """
+    i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
+    g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
+    a0, a1, a2, h0, h1, h2 = deviator_gradients(e, f, g)
+    var1 = sym3_sandwich(i00, i01, i02, i11, i12, i22, meat, g10, g11, g12)
+    var2 = sym3_sandwich(i00, i01, i02, i11, i12, i22, meat, g20, g21, g22)
+    vard = (sym3_sandwich(i00, i01, i02, i11, i12, i22, meat, a0, a1, a2)
+            + sym3_sandwich(i00, i01, i02, i11, i12, i22, meat, h0, h1, h2))
+    sc0, sc1, sc2 = meat[1], meat[2], meat[3]
+    b0, b1, b2, b3, b4, b5 = meat[6], meat[7], meat[8], meat[9], meat[10], meat[11]
+    # tr(M⁻¹ B) and sᵀM⁻¹s
+    trace = i00 * b0 + i11 * b3 + i22 * b5 + 2.0 * (i01 * b1 + i02 * b2 + i12 * b4)
+    spare = 2.0 * meat[0] - trace - sym3_bilinear(i00, i01, i02, i11, i12, i22, sc0, sc1, sc2, sc0, sc1, sc2)
+    drop, _ = tilt_residual(i00, i01, i02, i11, i12, i22, x0, x1, x2, 0.0, 0.0, 0.0, tilt)
+    rss = bb - xatb - drop
+    # the tilt's share of the hat matrix: T = LᵀQ M⁻¹ (2 x 3), S = LᵀL - T QᵀL
+    qu0, qu1, qu2, qv0, qv1, qv2 = tilt[3], tilt[4], tilt[5], tilt[6], tilt[7], tilt[8]
+    tu0 = qu0 * i00 + qu1 * i01 + qu2 * i02
+    tu1 = qu0 * i01 + qu1 * i11 + qu2 * i12
+    tu2 = qu0 * i02 + qu1 * i12 + qu2 * i22
+    tv0 = qv0 * i00 + qv1 * i01 + qv2 * i02
+    tv1 = qv0 * i01 + qv1 * i11 + qv2 * i12
+    tv2 = qv0 * i02 + qv1 * i12 + qv2 * i22
+    s_uu = tilt[0] - (tu0 * qu0 + tu1 * qu1 + tu2 * qu2)
+    s_uv = tilt[1] - (tu0 * qv0 + tu1 * qv1 + tu2 * qv2)
+    s_vv = tilt[2] - (tv0 * qv0 + tv1 * qv1 + tv2 * qv2)
+    det = s_uu * s_vv - s_uv * s_uv
+    # K B₅ Kᵀ = B_LL - T B_QL - B_LQ Tᵀ + T B_QQ Tᵀ (2 x 2)
+    bq_tu0 = b0 * tu0 + b1 * tu1 + b2 * tu2  # B_QQ Tᵀ, column u
+    bq_tu1 = b1 * tu0 + b3 * tu1 + b4 * tu2
+    bq_tu2 = b2 * tu0 + b4 * tu1 + b5 * tu2
+    bq_tv0 = b0 * tv0 + b1 * tv1 + b2 * tv2
+    bq_tv1 = b1 * tv0 + b3 * tv1 + b4 * tv2
+    bq_tv2 = b2 * tv0 + b4 * tv1 + b5 * tv2
+    lu0, lu1, lu2, lv0, lv1, lv2 = meat[12], meat[13], meat[14], meat[15], meat[16], meat[17]
+    k_uu = (meat[18] - 2.0 * (tu0 * lu0 + tu1 * lu1 + tu2 * lu2)
+            + tu0 * bq_tu0 + tu1 * bq_tu1 + tu2 * bq_tu2)
+    k_uv = (meat[19] - (tu0 * lv0 + tu1 * lv1 + tu2 * lv2) - (tv0 * lu0 + tv1 * lu1 + tv2 * lu2)
+            + tu0 * bq_tv0 + tu1 * bq_tv1 + tu2 * bq_tv2)
+    k_vv = (meat[20] - 2.0 * (tv0 * lv0 + tv1 * lv1 + tv2 * lv2)
+            + tv0 * bq_tv0 + tv1 * bq_tv1 + tv2 * bq_tv2)
+    du = meat[4] - (tu0 * sc0 + tu1 * sc1 + tu2 * sc2)
+    dv = meat[5] - (tv0 * sc0 + tv1 * sc1 + tv2 * sc2)
+    if det > RCOND * max(s_uu * s_vv, 1e-300):
+        # tr(S⁻¹ K B₅ Kᵀ) + d_Lᵀ S⁻¹ d_L
+        spare -= (s_vv * k_uu - 2.0 * s_uv * k_uv + s_uu * k_vv + s_vv * du * du - 2.0 * s_uv * du * dv
+                  + s_uu * dv * dv) / det
+    else:
+        rss = math.nan
+    store_parts(p, k1_se, k2_se, parts, var1, var2, rss, spare if m > 5 else 0.0, vard, math.hypot(0.5 * (e - g), f))
+
+
+@jit
 def cholesky_scaled(ata, size, work, srow):
     """Jacobi-scaled Cholesky ``D A D = L Lᵀ`` of a symmetric A (the lower triangle of its leading ``size`` block).
 
@@ -769,8 +870,9 @@ the errors of those normals (the curvatures do not depend on it):
 - ``"normals"``: the errors as the normals take them from independent height noise (each vertex
   normal tilts by the least-squares height gradient of its ring), followed exactly through the fit
   and pooled over the vertex's edge neighbours; calibrated on noisy meshes with their default
-  normals, and 3-4 times the whole call's time (it visits every neighbour's ring). A point cloud, or
-  a ring without a gradient, keeps the independent model."""
+  normals, and 3-4 times the whole call's time (it visits every neighbour's ring: docs/UNCERTAINTY.md,
+  Cost, says where the time goes). A point cloud, or a ring without a gradient, keeps the
+  independent model."""
 
 DEFAULT_NOISE_MODEL = NOISE_MODELS[0]
 

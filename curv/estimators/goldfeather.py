@@ -29,7 +29,7 @@ from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOI
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
-                         store_se3)
+                         store_se3, store_se3_weighted)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
@@ -37,36 +37,25 @@ MIN_NORMAL_Z = 0.1
 """A neighbour normal tilted more than ~84 degrees from the centre normal gives no slope equation."""
 
 
-@jit
-def _add_tilt(tilt, lu, lv, c0, c1, c2, rhs):
-    """Add one equation's linear columns (lu, lv) to the tilt sums of :func:`store_se3`: ``LᵀL``,
-    ``LᵀQ`` against the quadratic row (c0, c1, c2), ``Lᵀb`` and the row sums."""
-    tilt[0] += lu * lu
-    tilt[1] += lu * lv
-    tilt[2] += lv * lv
-    tilt[3] += lu * c0
-    tilt[4] += lu * c1
-    tilt[5] += lu * c2
-    tilt[6] += lv * c0
-    tilt[7] += lv * c1
-    tilt[8] += lv * c2
-    tilt[9] += lu * rhs
-    tilt[10] += lv * rhs
-    tilt[11] += lu
-    tilt[12] += lv
-
-
 @jit_inlined
-def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt, nc):
+def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt, meat,
+              offs, nc):
     """The 3-unknown fit at vertex p over its support ``queue[1:count]``: normal-curvature least
-    squares (``nc`` True) or the quadratic height fit; ``tilt`` (13,) is scratch for the frame-tilt
-    columns of the standard error (:func:`store_se3`)."""
+    squares (``nc`` True) or the quadratic height fit; ``tilt`` (13,) and ``meat`` (21,) are scratch
+    for the frame-tilt columns of the standard error (:func:`store_se3`) and nc's weighted sums
+    (:func:`store_se3_weighted`), written once after the loop; ``offs`` (rows, 2) keeps nc's tangent
+    offsets for its second pass (grown, perhaps, and returned)."""
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
-        return
+        return offs
+    if nc and offs.shape[0] < count:
+        offs = np.empty((count, 2))
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
-    tilt[:] = 0.0
+    # the standard error's sums in local scalars (array entries cost a load and a store per neighbour):
+    # the tilt columns' ``LᵀL``, ``LᵀQ``, ``Lᵀb`` and row sums (t0-t12,
+    # :func:`~curv.estimators._local_fit.tilt_residual`)
+    t0 = t1 = t2 = t3 = t4 = t5 = t6 = t7 = t8 = t9 = t10 = t11 = t12 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -74,18 +63,34 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         l2 = u * u + v * v
         if not (l2 > tiny2):
             continue
+        if nc:
+            offs[used, 0] = u
+            offs[used, 1] = v
         used += 1
         if nc:
             rhs = -2.0 * w / (l2 + w * w)  # kn
             # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
             c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
             # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
-            _add_tilt(tilt, u / l2, v / l2, c0, c1, c2, rhs)
+            lu, lv = u / l2, v / l2
         else:
             rhs = w  # w = A/2 u^2 + B uv + C/2 v^2
             c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
             # a tilt of the frame adds a linear term to w (the standard error's columns)
-            _add_tilt(tilt, u, v, c0, c1, c2, w)
+            lu, lv = u, v
+        t0 += lu * lu
+        t1 += lu * lv
+        t2 += lv * lv
+        t3 += lu * c0
+        t4 += lu * c1
+        t5 += lu * c2
+        t6 += lv * c0
+        t7 += lv * c1
+        t8 += lv * c2
+        t9 += lu * rhs
+        t10 += lv * rhs
+        t11 += lu
+        t12 += lv
         a00 += c0 * c0
         a01 += c0 * c1
         a02 += c0 * c2
@@ -99,14 +104,59 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         s0 += c0
         s1 += c1
         s2 += c2
+    tilt[0], tilt[1], tilt[2], tilt[3], tilt[4], tilt[5], tilt[6] = t0, t1, t2, t3, t4, t5, t6
+    tilt[7], tilt[8], tilt[9], tilt[10], tilt[11], tilt[12] = t7, t8, t9, t10, t11, t12
+    if nc:
+        # nc's weighted sums (:func:`~curv.estimators._local_fit.store_se3_weighted`) in a second pass
+        # over the support's offsets (kept in the first): kn = 2 h / l² moves by c = 2 / l² per unit
+        # height of q (or of p, the other way), and with ρ = 1 / l² the rows are a = ρ (u², 2uv, v²)
+        # and L = ρ (u, v), so the sums are 18 moments of u and v weighted by ρ² and ρ⁴
+        m0 = p20 = p11 = p02 = p10 = p01 = 0.0
+        q40 = q31 = q22 = q13 = q04 = k30 = k21 = k12 = k03 = l20 = l11 = l02 = 0.0
+        for j in range(used):
+            u, v = offs[j, 0], offs[j, 1]
+            rho = 1.0 / (u * u + v * v)
+            r2 = rho * rho
+            r4 = r2 * r2
+            uu, uv, vv = u * u, u * v, v * v
+            m0 += r2
+            p20 += r2 * uu
+            p11 += r2 * uv
+            p02 += r2 * vv
+            p10 += r2 * u
+            p01 += r2 * v
+            fu, fv, fuu, fuv, fvv = r4 * u, r4 * v, r4 * uu, r4 * uv, r4 * vv
+            q40 += fuu * uu
+            q31 += fuu * uv
+            q22 += fuu * vv
+            q13 += fuv * vv
+            q04 += fvv * vv
+            k30 += fuu * u
+            k21 += fuu * v
+            k12 += fu * vv
+            k03 += fvv * v
+            l20 += fuu
+            l11 += fuv
+            l02 += fvv
+        # Σ c², s = Σ c a, s_L = Σ c L, B_QQ = Σ c² a aᵀ, B_LQ = Σ c² L aᵀ, B_LL = Σ c² L Lᵀ
+        meat[0], meat[1], meat[2], meat[3], meat[4], meat[5] = 4.0 * m0, 2.0 * p20, 4.0 * p11, 2.0 * p02, 2.0 * p10, 2.0 * p01
+        meat[6], meat[7], meat[8], meat[9], meat[10], meat[11] = 4.0 * q40, 8.0 * q31, 4.0 * q22, 16.0 * q22, 8.0 * q13, 4.0 * q04
+        meat[12], meat[13], meat[14], meat[15], meat[16], meat[17] = 4.0 * k30, 8.0 * k21, 4.0 * k12, 4.0 * k21, 8.0 * k12, 4.0 * k03
+        meat[18], meat[19], meat[20] = 4.0 * l20, 4.0 * l11, 4.0 * l02
     x0, x1, x2, singular = solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2)
     # nc solves for W = (e, f, g); qs for the Hessian of the height along N, W = -(A, B, C)
     sign = 1.0 if nc else -1.0
     e, f, g = sign * x0, sign * x1, sign * x2
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
-    # p's own height error enters every equation (nc: as if with equal weight, docs/UNCERTAINTY.md)
+    if nc:
+        # each equation's error is its heights' difference times 2 / l² (docs/UNCERTAINTY.md)
+        store_se3_weighted(p, a00, a01, a02, a11, a12, a22, bb, x0 * b0 + x1 * b1 + x2 * b2, used, e, f, g, x0, x1,
+                           x2, tilt, meat, k1_se, k2_se, se_parts)
+        return offs
+    # p's own height error enters every equation alike (docs/UNCERTAINTY.md)
     store_se3(p, a00, a01, a02, a11, a12, a22, bb, x0 * b0 + x1 * b1 + x2 * b2, used, used, s0, s1, s2,
               e, f, g, k1_se, k2_se, se_parts, x0, x1, x2, tilt)
+    return offs
 
 
 @jit
@@ -366,7 +416,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
         queue = queues[t]
         stamp = stamps[t]
         slot = slots[t]
-        tilt = np.empty(13)
+        tilt, meat, offs = np.empty(13), np.empty(21), np.empty((64, 2))
         ata, atb = np.empty((7, 7)), np.empty(7)
         row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
         ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
@@ -381,8 +431,8 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
                                          k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, ata0, atb0, grads,
                                          ring_ptr, ring, slot, touched, yv, jp, agg, wrow)
             else:
-                _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se,
-                          se_parts, tilt, method == NC)
+                offs = _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se,
+                                 k2_se, se_parts, tilt, meat, offs, method == NC)
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
