@@ -505,6 +505,36 @@ def sym3_bilinear(i00, i01, i02, i11, i12, i22, g0, g1, g2, h0, h1, h2):
 
 
 @jit
+def tilt_schur(i00, i01, i02, i11, i12, i22, tilt):
+    """The frame tilt's two columns L against a 3-unknown fit (M⁻¹ given by its upper triangle):
+    ``T = LᵀQ M⁻¹`` (2 x 3) and the Schur complement ``S = LᵀL - T QᵀL`` (2 x 2, symmetric).
+
+    Parameters
+    ----------
+    i00 .. i22 : float
+        M⁻¹.
+    tilt : (13,) float64
+        The tilt columns' sums (:func:`tilt_residual`).
+
+    Returns
+    -------
+    tu0, tu1, tu2, tv0, tv1, tv2, s_uu, s_uv, s_vv : float
+        T's rows u and v, and S.
+    """
+    qu0, qu1, qu2, qv0, qv1, qv2 = tilt[3], tilt[4], tilt[5], tilt[6], tilt[7], tilt[8]
+    tu0 = qu0 * i00 + qu1 * i01 + qu2 * i02
+    tu1 = qu0 * i01 + qu1 * i11 + qu2 * i12
+    tu2 = qu0 * i02 + qu1 * i12 + qu2 * i22
+    tv0 = qv0 * i00 + qv1 * i01 + qv2 * i02
+    tv1 = qv0 * i01 + qv1 * i11 + qv2 * i12
+    tv2 = qv0 * i02 + qv1 * i12 + qv2 * i22
+    s_uu = tilt[0] - (tu0 * qu0 + tu1 * qu1 + tu2 * qu2)
+    s_uv = tilt[1] - (tu0 * qv0 + tu1 * qv1 + tu2 * qv2)
+    s_vv = tilt[2] - (tv0 * qv0 + tv1 * qv1 + tv2 * qv2)
+    return tu0, tu1, tu2, tv0, tv1, tv2, s_uu, s_uv, s_vv
+
+
+@jit
 def tilt_residual(i00, i01, i02, i11, i12, i22, x0, x1, x2, s0, s1, s2, tilt):
     """What fitting the frame's tilt as well takes from the residual sum of squares and the spare
     equations, by the Schur complement of the 3-unknown fit.
@@ -538,18 +568,8 @@ def tilt_residual(i00, i01, i02, i11, i12, i22, x0, x1, x2, s0, s1, s2, tilt):
         ``d_Lᵀ S⁻¹ d_L`` with ``d_L = Σ L rows - LᵀQ M⁻¹ s``: the linear terms' share of the centre's
         common error (add it to ``sᵀM⁻¹s``).
     """
-    l00, l01, l11 = tilt[0], tilt[1], tilt[2]
+    tu0, tu1, tu2, tv0, tv1, tv2, s_uu, s_uv, s_vv = tilt_schur(i00, i01, i02, i11, i12, i22, tilt)
     qu0, qu1, qu2, qv0, qv1, qv2 = tilt[3], tilt[4], tilt[5], tilt[6], tilt[7], tilt[8]
-    # T = LQ M⁻¹ (2 x 3)
-    tu0 = qu0 * i00 + qu1 * i01 + qu2 * i02
-    tu1 = qu0 * i01 + qu1 * i11 + qu2 * i12
-    tu2 = qu0 * i02 + qu1 * i12 + qu2 * i22
-    tv0 = qv0 * i00 + qv1 * i01 + qv2 * i02
-    tv1 = qv0 * i01 + qv1 * i11 + qv2 * i12
-    tv2 = qv0 * i02 + qv1 * i12 + qv2 * i22
-    s_uu = l00 - (tu0 * qu0 + tu1 * qu1 + tu2 * qu2)
-    s_uv = l01 - (tu0 * qv0 + tu1 * qv1 + tu2 * qv2)
-    s_vv = l11 - (tv0 * qv0 + tv1 * qv1 + tv2 * qv2)
     det = s_uu * s_vv - s_uv * s_uv
     if not det > RCOND * max(s_uu * s_vv, 1e-300):
         return math.nan, math.nan
@@ -691,17 +711,8 @@ def store_se3_weighted(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, e, f, g, x0
     spare = 2.0 * meat[0] - trace - sym3_bilinear(i00, i01, i02, i11, i12, i22, sc0, sc1, sc2, sc0, sc1, sc2)
     drop, _ = tilt_residual(i00, i01, i02, i11, i12, i22, x0, x1, x2, 0.0, 0.0, 0.0, tilt)
     rss = bb - xatb - drop
-    # the tilt's share of the hat matrix: T = LᵀQ M⁻¹ (2 x 3), S = LᵀL - T QᵀL
-    qu0, qu1, qu2, qv0, qv1, qv2 = tilt[3], tilt[4], tilt[5], tilt[6], tilt[7], tilt[8]
-    tu0 = qu0 * i00 + qu1 * i01 + qu2 * i02
-    tu1 = qu0 * i01 + qu1 * i11 + qu2 * i12
-    tu2 = qu0 * i02 + qu1 * i12 + qu2 * i22
-    tv0 = qv0 * i00 + qv1 * i01 + qv2 * i02
-    tv1 = qv0 * i01 + qv1 * i11 + qv2 * i12
-    tv2 = qv0 * i02 + qv1 * i12 + qv2 * i22
-    s_uu = tilt[0] - (tu0 * qu0 + tu1 * qu1 + tu2 * qu2)
-    s_uv = tilt[1] - (tu0 * qv0 + tu1 * qv1 + tu2 * qv2)
-    s_vv = tilt[2] - (tv0 * qv0 + tv1 * qv1 + tv2 * qv2)
+    # the tilt's share of the hat matrix
+    tu0, tu1, tu2, tv0, tv1, tv2, s_uu, s_uv, s_vv = tilt_schur(i00, i01, i02, i11, i12, i22, tilt)
     det = s_uu * s_vv - s_uv * s_uv
     # K B₅ Kᵀ = B_LL - T B_QL - B_LQ Tᵀ + T B_QQ Tᵀ (2 x 2)
     bq_tu0 = b0 * tu0 + b1 * tu1 + b2 * tu2  # B_QQ Tᵀ, column u
