@@ -26,7 +26,21 @@ def _region(mesh):
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("features", [None, 30])
 def test_region_equals_full_run(torus, method, features):
-    mesh = torus if features is None else box(4)
+    _assert_region_equals_full_run(torus if features is None else box(4), method, features)
+
+
+@pytest.mark.parametrize("method", ["csm", "icc"])
+@pytest.mark.parametrize("features", [None, 30])
+@pytest.mark.parametrize("share", [0.0, 1.0], ids=["terms-everywhere", "walk-first"])
+def test_clipping_region_either_way(torus, method, features, share, monkeypatch):
+    """Both ways of a clipping region: the per-triangle terms of the whole mesh, or a walk first."""
+    from curv.estimators import _ball_clipping
+
+    monkeypatch.setattr(_ball_clipping, "REGION_WALK_SHARE", share)
+    _assert_region_equals_full_run(torus if features is None else box(4), method, features)
+
+
+def _assert_region_equals_full_run(mesh, method, features):
     idx = _region(mesh)
     full = curv.estimate(mesh, method, features=features)
     part = curv.estimate(mesh, method, vertices=idx, features=features)

@@ -24,6 +24,14 @@ __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", 
            "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row",
            "vertex_normal", "unset_row"]
 
+REGION_WALK_SHARE = 0.05
+"""A region of fewer vertices than this share of the mesh walks its supports first, so that the
+per-triangle and per-vertex terms are computed only where its supports read them. For a larger
+region the walk (a second search per centre) costs more than the terms it saves, and the terms
+are computed for the whole mesh (the same values). Measured at R4, one thread, a slab of a torus:
+at 1M vertices the walk wins up to 3 % (csm 0.20 s against 0.54 s at 1 %) and loses at 10 %
+(1.85 s against 1.72 s); at 12k vertices it already loses at 10 % (0.022 s against 0.019 s)."""
+
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
 
@@ -731,7 +739,8 @@ def clipping_inputs(mesh: Mesh, centres: np.ndarray | None, radii: np.ndarray, f
     radii : (n,) float64
         Contiguous.
     touched : tuple
-        For a region, :func:`touched_elements` without the edges; else ``(None, None, None)``.
+        For a region of fewer than :data:`REGION_WALK_SHARE` of the vertices, :func:`touched_elements`
+        without the edges; else ``(None, None, None)`` (every triangle's and vertex's terms).
     """
     tri = np.ascontiguousarray(mesh.triangles)
     n = mesh.n_vertices
@@ -746,7 +755,8 @@ def clipping_inputs(mesh: Mesh, centres: np.ndarray | None, radii: np.ndarray, f
     indptr, indices = expansion_adjacency(mesh, blocked)
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
     radii = np.ascontiguousarray(radii, dtype=np.float64)
-    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False) if region else (None, None, None)
+    small = region and centres.size < REGION_WALK_SHARE * n
+    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False) if small else (None, None, None)
     return tri, centres, x, y, z, indptr, indices, blocked is not None, crease, radii, touched
 
 

@@ -39,7 +39,8 @@ Support vertices whose every edge stays inside the ball (``|v - p| + longest edg
 walked at all. A support holding a vertex whose terms are not exact (a non-manifold or
 inconsistently oriented edge, a degenerate face; with ``features``, a face touching a crease) is
 summed the long way, face by face and edge by edge over the mesh's edge table, which is only built then
-(:func:`edge_beta_scale`). With ``centres`` (a region), the star terms are computed only for the
+(:func:`edge_beta_scale`). With ``centres`` (a region of less than 5 % of the mesh,
+:data:`~curv.estimators._ball_clipping.REGION_WALK_SHARE`), the star terms are computed only for the
 vertices the region's supports hold, so the cost follows the region.
 """
 
@@ -468,7 +469,6 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         ``k1 <= k2`` as the tensor gives them; ``reason`` BORDER, DEGENERATE, NONMANIFOLD or
         SINGULAR where the estimate is not usable.
     """
-    region = centres is not None
     tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
         mesh, centres, radii, features)
     touched = touched[0]
@@ -479,7 +479,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     walk = not (clean.all() if touched is None else clean[touched].all())
     if walk:
         edges = mesh.edges
-        edge_ids = touched_elements(mesh, centres, radii, indptr, indices, edges=True)[2] if region else None
+        edge_ids = None if touched is None else touched_elements(mesh, centres, radii, indptr, indices, edges=True)[2]
         beta_scale = edge_beta_scale(mesh, edge_ids)
         halfedge_edge, edge_faces = mesh.halfedge_edge, mesh.edge_faces
         yield 0.0

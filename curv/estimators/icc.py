@@ -41,8 +41,9 @@ halfedge v -> w leaving the ball (v in the support; each vertex's ring read once
 area fraction (:func:`curv.estimators._ball_clipping.crossing_area`). Support vertices whose
 every edge stays inside the ball are not walked. A support holding a non-manifold vertex, a
 degenerate triangle or one without measures (with ``features``, one touching a crease) is summed
-the long way, face by face. For a region, the measures and the thirds are computed only for the
-triangles and vertices its supports touch.
+the long way, face by face. For a region of less than 5 % of the mesh
+(:data:`~curv.estimators._ball_clipping.REGION_WALK_SHARE`), the measures and the thirds are
+computed only for the triangles and vertices its supports touch.
 With ``features``, the triangles touching a crease vertex are left out of the sums: their normal
 field would use the crease vertex's normal (or its side's), tilted by O(h) from the surface's,
 which the normal differences turn into an O(1) error next to the crease.
