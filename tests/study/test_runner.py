@@ -66,3 +66,25 @@ def test_new_variants_are_added_to_finished_tasks(tmp_path, tiny_settings):
     assert {r["variant"] for r in rows} == {"mru:R2", "mru:R3"}
     table = run(tiny_settings, tmp_path, workers=0)
     assert len(table) == tiny_settings.n_tasks * 3
+
+
+def test_task_rows_equal_whole_mesh_estimates(tiny_settings):
+    """A task estimates only its evaluated vertices; its measures equal those of whole-mesh estimates."""
+    import curv
+    from curv.geometry.normals import cached_max_normals
+    from curv.study.metrics import summarize
+    from curv.study.tasks import run_task
+    from curv.study.testmesh import build_test_mesh
+
+    settings = tiny_settings.with_(estimators=("nc:R1", "mru:R2,R3", "csm:R2", "icc:R4", "jet:R3"))
+    task = next(iter(settings.tasks()))
+    variants = settings.variants_for(task)
+    tm = build_test_mesh(task)
+    assert 0 < tm.evaluated.sum() < tm.mesh.n_vertices
+    normals = cached_max_normals(tm.mesh)
+    rows = run_task(task, variants)
+    assert len(rows) == len(variants) == 6
+    for v, row in zip(variants, rows):
+        whole = curv.estimate(tm.mesh, v.method, v.range, normals=normals)
+        for name, value in summarize(tm.truth, whole, tm.evaluated).items():
+            assert row[name] == value or (np.isnan(row[name]) and np.isnan(value)), (v.id, name)
