@@ -503,8 +503,8 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 register(EstimatorSpec(
     name="csm", title="Cohen-Steiner & Morvan normal cycle", ranges=(1, 2, 3, 4), function=iter_csm,
-    # at 1M vertices csm peaked 0.96 GB above the fits (benchmarks/bench_estimators.py); 24 more: the corner rings
-    extra_bytes_per_unit=524.0,
+    # `curv estimate torus10M.ply -m csm -r 2`: 7.02 GB peak, 334 B a unit above the base and stamps; +35 % as mru
+    extra_bytes_per_unit=100.0,
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",

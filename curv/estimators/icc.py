@@ -392,8 +392,8 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
 
 register(EstimatorSpec(
     name="icc", in_paper=False, title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4),
-    # at 1M vertices icc peaked 0.62 GB above the fits (benchmarks/bench_estimators.py); 24 more: the corner rings
-    function=iter_icc, extra_bytes_per_unit=424.0,
+    # `curv estimate torus10M.ply -m icc -r 2`: 8.22 GB peak, 394 B a unit above the base and stamps; +35 % as mru
+    function=iter_icc, extra_bytes_per_unit=180.0,
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Lachaud, Romon, Thibert & Coeurjolly 2020, Interpolated corrected curvature measures for "
               "polygonal surfaces (SGP)",
