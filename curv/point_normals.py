@@ -168,59 +168,64 @@ def _pseudo_angle(u, v):
 
 
 @jit
-def _widest_gap(i, queue, count, x, y, z, vecs, bins):
+def _widest_gap(i, queue, count, x, y, z, vecs, bins, occupied):
     """Widest angle between consecutive offsets ``q - i`` projected on the plane of ``vecs``'s
-    last two eigenvectors (2 pi with fewer than two); ``bins``: (6, GAP_BINS) scratch.
+    last two eigenvectors (2 pi with fewer than two); ``bins``: (6, GAP_BINS) and ``occupied``:
+    (GAP_BINS,) int64 scratch.
 
     The offsets fall in :data:`GAP_BINS` bins of their pseudo-angle (:func:`_pseudo_angle`); each
-    bin keeps its least and greatest. Between consecutive occupied bins the step of the
-    pseudo-angle bounds the angle within a factor 2, so only the steps within a factor 2 of the
-    largest are measured with ``atan2`` (as the difference of the two ends' angles).
+    bin keeps its least and greatest (a bit mask says which bins hold any: no bin is cleared
+    before). Between consecutive occupied bins the step of the pseudo-angle bounds the angle
+    within a factor 2, so only the steps within a factor 2 of the largest are measured with
+    ``atan2`` (as the difference of the two ends' angles).
     """
     e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
     e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
+    px, py, pz = x[i], y[i], z[i]
     # rows: least key, its u, v; greatest key, its u, v
-    for b in range(GAP_BINS):
-        bins[0, b] = math.inf
-        bins[3, b] = -math.inf
     scale = GAP_BINS / 4.0
+    mask = np.uint64(0)
+    one = np.uint64(1)
     used = 0
     for j in range(1, count):
         q = queue[j]
-        dx, dy, dz = x[q] - x[i], y[q] - y[i], z[q] - z[i]
+        dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
         u = dx * e1x + dy * e1y + dz * e1z
         v = dx * e2x + dy * e2y + dz * e2z
         if u * u + v * v > 0.0:
             key = _pseudo_angle(u, v)
             b = min(max(int((key + 2.0) * scale), 0), GAP_BINS - 1)
-            if key < bins[0, b]:
+            bit = one << np.uint64(b)
+            if mask & bit:
+                if key < bins[0, b]:
+                    bins[0, b], bins[1, b], bins[2, b] = key, u, v
+                if key > bins[3, b]:
+                    bins[3, b], bins[4, b], bins[5, b] = key, u, v
+            else:
+                mask |= bit
                 bins[0, b], bins[1, b], bins[2, b] = key, u, v
-            if key > bins[3, b]:
                 bins[3, b], bins[4, b], bins[5, b] = key, u, v
             used += 1
     if used < 2:
         return 2.0 * math.pi
-    # the largest step of the key between consecutive occupied bins (the last to the first round the circle)
-    first = last = -1
-    largest = 0.0
+    # the occupied bins in order, without a branch per bin
+    m = 0
     for b in range(GAP_BINS):
-        if bins[3, b] >= bins[0, b]:
-            if last >= 0:
-                largest = max(largest, bins[0, b] - bins[3, last])
-            else:
-                first = b
-            last = b
-    largest = max(largest, bins[0, first] + 4.0 - bins[3, last])
+        occupied[m] = b
+        m += int((mask >> np.uint64(b)) & one)
+    # the largest step of the key between consecutive occupied bins (the last to the first round the circle)
+    first, last = occupied[0], occupied[m - 1]
+    largest = bins[0, first] + 4.0 - bins[3, last]
+    for k in range(1, m):
+        largest = max(largest, bins[0, occupied[k]] - bins[3, occupied[k - 1]])
     # every step whose angle may beat the largest step's angle (at least its key step)
     bound = 0.5 * largest * (1.0 - 1e-9)
     widest = 0.0
-    prev = -1
-    for b in range(GAP_BINS):
-        if bins[3, b] >= bins[0, b]:
-            if prev >= 0 and bins[0, b] - bins[3, prev] >= bound:
-                step = math.atan2(bins[2, b], bins[1, b]) - math.atan2(bins[5, prev], bins[4, prev])
-                widest = max(widest, step)
-            prev = b
+    for k in range(1, m):
+        a, b = occupied[k - 1], occupied[k]
+        if bins[0, b] - bins[3, a] >= bound:
+            step = math.atan2(bins[2, b], bins[1, b]) - math.atan2(bins[5, a], bins[4, a])
+            widest = max(widest, step)
     if bins[0, first] + 4.0 - bins[3, last] >= bound:
         step = math.atan2(bins[2, first], bins[1, first]) + 2.0 * math.pi - math.atan2(bins[5, last], bins[4, last])
         widest = max(widest, step)
@@ -228,14 +233,14 @@ def _widest_gap(i, queue, count, x, y, z, vecs, bins):
 
 
 @jit
-def _frame(i, sub, count, x, y, z, cov, vecs, bins):
+def _frame(i, sub, count, x, y, z, cov, vecs, bins, occupied):
     """PCA normal (``vecs[:3, 0]``) and widest gap of the support ``sub[:count]``; the gap, or -1
     when the support is too small (fewer than 3 points) for a plane."""
     if count < 3:
         return -1.0
     offset_moments(i, sub, count, x, y, z, True, cov)
     sym3_eigen(cov, vecs)
-    return _widest_gap(i, sub, count, x, y, z, vecs, bins)
+    return _widest_gap(i, sub, count, x, y, z, vecs, bins, occupied)
 
 
 @jit
@@ -303,6 +308,7 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
         cov = np.empty((3, 3))
         vecs = np.empty((4, 3))
         bins = np.empty((6, GAP_BINS))
+        occupied = np.empty(GAP_BINS, np.int64)
         m, vec, cov_jet, frame, evec = jet_scratch()
         keep_b = normal_b.shape[0] > 1
         start, stop = slice_bounds(lo, hi, t, parts)
@@ -312,7 +318,7 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
             if wanted[0]:
                 c = _within(queue, dist2, count, radii2[0, p], sub)
                 count_a[p] = c - 1
-                g = _frame(i, sub, c, x, y, z, cov, vecs, bins)
+                g = _frame(i, sub, c, x, y, z, cov, vecs, bins, occupied)
                 if g < 0.0:
                     normal_a[i, 0] = normal_a[i, 1] = normal_a[i, 2] = math.nan
                     gap_a[p] = 2.0 * math.pi
@@ -332,9 +338,9 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
                         fitted[p, 0] = fitted[p, 1] = fitted[p, 2] = math.nan
                     if c >= 3 and math.isfinite(evec[3, 0]):
                         # the fit's own PCA of this support (its frame): the plane of the gap
-                        g = _widest_gap(i, sub, c, x, y, z, evec, bins)
+                        g = _widest_gap(i, sub, c, x, y, z, evec, bins, occupied)
                 if g == -2.0 or keep_b:
-                    g = _frame(i, sub, c, x, y, z, cov, vecs, bins)
+                    g = _frame(i, sub, c, x, y, z, cov, vecs, bins, occupied)
                     if keep_b:
                         if g < 0.0:
                             normal_b[p, 0] = normal_b[p, 1] = normal_b[p, 2] = math.nan
