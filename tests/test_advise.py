@@ -342,14 +342,25 @@ def test_the_packaged_table_is_what_the_documented_commands_write():
     assert "python -m curv.advice.table extend --base base.json" in doc
     n_base = at.table_settings().n_tasks + len(at.DEFAULT_CLOSED) * len(at.DEFAULT_CLOSED_VERTICES) * len(
         at.DEFAULT_NOISE) * at.DEFAULT_SAMPLES
-    fill = meta["fill_commands"][-1].split()
-    assert fill[:4] == ["python", "-m", "curv.advice.table", "fill"] and "--coarse-samples" in fill
+    fills = [c.split() for c in meta["fill_commands"]]
+    assert all(f[:4] == ["python", "-m", "curv.advice.table", "fill"] for f in fills)
+    fill = [f for f in fills if "--coarse-samples" in f][-1]
     samples = int(fill[fill.index("--coarse-samples") + 1])
     sizes = meta["coarse"]["closed_vertices"]
     assert set(at.COARSE_CLOSED_VERTICES) <= set(sizes)
     n_coarse = len(at.coarse_jobs({**table, "truth": {"key": []}}, samples, sizes))  # every coarse mesh of those samples
     assert n_coarse == samples * (3 * len(at.COARSE_DENSITIES) * 4 * 7 + 3 * len(sizes) * 7)
-    assert meta["n_meshes"] == len(table["points"]) == n_base + n_coarse
+    # the noise twins (fill --noise-levels) of the noise-free meshes of --sizes, every one a row
+    twin = [f for f in fills if "--noise-levels" in f]
+    assert len(twin) == 1 and meta["twin_noise_levels"] == [float(twin[0][twin[0].index("--noise-levels") + 1])]
+    after = twin[0][twin[0].index("--sizes") + 1:]
+    twin_sizes = {int(x) for x in after[:next((i for i, a in enumerate(after) if a.startswith("--")), len(after))]}
+    levels = np.array([k[4] for k in table["truth"]["key"]])
+    n_free = sum(1 for k in table["truth"]["key"] if k[4] == 0 and k[2] in twin_sizes)
+    assert n_free >= 90 and np.sum(levels == meta["twin_noise_levels"][0]) == n_free
+    assert meta["n_meshes"] == len(table["points"]) == n_base + n_coarse + n_free
+    lv = twin[0][twin[0].index("--noise-levels") + 1]
+    assert f"--noise-levels {lv} --sizes {' '.join(map(str, sorted(twin_sizes)))}" in doc
     assert f"--coarse-samples {samples}" in doc
     assert table["variants"] == [v.id for v in at.table_settings().variants()] + at.option_variants()
 
@@ -363,7 +374,7 @@ def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
     hexagon = {k[2] for k in table["truth"]["key"] if k[1] in ("quadratic", "ellipsoid_patch", "trigonometric")}
     assert {217, 331, 469, 817, 3169, 12481} <= hexagon and len(hexagon) >= 8
     assert min(k[2] for k in table["truth"]["key"]) == 162
-    assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 1_400_000
+    assert len(resources.files("curv").joinpath(TABLE_RESOURCE).read_bytes()) < 1_700_000
     values = np.array(table["median_erel"], float)
     n_options = len(curv.advice.table.option_variants())
     assert np.isfinite(values[:, :-n_options]).mean() > 0.99 and np.nanmin(values) > 0
@@ -741,3 +752,24 @@ def test_fill_adds_closed_surfaces_of_a_new_coarse_size_only():
     assert out["truth"]["key"][-1] == jobs[0][0] and len(out["points"]) == len(have) + 1
     assert out["metadata"]["coarse"]["closed_vertices"] == [162, 252, 362, 482]
     assert out["metadata"]["coarse"]["densities"] == list(at.COARSE_DENSITIES)
+
+
+def test_fill_adds_the_noise_twins_of_the_noise_free_meshes_at_a_level_between_the_grid():
+    import curv.advice.table as at
+
+    keys = [[0, "quadratic", 817, 8.0, 0.0, 1], [0, "quadratic", 817, 8.0, 0.05, 1],
+            [0, "torus", 2562, 0.0, 0.0, 2], [0, "quadratic", 12481, 0.0, 0.0, 0], [0, "torus", 2562, 0.0, 0.015, 0]]
+    table = {"variants": ["nc:R1", "jet:R2;degree=4"], "truth": {"key": keys}}
+    jobs = at.noise_jobs(table, [0.015, 0.005], sizes=(817, 2562))
+    assert [j[0] for j in jobs] == [[0, "torus", 2562, 0.0, 0.015, 2], [0, "torus", 2562, 0.0, 0.005, 2],
+                                    [0, "quadratic", 817, 8.0, 0.015, 1], [0, "quadratic", 817, 8.0, 0.005, 1]]
+    assert all(j[1] == ("nc:R1", "jet:R2;degree=4") for j in jobs)  # every candidate on a new row
+    assert len(at.noise_jobs(table, [0.015])) == 3  # every size; the torus of sample 0 has no noise-free twin
+    assert at.noise_jobs({**table, "truth": {"key": keys + [j[0] for j in jobs]}}, [0.015, 0.005], (817, 2562)) == []
+    # the twin is the same surface and tessellation, only its noise level differs
+    mesh0, truth0, _ = at.table_mesh([0, "torus", 162, 0.0, 0.0, 2])
+    mesh1, truth1, _ = at.table_mesh([0, "torus", 162, 0.0, 0.015, 2])
+    assert np.array_equal(mesh0.faces, mesh1.faces) and np.array_equal(truth0.k1, truth1.k1)
+    step = np.linalg.norm(mesh1.vertices - mesh0.vertices, axis=1)
+    assert 0 < np.median(step) < 0.01 * np.mean(np.linalg.norm(mesh0.vertices[mesh0.edges[:, 0]]
+                                                                - mesh0.vertices[mesh0.edges[:, 1]], axis=1))

@@ -70,7 +70,17 @@ chosen again (the rows of the meshes measured before come from the same ``--work
     python -m curv.advice.table fill --table options.json --out closed.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 --work /tmp/advisor-closed --workers 1
     python -m curv.advice.table refeature --table closed.json --work /tmp/advisor-refeature --workers 1
 
-(504 meshes, 20,160 estimates, 356 CPU-s; 63 meshes, 105 CPU-s; with 1 worker each.) The coarse rows are
+(504 meshes, 20,160 estimates, 356 CPU-s; 63 meshes, 105 CPU-s; with 1 worker each.) Then the
+option candidates are run on the 7057-vertex patches of samples 1 and 2, a noise level between the
+grid's 0 and 0.05 of the paper's is added where the noise measure resolves it: the noise twins at
+0.015 of every noise-free mesh of 2562-10242 vertices (the same surface, tessellation and noise
+directions, :func:`noise_jobs`), every candidate, as rows; and the measures and axes again::
+
+    python -m curv.advice.table fill --out options7057.json --kinds quadratic ellipsoid_patch trigonometric --sizes 7057 --work /tmp/advisor-twins --workers 1
+    python -m curv.advice.table fill --table options7057.json --out twins.json --kinds --noise-levels 0.015 --sizes 2562 3169 7057 10242 --work /tmp/advisor-twins --workers 1
+    python -m curv.advice.table refeature --table twins.json --work /tmp/advisor-refeature --workers 1
+
+(168 meshes, 6720 estimates, 331 CPU-s; 90 meshes, 6120 estimates.) The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
@@ -95,7 +105,7 @@ __all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "random_closed_para
            "measure_rows", "fit_calibration", "table_points", "choose_bandwidth", "fit_kernel", "make_table",
            "build_table", "main", "table_mesh", "fill_jobs", "fill_table", "feature_row", "noise_groups",
            "select_axes", "refeature_table", "loo_regret", "EXTRA_COLUMNS", "EREL_FLOOR", "surface_groups",
-           "coarse_jobs"]
+           "coarse_jobs", "noise_jobs"]
 
 DEFAULT_OUT = Path(__file__).parents[1] / "data" / "advisor_table.json"
 BANDWIDTHS = (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
@@ -828,6 +838,27 @@ def coarse_jobs(table: dict, samples: int, closed_vertices=None) -> list[tuple]:
     return [j for j in jobs if _key_text(j[0]) not in have]
 
 
+def noise_jobs(table: dict, levels, sizes=None) -> list[tuple]:
+    """Jobs (:func:`candidate_point`, every variant of ``table``) for the noise twins at ``levels``
+    (fractions of the paper's level) of every noise-free mesh of ``table`` (of ``sizes`` if given:
+    a key's density or vertex count) that ``table`` does not hold yet: the same surface,
+    tessellation and noise directions (:func:`table_mesh`), a noise level between the grid's. Largest
+    meshes first (load balance)."""
+    have = {_key_text(k) for k in table["truth"]["key"]}
+    every = tuple(table["variants"])
+    jobs = []
+    for key in table["truth"]["key"]:
+        if key[4] != 0 or (sizes is not None and key[2] not in sizes):
+            continue
+        for lv in levels:
+            twin = [*key[:4], float(lv), key[5]]
+            if _key_text(twin) not in have:
+                have.add(_key_text(twin))
+                jobs.append((twin, every))
+    jobs.sort(key=lambda j: -j[0][2])
+    return jobs
+
+
 def fill_table(table: dict, done: dict, *, command: str = "", new_keys=(), closed_vertices=None) -> dict:
     """``table`` with the values of ``done`` (:func:`run_extension`'s results) in its empty cells and
     the meshes of ``new_keys`` (keys of ``done`` the table does not hold, :func:`coarse_jobs`) as new
@@ -889,13 +920,16 @@ def fill_main(argv) -> int:
     parser.add_argument("--coarse-closed-vertices", type=int, nargs="+", default=None,
                         help="coarse closed-surface sizes (default the table's, else "
                              f"{' '.join(map(str, COARSE_CLOSED_VERTICES))}): sizes it lacks are added")
+    parser.add_argument("--noise-levels", type=float, nargs="+", default=(),
+                        help="add the noise twins at these levels (fractions of the paper's) of every noise-free "
+                             "mesh (of --sizes if given) as new rows, every variant")
     parser.add_argument("--dry-run", action="store_true", help="count the jobs and stop")
     args = parser.parse_args(argv)
     with open(args.table) as fh:
         table = json.load(fh)
     sizes = args.coarse_closed_vertices or table.get("metadata", {}).get("coarse", {}).get(
         "closed_vertices", list(COARSE_CLOSED_VERTICES))
-    new = coarse_jobs(table, args.coarse_samples, sizes)
+    new = coarse_jobs(table, args.coarse_samples, sizes) + noise_jobs(table, args.noise_levels, args.sizes)
     jobs = fill_jobs(table, kinds=tuple(args.kinds), sizes=args.sizes) + new
     if args.dry_run:
         print(f"{len(jobs)} jobs, {sum(len(j[1]) for j in jobs)} estimates")
@@ -903,6 +937,9 @@ def fill_main(argv) -> int:
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
     out = fill_table(table, done, command="python -m curv.advice.table fill " + " ".join(argv),
                      new_keys=[j[0] for j in new], closed_vertices=sizes)
+    if args.noise_levels:  # the levels between the grid's, as rows of every noise-free mesh's twins
+        meta = out["metadata"]
+        meta["twin_noise_levels"] = sorted({*meta.get("twin_noise_levels", []), *map(float, args.noise_levels)})
     with open(args.out, "w") as fh:
         json.dump(out, fh, separators=(",", ":"))
     print(f"wrote {args.out}: {out['metadata']['filled_cells']} cells filled", flush=True)
