@@ -47,7 +47,7 @@ __all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_s
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
            "clear_parts", "store_parts", "store_se3_weighted", "sym3_sandwich", "ring_gradient", "gradient_column", "list_room", "list_slot", "centre_columns",
-           "add_ring_columns", "fit_frame", "normal_in_frame",
+           "add_ring_columns", "fit_frame", "normal_in_frame", "checked_noise_model", "sampled_scales",
            "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
 
 
@@ -869,7 +869,7 @@ def mark_degenerate(p, k1, k2, d1, d2, reason):
     reason[p] = DEGENERATE
 
 
-NOISE_MODELS = ("independent", "normals")
+NOISE_MODELS = ("independent", "normals", "sampled")
 """How the standard errors of ``an`` and ``mru`` (the fits that read the neighbours' normals) take
 the errors of those normals (the curvatures do not depend on it):
 
@@ -888,16 +888,66 @@ the errors of those normals (the curvatures do not depend on it):
 DEFAULT_NOISE_MODEL = NOISE_MODELS[0]
 
 
-def models_normals(noise_model: str) -> bool:
-    """True for ``noise_model="normals"``; an :class:`~curv.core.errors.EstimatorError` naming the
-    choices for anything else but ``"independent"``."""
+def checked_noise_model(noise_model: str) -> str:
+    """``noise_model`` if it is one of :data:`NOISE_MODELS`; else an
+    :class:`~curv.core.errors.EstimatorError` naming the choices."""
     if noise_model not in NOISE_MODELS:
         raise EstimatorError(f"noise_model must be one of {', '.join(NOISE_MODELS)}; got {noise_model!r}")
-    return noise_model == "normals"
+    return noise_model
+
+
+SAMPLE_SIZE = 2000
+"""Vertices at which ``noise_model="sampled"`` runs the normals' model (:func:`sampled_scales`)."""
+
+
+def sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, queues, k1, k2, d1, d2, reason,
+                   k1_se, k2_se, parts, ring_ptr, ring) -> np.ndarray | None:
+    """The factors by which the normals' model scales the independent model's standard errors,
+    measured at a sample of the fitted vertices (``noise_model="sampled"``).
+
+    Both models read the noise level from the same residuals, so at a vertex the ratio of their
+    ``var(k_i) / E[RSS]`` (propagation per unit noise variance over the spare equations it expects)
+    is the factor between their squared standard errors, free of the noise's units. The kernel runs
+    again with its slot maps at up to :data:`SAMPLE_SIZE` vertices, evenly spaced in ``fitted``;
+    the factors are the medians over the sample where both models hold.
+
+    Parameters
+    ----------
+    kernel, fitted, radius, ..., ring :
+        As in :func:`run_fit`, after the independent model's run: ``k1_se``, ``k2_se`` hold
+        ``var(k_i) / sigma²`` and ``parts`` the parts of :func:`store_parts` (spare equations
+        negative: the independent model's noise level, in units of the normals).
+
+    Returns
+    -------
+    (3,) float64 or None
+        The factors of ``var(k1)``, ``var(k2)`` and the deviator's variance; None when no sampled
+        vertex holds both models. The rows of the sample are left as the independent run wrote them.
+    """
+    step = max(1, fitted.size // SAMPLE_SIZE)
+    sample = np.ascontiguousarray(fitted[::step])
+    sample = sample[(reason[sample] == OK) & (parts[sample, 1] < 0.0)]
+    if sample.size == 0:
+        return None
+    kept = k1_se[sample], k2_se[sample], parts[sample]
+    stamps = new_scratch(x.size, max(1, min(threads(), sample.size)))
+    slots = new_scratch(x.size, stamps.shape[0])
+    launch(kernel, sample, 0, sample.size, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
+           k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)
+    exact = parts[sample, 1] > 0.0  # the normals' model held (else the kernel fell back)
+    per_spare_exact = np.stack([k1_se[sample], k2_se[sample], parts[sample, 2]]) / parts[sample, 1]
+    per_spare_indep = np.stack([kept[0], kept[1], kept[2][:, 2]]) / -kept[2][:, 1]
+    k1_se[sample], k2_se[sample], parts[sample] = kept
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = per_spare_exact[:, exact] / per_spare_indep[:, exact]
+    ratio = ratio[:, np.all(np.isfinite(ratio) & (ratio > 0.0), axis=0)]
+    if ratio.shape[1] == 0:
+        return None
+    return np.median(ratio, axis=1)
 
 
 def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None, slot_maps: bool = False
+            centres: np.ndarray | None = None, features=None, noise_model: str | None = None
             ) -> Generator[float, None, Principal]:
     """Run a fit kernel over all (or some) vertices, a chunk of them per call, and assemble the result.
 
@@ -924,9 +974,11 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         ``radii`` must cover them), whose residuals the standard errors pool.
     features : curv.core.features.FeatureSet, optional
         The search does not expand through feature vertices.
-    slot_maps : bool
-        Give the kernel a zeroed (slices, n) int64 ``slots`` (vertex -> 1 + its place in a short list,
-        reset after each vertex) instead of an empty one.
+    noise_model : str, optional
+        For the fits with a model of their normals' errors (an, mru; :data:`NOISE_MODELS`):
+        ``"normals"`` gives the kernel a zeroed (slices, n) int64 ``slots`` (vertex -> 1 + its place in
+        a short list, reset after each vertex) instead of an empty one; ``"sampled"`` runs the kernel
+        without and scales the standard errors by :func:`sampled_scales` on a mesh.
 
     It yields the fraction of vertices done and returns the :class:`~curv.core.result.Principal`,
     as the estimators' functions do (:data:`~curv.estimators.registry.EstimatorFunction`).
@@ -951,13 +1003,23 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     reason = np.empty(n, np.uint8)
     k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
     parts = filled((n, 4), np.nan, most_written=whole)
-    slots = new_scratch(n if slot_maps else 0, stamps.shape[0])
+    slots = new_scratch(n if noise_model == "normals" else 0, stamps.shape[0])
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, fitted, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
                k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)
 
     yield from iter_chunks(fitted.size, run, chunk=chunk)
+    if noise_model == "sampled" and ring.size > 0:
+        scales = sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, queues, k1, k2, d1, d2,
+                                reason, k1_se, k2_se, parts, ring_ptr, ring)
+        if scales is not None:
+            # the independent model's noise levels, now all of the same units: pooled
+            at = slice(None) if whole else fitted
+            k1_se[at] *= scales[0]
+            k2_se[at] *= scales[1]
+            parts[at, 2] *= scales[2]
+            np.abs(parts[:, 1], out=parts[:, 1])
     pool_standard_errors(pooled, ring_ptr, ring, reason, parts, k1_se, k2_se)
     if not whole:
         extra = np.setdiff1d(fitted, pooled, assume_unique=True)
