@@ -154,7 +154,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         if ok and spare > 0.0:
             store_parts(p, k1_se, k2_se, se_parts, var1, var2, saa_bb - xatb, spare, vard, math.hypot(0.5 * (e - g), f))
             return touched, yv, jp
-    # the default model (noise_model="independent"), a point cloud, or a ring without a gradient:
+    # noise_model="independent" (and the first pass of "sampled"), a point cloud, or a ring without a gradient:
     # the equations' errors taken as independent
     if ring.size > 0:
         # a mesh: the noise level from the plain residuals. A term for the tilt of p's own normal
