@@ -15,8 +15,8 @@ for k1 and k2 pooled over the surfaces, samples and densities, and the median of
 over both. A Gaussian error of exactly the standard error's size would give 95 % and a median of 0.67;
 above that the standard error is too small, below it too large.
 
-``an`` and ``mru`` run with each ``noise_model`` (the default independent equations, and
-``"normals"``). ``--normals``: an and mru (``noise_model="normals"``) at R2 and R3 with the default
+``an`` and ``mru`` run with each ``noise_model`` (the default ``"sampled"``, ``"normals"`` and
+the independent equations). ``--normals``: an and mru (``noise_model="normals"``) at R2 and R3 with the default
 normals, ``normals="fit"`` and the exact normals, on six random trigonometric patches of 3169 vertices at 100 % noise (k1 only): their
 standard errors model the default normals (made from the noisy mesh).
 """
@@ -34,10 +34,13 @@ from curv.study.testmesh import build_test_mesh
 from curv.surfaces import PAPER_SURFACES
 
 _NORMALS = {"noise_model": "normals"}
+_INDEPENDENT = {"noise_model": "independent"}
 VARIANTS = (("nc", 1, {}), ("nc", 2, {}), ("nc", 4, {}), ("qs", 1, {}), ("qs", 2, {}), ("qs", 4, {}),
             ("an", 2, {}), ("an", 3, {}), ("an", 4, {}), ("an", 2, _NORMALS), ("an", 3, _NORMALS), ("an", 4, _NORMALS),
+            ("an", 2, _INDEPENDENT), ("an", 3, _INDEPENDENT), ("an", 4, _INDEPENDENT),
             ("mru", 2, {}), ("mru", 3, {}), ("mru", 4, {}),
             ("mru", 2, _NORMALS), ("mru", 3, _NORMALS), ("mru", 4, _NORMALS),
+            ("mru", 2, _INDEPENDENT), ("mru", 3, _INDEPENDENT), ("mru", 4, _INDEPENDENT),
             ("jet", 2, {}), ("jet", 3, {}), ("jet", 4, {}), ("jet", 4, {"degree": 4}))
 NOISE = (0.0, 0.33, 0.67, 1.0)
 

@@ -401,8 +401,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "default 2")
     p_est.add_argument("--degree", type=int, choices=[2, 3, 4], help="jet degree (estimator jet); default 2")
     p_est.add_argument("--noise-model", choices=list(NOISE_MODELS),
-                       help="standard errors of an and mru: independent equations (default) or the errors "
-                            "the neighbours' normals take from the noisy positions (calibrated, 3-4x slower)")
+                       help="standard errors of an and mru: sampled (default: the errors the neighbours' normals "
+                            "take from the noisy positions, measured at 2000 vertices and applied to all), "
+                            "independent equations, or normals (that model at every vertex, 3-5x slower)")
     p_est.add_argument("--weights", choices=list(JET_WEIGHTS),
                        help="jet fit weights: uniform (default) or smooth, (1 - d²/r²)^4 falling to 0 at the ball's "
                             "edge (estimator jet)")

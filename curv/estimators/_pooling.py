@@ -102,7 +102,10 @@ def pool_standard_errors(centres: np.ndarray, ring_ptr: np.ndarray, ring: np.nda
     parts : (n, 4) float64
         ``(RSS, spare equations, var_deviator / sigma², rad)`` per vertex
         (:func:`curv.estimators._local_fit.store_parts`); spare equations below 0 (their negative): a
-        noise level in other units than the neighbours' (mru's fallback), taken alone.
+        noise level in other units than the neighbours' (an's and mru's independent equations, or
+        their fallback where the normals' model does not hold), taken alone. ``noise_model="sampled"``
+        makes them positive, every vertex then in the same units
+        (:func:`curv.estimators._local_fit.sampled_scales`).
     k1_se, k2_se : (n,) float64
         In: ``var(k_i) / sigma²``; out, at the centres: the standard errors.
     """

@@ -27,7 +27,7 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
-                         fit_frame, list_room, list_slot, models_normals, normal_in_frame, offset_in_frame,
+                         fit_frame, list_room, list_slot, checked_noise_model, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
                          store_se3, store_se3_weighted)
 from ._pooling import POOL_KERNEL
@@ -456,7 +456,7 @@ def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
     ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
     take the errors of the neighbours' normals; the curvatures do not depend on it."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, AN), chunk=chunk, centres=centres,
-                               features=features, slot_maps=models_normals(noise_model)))
+                               features=features, noise_model=checked_noise_model(noise_model)))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"

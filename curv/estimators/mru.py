@@ -18,7 +18,7 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, deviator_gradients, finish_fit, fit_frame, list_room,
-                         models_normals, normal_in_frame, offset_in_frame, principal_gradients, run_fit, slice_bounds,
+                         checked_noise_model, normal_in_frame, offset_in_frame, principal_gradients, run_fit, slice_bounds,
                          solve_sym3, store_parts, store_se3, sym3_inverse)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
@@ -154,7 +154,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         if ok and spare > 0.0:
             store_parts(p, k1_se, k2_se, se_parts, var1, var2, saa_bb - xatb, spare, vard, math.hypot(0.5 * (e - g), f))
             return touched, yv, jp
-    # the default model (noise_model="independent"), a point cloud, or a ring without a gradient:
+    # noise_model="independent" (and the first pass of "sampled"), a point cloud, or a ring without a gradient:
     # the equations' errors taken as independent
     if ring.size > 0:
         # a mesh: the noise level from the plain residuals. A term for the tilt of p's own normal
@@ -203,7 +203,7 @@ def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
     take the errors of the neighbours' normals; the curvatures do not depend on it."""
     return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk, centres=centres,
-                                 features=features, slot_maps=models_normals(noise_model)))
+                                 features=features, noise_model=checked_noise_model(noise_model)))
 
 
 register(EstimatorSpec(
