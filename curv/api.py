@@ -92,7 +92,8 @@ def iter_estimate(
     centres = _check_vertices(vertices, mesh.n_vertices)
     twin = _grid_ordered(mesh) if isinstance(mesh, PointCloud) else _locality_ordered(mesh, centres, features)
     if twin is not None:
-        # a point cloud runs in its grid's order; the rows go back at the end (curv.point_normals, notes 6)
+        # a point cloud runs in its grid's order (curv.point_normals, notes 6), and so does a whole mesh
+        # numbered too scattered for the caches (_locality_ordered); the rows go back at the end
         mesh, rows = twin
         normals = _rows_of(normals, rows)
         centres = None if centres is None else _rank(rows)[centres]
