@@ -24,6 +24,8 @@ Meshes (``--mesh``):
 - ``torus``: a closed torus whose grid parameters are jittered: right-angled, uneven triangles whose
   longest 1-ring edge is ~1.4 mean edges, so every Rk support holds about twice as many vertices
   (R2: ~32, R4: ~130) as on the hexagon (R2: ~18, R4: ~60). A stress case.
+- ``--shuffle``: any of them with its vertices numbered at random (the same numbering for every
+  peer): a mesh whose neighbours are far apart in memory, as a careless export leaves it.
 
 Point clouds (``--points``)::
 
@@ -87,6 +89,14 @@ def sphere(n_target: int):
 
 
 MESHES = {"sphere": sphere, "hexagon": hexagon_patch, "torus": jittered_torus}
+
+
+def shuffled(v: np.ndarray, f: np.ndarray, seed: int = 0):
+    """The same mesh with its vertices numbered at random (``--shuffle``): (vertices (n,3), faces (m,3))."""
+    perm = np.random.default_rng(seed).permutation(len(v))
+    rank = np.empty_like(perm)
+    rank[perm] = np.arange(perm.size)
+    return v[perm], rank[f]
 
 
 class PeakRSS:
@@ -210,7 +220,10 @@ def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
     """Runs in the subprocess: build the arrays, warm up on a tiny mesh, take the baseline, time one call."""
     if mesh_kind == "points":
         return _points_child(kind, name, k, n)
+    mesh_kind, _, order = mesh_kind.partition(":")
     v, f = MESHES[mesh_kind](n)
+    if order == "shuffled":
+        v, f = shuffled(v, f)
     extra = {}
     if kind == "curv":
         import curv
@@ -320,6 +333,8 @@ def main(argv=None) -> int:
     parser.add_argument("--only", nargs="*", help="variants as name:k (default all)")
     parser.add_argument("--no-peers", action="store_true", help="skip trueform, libigl and VTK")
     parser.add_argument("--mesh", choices=sorted(MESHES), default="sphere", help="benchmark mesh (see above)")
+    parser.add_argument("--shuffle", action="store_true",
+                        help="number the mesh's vertices at random (seed 0), for every peer alike")
     parser.add_argument("--compile", action="store_true",
                         help="measure first-run compile and cached cold-start times instead")
     parser.add_argument("--repeat", type=int, default=1,
@@ -348,17 +363,18 @@ def main(argv=None) -> int:
     print(f"# cores: {os.cpu_count()}, numpy {np.__version__}, curv {curv.__version__}, best of {args.repeat}")
     for n in args.sizes:
         v, _ = MESHES[args.mesh](n)
-        print(f"\n## {args.mesh}, {len(v)} vertices")
+        print(f"\n## {args.mesh}, {len(v)} vertices{', shuffled numbering' if args.shuffle else ''}")
+        mesh_kind = f"{args.mesh}:shuffled" if args.shuffle else args.mesh
         peers = {}
         if not args.no_peers:
             for k in (2, 4):
-                peers[f"trueform k={k}"] = run_one("trueform", "principal_curvatures", k, n, args.mesh, args.repeat)
-            peers["libigl r=2"] = run_one("igl", "principal_curvature", 2, n, args.mesh, args.repeat)
-            peers["VTK H+K"] = run_one("vtk", "curvatures", 0, n, args.mesh, args.repeat)
+                peers[f"trueform k={k}"] = run_one("trueform", "principal_curvatures", k, n, mesh_kind, args.repeat)
+            peers["libigl r=2"] = run_one("igl", "principal_curvature", 2, n, mesh_kind, args.repeat)
+            peers["VTK H+K"] = run_one("vtk", "curvatures", 0, n, mesh_kind, args.repeat)
         print(f"{'variant':<14} {'seconds':>8} {'cpu s':>7} {'conn s':>7} {'peak MB':>8} {'valid':>6}  vs tf k=2"
               f"  vs tf k=4  vs VTK  (cpu: tf k=2, tf k=4)")
         for m, k in variants:
-            r = run_one("curv", m, k, n, args.mesh, args.repeat)
+            r = run_one("curv", m, k, n, mesh_kind, args.repeat)
             label = f"{m} R{k:g}"
             if "error" in r:
                 print(f"{label:<14} error: {r['error']}")

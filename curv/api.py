@@ -21,7 +21,7 @@ from .core.pointcloud import PointCloud
 from .core.ranges import ball_radii, parse_range, resolve
 from .core.features import check_angle, feature_set
 from .core.filled import filled
-from .geometry.neighbourhood import latest_with_mesh
+from .geometry.neighbourhood import cached_with_mesh, latest_with_mesh
 from .geometry.normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
 from .core.result import Curvature
 from .geometry.smoothing import smooth_positions, smooth_values
@@ -90,9 +90,10 @@ def iter_estimate(
         raise MeshError(why_not)
     smooth = Smoothing(smooth or Smoothing.NONE)
     centres = _check_vertices(vertices, mesh.n_vertices)
-    twin = _grid_ordered(mesh)
+    twin = _grid_ordered(mesh) if isinstance(mesh, PointCloud) else _locality_ordered(mesh, centres, features)
     if twin is not None:
-        # a point cloud runs in its grid's order; the rows go back at the end (curv.point_normals, notes 6)
+        # a point cloud runs in its grid's order (curv.point_normals, notes 6), and so does a whole mesh
+        # numbered too scattered for the caches (_locality_ordered); the rows go back at the end
         mesh, rows = twin
         normals = _rows_of(normals, rows)
         centres = None if centres is None else _rank(rows)[centres]
@@ -314,6 +315,25 @@ def _grid_ordered(mesh):
     from .point_normals import grid_ordered
 
     return grid_ordered(mesh)
+
+
+def _locality_ordered(mesh: Mesh, centres, features):
+    """A whole-mesh estimate of a mesh numbered too scattered for the caches
+    (:meth:`curv.Mesh.scattered_order`) runs on its twin in grid order (the point clouds' order,
+    :func:`curv.core.knn.build_grid`): ``(twin, order)``, kept with the mesh; None otherwise (a
+    region costs what the region costs, and a caller's feature mask is in the mesh's own numbering).
+    """
+    if centres is not None or (features is not None and np.ndim(features) != 0) or not mesh.scattered_order():
+        return None
+
+    def build():
+        from .core.knn import build_grid
+
+        order = np.ascontiguousarray(build_grid(mesh.vertices)[0][3], dtype=np.int64)
+        order.setflags(write=False)
+        return mesh.renumbered(order), order
+
+    return cached_with_mesh(mesh, "locality order", build)
 
 
 def _rank(order: np.ndarray) -> np.ndarray:

@@ -3,7 +3,7 @@ import pytest
 
 import curv
 from curv.core.validity import Reason
-from tests.meshes import icosphere, tube
+from tests.meshes import icosphere, torus_grid, tube
 
 
 @pytest.fixture(scope="module")
@@ -128,3 +128,34 @@ def test_fitted_normals_option(sphere):
 def test_unknown_estimator_option_names_the_allowed_ones(sphere):
     with pytest.raises(curv.EstimatorError, match="'qs' has no option 'degree'; its options: none"):
         curv.estimate(sphere, "qs", 2, degree=3)
+
+
+def _shuffled(mesh: curv.Mesh, seed: int = 3) -> tuple[curv.Mesh, np.ndarray]:
+    """The mesh with its vertices in a random numbering, and that permutation (new vertex i is old perm[i])."""
+    perm = np.random.default_rng(seed).permutation(mesh.n_vertices)
+    rank = np.empty_like(perm)
+    rank[perm] = np.arange(perm.size)
+    return curv.Mesh(mesh.vertices[perm], rank[mesh.faces]), perm
+
+
+@pytest.mark.parametrize("method,k", [("qs", 2), ("meyer", 1), ("ru", 2), ("mru", 2)])
+def test_a_scattered_numbering_runs_in_grid_order_with_the_same_result(monkeypatch, method, k):
+    # a shuffled numbering is estimated on a renumbered twin; the rows come back in the caller's order
+    mesh = torus_grid(40, 16)[0]  # no umbilic: the directions are defined
+    shuffled, perm = _shuffled(mesh)
+    assert not shuffled.scattered_order()  # below the size where the order matters
+    ref = curv.estimate(mesh, method, k)
+    monkeypatch.setattr(curv.core.mesh, "SCATTERED_SPAN", 40)
+    assert shuffled.scattered_order()
+    res = curv.estimate(shuffled, method, k)
+    assert curv.api._locality_ordered(shuffled, None, None) is not None
+    assert np.array_equal(res.valid, ref.valid[perm]) and np.array_equal(res.reason, ref.reason[perm])
+    for field in ("k1", "k2", "normals", "k1_se", "k2_se"):
+        got, want = getattr(res, field), getattr(ref, field)[perm]
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12, err_msg=field)
+    for field in ("d1", "d2"):  # a direction up to its sign
+        cos = np.abs(np.sum(getattr(res, field) * getattr(ref, field)[perm], axis=1))
+        np.testing.assert_allclose(cos[res.valid], 1.0, atol=1e-9, err_msg=field)
+    # a region is estimated on the mesh as it is: no whole-mesh renumbering for a few rows
+    region = curv.estimate(shuffled, method, k, vertices=np.arange(10))
+    np.testing.assert_allclose(region.k1[:10], ref.k1[perm[:10]], rtol=1e-9, atol=1e-12)

@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .jit import jit, jit_parallel, launch, prange, threads
-from .corner_normals import corner_term, unit
+from .corner_normals import corner_terms, unit
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "vertex_face_incidence",
            "corner_pass", "CornerPass", "fan_flags", "next_corner", "prev_corner", "triangle_geometry", "duplicate_positions", "dihedral_angles",
@@ -446,12 +446,13 @@ def _one_fan(u, d, lead, trail, match):
         w = lead[i]
         if w == u or trail[i] == u:
             return 0
+        # the first corner arriving from w: had two corners arrived from w, two leading corners would
+        # have to share one (a collision below), since d leads matched to distinct corners use all d
         found = -1
         for j in range(d):
             if trail[j] == w:
-                if found >= 0:
-                    return 0
                 found = j
+                break
         if found < 0 or match[found] >= 0:
             return 0
         match[found] = i  # match is filled backwards: match[j] = the corner whose lead is trail[j]
@@ -552,27 +553,29 @@ def _corner_pass(indptr, corners, indices, corner_next, corner_prev, x, width, p
             d = last - first
             # the next and previous vertex of each corner, and the Max normal from them
             sx, sy, sz = 0.0, 0.0, 0.0
+            far2 = 0.0  # the longest squared edge to a next vertex
             for i in range(d):
                 c = corners[first + i]
                 b, q = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
                 lead[i], trail[i] = b, q
-                wx, wy, wz = corner_term(x, u, b, q)
+                wx, wy, wz, lead2 = corner_terms(x, u, b, q)
                 sx += wx
                 sy += wy
                 sz += wz
+                far2 = lead2 if lead2 > far2 else far2
             normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
             fans = _one_fan(u, d, lead, trail, parent)
             if fans > 0:
-                # the usual vertex: its neighbours are the next vertices of its corners, each once
+                # the usual vertex: its neighbours are the next vertices of its corners, each once; the
+                # longest edge is the root of the longest square (sqrt is monotonic and correctly
+                # rounded: the same value, to the bit, as the longest of the roots, _farther)
                 _insertion_sort(lead, d)
-                far = 0.0
                 for i in range(d):
                     spread[2 * first + i] = lead[i]
-                    far = _farther(x, u, lead[i], far)
                 nonmanifold[u] = fans > 1
                 border[u] = inconsistent[u] = False
                 counts[u] = d
-                longest[u] = far
+                longest[u] = math.sqrt(far2)
             else:
                 (nonmanifold[u], border[u], inconsistent[u], counts[u],
                  longest[u]) = _sorted_fan(u, first, last, corners, indices, corner_next, corner_prev, x, other,
@@ -705,7 +708,12 @@ def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
 @jit_parallel
 def triangle_geometry(tri, vertices, vector_area, area, degenerate):
     """Per triangle (p0, p1, p2): Newell vector area ``(p1 - p0) x (p2 - p0) / 2``, its norm, and
-    degeneracy (a repeated index, or area <= 1e-12 times the squared longest side)."""
+    degeneracy (a repeated index, or area <= 1e-12 times the squared longest side).
+
+    ``vector_area`` (m, 3) and ``area`` (m,) may be empty (not asked for: a 1-ring estimator reads
+    only ``degenerate`` (m,), and writing 32 bytes per face it never reads cost it more than the test).
+    """
+    shape = area.size > 0
     for f in prange(tri.shape[0]):
         i, j, k = tri[f, 0], tri[f, 1], tri[f, 2]
         ax = vertices[j, 0] - vertices[i, 0]
@@ -717,11 +725,12 @@ def triangle_geometry(tri, vertices, vector_area, area, degenerate):
         nx = 0.5 * (ay * bz - az * by)
         ny = 0.5 * (az * bx - ax * bz)
         nz = 0.5 * (ax * by - ay * bx)
-        vector_area[f, 0] = nx
-        vector_area[f, 1] = ny
-        vector_area[f, 2] = nz
         a = math.sqrt(nx * nx + ny * ny + nz * nz)
-        area[f] = a
+        if shape:
+            vector_area[f, 0] = nx
+            vector_area[f, 1] = ny
+            vector_area[f, 2] = nz
+            area[f] = a
         cx = vertices[k, 0] - vertices[j, 0]
         cy = vertices[k, 1] - vertices[j, 1]
         cz = vertices[k, 2] - vertices[j, 2]

@@ -11,7 +11,7 @@ import math
 
 from .jit import jit
 
-__all__ = ["max_normal", "max_weight", "corner_term", "unit"]
+__all__ = ["max_normal", "max_weight", "corner_term", "corner_terms", "unit"]
 
 
 @jit
@@ -44,10 +44,24 @@ def corner_term(x, p, b, q):
     -------
     wx, wy, wz : float
     """
+    wx, wy, wz, _ = corner_terms(x, p, b, q)
+    return wx, wy, wz
+
+
+@jit
+def corner_terms(x, p, b, q):
+    """:func:`corner_term` and ``|a|^2``, the squared edge from p to the next vertex b (the corner
+    pass takes the longest edge from it).
+
+    Returns
+    -------
+    wx, wy, wz, a2 : float
+    """
     ax, ay, az = x[b, 0] - x[p, 0], x[b, 1] - x[p, 1], x[b, 2] - x[p, 2]
     bx, by, bz = x[q, 0] - x[p, 0], x[q, 1] - x[p, 1], x[q, 2] - x[p, 2]
-    return max_weight(ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx,
-                      ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz)
+    a2 = ax * ax + ay * ay + az * az
+    wx, wy, wz = max_weight(ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx, a2, bx * bx + by * by + bz * bz)
+    return wx, wy, wz, a2
 
 
 @jit
