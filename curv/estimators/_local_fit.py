@@ -918,8 +918,8 @@ def sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, qu
     ``var(k_i) / E[RSS]`` (propagation per unit noise variance over the spare equations it expects)
     is the factor between their squared standard errors, free of the noise's units. The kernel runs
     again with its slot maps at up to :data:`SAMPLE_SIZE` vertices (all of ``fitted`` or runs of
-:data:`SAMPLE_RUN` consecutive ones, evenly spaced);
-    the factors are the medians over the sample where both models hold.
+    :data:`SAMPLE_RUN` consecutive ones, evenly spaced); the factors are the medians over the sample
+    where both models hold.
 
     Parameters
     ----------
