@@ -80,7 +80,15 @@ directions, :func:`noise_jobs`), every candidate, as rows; and the measures and 
     python -m curv.advice.table fill --table options7057.json --out twins.json --kinds --noise-levels 0.015 --sizes 2562 3169 7057 10242 --work /tmp/advisor-twins --workers 1
     python -m curv.advice.table refeature --table twins.json --work /tmp/advisor-refeature --workers 1
 
-(168 meshes, 6720 estimates, 331 CPU-s; 90 meshes, 6120 estimates.) The coarse rows are
+(168 meshes, 6720 estimates, 331 CPU-s; 90 meshes, 6120 estimates.) Then closed surfaces between
+the grid's sizes are added as rows, where the winners of the noise-free ellipsoids change (nc R1 up
+to 642 vertices, jet R2 degree 4 from 2562): 1000, 1600 and 5000 vertices, three random shapes at
+every noise level, every candidate; and the measures and axes again::
+
+    python -m curv.advice.table fill --table twins.json --out closed2.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 1000 1600 5000 --work /tmp/advisor-closed2 --workers 1
+    python -m curv.advice.table refeature --table closed2.json --work /tmp/advisor-refeature --workers 1
+
+(189 meshes, 12,852 estimates, 502 s wall with 1 worker at niceness 10 on the loaded machine.) The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
