@@ -3,7 +3,7 @@
 Run by hand (not part of the test suite)::
 
     .venv/bin/python benchmarks/bench_advisor.py --quick            # 48 meshes of at most ~3700 vertices
-    .venv/bin/python benchmarks/bench_advisor.py --meshes 80 --seed 9000 --workers 1 --runs runs9000.json   # docs/ADVISOR.md
+    .venv/bin/python benchmarks/bench_advisor.py --meshes 80 --seed 11000 --workers 1 --runs runs11000.json   # docs/ADVISOR.md
     .venv/bin/python benchmarks/bench_advisor.py --meshes 60 --seed 2000 --workers 2 --runs runs2000.json
     .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
 
