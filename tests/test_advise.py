@@ -365,6 +365,33 @@ def test_the_packaged_table_is_what_the_documented_commands_write():
     assert table["variants"] == [v.id for v in at.table_settings().variants()] + at.option_variants()
 
 
+def test_the_packaged_table_has_the_option_calls_wherever_it_has_the_named_ones():
+    """An option call is predicted from the same neighbours as a named call: every size of closed
+    surface and of patch (but the 12481-vertex patches of samples 1 and 2) ran the option calls on
+    every mesh, so each option column has values across the group (empty only where the call gives
+    none, e.g. a fit that needs more neighbours than a coarse mesh has), and the closed sizes between
+    the grid's are rows."""
+    import curv.advice.table as at
+
+    table = load_table()
+    erel = np.array(table["median_erel"], float)
+    keys = table["truth"]["key"]
+    options = np.isin(table["variants"], at.option_variants())
+    assert options.sum() == 40
+    closed = np.array([k[1] in at.DEFAULT_CLOSED for k in keys])
+    size = np.array([k[2] for k in keys])
+    sample = np.array([k[5] for k in keys])
+    assert {1000, 1600, 5000} <= set(size[closed].tolist())
+    for is_closed in (True, False):
+        for n in np.unique(size[closed == is_closed]):
+            group = (closed == is_closed) & (size == n) & ~(~closed & (size == 12481) & (sample > 0))
+            have = np.isfinite(erel[group][:, options])
+            assert have.any(axis=0).all(), (is_closed, n)  # every option call has values in every group
+            assert have.mean() >= 0.8, (is_closed, n, have.mean())
+    dense = ~closed & (size == 12481) & (sample > 0)  # not run there (yet): empty, the prediction leaves them out
+    assert dense.sum() == 168 and not np.isfinite(erel[dense][:, options]).any()
+
+
 def test_the_packaged_table_reaches_the_densest_hexagon_and_stays_small():
     from importlib import resources
 
