@@ -2,7 +2,9 @@
 
 Run by hand from the repository root (about 10 minutes on a loaded 2-core machine)::
 
-    .venv/bin/python benchmarks/points_wide_ranges.py 3      # 3 surfaces per function and sampling
+    .venv/bin/python benchmarks/points_wide_ranges.py 3            # 3 surfaces per function and sampling
+    .venv/bin/python benchmarks/points_wide_ranges.py 3 --short    # the leading variants only (about 12 minutes)
+    .venv/bin/python benchmarks/points_wide_ranges.py 3 --short --first 3   # surfaces 3-5: a held-out check
 
 The clouds are those of ``bench_accuracy.py --points`` (same surfaces, samplings, noise levels and
 seeds). **Same-footing rule**: every support of every variant compared stays inside the patch at
@@ -18,9 +20,11 @@ out of APSS's input, as in ``points_accuracy.apss_curvature``) and the same eval
 invalid estimate counts against the 1 % rule for both.
 
 Variants: the jet at degrees 2-4, uniform and smooth weights (``weights="smooth"``), at R12, R13
-and at ``radius=`` 12 and 13 median spacings, and at degree 4 R3 (the clean cells' choice); APSS
-at scales 6, 8, 12, 14, 16. Prints the pooled measures per cell (sampling, noise) and the best of
-each side.
+and at ``radius=`` 12 and 13 median spacings, and at degree 4 R3 (the clean cells' choice); the
+degree-4 jet with the adaptive width (``width="adaptive"``, :mod:`curv.estimators.jet_width`) at
+R13 and ``radius=`` 13 median spacings; APSS at scales 6, 8, 12, 14, 16. ``--short`` keeps the
+variants that led a cell or a measure in the full run (:data:`SHORT`) and APSS at 12, 14, 16.
+Prints the pooled measures per cell (sampling, noise) and the best of each side.
 """
 
 from __future__ import annotations
@@ -48,6 +52,12 @@ APSS_RADIUS_PER_SPACING = 0.813
 """MeshLab's per-point radius d16/2 over curvlab's spacing (6th-neighbour distance), median over the
 clouds of this benchmark (0.8131 on the noisy ones); printed again by every run."""
 MAX_INVALID = 0.01
+SHORT = ("jet degree 4 uniform R3", "jet degree 4 uniform R13", "jet degree 4 uniform radius 13",
+         "jet degree 4 smooth radius 13", "jet degree 2 smooth radius 13", "jet degree 4 uniform adaptive R13",
+         "jet degree 4 uniform adaptive radius 13")
+"""The variants of ``--short``: the full run's leaders (median, trimmed RMS, nRMS H and K) and the
+adaptive width."""
+SHORT_APSS_SCALES = (12.0, 14.0, 16.0)
 
 
 def run_cloud(job) -> tuple:
@@ -62,7 +72,7 @@ def run_cloud(job) -> tuple:
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import sample_points
 
-    function, noise, sample, s_index = job
+    function, noise, sample, s_index, short = job
     sampling = pa.SAMPLINGS[s_index]
     tm = build_test_mesh(Task(seed=0, function=function, density=pa.DENSITY, irregularity=0.0, noise=noise,
                               sample=sample))
@@ -82,17 +92,20 @@ def run_cloud(job) -> tuple:
     t1, t2 = sampled.truth.k1[ev], sampled.truth.k2[ev]
     normals = point_normals(cloud).normals
     out = {}
-    for degree in DEGREES:
-        for weights in WEIGHTS:
-            for k in RANGES:
-                res = curv.estimate(cloud, "jet", k, normals=normals, degree=degree, weights=weights)
-                out[f"jet degree {degree} {weights} R{k}"] = pa._errors(t1, t2, res.k1[ev], res.k2[ev])
-                res = curv.estimate(cloud, "jet", radius=k * median_spacing, normals=normals, degree=degree,
-                                    weights=weights)
-                out[f"jet degree {degree} {weights} radius {k}"] = pa._errors(t1, t2, res.k1[ev], res.k2[ev])
-    res = curv.estimate(cloud, "jet", 3, normals=normals, degree=4)
-    out["jet degree 4 uniform R3"] = pa._errors(t1, t2, res.k1[ev], res.k2[ev])
-    for scale in APSS_SCALES:
+    jets = [(f"jet degree {degree} {weights} R{k}", dict(range=k), dict(degree=degree, weights=weights))
+            for degree in DEGREES for weights in WEIGHTS for k in RANGES]
+    jets += [(f"jet degree {degree} {weights} radius {k}", dict(radius=k * median_spacing),
+              dict(degree=degree, weights=weights)) for degree in DEGREES for weights in WEIGHTS for k in RANGES]
+    jets += [("jet degree 4 uniform R3", dict(range=3), dict(degree=4)),
+             (f"jet degree 4 uniform adaptive R{REACH}", dict(range=REACH), dict(degree=4, width="adaptive")),
+             (f"jet degree 4 uniform adaptive radius {REACH}", dict(radius=REACH * median_spacing),
+              dict(degree=4, width="adaptive"))]
+    for label, where, options in jets:
+        if short and label not in SHORT:
+            continue
+        res = curv.estimate(cloud, "jet", **where, normals=normals, **options)
+        out[label] = pa._errors(t1, t2, res.k1[ev], res.k2[ev])
+    for scale in SHORT_APSS_SCALES if short else APSS_SCALES:
         k1, k2, _, _ = pa.apss_curvature(points, normals, scale)
         out[f"APSS scale {scale:g}"] = pa._errors(t1, t2, k1[ev], k2[ev])
     return (sampling, noise), out, ratio, int(ev.sum())
@@ -102,11 +115,11 @@ def _init_worker():
     os.environ["CURV_THREADS"] = "1"
 
 
-def main(samples: int, workers: int = 2) -> int:
+def main(samples: int, workers: int = 2, short: bool = False, first: int = 0) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
     t0 = time.perf_counter()
-    jobs = [(fn, noise, s, si) for noise in pa.NOISES for fn in pa.FUNCTIONS for s in range(samples)
+    jobs = [(fn, noise, s, si, short) for noise in pa.NOISES for fn in pa.FUNCTIONS for s in range(first, first + samples)
             for si in range(len(pa.SAMPLINGS))]
     pooled: dict = {}
     ratios, counts = [], {}
@@ -127,12 +140,18 @@ def main(samples: int, workers: int = 2) -> int:
     for cell in sorted(pooled):
         stats = {label: pa.summarise(es) for label, es in pooled[cell].items()}
         ranked = [lab for lab in sorted(stats, key=lambda x: stats[x]["median"]) if stats[lab]["invalid"] <= MAX_INVALID]
-        ours = next(lab for lab in ranked if not lab.startswith("APSS"))
-        peer = next(lab for lab in ranked if lab.startswith("APSS"))
-        o, p = stats[ours], stats[peer]
-        r = [o[m] / p[m] for m in ("median", "trimmed_rms", "nrms_h", "nrms_k")]
-        summary.append(f"| {pa.cell_name(cell)} | {np.sum(counts[cell])} | {ours} | {o['median']:.4g} | {peer} | "
-                       f"{p['median']:.4g} | {', '.join(f'{x:.2f}' for x in r)} | {'yes' if r[0] <= 0.8 else 'no'} |")
+        ours = next((lab for lab in ranked if not lab.startswith("APSS")), None)
+        peer = next((lab for lab in ranked if lab.startswith("APSS")), None)
+        if ours is None or peer is None:
+            summary.append(f"| {pa.cell_name(cell)} | {np.sum(counts[cell])} | {ours or 'none ranked'} | | "
+                           f"{peer or 'none ranked'} | | (a side has no variant within {100 * MAX_INVALID:g} % "
+                           f"invalid) | |")
+        else:
+            o, p = stats[ours], stats[peer]
+            r = [o[m] / p[m] for m in ("median", "trimmed_rms", "nrms_h", "nrms_k")]
+            summary.append(f"| {pa.cell_name(cell)} | {np.sum(counts[cell])} | {ours} | {o['median']:.4g} | {peer} | "
+                           f"{p['median']:.4g} | {', '.join(f'{x:.2f}' for x in r)} | "
+                           f"{'yes' if r[0] <= 0.8 else 'no'} |")
         print(f"\n{pa.cell_name(cell)}")
         for lab in sorted(stats, key=lambda x: stats[x]["median"]):
             s = stats[lab]
@@ -144,4 +163,11 @@ def main(samples: int, workers: int = 2) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main(int(sys.argv[1]) if len(sys.argv) > 1 else 3))
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("samples", type=int, nargs="?", default=3, help="surfaces per function and sampling")
+    parser.add_argument("--short", action="store_true", help="the leading variants only (SHORT)")
+    parser.add_argument("--first", type=int, default=0, help="index of the first surface (default 0)")
+    args = parser.parse_args()
+    raise SystemExit(main(args.samples, short=args.short, first=args.first))

@@ -5,8 +5,8 @@ Run by hand from the repository root (about 3 minutes)::
     .venv/bin/python benchmarks/points_wide_tails.py 3      # 3 surfaces per function and sampling
 
 The noisy clouds and evaluated points of ``points_wide_ranges.py`` (same seeds, same rule); the
-degree-4 jet over a ball of 13 median spacings against APSS at scale 16. Prints, per sampling and
-function: the evaluated points, then for each side the trimmed RMS (over e_rel < 1), the median
+degree-4 jet over a ball of 13 median spacings, with the fixed and the adaptive width
+(``width="adaptive"``), against APSS at scale 16. Prints, per sampling and function: the evaluated points, then for each side the trimmed RMS (over e_rel < 1), the median
 e_rel and the share with e_rel >= 0.2, on all evaluated points and on the flattest fifth of them
 (lowest curvature scale c = (|k1| + |k2|) / 2).
 """
@@ -36,7 +36,7 @@ def _measures(e: np.ndarray) -> tuple[float, float, float]:
 
 
 def run(samples: int) -> dict:
-    """``{(sampling, function): [(e_jet, e_apss, c)]}`` over the noisy clouds."""
+    """``{(sampling, function): [(e_jet, e_adaptive, e_apss, c)]}`` over the noisy clouds."""
     from scipy.spatial import cKDTree
 
     import curv
@@ -67,24 +67,26 @@ def run(samples: int) -> dict:
                 t1, t2 = sampled.truth.k1[ev], sampled.truth.k2[ev]
                 normals = point_normals(cloud).normals
                 res = curv.estimate(cloud, "jet", radius=pw.REACH * median_spacing, normals=normals, degree=4)
+                ada = curv.estimate(cloud, "jet", radius=pw.REACH * median_spacing, normals=normals, degree=4,
+                                    width="adaptive")
                 k1, k2, _, _ = pa.apss_curvature(points, normals, 16.0)
                 out.setdefault((sampling, function), []).append(
-                    (relative_error(t1, t2, res.k1[ev], res.k2[ev]), relative_error(t1, t2, k1[ev], k2[ev]),
-                     0.5 * (np.abs(t1) + np.abs(t2))))
+                    (relative_error(t1, t2, res.k1[ev], res.k2[ev]), relative_error(t1, t2, ada.k1[ev], ada.k2[ev]),
+                     relative_error(t1, t2, k1[ev], k2[ev]), 0.5 * (np.abs(t1) + np.abs(t2))))
     return out
 
 
 def main(samples: int) -> int:
     for (sampling, function), rows in sorted(run(samples).items()):
-        e_jet, e_apss, c = (np.concatenate([r[i] for r in rows]) for i in range(3))
+        e_jet, e_ada, e_apss, c = (np.concatenate([r[i] for r in rows]) for i in range(4))
         flat = c < np.percentile(c, 20)
         line = [f"{sampling:8s} {function:16s} {e_jet.size:5d} points"]
-        for name, e in (("jet degree 4 radius 13", e_jet), ("APSS scale 16", e_apss)):
+        for name, e in (("jet degree 4 radius 13", e_jet), ("adaptive", e_ada), ("APSS scale 16", e_apss)):
             rms, med, tail = _measures(e)
             frms, fmed, ftail = _measures(e[flat])
             line.append(f"{name}: RMS {rms:.4f} median {med:.4f} tail {100 * tail:.1f} % "
                         f"(flattest fifth: RMS {frms:.4f} median {fmed:.4f} tail {100 * ftail:.1f} %)")
-        print(" | ".join(line))
+        print("\n    ".join(line))
     return 0
 
 

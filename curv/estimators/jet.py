@@ -29,6 +29,11 @@ jet's tangent plane to the reported normal's by the smallest rotation taking ``n
 tangent to the reported normal. The angle between the two is about the Max normal's own error:
 0.01-0.07 degrees (median) on the study's clean meshes, 5-9 degrees at its 100 % noise. :func:`curv.fitted_normals.fitted_normals` gives the jet normals.
 
+Width: with ``width="adaptive"`` the given ball is the widest of several candidate fits (narrower
+balls at the same degree, then the degree-2 smooth fit over the whole ball), chosen per vertex by
+the intersection of their confidence intervals (:mod:`curv.estimators.jet_width`); the default
+``"fixed"`` is the single fit above.
+
 Works on any polygon mesh and on borders (a one-sided fit there).
 """
 
@@ -46,10 +51,11 @@ from ..geometry.neighbourhood import all_centres, ball_support, blocked_vertices
 from ..core.validity import Reason
 from ._local_fit import factor_whiten, noise_variance, principal_gradients, row_dot, slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
+from .jet_width import DEFAULT_WIDTH, WIDTHS, iter_adaptive_jet
 from .registry import EstimatorSpec, empty_principal, register
 
-__all__ = ["iter_jet", "DEFAULT_DEGREE", "DEGREES", "DEFAULT_WEIGHTS", "WEIGHTS", "RCOND", "unknowns", "jet_normals",
-           "smooth_weight"]
+__all__ = ["iter_jet", "DEFAULT_DEGREE", "DEGREES", "DEFAULT_WEIGHTS", "WEIGHTS", "DEFAULT_WIDTH", "WIDTHS", "RCOND",
+           "unknowns", "jet_normals", "smooth_weight"]
 
 DEGREES = (2, 3, 4)
 """The jet degrees offered."""
@@ -453,6 +459,13 @@ def check_weights(weights) -> bool:
     return weights == "smooth"
 
 
+def check_width(width) -> bool:
+    """True for ``"adaptive"``, False for ``"fixed"``; :class:`~curv.core.errors.EstimatorError` otherwise."""
+    if not isinstance(width, str) or width not in WIDTHS:
+        raise EstimatorError(f"jet width must be one of {', '.join(WIDTHS)}; got {width!r}")
+    return width == "adaptive"
+
+
 def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, features):
     indptr, indices = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
@@ -468,7 +481,7 @@ def _inputs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, centres: np.ndar
 
 def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
              degree: int = DEFAULT_DEGREE, weights: str = DEFAULT_WEIGHTS, centres: np.ndarray | None = None,
-             features=None):
+             features=None, width: str = DEFAULT_WIDTH):
     """Osculating jet of degree ``degree`` over each vertex's ball support.
 
     Parameters
@@ -493,6 +506,11 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         The vertices to estimate (default all); other rows are left unset.
     features : curv.core.features.FeatureSet, optional
         The supports do not expand through feature vertices.
+    width : {"fixed", "adaptive"}
+        ``"fixed"`` (the default) fits over the given ball. ``"adaptive"`` chooses per vertex among
+        the degree-``degree`` jets over narrower balls and the degree-2 smooth jet over the whole
+        ball, by the intersection of their confidence intervals (:mod:`curv.estimators.jet_width`;
+        7 fits, all within the given ball).
 
     Yields
     ------
@@ -507,6 +525,9 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     """
     degree = check_degree(degree)
     smooth = check_weights(weights)
+    if check_width(width):
+        return (yield from iter_adaptive_jet(mesh, normals, radii, chunk=chunk, degree=degree, weights=weights,
+                                             centres=centres, features=features))
     n = mesh.n_vertices
     centres = all_centres(n, centres)
     whole = centres.size == n
@@ -566,7 +587,7 @@ register(EstimatorSpec(
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True,
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
-    options={"degree": DEGREES, "weights": WEIGHTS},
+    options={"degree": DEGREES, "weights": WEIGHTS, "width": WIDTHS},
     kernels=(_jet_kernel,),
     min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
 ))
