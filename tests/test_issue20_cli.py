@@ -56,6 +56,20 @@ def test_jet_weights_flag_is_the_librarys_option(sphere_file, tmp_path, capsys):
     assert "has no option 'weights'" in capsys.readouterr().err
 
 
+def test_jet_width_flag_is_the_librarys_option(tmp_path, capsys):
+    noisy = curv.surfaces.make_surface("sphere", n_vertices=642, noise=0.1, seed=3).mesh
+    src, out = tmp_path / "noisy.ply", tmp_path / "adaptive.ply"
+    curv.save_ply(src, noisy, curv.estimate(noisy, "qs"))
+    assert main(["estimate", str(src), "-m", "jet", "-r", "4", "--width", "adaptive", "-o", str(out), "-q"]) == 0
+    k1 = plyfile.PlyData.read(str(out))["vertex"]["k1"]
+    mesh = curv.load(src)
+    np.testing.assert_allclose(k1, curv.estimate(mesh, "jet", 4, width="adaptive").k1, rtol=1e-6, equal_nan=True)
+    assert not np.allclose(k1, curv.estimate(mesh, "jet", 4).k1, rtol=1e-9, atol=0, equal_nan=True)
+    capsys.readouterr()
+    assert main(["estimate", str(src), "-m", "qs", "--width", "adaptive", "-q"]) == 2
+    assert "has no option 'width'" in capsys.readouterr().err
+
+
 def test_noise_model_flag_is_the_librarys_option(tmp_path):
     noisy = curv.surfaces.make_surface("sphere", n_vertices=642, noise=0.05, seed=3).mesh
     path, out = tmp_path / "noisy.ply", tmp_path / "mru.ply"
