@@ -73,6 +73,7 @@ def iter_estimate(
     vertices=None,
     knn: int | None = None,
     orient="up",
+    standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
@@ -114,7 +115,11 @@ def iter_estimate(
                                                             smooth_iterations, smooth_strength, fit_range, feats)
         normals_label = _normals_label(normals, normal_weighting, fit_range)
     # a region's fits also run at its neighbours, whose residuals its standard errors pool
-    fitted = centres if centres is None or isinstance(work_mesh, PointCloud) else pool_members(work_mesh, centres)
+    pools = standard_errors and _ERRORS_OPTION in spec.options
+    fitted = (pool_members(work_mesh, centres)
+              if pools and centres is not None and not isinstance(work_mesh, PointCloud) else centres)
+    if _ERRORS_OPTION in spec.options:
+        options = {**options, _ERRORS_OPTION: bool(standard_errors)}
     radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
@@ -146,7 +151,7 @@ def iter_estimate(
         return flags if centres is None else flags[centres]
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
-    k1_se, k2_se = _standard_errors(raw, at, smooth, k1.shape[0])
+    k1_se, k2_se = _standard_errors(raw if standard_errors else None, at, smooth, k1.shape[0])
     # root causes, whatever the estimator saw (no face or no other point at all; a normal whose
     # orientation was left undecided): later codes win
     for mask, code in flags.forced:
@@ -182,7 +187,7 @@ def iter_estimate(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
         method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
-              "normals": normals_label, **options,
+              "normals": normals_label, **{k: v for k, v in options.items() if k != _ERRORS_OPTION},
               "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
@@ -379,9 +384,10 @@ def _check_vertices(vertices, n: int) -> np.ndarray | None:
 
 def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray, np.ndarray]:
     """This call's rows of the fit's standard errors (copies), NaN for an estimator without a fit
-    and for the smoothing variants: smoothing correlates the noise of neighbouring vertices (before
-    the fit with ``mesh``, after it with ``values``), which the residual model assumes independent."""
-    if raw.k1_se is None or smooth is not Smoothing.NONE:
+    (or a call without standard errors, ``raw`` None) and for the smoothing variants: smoothing
+    correlates the noise of neighbouring vertices (before the fit with ``mesh``, after it with
+    ``values``), which the residual model assumes independent."""
+    if raw is None or raw.k1_se is None or smooth is not Smoothing.NONE:
         return np.full(rows, np.nan), np.full(rows, np.nan)
     return at(raw.k1_se).copy(), at(raw.k2_se).copy()
 
@@ -444,6 +450,9 @@ def _normals_label(normals, weighting, fit_range) -> str:
 
 
 _NO_ROWS = np.empty(0, np.int64)
+_ERRORS_OPTION = "standard_errors"
+"""The estimator option :func:`iter_estimate` sets from its keyword of that name (declared by the
+fits whose standard errors cost a pass of their own, :data:`curv.estimators._local_fit.STANDARD_ERRORS`)."""
 _OK, _SINGULAR = np.uint8(Reason.OK), np.uint8(Reason.SINGULAR)
 
 
@@ -531,6 +540,12 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
         Point clouds whose normals are estimated: turn each connected part up (+z at its highest
         point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
         viewpoint (a scanner's position).
+    standard_errors : bool
+        False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
+        and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,
+        ``an``, ``mru``: the estimators whose options list ``standard_errors``) neither fit a
+        region's neighbours nor run the pooling pass. k1, k2, the directions, ``valid`` and
+        ``reason`` are the same either way. Default True.
     **options
         Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for
         ``jet``.

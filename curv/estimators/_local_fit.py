@@ -869,6 +869,10 @@ def mark_degenerate(p, k1, k2, d1, d2, reason):
     reason[p] = DEGENERATE
 
 
+STANDARD_ERRORS = (True, False)
+"""The fits' option ``standard_errors``: False when the caller reads none (:func:`run_fit`;
+:func:`curv.estimate` passes its keyword of that name to the estimators that declare it)."""
+
 NOISE_MODELS = ("sampled", "independent", "normals")
 """How the standard errors of ``an`` and ``mru`` (the fits that read the neighbours' normals) take
 the errors of those normals (the curvatures do not depend on it):
@@ -962,8 +966,8 @@ def sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, qu
 
 
 def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None, noise_model: str | None = None
-            ) -> Generator[float, None, Principal]:
+            centres: np.ndarray | None = None, features=None, noise_model: str | None = None,
+            standard_errors: bool = True) -> Generator[float, None, Principal]:
     """Run a fit kernel over all (or some) vertices, a chunk of them per call, and assemble the result.
 
     Parameters
@@ -994,6 +998,11 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         ``"normals"`` gives the kernel a zeroed (slices, n) int64 ``slots`` (vertex -> 1 + its place in
         a short list, reset after each vertex) instead of an empty one; ``"sampled"`` runs the kernel
         without and scales the standard errors by :func:`sampled_scales` on a mesh.
+    standard_errors : bool
+        False: the caller reads no standard errors, so the fits run at ``centres`` only (not at a
+        region's pooling neighbours), there is no pooling pass and no sample of ``noise_model``,
+        and the result's ``k1_se``, ``k2_se`` are None. The curvatures, directions and reasons are
+        the same either way (each vertex's fit reads only its own support).
 
     It yields the fraction of vertices done and returns the :class:`~curv.core.result.Principal`,
     as the estimators' functions do (:data:`~curv.estimators.registry.EstimatorFunction`).
@@ -1001,12 +1010,17 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     n = mesh.n_vertices
     given = centres is not None
     centres = all_centres(n, centres)
-    # each vertex once (the pooling pass updates its rows in place)
-    pooled = np.unique(centres) if given else centres
-    whole = pooled.size == n
+    if standard_errors:
+        # each vertex once (the pooling pass updates its rows in place)
+        pooled = np.unique(centres) if given else centres
+        whole = pooled.size == n
+        # a region's standard errors pool its neighbours' residuals too: fit them as well
+        fitted = centres if whole else pool_members(mesh, pooled)
+    else:
+        # no pooling: a vertex listed twice is fitted twice, to the same values
+        fitted = centres
+        whole = not given
     ring_ptr, ring = pool_rings(mesh)
-    # a region's standard errors pool its neighbours' residuals too: fit them as well
-    fitted = centres if whole else pool_members(mesh, pooled)
     adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
@@ -1025,6 +1039,8 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
                k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)
 
     yield from iter_chunks(fitted.size, run, chunk=chunk)
+    if not standard_errors:
+        return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason)
     if noise_model == "sampled" and ring.size > 0:
         scales = sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, queues, k1, k2, d1, d2,
                                 reason, k1_se, k2_se, parts, ring_ptr, ring)

@@ -26,6 +26,7 @@ from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
+                         STANDARD_ERRORS,
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, checked_noise_model, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
@@ -436,27 +437,34 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Normal-curvature least squares over each vertex's support (3 unknowns, 1 equation per neighbour)."""
+            centres: np.ndarray | None = None, features=None, standard_errors: bool = True):
+    """Normal-curvature least squares over each vertex's support (3 unknowns, 1 equation per neighbour).
+
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, NC), chunk=chunk, centres=centres,
-                               features=features))
+                               features=features, standard_errors=standard_errors))
 
 
 def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Quadratic height fit over each vertex's support (3 unknowns, 1 equation per neighbour)."""
+            centres: np.ndarray | None = None, features=None, standard_errors: bool = True):
+    """Quadratic height fit over each vertex's support (3 unknowns, 1 equation per neighbour).
+
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, QS), chunk=chunk, centres=centres,
-                               features=features))
+                               features=features, standard_errors=standard_errors))
 
 
 def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL,
+            standard_errors: bool = True):
     """Adjacent-normal cubic fit over each vertex's support (7 unknowns, 3 equations per neighbour).
 
     ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
-    take the errors of the neighbours' normals; the curvatures do not depend on it."""
+    take the errors of the neighbours' normals; the curvatures do not depend on it.
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, AN), chunk=chunk, centres=centres,
-                               features=features, noise_model=checked_noise_model(noise_model)))
+                               features=features, noise_model=checked_noise_model(noise_model),
+                               standard_errors=standard_errors))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
@@ -465,18 +473,18 @@ register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_fit_kernel, POOL_KERNEL),
-    extra_bytes_per_unit=SE_PARTS_BYTES,
+    options={"standard_errors": STANDARD_ERRORS}, extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_fit_kernel, POOL_KERNEL),
-    extra_bytes_per_unit=SE_PARTS_BYTES,
+    options={"standard_errors": STANDARD_ERRORS}, extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL),
-    options={"noise_model": NOISE_MODELS},
+    options={"noise_model": NOISE_MODELS, "standard_errors": STANDARD_ERRORS},
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))

@@ -17,6 +17,7 @@ from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
+                         STANDARD_ERRORS,
                          add_ring_columns, centre_columns, deviator_gradients, finish_fit, fit_frame, list_room,
                          checked_noise_model, normal_in_frame, offset_in_frame, principal_gradients, run_fit, slice_bounds,
                          solve_sym3, store_parts, store_se3, sym3_inverse)
@@ -197,13 +198,16 @@ def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stam
 
 
 def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL,
+            standard_errors: bool = True):
     """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk).
 
     ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
-    take the errors of the neighbours' normals; the curvatures do not depend on it."""
+    take the errors of the neighbours' normals; the curvatures do not depend on it.
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk, centres=centres,
-                                 features=features, noise_model=checked_noise_model(noise_model)))
+                                 features=features, noise_model=checked_noise_model(noise_model),
+                                 standard_errors=standard_errors))
 
 
 register(EstimatorSpec(
@@ -211,6 +215,6 @@ register(EstimatorSpec(
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
     summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
-    options={"noise_model": NOISE_MODELS},
+    options={"noise_model": NOISE_MODELS, "standard_errors": STANDARD_ERRORS},
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))
