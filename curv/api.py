@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import builtins
 import enum
 import inspect
 import math
@@ -27,7 +28,9 @@ from .core.result import Curvature
 from .geometry.smoothing import smooth_positions, smooth_values
 from .core.validity import Reason
 
-__all__ = ["estimate", "iter_estimate", "Smoothing", "parse_range"]
+__all__ = ["estimate", "iter_estimate", "estimate_ranges", "iter_estimate_ranges", "Smoothing", "parse_range"]
+
+builtins_range = builtins.range  # the keyword ``range`` shadows it in the functions below
 
 
 class Smoothing(str, enum.Enum):
@@ -82,8 +85,91 @@ def iter_estimate(
     :class:`curv.core.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
     Parameters as in :func:`estimate`.
     """
+    results = yield from _iter_estimates(
+        mesh, method, (range,), radius=radius, normals=normals, normal_weighting=normal_weighting, smooth=smooth,
+        smooth_iterations=smooth_iterations, smooth_strength=smooth_strength, fit_range=fit_range,
+        block_size=block_size, features=features, vertices=vertices, knn=knn, orient=orient,
+        standard_errors=standard_errors, **options)
+    return results[0]
+
+
+def iter_estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords
+                         ) -> Generator[float, None, list]:
+    """:func:`estimate_ranges` step by step: yields the fraction done, returns the list of
+    :class:`Curvature` (as :func:`iter_estimate` does for one range)."""
+    ranges = tuple(ranges) if isinstance(ranges, (list, tuple)) else (ranges,)
+    if not ranges:
+        raise EstimatorError("ranges must name at least one range")
+    for name in ("radius", "knn"):
+        if keywords.get(name) is not None:
+            raise EstimatorError(f"estimate_ranges takes ranges, not {name}=; estimate one {name} with curv.estimate")
+    return (yield from _iter_estimates(mesh, method, ranges, **keywords))
+
+
+def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords) -> list:
+    """Estimate at several ranges of one estimator on the same mesh: one :class:`Curvature` per range.
+
+    The result for each range equals ``estimate(mesh, method, range, **keywords)``: bit for bit for
+    the estimators that run each range on its own, to rounding for those that share one pass
+    over the ranges (below). What every range shares is done once: the mesh's checks and
+    connectivity, the normals, a region's rows. ``csm`` and ``icc`` share more: one walk per
+    vertex at the widest range serves every range (each range's support is exactly its own
+    search's, :func:`curv.geometry.neighbourhood.widen_ball_support`), the star sums of a range are
+    the narrower one's plus the vertices it adds, and only the faces crossing each sphere are
+    clipped per range; their sums are added in another order than a call with one range, so the
+    values agree to a few units in the last place (and a value at a threshold, e.g. a tiny negative
+    discriminant, may land on the other side).
+
+    Parameters
+    ----------
+    mesh, method :
+        As in :func:`estimate`.
+    ranges : sequence of (int, float or str)
+        The ranges k of Rk (:mod:`curv.core.ranges`), in any order; the results follow it.
+    **keywords
+        As in :func:`estimate`, but not ``radius`` or ``knn``.
+
+    Returns
+    -------
+    list of Curvature
+        One per range, in the order of ``ranges``.
+    """
+    gen = iter_estimate_ranges(mesh, method, ranges, **keywords)
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+
+def _iter_estimates(
+    mesh: Mesh,
+    method: str = DEFAULT_ESTIMATOR,
+    ranges=(None,),
+    *,
+    radius: float | None = None,
+    normals: np.ndarray | None = None,
+    normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
+    smooth: Smoothing | str | None = None,
+    smooth_iterations: int = 1,
+    smooth_strength: float = 0.5,
+    fit_range=2,
+    block_size: int | None = None,
+    features=None,
+    vertices=None,
+    knn: int | None = None,
+    orient="up",
+    standard_errors: bool = True,
+    **options,
+) -> Generator[float, None, list]:
+    """:func:`iter_estimate` at each of ``ranges``: returns the list of :class:`Curvature`, in that order.
+
+    The setup (mesh checks, normals, flags, a region's rows) is done once; an estimator whose
+    function takes ``(levels, n)`` radii (its ``takes_levels`` attribute: ``csm``, ``icc``) runs the
+    ranges in one call, in ascending order; the others run once per range.
+    """
     spec = get_spec(method)
-    rng = resolve(spec, range, radius, knn)
+    rngs = [resolve(spec, r, radius, knn) for r in ranges]
     options = spec.check_options(options)
     mesh = mesh if isinstance(mesh, PointCloud) else as_mesh(mesh)
     why_not = refusal(spec, mesh)
@@ -120,7 +206,8 @@ def iter_estimate(
               if pools and centres is not None and not isinstance(work_mesh, PointCloud) else centres)
     if _ERRORS_OPTION in spec.options:
         options = {**options, _ERRORS_OPTION: bool(standard_errors)}
-    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
+    radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
+                for rng in rngs]
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
     if on_crease and used_normals is not None:
@@ -128,17 +215,45 @@ def iter_estimate(
         # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
                                           lambda: _without(used_normals, feats.vertices))
-    order = centres
-    if centres is None and isinstance(work_mesh, PointCloud) and radii is not None:
-        # a whole cloud in its grid's cell order: neighbouring points are estimated one after another
-        # and share what is in the cache (a random-order cloud's kernel ran about 3x slower); every
-        # point writes its own rows, so the result is the same
-        order = work_mesh.ball_grid(radii)[0][3]
-    raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
-                                   features=feats if on_crease else None, **options)
+    shared = len(rngs) > 1 and getattr(spec.function, "takes_levels", False) and all(
+        rng.radius is None and rng.knn is None for rng in rngs)
+    if shared:
+        # one call for every range, narrowest first (radius = factor(k) * unit is ascending in k)
+        ascending = sorted(builtins_range(len(rngs)), key=lambda i: rngs[i].k)
+        levels = yield from spec.function(work_mesh, kernel_normals, np.stack([radii_of[i] for i in ascending]),
+                                          chunk=block_size, centres=centres,
+                                          features=feats if on_crease else None, **options)
+        raws = [None] * len(rngs)
+        for i, level in zip(ascending, levels):
+            raws[i] = level
+    else:
+        raws = []
+        for radii in radii_of:
+            order = centres
+            if centres is None and isinstance(work_mesh, PointCloud) and radii is not None:
+                # a whole cloud in its grid's cell order: neighbouring points are estimated one after
+                # another and share what is in the cache (a random-order cloud's kernel ran about 3x
+                # slower); every point writes its own rows, so the result is the same
+                order = work_mesh.ball_grid(radii)[0][3]
+            raws.append((yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
+                                                  features=feats if on_crease else None, **options)))
     # the neighbours an estimator that reads their normals can use (a NaN normal is left out)
     usable = (np.isfinite(kernel_normals).all(axis=1)
               if spec.uses_normals and kernel_normals is not None else None)
+    results = []
+    for rng, radii, raw in zip(rngs, radii_of, raws):
+        results.append((yield from _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres,
+                                           feats, on_crease, smooth, smooth_iterations, smooth_strength,
+                                           standard_errors, normals_label, options, twin, t0)))
+    yield 1.0
+    return results
+
+
+def _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
+            smooth_iterations, smooth_strength, standard_errors, normals_label, options, twin, t0):
+    """The :class:`Curvature` of one range from the estimator's raw result: the validity rules,
+    the settling pass, smoothing of the values, a region's full-length rows (a generator, as the
+    support checks of a point cloud are)."""
     for mask_of in flags.support_marks:
         # checks of the supports themselves (points: a support along a curve), on the estimated rows
         mask, code = yield from mask_of(radii, centres, usable)
@@ -182,7 +297,6 @@ def iter_estimate(
     if centres is not None:
         k1, k2, d1, d2, reason, valid = _full_length(mesh.n_vertices, centres, k1, k2, d1, d2, reason, valid)
         k1_se, k2_se = (_scatter(mesh.n_vertices, centres, se) for se in (k1_se, k2_se))
-    yield 1.0
     result = Curvature(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
         method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
