@@ -298,7 +298,10 @@ def eigen_bias(e, f, g, var_deviator):
 
 @jit
 def clear_parts(p, parts):
-    """Row p of ``parts`` before a fit: no residual to pool (:func:`store_parts`)."""
+    """Row p of ``parts`` before a fit: no residual to pool (:func:`store_parts`). Nothing with
+    ``parts`` of no rows (a fit without standard errors, :func:`run_fit`)."""
+    if parts.shape[0] == 0:
+        return
     parts[p, 0] = math.nan
     parts[p, 1] = 0.0
     parts[p, 2] = 0.0
@@ -319,8 +322,11 @@ def store_parts(p, k1_se, k2_se, parts, var1, var2, rss, dof, var_deviator, rad)
     parts : (n, 4) float64
         Row p gets ``(RSS, spare equations, var_deviator / sigma², rad)``: the residual sum of
         squares and the (effective) number of spare equations it is spread over (0 when there is
-        none), and what :func:`rad_bias` needs.
+        none), and what :func:`rad_bias` needs. No rows: the fit computes no standard errors
+        (:func:`run_fit`), nothing is written.
     """
+    if parts.shape[0] == 0:
+        return
     k1_se[p] = var1
     k2_se[p] = var2
     parts[p, 0] = rss
@@ -621,6 +627,8 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
     k1_se, k2_se, parts :
         As in :func:`store_parts`.
     """
+    if parts.shape[0] == 0:
+        return  # no standard errors asked (:func:`run_fit`)
     i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
     a0, a1, a2, h0, h1, h2 = deviator_gradients(e, f, g)
@@ -697,6 +705,8 @@ def store_se3_weighted(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, e, f, g, x0
     k1_se, k2_se, parts :
         As in :func:`store_parts`.
     """
+    if parts.shape[0] == 0:
+        return  # no standard errors asked (:func:`run_fit`)
     i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
     a0, a1, a2, h0, h1, h2 = deviator_gradients(e, f, g)
@@ -1030,9 +1040,13 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
-    k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
-    parts = filled((n, 4), np.nan, most_written=whole)
-    slots = new_scratch(n if noise_model == "normals" else 0, stamps.shape[0])
+    if standard_errors:
+        k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
+        parts = filled((n, 4), np.nan, most_written=whole)
+    else:
+        # no rows: the kernels skip the standard errors' sums and write none (clear_parts, store_parts)
+        k1_se, k2_se, parts = np.empty(0), np.empty(0), np.empty((0, 4))
+    slots = new_scratch(n if noise_model == "normals" and standard_errors else 0, stamps.shape[0])
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, fitted, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,

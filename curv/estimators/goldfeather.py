@@ -49,7 +49,8 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
         return offs
-    if nc and offs.shape[0] < count:
+    errors = se_parts.shape[0] > 0  # no rows: no standard errors asked, their sums are skipped
+    if nc and errors and offs.shape[0] < count:
         offs = np.empty((count, 2))
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
@@ -64,7 +65,7 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         l2 = u * u + v * v
         if not (l2 > tiny2):
             continue
-        if nc:
+        if nc and errors:
             offs[used, 0] = u
             offs[used, 1] = v
         used += 1
@@ -79,19 +80,20 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
             c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
             # a tilt of the frame adds a linear term to w (the standard error's columns)
             lu, lv = u, v
-        t0 += lu * lu
-        t1 += lu * lv
-        t2 += lv * lv
-        t3 += lu * c0
-        t4 += lu * c1
-        t5 += lu * c2
-        t6 += lv * c0
-        t7 += lv * c1
-        t8 += lv * c2
-        t9 += lu * rhs
-        t10 += lv * rhs
-        t11 += lu
-        t12 += lv
+        if errors:
+            t0 += lu * lu
+            t1 += lu * lv
+            t2 += lv * lv
+            t3 += lu * c0
+            t4 += lu * c1
+            t5 += lu * c2
+            t6 += lv * c0
+            t7 += lv * c1
+            t8 += lv * c2
+            t9 += lu * rhs
+            t10 += lv * rhs
+            t11 += lu
+            t12 += lv
         a00 += c0 * c0
         a01 += c0 * c1
         a02 += c0 * c2
@@ -107,7 +109,7 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         s2 += c2
     tilt[0], tilt[1], tilt[2], tilt[3], tilt[4], tilt[5], tilt[6] = t0, t1, t2, t3, t4, t5, t6
     tilt[7], tilt[8], tilt[9], tilt[10], tilt[11], tilt[12] = t7, t8, t9, t10, t11, t12
-    if nc:
+    if nc and errors:
         # nc's weighted sums (:func:`~curv.estimators._local_fit.store_se3_weighted`) in a second pass
         # over the support's offsets (kept in the first): kn = 2 h / l² moves by c = 2 / l² per unit
         # height of q (or of p, the other way), and with ρ = 1 / l² the rows are a = ρ (u², 2uv, v²)
@@ -399,7 +401,8 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
             var2 += row_dot(grads, 1, shared, 7) ** 2
         store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, dof, var_dev * scale,
                     math.hypot(0.5 * (e - g), f))
-        se_parts[p, 1] = -se_parts[p, 1]
+        if se_parts.shape[0] > 0:
+            se_parts[p, 1] = -se_parts[p, 1]
     return touched, yv, jp
 
 

@@ -173,7 +173,8 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         store_se3(p, suu, suv, 0.0, suu + svv, suv, svv, saa_bb, xatb, 2 * used, 0,
                   0.0, 0.0, 0.0, e, f, g, k1_se, k2_se, se_parts, e, f, g, tilt)
     # its noise level is of the normals, not of the heights: pooled with no other vertex's
-    se_parts[p, 1] = -se_parts[p, 1]
+    if se_parts.shape[0] > 0:
+        se_parts[p, 1] = -se_parts[p, 1]
     return touched, yv, jp
 
 
