@@ -201,11 +201,10 @@ def _iter_estimates(
                                                             smooth_iterations, smooth_strength, fit_range, feats)
         normals_label = _normals_label(normals, normal_weighting, fit_range)
     # a region's fits also run at its neighbours, whose residuals its standard errors pool
-    pools = standard_errors and _ERRORS_OPTION in spec.options
-    fitted = (pool_members(work_mesh, centres)
-              if pools and centres is not None and not isinstance(work_mesh, PointCloud) else centres)
-    if _ERRORS_OPTION in spec.options:
-        options = {**options, _ERRORS_OPTION: bool(standard_errors)}
+    skips = getattr(spec.function, "skips_errors", False)
+    fitted = (pool_members(work_mesh, centres) if skips and standard_errors and centres is not None
+              and not isinstance(work_mesh, PointCloud) else centres)
+    kernel_options = {**options, "standard_errors": bool(standard_errors)} if skips else options
     radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
                 for rng in rngs]
     on_crease = feats is not None and feats.any
@@ -222,7 +221,7 @@ def _iter_estimates(
         ascending = sorted(builtins_range(len(rngs)), key=lambda i: rngs[i].k)
         levels = yield from spec.function(work_mesh, kernel_normals, np.stack([radii_of[i] for i in ascending]),
                                           chunk=block_size, centres=centres,
-                                          features=feats if on_crease else None, **options)
+                                          features=feats if on_crease else None, **kernel_options)
         raws = [None] * len(rngs)
         for i, level in zip(ascending, levels):
             raws[i] = level
@@ -236,7 +235,7 @@ def _iter_estimates(
                 # slower); every point writes its own rows, so the result is the same
                 order = work_mesh.ball_grid(radii)[0][3]
             raws.append((yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
-                                                  features=feats if on_crease else None, **options)))
+                                                  features=feats if on_crease else None, **kernel_options)))
     # the neighbours an estimator that reads their normals can use (a NaN normal is left out)
     usable = (np.isfinite(kernel_normals).all(axis=1)
               if spec.uses_normals and kernel_normals is not None else None)
@@ -301,7 +300,7 @@ def _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cen
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
         method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
         info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
-              "normals": normals_label, **{k: v for k, v in options.items() if k != _ERRORS_OPTION},
+              "normals": normals_label, **options,
               "radius": rng.radius,
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
@@ -564,9 +563,7 @@ def _normals_label(normals, weighting, fit_range) -> str:
 
 
 _NO_ROWS = np.empty(0, np.int64)
-_ERRORS_OPTION = "standard_errors"
-"""The estimator option :func:`iter_estimate` sets from its keyword of that name (declared by the
-fits whose standard errors cost a pass of their own, :data:`curv.estimators._local_fit.STANDARD_ERRORS`)."""
+
 _OK, _SINGULAR = np.uint8(Reason.OK), np.uint8(Reason.SINGULAR)
 
 
@@ -657,8 +654,9 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
     standard_errors : bool
         False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
         and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,
-        ``an``, ``mru``: the estimators whose options list ``standard_errors``) neither fit a
-        region's neighbours nor run the pooling pass. k1, k2, the directions, ``valid`` and
+        ``an``, ``mru``: the estimator functions marked ``skips_errors``, which take the keyword)
+        neither fit a region's neighbours nor run the pooling pass nor add up the standard
+        errors' sums. k1, k2, the directions, ``valid`` and
         ``reason`` are the same either way. Default True.
     **options
         Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for

@@ -879,10 +879,6 @@ def mark_degenerate(p, k1, k2, d1, d2, reason):
     reason[p] = DEGENERATE
 
 
-STANDARD_ERRORS = (True, False)
-"""The fits' option ``standard_errors``: False when the caller reads none (:func:`run_fit`;
-:func:`curv.estimate` passes its keyword of that name to the estimators that declare it)."""
-
 NOISE_MODELS = ("sampled", "independent", "normals")
 """How the standard errors of ``an`` and ``mru`` (the fits that read the neighbours' normals) take
 the errors of those normals (the curvatures do not depend on it):

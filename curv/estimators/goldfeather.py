@@ -26,7 +26,6 @@ from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
-                         STANDARD_ERRORS,
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, checked_noise_model, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
@@ -470,24 +469,27 @@ def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
                                standard_errors=standard_errors))
 
 
+for _fit in (iter_nc, iter_qs, iter_an):
+    _fit.skips_errors = True  # takes standard_errors=False (curv.estimate's keyword of that name)
+
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
 
 register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_fit_kernel, POOL_KERNEL),
-    options={"standard_errors": STANDARD_ERRORS}, extra_bytes_per_unit=SE_PARTS_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_fit_kernel, POOL_KERNEL),
-    options={"standard_errors": STANDARD_ERRORS}, extra_bytes_per_unit=SE_PARTS_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES,
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL),
-    options={"noise_model": NOISE_MODELS, "standard_errors": STANDARD_ERRORS},
+    options={"noise_model": NOISE_MODELS},
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))

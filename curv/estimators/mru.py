@@ -17,7 +17,6 @@ from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
-                         STANDARD_ERRORS,
                          add_ring_columns, centre_columns, deviator_gradients, finish_fit, fit_frame, list_room,
                          checked_noise_model, normal_in_frame, offset_in_frame, principal_gradients, run_fit, slice_bounds,
                          solve_sym3, store_parts, store_se3, sym3_inverse)
@@ -211,11 +210,13 @@ def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
                                  standard_errors=standard_errors))
 
 
+iter_mru.skips_errors = True  # takes standard_errors=False (curv.estimate's keyword of that name)
+
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
     summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
-    options={"noise_model": NOISE_MODELS, "standard_errors": STANDARD_ERRORS},
+    options={"noise_model": NOISE_MODELS},
     extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
 ))
