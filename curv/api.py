@@ -97,7 +97,7 @@ def iter_estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1,
                          ) -> Generator[float, None, list]:
     """:func:`estimate_ranges` step by step: yields the fraction done, returns the list of
     :class:`Curvature` (as :func:`iter_estimate` does for one range)."""
-    ranges = tuple(ranges) if isinstance(ranges, (list, tuple)) else (ranges,)
+    ranges = (ranges,) if isinstance(ranges, (str, int, float, np.number)) else tuple(ranges)
     if not ranges:
         raise EstimatorError("ranges must name at least one range")
     for name in ("radius", "knn"):
@@ -132,7 +132,8 @@ def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3
     Returns
     -------
     list of Curvature
-        One per range, in the order of ``ranges``.
+        One per range, in the order of ``ranges``; each one's ``info["seconds"]`` counts from the
+        start of the call.
     """
     gen = iter_estimate_ranges(mesh, method, ranges, **keywords)
     while True:

@@ -80,6 +80,10 @@ def test_one_range_is_estimate():
     (res,) = estimate_ranges(mesh, "csm", [2])
     ref = curv.estimate(mesh, "csm", 2)
     assert np.array_equal(res.k1, ref.k1) and np.array_equal(res.d2, ref.d2)
+    (single,) = estimate_ranges(mesh, "csm", "R2")
+    assert np.array_equal(single.k1, ref.k1)
+    pair = estimate_ranges(mesh, "qs", np.array([2, 1]))
+    assert [r.range for r in pair] == [2, 1] and np.array_equal(pair[1].k1, curv.estimate(mesh, "qs", 1).k1)
 
 
 def test_sphere_sign_and_value():
