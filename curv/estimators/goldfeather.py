@@ -314,6 +314,7 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
         return touched, yv, jp
+    errors = se_parts.shape[0] > 0  # no rows: no standard errors asked, their sums are skipped
     # Heights are lengths, slopes are not: fit in coordinates divided by the ball radius so the
     # balance of the two kinds of equation (and so the result) does not depend on the mesh's scale.
     inv_r = 1.0 / r
@@ -336,8 +337,9 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         _accumulate(ata, atb, row, w)
         bb += w * w
         equations += 1
-        for j in range(7):
-            grads[2, j] += row[j]
+        if errors:
+            for j in range(7):
+                grads[2, j] += row[j]
         a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
         if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
             continue
@@ -345,20 +347,24 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         _slope_rows(u, v, ru, rv)
         _accumulate(ata, atb, ru, -a / c)
         _accumulate(ata, atb, rv, -b / c)
-        for j in range(7):
-            grads[3, j] += ru[j]
-            grads[4, j] += rv[j]
+        if errors:
+            for j in range(7):
+                grads[3, j] += ru[j]
+                grads[4, j] += rv[j]
         bb += (a * a + b * b) / (c * c)
         equations += 2
         sloped += 1
-    for j in range(7):
-        atb0[j] = atb[j]
-        for k in range(7):
-            ata0[j, k] = ata[j, k]
+    if errors:
+        for j in range(7):
+            atb0[j] = atb[j]
+            for k in range(7):
+                ata0[j, k] = ata[j, k]
     singular = solve_scaled(ata, atb, sol)
     # second derivatives back in unscaled coordinates
     e, f, g = -sol[0] * inv_r, -sol[1] * inv_r, -sol[2] * inv_r
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
+    if not errors:
+        return touched, yv, jp
     xatb = 0.0
     for j in range(7):
         xatb += sol[j] * atb0[j]
