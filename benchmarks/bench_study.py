@@ -8,7 +8,8 @@ irregularity and noise level: 48 of the surface's 144 meshes) through ``curv.stu
 as the study's workers do, after one warm-up task (so numba's cache is loaded, not timed). It prints
 the process CPU seconds of the 48 tasks, that times 3 as the cost of one random surface, and the
 CPU seconds of each estimator and density (each variant's ``seconds`` is timed by ``run_task``; here
-the task clock is the process clock, so the split does not move with the machine's other load).
+the task clock is the process clock, so the split does not move with the machine's other load; the
+ranges of one estimator run in one call, whose time its rows share equally).
 """
 
 from __future__ import annotations

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import builtins
 import enum
 import inspect
 import math
@@ -27,7 +28,9 @@ from .core.result import Curvature
 from .geometry.smoothing import smooth_positions, smooth_values
 from .core.validity import Reason
 
-__all__ = ["estimate", "iter_estimate", "Smoothing", "parse_range"]
+__all__ = ["estimate", "iter_estimate", "estimate_ranges", "iter_estimate_ranges", "Smoothing", "parse_range"]
+
+builtins_range = builtins.range  # the keyword ``range`` shadows it in the functions below
 
 
 class Smoothing(str, enum.Enum):
@@ -73,6 +76,7 @@ def iter_estimate(
     vertices=None,
     knn: int | None = None,
     orient="up",
+    standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
@@ -81,8 +85,92 @@ def iter_estimate(
     :class:`curv.core.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
     Parameters as in :func:`estimate`.
     """
+    results = yield from _iter_estimates(
+        mesh, method, (range,), radius=radius, normals=normals, normal_weighting=normal_weighting, smooth=smooth,
+        smooth_iterations=smooth_iterations, smooth_strength=smooth_strength, fit_range=fit_range,
+        block_size=block_size, features=features, vertices=vertices, knn=knn, orient=orient,
+        standard_errors=standard_errors, **options)
+    return results[0]
+
+
+def iter_estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords
+                         ) -> Generator[float, None, list]:
+    """:func:`estimate_ranges` step by step: yields the fraction done, returns the list of
+    :class:`Curvature` (as :func:`iter_estimate` does for one range)."""
+    ranges = (ranges,) if isinstance(ranges, (str, int, float, np.number)) else tuple(ranges)
+    if not ranges:
+        raise EstimatorError("ranges must name at least one range")
+    for name in ("radius", "knn"):
+        if keywords.get(name) is not None:
+            raise EstimatorError(f"estimate_ranges takes ranges, not {name}=; estimate one {name} with curv.estimate")
+    return (yield from _iter_estimates(mesh, method, ranges, **keywords))
+
+
+def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords) -> list:
+    """Estimate at several ranges of one estimator on the same mesh: one :class:`Curvature` per range.
+
+    The result for each range equals ``estimate(mesh, method, range, **keywords)``: bit for bit for
+    the estimators that run each range on its own, to rounding for those that share one pass
+    over the ranges (below). What every range shares is done once: the mesh's checks and
+    connectivity, the normals, a region's rows. ``csm`` and ``icc`` share more: one walk per
+    vertex at the widest range serves every range (each range's support is exactly its own
+    search's, :func:`curv.geometry.neighbourhood.widen_ball_support`), the star sums of a range are
+    the narrower one's plus the vertices it adds, and only the faces crossing each sphere are
+    clipped per range; their sums are added in another order than a call with one range, so the
+    values agree to a few units in the last place (and a value at a threshold, e.g. a tiny negative
+    discriminant, may land on the other side).
+
+    Parameters
+    ----------
+    mesh, method :
+        As in :func:`estimate`.
+    ranges : sequence of (int, float or str)
+        The ranges k of Rk (:mod:`curv.core.ranges`), in any order; the results follow it.
+    **keywords
+        As in :func:`estimate`, but not ``radius`` or ``knn``.
+
+    Returns
+    -------
+    list of Curvature
+        One per range, in the order of ``ranges``; each one's ``info["seconds"]`` counts from the
+        start of the call.
+    """
+    gen = iter_estimate_ranges(mesh, method, ranges, **keywords)
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+
+def _iter_estimates(
+    mesh: Mesh,
+    method: str = DEFAULT_ESTIMATOR,
+    ranges=(None,),
+    *,
+    radius: float | None = None,
+    normals: np.ndarray | None = None,
+    normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
+    smooth: Smoothing | str | None = None,
+    smooth_iterations: int = 1,
+    smooth_strength: float = 0.5,
+    fit_range=2,
+    block_size: int | None = None,
+    features=None,
+    vertices=None,
+    knn: int | None = None,
+    orient="up",
+    standard_errors: bool = True,
+    **options,
+) -> Generator[float, None, list]:
+    """:func:`iter_estimate` at each of ``ranges``: returns the list of :class:`Curvature`, in that order.
+
+    The setup (mesh checks, normals, flags, a region's rows) is done once; an estimator whose
+    function takes ``(levels, n)`` radii (its ``takes_levels`` attribute: ``csm``, ``icc``) runs the
+    ranges in one call, in ascending order; the others run once per range.
+    """
     spec = get_spec(method)
-    rng = resolve(spec, range, radius, knn)
+    rngs = [resolve(spec, r, radius, knn) for r in ranges]
     options = spec.check_options(options)
     mesh = mesh if isinstance(mesh, PointCloud) else as_mesh(mesh)
     why_not = refusal(spec, mesh)
@@ -114,8 +202,12 @@ def iter_estimate(
                                                             smooth_iterations, smooth_strength, fit_range, feats)
         normals_label = _normals_label(normals, normal_weighting, fit_range)
     # a region's fits also run at its neighbours, whose residuals its standard errors pool
-    fitted = centres if centres is None or isinstance(work_mesh, PointCloud) else pool_members(work_mesh, centres)
-    radii = ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
+    skips = getattr(spec.function, "skips_errors", False)
+    fitted = (pool_members(work_mesh, centres) if skips and standard_errors and centres is not None
+              and not isinstance(work_mesh, PointCloud) else centres)
+    kernel_options = {**options, "standard_errors": bool(standard_errors)} if skips else options
+    radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
+                for rng in rngs]
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
     if on_crease and used_normals is not None:
@@ -123,17 +215,45 @@ def iter_estimate(
         # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
                                           lambda: _without(used_normals, feats.vertices))
-    order = centres
-    if centres is None and isinstance(work_mesh, PointCloud) and radii is not None:
-        # a whole cloud in its grid's cell order: neighbouring points are estimated one after another
-        # and share what is in the cache (a random-order cloud's kernel ran about 3x slower); every
-        # point writes its own rows, so the result is the same
-        order = work_mesh.ball_grid(radii)[0][3]
-    raw = yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
-                                   features=feats if on_crease else None, **options)
+    shared = len(rngs) > 1 and getattr(spec.function, "takes_levels", False) and all(
+        rng.radius is None and rng.knn is None for rng in rngs)
+    if shared:
+        # one call for every range, narrowest first (radius = factor(k) * unit is ascending in k)
+        ascending = sorted(builtins_range(len(rngs)), key=lambda i: rngs[i].k)
+        levels = yield from spec.function(work_mesh, kernel_normals, np.stack([radii_of[i] for i in ascending]),
+                                          chunk=block_size, centres=centres,
+                                          features=feats if on_crease else None, **kernel_options)
+        raws = [None] * len(rngs)
+        for i, level in zip(ascending, levels):
+            raws[i] = level
+    else:
+        raws = []
+        for radii in radii_of:
+            order = centres
+            if centres is None and isinstance(work_mesh, PointCloud) and radii is not None:
+                # a whole cloud in its grid's cell order: neighbouring points are estimated one after
+                # another and share what is in the cache (a random-order cloud's kernel ran about 3x
+                # slower); every point writes its own rows, so the result is the same
+                order = work_mesh.ball_grid(radii)[0][3]
+            raws.append((yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
+                                                  features=feats if on_crease else None, **kernel_options)))
     # the neighbours an estimator that reads their normals can use (a NaN normal is left out)
     usable = (np.isfinite(kernel_normals).all(axis=1)
               if spec.uses_normals and kernel_normals is not None else None)
+    results = []
+    for rng, radii, raw in zip(rngs, radii_of, raws):
+        results.append((yield from _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres,
+                                           feats, on_crease, smooth, smooth_iterations, smooth_strength,
+                                           standard_errors, normals_label, options, twin, t0)))
+    yield 1.0
+    return results
+
+
+def _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
+            smooth_iterations, smooth_strength, standard_errors, normals_label, options, twin, t0):
+    """The :class:`Curvature` of one range from the estimator's raw result: the validity rules,
+    the settling pass, smoothing of the values, a region's full-length rows (a generator, as the
+    support checks of a point cloud are)."""
     for mask_of in flags.support_marks:
         # checks of the supports themselves (points: a support along a curve), on the estimated rows
         mask, code = yield from mask_of(radii, centres, usable)
@@ -146,7 +266,7 @@ def iter_estimate(
         return flags if centres is None else flags[centres]
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
-    k1_se, k2_se = _standard_errors(raw, at, smooth, k1.shape[0])
+    k1_se, k2_se = _standard_errors(raw if standard_errors else None, at, smooth, k1.shape[0])
     # root causes, whatever the estimator saw (no face or no other point at all; a normal whose
     # orientation was left undecided): later codes win
     for mask, code in flags.forced:
@@ -177,7 +297,6 @@ def iter_estimate(
     if centres is not None:
         k1, k2, d1, d2, reason, valid = _full_length(mesh.n_vertices, centres, k1, k2, d1, d2, reason, valid)
         k1_se, k2_se = (_scatter(mesh.n_vertices, centres, se) for se in (k1_se, k2_se))
-    yield 1.0
     result = Curvature(
         k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
         method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
@@ -379,9 +498,10 @@ def _check_vertices(vertices, n: int) -> np.ndarray | None:
 
 def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray, np.ndarray]:
     """This call's rows of the fit's standard errors (copies), NaN for an estimator without a fit
-    and for the smoothing variants: smoothing correlates the noise of neighbouring vertices (before
-    the fit with ``mesh``, after it with ``values``), which the residual model assumes independent."""
-    if raw.k1_se is None or smooth is not Smoothing.NONE:
+    (or a call without standard errors, ``raw`` None) and for the smoothing variants: smoothing
+    correlates the noise of neighbouring vertices (before the fit with ``mesh``, after it with
+    ``values``), which the residual model assumes independent."""
+    if raw is None or raw.k1_se is None or smooth is not Smoothing.NONE:
         return np.full(rows, np.nan), np.full(rows, np.nan)
     return at(raw.k1_se).copy(), at(raw.k2_se).copy()
 
@@ -444,6 +564,7 @@ def _normals_label(normals, weighting, fit_range) -> str:
 
 
 _NO_ROWS = np.empty(0, np.int64)
+
 _OK, _SINGULAR = np.uint8(Reason.OK), np.uint8(Reason.SINGULAR)
 
 
@@ -531,6 +652,13 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
         Point clouds whose normals are estimated: turn each connected part up (+z at its highest
         point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
         viewpoint (a scanner's position).
+    standard_errors : bool
+        False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
+        and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,
+        ``an``, ``mru``: the estimator functions marked ``skips_errors``, which take the keyword)
+        neither fit a region's neighbours nor run the pooling pass nor add up the standard
+        errors' sums. k1, k2, the directions, ``valid`` and
+        ``reason`` are the same either way. Default True.
     **options
         Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for
         ``jet``.

@@ -14,15 +14,16 @@ import numpy as np
 from ..core.jit import jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, cached_with_mesh, coordinate_columns,
-                                      expansion_adjacency, new_queues, new_scratch)
+                                      expansion_adjacency, new_queues, new_scratch, start_ball_support,
+                                      widen_ball_support)
 from ..core.jit import jit_inlined
-from ._triangle_corners import unset_principal
 from ..core.validity import Reason
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs", "clipping_scratch",
            "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
-           "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "star_support", "add_row",
-           "vertex_normal", "unset_row"]
+           "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "add_row",
+           "vertex_normal", "unset_row", "level_radii", "start_ball_support", "widen_ball_support", "add_star_rows",
+           "level_mark", "LevelOutputs"]
 
 REGION_WALK_SHARE = 0.05
 """A region of fewer vertices than this share of the mesh walks its supports first, so that the
@@ -545,44 +546,73 @@ def crossing_faces(v, px, py, pz, radius, x, y, z, vc_ptr, vc, after, link, tri,
 
 
 @jit
-def star_support(p, radius, indptr, indices, x, y, z, stamp, queue, border, nonmanifold, clean, star, sums):
-    """The support of centre p in the ball of radius ``radius``
-    (:func:`~curv.geometry.neighbourhood.ball_support`), what it touches
-    and, where every vertex of it is ``clean``, the sum of their rows of ``star`` (per-vertex shares
-    of the elements around them, exact for the elements inside the ball).
+def add_star_rows(queue, lo, hi, border, nonmanifold, clean, star, hit, exact, sums):
+    """Add the support rows ``queue[lo:hi]`` (:func:`~curv.geometry.neighbourhood.widen_ball_support`:
+    the vertices a level added) to the support's flags and star sums.
 
     Parameters
     ----------
+    queue : (>= hi,) int64
+    lo, hi : int
+    border, nonmanifold, clean : (n,) bool
     star : (n, K) float64
+        Per-vertex shares of the elements around each vertex, exact for the elements inside the ball.
+    hit : int
+        The :func:`vertex_bits` of ``queue[:lo]``.
+    exact : bool
+        Every vertex of ``queue[:lo]`` is ``clean``.
     sums : (k,) float64, k <= K
-        Set to 0, then to the sum of ``star[v, :k]`` over the support when it is clean.
+        The sum of ``star[v, :k]`` over ``queue[:lo]`` while ``exact``; added to column by column,
+        in queue order (in a register: the support's rows stay in cache between the columns).
+        From the first vertex that is not clean it is no longer read (the caller walks face by face).
 
     Returns
     -------
-    count : int
-    queue : (>= count,) int64
-        The support.
-    hit : int
-        The :func:`vertex_bits` of its vertices.
-    exact : bool
-        Every support vertex is ``clean`` (else ``sums`` stays 0: the caller walks face by face).
+    hit, exact :
+        For ``queue[:hi]``.
     """
-    count, queue = ball_support(p, radius ** 2, indptr, indices, x, y, z, stamp, queue)
-    hit = 0
-    exact = True
-    for i in range(count):
+    for i in range(lo, hi):
         v = queue[i]
         hit |= vertex_bits(v, border, nonmanifold)
         if not clean[v]:
             exact = False
-    for c in range(sums.size):
-        # column by column, in a register: the support's rows stay in cache between the columns
-        acc = 0.0
-        if exact:
-            for i in range(count):
+    if exact:
+        for c in range(sums.size):
+            acc = sums[c]
+            for i in range(lo, hi):
                 acc += star[queue[i], c]
-        sums[c] = acc
-    return count, queue, hit, exact
+            sums[c] = acc
+    return hit, exact
+
+
+@jit
+def level_mark(p, level, levels):
+    """The face (and edge) stamp of centre p's walk at ``level`` of ``levels`` radii: a new mark per
+    level (``p + 1`` with one level)."""
+    return p * levels + level + 1
+
+
+def level_radii(radii: np.ndarray) -> np.ndarray:
+    """``radii`` as (levels, n) float64, C-contiguous: a (n,) array is one level."""
+    radii = np.asarray(radii, dtype=np.float64)
+    return np.ascontiguousarray(radii[None] if radii.ndim == 1 else radii)
+
+
+class LevelOutputs:
+    """A clipping kernel's outputs for ``levels`` radii: ``k1, k2`` (levels, n), ``d1, d2``
+    (levels, n, 3), ``reason`` (levels, n) uint8, uninitialised (the kernel writes every centre's
+    rows); :meth:`principal` is one level's :class:`~curv.core.result.Principal` (views)."""
+
+    def __init__(self, levels: int, n: int):
+        self.k1, self.k2 = np.empty((levels, n)), np.empty((levels, n))
+        self.d1, self.d2 = np.empty((levels, n, 3)), np.empty((levels, n, 3))
+        self.reason = np.empty((levels, n), np.uint8)
+
+    def principal(self, level: int):
+        from ..core.result import Principal
+
+        return Principal(k1=self.k1[level], k2=self.k2[level], d1=self.d1[level], d2=self.d2[level],
+                         reason=self.reason[level])
 
 
 @jit
@@ -720,8 +750,8 @@ def clipping_inputs(mesh: Mesh, centres: np.ndarray | None, radii: np.ndarray, f
         Triangle mesh (:class:`~curv.core.errors.MeshError` on polygons).
     centres : (c,) int64 or None
         The vertices to estimate (None: all).
-    radii : (n,) float64
-        Ball radius of every vertex.
+    radii : (n,) or (levels, n) float64
+        Ball radius of every vertex, or of every vertex at each level (ascending per vertex).
     features : curv.core.features.FeatureSet or None
         The supports stop at its vertices.
 
@@ -736,8 +766,8 @@ def clipping_inputs(mesh: Mesh, centres: np.ndarray | None, radii: np.ndarray, f
         Some vertices are blocked (creases).
     crease : (n,) bool
         The blocked vertices.
-    radii : (n,) float64
-        Contiguous.
+    radii : (levels, n) float64
+        Contiguous (:func:`level_radii`).
     touched : tuple
         For a region of fewer than :data:`REGION_WALK_SHARE` of the vertices, :func:`touched_elements`
         without the edges; else ``(None, None, None)`` (every triangle's and vertex's terms).
@@ -754,14 +784,15 @@ def clipping_inputs(mesh: Mesh, centres: np.ndarray | None, radii: np.ndarray, f
     blocked = blocked_vertices(features)
     indptr, indices = expansion_adjacency(mesh, blocked)
     crease = np.zeros(n, np.bool_) if blocked is None else blocked
-    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    radii = level_radii(radii)
     small = region and centres.size < REGION_WALK_SHARE * n
-    touched = touched_elements(mesh, centres, radii, indptr, indices, edges=False) if small else (None, None, None)
+    # the widest level's supports hold every narrower one's
+    touched = touched_elements(mesh, centres, radii[-1], indptr, indices, edges=False) if small else (None, None, None)
     return tri, centres, x, y, z, indptr, indices, blocked is not None, crease, radii, touched
 
 
-def clipping_scratch(mesh: Mesh, centres: np.ndarray, walk: bool):
-    """The per-call arrays of a ``csm`` or ``icc`` kernel over ``centres``.
+def clipping_scratch(mesh: Mesh, centres: np.ndarray, walk: bool, levels: int = 1):
+    """The per-call arrays of a ``csm`` or ``icc`` kernel over ``centres`` at ``levels`` radii.
 
     Returns
     -------
@@ -771,17 +802,25 @@ def clipping_scratch(mesh: Mesh, centres: np.ndarray, walk: bool):
         :func:`corner_width`.
     vstamps, queues : (parts, n) int64
         A row per thread slice (:func:`~curv.geometry.neighbourhood.new_scratch`, ``new_queues``).
-    fstamps : (parts, m or 0) int32
-        Zeroed face stamps of the face-by-face walk (none without ``walk``; vertex ids fit, half the
-        cache lines).
-    out : Principal
-        Unset: the kernel writes every centre's row, a region touches only its own pages.
+    fstamps : (parts, m or 0) int32 (int64 where the level marks need it)
+        Zeroed face stamps of the face-by-face walk (none without ``walk``; :func:`level_mark` fits
+        in 32 bits for a mesh of fewer than 2**31 / levels vertices: half the cache lines).
+    rims : (parts, n) int64
+        Per thread, the support vertices whose edges may leave the last level's ball (the only ones
+        that may leave a wider one, besides the vertices it adds).
+    outside, outside_d2 : (parts, n) int64 and float64
+        :func:`widen_ball_support`'s waiting vertices (size 0 with one level).
+    out : LevelOutputs
+        Unset: the kernel writes every centre's rows, a region touches only its own pages.
     """
     vc_ptr, vc = mesh.vertex_corners
+    n = mesh.n_vertices
     parts = max(1, min(threads(), centres.size))
-    fstamps = np.zeros((parts, mesh.n_faces if walk else 0), np.int32)
-    return (vc_ptr, vc, corner_width(mesh), new_scratch(mesh.n_vertices, parts), new_queues(mesh.n_vertices, parts),
-            fstamps, unset_principal(mesh.n_vertices))
+    stamp_type = np.int32 if (n + 1) * levels < 2**31 else np.int64
+    fstamps = np.zeros((parts, mesh.n_faces if walk else 0), stamp_type)
+    wide = n if levels > 1 else 0
+    return (vc_ptr, vc, corner_width(mesh), new_scratch(n, parts), new_queues(n, parts), fstamps,
+            new_queues(n, parts), new_queues(wide, parts), np.empty((parts, wide)), LevelOutputs(levels, n))
 
 
 def element_list(count: int, touched: np.ndarray | None) -> np.ndarray:

@@ -298,7 +298,10 @@ def eigen_bias(e, f, g, var_deviator):
 
 @jit
 def clear_parts(p, parts):
-    """Row p of ``parts`` before a fit: no residual to pool (:func:`store_parts`)."""
+    """Row p of ``parts`` before a fit: no residual to pool (:func:`store_parts`). Nothing with
+    ``parts`` of no rows (a fit without standard errors, :func:`run_fit`)."""
+    if parts.shape[0] == 0:
+        return
     parts[p, 0] = math.nan
     parts[p, 1] = 0.0
     parts[p, 2] = 0.0
@@ -319,8 +322,11 @@ def store_parts(p, k1_se, k2_se, parts, var1, var2, rss, dof, var_deviator, rad)
     parts : (n, 4) float64
         Row p gets ``(RSS, spare equations, var_deviator / sigma², rad)``: the residual sum of
         squares and the (effective) number of spare equations it is spread over (0 when there is
-        none), and what :func:`rad_bias` needs.
+        none), and what :func:`rad_bias` needs. No rows: the fit computes no standard errors
+        (:func:`run_fit`), nothing is written.
     """
+    if parts.shape[0] == 0:
+        return
     k1_se[p] = var1
     k2_se[p] = var2
     parts[p, 0] = rss
@@ -621,6 +627,8 @@ def store_se3(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, shared, s0, s1, s2, 
     k1_se, k2_se, parts :
         As in :func:`store_parts`.
     """
+    if parts.shape[0] == 0:
+        return  # no standard errors asked (:func:`run_fit`)
     i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
     a0, a1, a2, h0, h1, h2 = deviator_gradients(e, f, g)
@@ -697,6 +705,8 @@ def store_se3_weighted(p, a00, a01, a02, a11, a12, a22, bb, xatb, m, e, f, g, x0
     k1_se, k2_se, parts :
         As in :func:`store_parts`.
     """
+    if parts.shape[0] == 0:
+        return  # no standard errors asked (:func:`run_fit`)
     i00, i01, i02, i11, i12, i22 = sym3_inverse(a00, a01, a02, a11, a12, a22)
     g10, g11, g12, g20, g21, g22 = principal_gradients(e, f, g)
     a0, a1, a2, h0, h1, h2 = deviator_gradients(e, f, g)
@@ -962,8 +972,8 @@ def sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, qu
 
 
 def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None, noise_model: str | None = None
-            ) -> Generator[float, None, Principal]:
+            centres: np.ndarray | None = None, features=None, noise_model: str | None = None,
+            standard_errors: bool = True) -> Generator[float, None, Principal]:
     """Run a fit kernel over all (or some) vertices, a chunk of them per call, and assemble the result.
 
     Parameters
@@ -994,6 +1004,11 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         ``"normals"`` gives the kernel a zeroed (slices, n) int64 ``slots`` (vertex -> 1 + its place in
         a short list, reset after each vertex) instead of an empty one; ``"sampled"`` runs the kernel
         without and scales the standard errors by :func:`sampled_scales` on a mesh.
+    standard_errors : bool
+        False: the caller reads no standard errors, so the fits run at ``centres`` only (not at a
+        region's pooling neighbours), there is no pooling pass and no sample of ``noise_model``,
+        and the result's ``k1_se``, ``k2_se`` are None. The curvatures, directions and reasons are
+        the same either way (each vertex's fit reads only its own support).
 
     It yields the fraction of vertices done and returns the :class:`~curv.core.result.Principal`,
     as the estimators' functions do (:data:`~curv.estimators.registry.EstimatorFunction`).
@@ -1001,12 +1016,17 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     n = mesh.n_vertices
     given = centres is not None
     centres = all_centres(n, centres)
-    # each vertex once (the pooling pass updates its rows in place)
-    pooled = np.unique(centres) if given else centres
-    whole = pooled.size == n
+    if standard_errors:
+        # each vertex once (the pooling pass updates its rows in place)
+        pooled = np.unique(centres) if given else centres
+        whole = pooled.size == n
+        # a region's standard errors pool its neighbours' residuals too: fit them as well
+        fitted = centres if whole else pool_members(mesh, pooled)
+    else:
+        # no pooling: a vertex listed twice is fitted twice, to the same values
+        fitted = centres
+        whole = not given
     ring_ptr, ring = pool_rings(mesh)
-    # a region's standard errors pool its neighbours' residuals too: fit them as well
-    fitted = centres if whole else pool_members(mesh, pooled)
     adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features), radii)
     x, y, z = coordinate_columns(mesh)
     nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
@@ -1016,15 +1036,21 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
     k1, k2 = np.empty(n), np.empty(n)
     d1, d2 = np.empty((n, 3)), np.empty((n, 3))
     reason = np.empty(n, np.uint8)
-    k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
-    parts = filled((n, 4), np.nan, most_written=whole)
-    slots = new_scratch(n if noise_model == "normals" else 0, stamps.shape[0])
+    if standard_errors:
+        k1_se, k2_se = filled(n, np.nan, most_written=whole), filled(n, np.nan, most_written=whole)
+        parts = filled((n, 4), np.nan, most_written=whole)
+    else:
+        # no rows: the kernels skip the standard errors' sums and write none (clear_parts, store_parts)
+        k1_se, k2_se, parts = np.empty(0), np.empty(0), np.empty((0, 4))
+    slots = new_scratch(n if noise_model == "normals" and standard_errors else 0, stamps.shape[0])
 
     def run(lo: int, hi: int) -> None:
         launch(kernel, fitted, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
                k1, k2, d1, d2, reason, k1_se, k2_se, parts, ring_ptr, ring, slots)
 
     yield from iter_chunks(fitted.size, run, chunk=chunk)
+    if not standard_errors:
+        return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason)
     if noise_model == "sampled" and ring.size > 0:
         scales = sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, queues, k1, k2, d1, d2,
                                 reason, k1_se, k2_se, parts, ring_ptr, ring)

@@ -53,10 +53,10 @@ import numpy as np
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
-from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, clipping_inputs, clipping_scratch, corner_rings, corner_width,
-                             crossing_faces, may_leave,
-                             crossing_scratch, element_list, face_in_ball_area, star_support, support_reason,
-                             touched_elements, touches, unset_row, vertex_normal)
+from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_star_rows, clipping_inputs, clipping_scratch,
+                             corner_rings, corner_width, crossing_faces, level_mark, may_leave, crossing_scratch,
+                             element_list, face_in_ball_area, start_ball_support, support_reason, touched_elements,
+                             touches, vertex_normal, widen_ball_support)
 from ._local_fit import slice_bounds
 from ._small_linalg import sym3_eigen
 from .registry import EstimatorSpec, register
@@ -326,14 +326,14 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None, crease: np.ndarray | N
 
 
 @jit
-def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri, vector_area,
-               face_area, degenerate, cut, crease, estamp, fstamp, sums):
+def _walk_sums(p, mark, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri,
+               vector_area, face_area, degenerate, cut, crease, estamp, fstamp, sums):
     """The sums of a centre whose support is not clean (or that stops at creases), face by face and edge by edge.
 
     Adds the upper triangle of T and the area to ``sums`` (as :func:`_csm_chunk` has them); returns
-    the DEGENERATE_BIT if a degenerate face was met.
+    the DEGENERATE_BIT if a degenerate face was met. ``mark``: this walk's stamp
+    (:func:`~curv.estimators._ball_clipping.level_mark`; the stamps start zeroed).
     """
-    mark = p + 1  # the stamps start zeroed
     px, py, pz = x[p], y[p], z[p]
     hit = 0
     for i in range(count):
@@ -367,66 +367,99 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_sca
     return hit
 
 
+@jit
+def _csm_finish(p, level, sums, hit, normals, tensor, vectors, res, k1, k2, d1, d2, reason):
+    """Centre p's principal curvatures at ``level`` from its sums (upper triangle of T, area), into
+    row ``(level, p)`` of the outputs."""
+    nx, ny, nz, normal_ok = vertex_normal(normals, p)
+    area = sums[6]
+    singular = not (area > 0.0 and math.isfinite(sums[0] + sums[1] + sums[2] + sums[3] + sums[4] + sums[5]))
+    if not singular and normal_ok:
+        inv = 1.0 / area
+        tensor[0, 0], tensor[1, 1], tensor[2, 2] = sums[0] * inv, sums[3] * inv, sums[5] * inv
+        tensor[0, 1] = tensor[1, 0] = sums[1] * inv
+        tensor[0, 2] = tensor[2, 0] = sums[2] * inv
+        tensor[1, 2] = tensor[2, 1] = sums[4] * inv
+        _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, res)
+        k1[level, p], k2[level, p] = res[0], res[1]
+        for c in range(3):
+            d1[level, p, c] = res[2 + c]
+            d2[level, p, c] = res[5 + c]
+        if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
+            singular = True
+    else:
+        k1[level, p] = k2[level, p] = math.nan
+        for c in range(3):
+            d1[level, p, c] = d2[level, p, c] = math.nan
+    reason[level, p] = support_reason(singular, hit, normal_ok)
+
+
 @jit_parallel
 def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, half_scale, star,
                clean,
                halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area, degenerate, border,
-               nonmanifold, cut, crease, normals, width, vstamps, queues, estamps, fstamps, k1, k2, d1, d2, reason):
+               nonmanifold, cut, crease, normals, width, vstamps, queues, estamps, fstamps, rims, outside, outside_d2,
+               k1, k2, d1, d2, reason):
     parts = vstamps.shape[0]
+    levels = radii.shape[0]
     for t in prange(parts):
         vectors = np.empty((4, 3))
         tensor = np.empty((3, 3))
         res = np.empty(8)
+        acc = np.empty(7)  # the support's star sums so far
         sums = np.empty(7)  # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle), area(B ∩ mesh)
         out_h, out_w, out_t, out_area, out_in, ring = crossing_scratch(width)
-        queue, vstamp, estamp, fstamp = queues[t], vstamps[t], estamps[t], fstamps[t]
+        queue, vstamp, estamp, fstamp, rim = queues[t], vstamps[t], estamps[t], fstamps[t], rims[t]
+        waiting, waiting_d2 = outside[t], outside_d2[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for k in range(start, stop):
             p = centres[k]
-            count, queue, hit, exact = star_support(p, radii[p], indptr, indices, x, y, z, vstamp, queue, border,
-                                                    nonmanifold, clean, star, sums)
             px, py, pz = x[p], y[p], z[p]
-            if exact:
-                # every edge and face inside the ball whole: the support's star terms hold each edge
-                # twice by halves and each face thrice by thirds; an edge v -> w leaving the ball has
-                # one half in, and its face (v, w, u) one or two thirds: replace them by what is inside
-                for i in range(count):
-                    v = queue[i]
-                    if not may_leave(v, px, py, pz, radii[p], x, y, z, longest):
-                        continue
-                    leaving = crossing_faces(v, px, py, pz, radii[p], x, y, z, vc_ptr, vc, after, link, tri,
-                                             vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
-                    for a in range(leaving):
-                        h, w = out_h[a], out_w[a]
-                        f = h // 3
-                        s = half_scale[h]
-                        if s != 0.0:
-                            vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
-                            _add_outer(sums, s * (out_t[a] - 0.5), (x[w] - px) - vx, (y[w] - py) - vy, (z[w] - pz) - vz)
-                        sums[6] += out_area[a] - out_in[a] * (face_area[f] / 3.0)
-            else:
-                hit |= _walk_sums(p, count, queue, radii[p] ** 2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale,
-                                  edge_faces, tri, vector_area, face_area, degenerate, cut, crease, estamp, fstamp,
-                                  sums)
-            nx, ny, nz, normal_ok = vertex_normal(normals, p)
-            area = sums[6]
-            singular = not (area > 0.0 and math.isfinite(sums[0] + sums[1] + sums[2] + sums[3] + sums[4] + sums[5]))
-            if not singular and normal_ok:
-                inv = 1.0 / area
-                tensor[0, 0], tensor[1, 1], tensor[2, 2] = sums[0] * inv, sums[3] * inv, sums[5] * inv
-                tensor[0, 1] = tensor[1, 0] = sums[1] * inv
-                tensor[0, 2] = tensor[2, 0] = sums[2] * inv
-                tensor[1, 2] = tensor[2, 1] = sums[4] * inv
-                _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, res)
-                k1[p], k2[p] = res[0], res[1]
-                for c in range(3):
-                    d1[p, c] = res[2 + c]
-                    d2[p, c] = res[5 + c]
-                if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
-                    singular = True
-            else:
-                unset_row(p, k1, k2, d1, d2)
-            reason[p] = support_reason(singular, hit, normal_ok)
+            # one walk for every level: each level's support is the single search's at its radius
+            # (widen_ball_support), its star sums the last level's plus the rows it added
+            count = start_ball_support(p, vstamp, queue)
+            head = pending = done = rim_count = 0
+            hit = 0
+            exact = True
+            acc[:] = 0.0
+            for level in range(levels):
+                r = radii[level, p]
+                count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, indptr, indices, x, y, z,
+                                                          vstamp, queue, count, head, waiting, waiting_d2, pending)
+                hit, exact = add_star_rows(queue, done, count, border, nonmanifold, clean, star, hit, exact, acc)
+                level_hit = hit
+                if exact:
+                    sums[:] = acc
+                    # every edge and face inside the ball whole: the support's star terms hold each edge
+                    # twice by halves and each face thrice by thirds; an edge v -> w leaving the ball has
+                    # one half in, and its face (v, w, u) one or two thirds: replace them by what is
+                    # inside. Only the last level's rim and the new vertices may have such edges.
+                    kept = 0
+                    for i in range(rim_count + count - done):
+                        v = rim[i] if i < rim_count else queue[done + i - rim_count]
+                        if not may_leave(v, px, py, pz, r, x, y, z, longest):
+                            continue
+                        rim[kept] = v
+                        kept += 1
+                        leaving = crossing_faces(v, px, py, pz, r, x, y, z, vc_ptr, vc, after, link, tri,
+                                                 vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
+                        for a in range(leaving):
+                            h, w = out_h[a], out_w[a]
+                            f = h // 3
+                            s = half_scale[h]
+                            if s != 0.0:
+                                vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
+                                _add_outer(sums, s * (out_t[a] - 0.5), (x[w] - px) - vx, (y[w] - py) - vy,
+                                           (z[w] - pz) - vz)
+                            sums[6] += out_area[a] - out_in[a] * (face_area[f] / 3.0)
+                    rim_count = kept
+                else:
+                    sums[:] = 0.0
+                    level_hit |= _walk_sums(p, level_mark(p, level, levels), count, queue, r ** 2, x, y, z, vc_ptr,
+                                            vc, halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area,
+                                            degenerate, cut, crease, estamp, fstamp, sums)
+                done = count
+                _csm_finish(p, level, sums, level_hit, normals, tensor, vectors, res, k1, k2, d1, d2, reason)
 
 
 def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
@@ -440,8 +473,14 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         a non-manifold vertex or a degenerate face are marked invalid).
     normals : (n, 3) float64
         Unit vertex normals; they only pick which eigenvector of T is the normal.
-    radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii` with ``uses_normals=False``).
+    radii : (n,) or (levels, n) float64
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii` with ``uses_normals=False``),
+        or of every vertex at each of several levels, ascending per vertex (several ranges in one
+        call, :func:`curv.estimate_ranges`): one walk per centre serves them all
+        (:func:`~curv.geometry.neighbourhood.widen_ball_support`; each level's support is exactly the
+        single search's), the star sums of a level are the last one's plus the vertices it added,
+        and only the crossing faces are clipped per level. The sums are added in another order than
+        a call with that radius alone: the results agree to rounding.
     chunk : int, optional
         Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
     centres : (c,) int64, optional
@@ -465,10 +504,11 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
     Returns
     -------
-    Principal
+    Principal, or a list of one per level
         ``k1 <= k2`` as the tensor gives them; ``reason`` BORDER, DEGENERATE, NONMANIFOLD or
         SINGULAR where the estimate is not usable.
     """
+    levels = np.ndim(radii) == 2
     tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
         mesh, centres, radii, features)
     touched = touched[0]
@@ -479,15 +519,17 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     walk = not (clean.all() if touched is None else clean[touched].all())
     if walk:
         edges = mesh.edges
-        edge_ids = None if touched is None else touched_elements(mesh, centres, radii, indptr, indices, edges=True)[2]
+        edge_ids = None if touched is None else touched_elements(mesh, centres, radii[-1], indptr, indices,
+                                                                 edges=True)[2]
         beta_scale = edge_beta_scale(mesh, edge_ids)
         halfedge_edge, edge_faces = mesh.halfedge_edge, mesh.edge_faces
         yield 0.0
     else:
         beta_scale, halfedge_edge, edge_faces = np.empty(0), np.empty(0, np.int64), np.empty((0, 2), np.int64)
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
-    vc_ptr, vc, width, vstamps, queues, fstamps, out = clipping_scratch(mesh, centres, walk)
-    estamps = np.zeros((vstamps.shape[0], beta_scale.size), np.int32)  # vertex ids fit; half the cache lines
+    vc_ptr, vc, width, vstamps, queues, fstamps, rims, outside, outside_d2, out = clipping_scratch(
+        mesh, centres, walk, radii.shape[0])
+    estamps = np.zeros((vstamps.shape[0], beta_scale.size), fstamps.dtype)  # the level marks fit; half the cache lines
 
     def run(lo: int, hi: int) -> None:
         launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, after, link,
@@ -495,11 +537,16 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
                star, clean, halfedge_edge, beta_scale, edge_faces, tri, mesh.face_vector_areas,
                mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
                cut, crease,
-               normals, width, vstamps, queues, estamps, fstamps, out.k1, out.k2, out.d1, out.d2, out.reason)
+               normals, width, vstamps, queues, estamps, fstamps, rims, outside, outside_d2, out.k1, out.k2, out.d1,
+               out.d2, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
-    return out
+    if levels:
+        return [out.principal(level) for level in range(radii.shape[0])]
+    return out.principal(0)
 
+
+iter_csm.takes_levels = True  # several ranges in one call (curv.estimate_ranges)
 
 register(EstimatorSpec(
     name="csm", title="Cohen-Steiner & Morvan normal cycle", ranges=(1, 2, 3, 4), function=iter_csm,

@@ -48,7 +48,8 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
         return offs
-    if nc and offs.shape[0] < count:
+    errors = se_parts.shape[0] > 0  # no rows: no standard errors asked, their sums are skipped
+    if nc and errors and offs.shape[0] < count:
         offs = np.empty((count, 2))
     tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
     a00 = a01 = a02 = a11 = a12 = a22 = b0 = b1 = b2 = bb = s0 = s1 = s2 = 0.0
@@ -63,7 +64,7 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         l2 = u * u + v * v
         if not (l2 > tiny2):
             continue
-        if nc:
+        if nc and errors:
             offs[used, 0] = u
             offs[used, 1] = v
         used += 1
@@ -78,19 +79,20 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
             c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
             # a tilt of the frame adds a linear term to w (the standard error's columns)
             lu, lv = u, v
-        t0 += lu * lu
-        t1 += lu * lv
-        t2 += lv * lv
-        t3 += lu * c0
-        t4 += lu * c1
-        t5 += lu * c2
-        t6 += lv * c0
-        t7 += lv * c1
-        t8 += lv * c2
-        t9 += lu * rhs
-        t10 += lv * rhs
-        t11 += lu
-        t12 += lv
+        if errors:
+            t0 += lu * lu
+            t1 += lu * lv
+            t2 += lv * lv
+            t3 += lu * c0
+            t4 += lu * c1
+            t5 += lu * c2
+            t6 += lv * c0
+            t7 += lv * c1
+            t8 += lv * c2
+            t9 += lu * rhs
+            t10 += lv * rhs
+            t11 += lu
+            t12 += lv
         a00 += c0 * c0
         a01 += c0 * c1
         a02 += c0 * c2
@@ -106,7 +108,7 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
         s2 += c2
     tilt[0], tilt[1], tilt[2], tilt[3], tilt[4], tilt[5], tilt[6] = t0, t1, t2, t3, t4, t5, t6
     tilt[7], tilt[8], tilt[9], tilt[10], tilt[11], tilt[12] = t7, t8, t9, t10, t11, t12
-    if nc:
+    if nc and errors:
         # nc's weighted sums (:func:`~curv.estimators._local_fit.store_se3_weighted`) in a second pass
         # over the support's offsets (kept in the first): kn = 2 h / l² moves by c = 2 / l² per unit
         # height of q (or of p, the other way), and with ρ = 1 / l² the rows are a = ρ (u², 2uv, v²)
@@ -312,6 +314,7 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     n0, n1, n2, frame, ok = fit_frame(p, nx, ny, nz, k1, k2, d1, d2, reason, se_parts)
     if not ok:
         return touched, yv, jp
+    errors = se_parts.shape[0] > 0  # no rows: no standard errors asked, their sums are skipped
     # Heights are lengths, slopes are not: fit in coordinates divided by the ball radius so the
     # balance of the two kinds of equation (and so the result) does not depend on the mesh's scale.
     inv_r = 1.0 / r
@@ -334,8 +337,9 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         _accumulate(ata, atb, row, w)
         bb += w * w
         equations += 1
-        for j in range(7):
-            grads[2, j] += row[j]
+        if errors:
+            for j in range(7):
+                grads[2, j] += row[j]
         a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
         if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
             continue
@@ -343,20 +347,24 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         _slope_rows(u, v, ru, rv)
         _accumulate(ata, atb, ru, -a / c)
         _accumulate(ata, atb, rv, -b / c)
-        for j in range(7):
-            grads[3, j] += ru[j]
-            grads[4, j] += rv[j]
+        if errors:
+            for j in range(7):
+                grads[3, j] += ru[j]
+                grads[4, j] += rv[j]
         bb += (a * a + b * b) / (c * c)
         equations += 2
         sloped += 1
-    for j in range(7):
-        atb0[j] = atb[j]
-        for k in range(7):
-            ata0[j, k] = ata[j, k]
+    if errors:
+        for j in range(7):
+            atb0[j] = atb[j]
+            for k in range(7):
+                ata0[j, k] = ata[j, k]
     singular = solve_scaled(ata, atb, sol)
     # second derivatives back in unscaled coordinates
     e, f, g = -sol[0] * inv_r, -sol[1] * inv_r, -sol[2] * inv_r
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
+    if not errors:
+        return touched, yv, jp
     xatb = 0.0
     for j in range(7):
         xatb += sol[j] * atb0[j]
@@ -398,7 +406,8 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
             var2 += row_dot(grads, 1, shared, 7) ** 2
         store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, dof, var_dev * scale,
                     math.hypot(0.5 * (e - g), f))
-        se_parts[p, 1] = -se_parts[p, 1]
+        if se_parts.shape[0] > 0:
+            se_parts[p, 1] = -se_parts[p, 1]
     return touched, yv, jp
 
 
@@ -436,28 +445,38 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
 
 
 def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Normal-curvature least squares over each vertex's support (3 unknowns, 1 equation per neighbour)."""
+            centres: np.ndarray | None = None, features=None, standard_errors: bool = True):
+    """Normal-curvature least squares over each vertex's support (3 unknowns, 1 equation per neighbour).
+
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, NC), chunk=chunk, centres=centres,
-                               features=features))
+                               features=features, standard_errors=standard_errors))
 
 
 def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None):
-    """Quadratic height fit over each vertex's support (3 unknowns, 1 equation per neighbour)."""
+            centres: np.ndarray | None = None, features=None, standard_errors: bool = True):
+    """Quadratic height fit over each vertex's support (3 unknowns, 1 equation per neighbour).
+
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, QS), chunk=chunk, centres=centres,
-                               features=features))
+                               features=features, standard_errors=standard_errors))
 
 
 def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL,
+            standard_errors: bool = True):
     """Adjacent-normal cubic fit over each vertex's support (7 unknowns, 3 equations per neighbour).
 
     ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
-    take the errors of the neighbours' normals; the curvatures do not depend on it."""
+    take the errors of the neighbours' normals; the curvatures do not depend on it.
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, AN), chunk=chunk, centres=centres,
-                               features=features, noise_model=checked_noise_model(noise_model)))
+                               features=features, noise_model=checked_noise_model(noise_model),
+                               standard_errors=standard_errors))
 
+
+for _fit in (iter_nc, iter_qs, iter_an):
+    _fit.skips_errors = True  # takes standard_errors=False (curv.estimate's keyword of that name)
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
 

@@ -66,10 +66,10 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ..core.validity import Reason
 from ._local_fit import slice_bounds, store_principal, sym3_bilinear, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_row, clipping_inputs, clipping_scratch, corner_rings,
-                             crossing_faces, may_leave,
-                             crossing_scratch, element_list, face_in_ball_area, star_support, support_reason, touches,
-                             unset_row, vertex_normal)
+from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_row, add_star_rows, clipping_inputs, clipping_scratch,
+                             corner_rings, crossing_faces, level_mark, may_leave, crossing_scratch, element_list,
+                             face_in_ball_area, start_ball_support, support_reason, touches, vertex_normal,
+                             widen_ball_support)
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_icc", "icc_mean_gaussian", "face_measures", "star_measures"]
@@ -210,14 +210,14 @@ def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = Non
 
 
 @jit
-def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_area, degenerate, measures, cut,
+def _walk_sums(p, mark, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_area, degenerate, measures, cut,
                crease, fstamp, sums):
     """The nine sums of a centre whose support is not clean (or that stops at creases), face by face.
 
     Adds them to ``sums`` (9,); returns the DEGENERATE_BIT if a degenerate face or a face without
-    measures was met.
+    measures was met. ``mark``: this walk's stamp (:func:`~curv.estimators._ball_clipping.level_mark`;
+    the stamps start zeroed).
     """
-    mark = p + 1  # the stamps start zeroed
     px, py, pz = x[p], y[p], z[p]
     hit = 0
     for i in range(count):
@@ -243,75 +243,106 @@ def _walk_sums(p, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_
     return hit
 
 
+@jit
+def _icc_finish(p, level, sums, hit, normals, from_measures, k1, k2, d1, d2, mean, gaussian, reason):
+    """Centre p's curvatures at ``level`` from its nine sums, into row ``(level, p)`` of the outputs."""
+    nx, ny, nz, normal_ok = vertex_normal(normals, p)
+    mean[level, p] = gaussian[level, p] = math.nan
+    mu0, s1, s2 = sums[0], sums[1], sums[2]
+    total = 0.0
+    for c in range(MEASURES):
+        total += sums[c]
+    singular = not (mu0 > 0.0 and math.isfinite(total))
+    if not singular and normal_ok:
+        h = mean[level, p] = 0.5 * s1 / mu0
+        kk = gaussian[level, p] = s2 / mu0
+        # W = M / mu0 in the tangent frame (U, V) of the vertex normal
+        ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
+        m00, m01, m02, m11, m12, m22 = sums[3], sums[4], sums[5], sums[6], sums[7], sums[8]
+        e = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, ux, uy, uz) / mu0
+        f_ = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, vx, vy, vz) / mu0
+        g = sym3_bilinear(m00, m01, m02, m11, m12, m22, vx, vy, vz, vx, vy, vz) / mu0
+        store_principal(p, e, f_, g, ux, uy, uz, vx, vy, vz, k1[level], k2[level], d1[level], d2[level])
+        if from_measures:
+            # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
+            # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8.
+            # H and K are sums of a few hundred clipped terms, rounded to tens of EPS.
+            disc = h * h - kk
+            if disc <= 64.0 * EPS * (h * h + abs(kk)):
+                disc = 0.0
+            rad = math.sqrt(disc)
+            k1[level, p] = h + rad
+            k2[level, p] = h - rad
+        if not (math.isfinite(k1[level, p]) and math.isfinite(k2[level, p])):
+            singular = True
+    else:
+        k1[level, p] = k2[level, p] = math.nan
+        for c in range(3):
+            d1[level, p, c] = d2[level, p, c] = math.nan
+    reason[level, p] = support_reason(singular, hit, normal_ok)
+
+
 @jit_parallel
 def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, star, clean, tri,
                vector_area,
                face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, width,
-               vstamps, queues, fstamps, k1, k2, d1, d2, mean, gaussian, reason):
+               vstamps, queues, fstamps, rims, outside, outside_d2, k1, k2, d1, d2, mean, gaussian, reason):
     parts = vstamps.shape[0]
+    levels = radii.shape[0]
     for t in prange(parts):
+        acc = np.empty(MEASURES)  # the support's star sums so far
         sums = np.empty(MEASURES)
         out_h, out_w, out_t, out_area, out_in, ring = crossing_scratch(width)
-        queue, vstamp, fstamp = queues[t], vstamps[t], fstamps[t]
+        queue, vstamp, fstamp, rim = queues[t], vstamps[t], fstamps[t], rims[t]
+        waiting, waiting_d2 = outside[t], outside_d2[t]
         start, stop = slice_bounds(lo, hi, t, parts)
         for k in range(start, stop):
             p = centres[k]
-            count, queue, hit, exact = star_support(p, radii[p], indptr, indices, x, y, z, vstamp, queue, border,
-                                                    nonmanifold, clean, star, sums)
             px, py, pz = x[p], y[p], z[p]
-            mean[p] = gaussian[p] = math.nan
-            if exact:
-                # the support's star sums hold every face inside the ball thrice by thirds; a face
-                # (v, w, u) leaving the ball along v -> w has one or two thirds in: replace them by
-                # the fraction of its area inside
-                for i in range(count):
-                    if not may_leave(queue[i], px, py, pz, radii[p], x, y, z, longest):
-                        continue
-                    leaving = crossing_faces(queue[i], px, py, pz, radii[p], x, y, z, vc_ptr, vc, after, link, tri,
-                                             vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
-                    for a in range(leaving):
-                        f = out_h[a] // 3
-                        add_row(sums, min(out_area[a] / face_area[f], 1.0) - out_in[a] * (1.0 / 3.0), measures, f)
-            else:
-                hit |= _walk_sums(p, count, queue, radii[p] ** 2, x, y, z, vc_ptr, vc, tri, vector_area, face_area,
-                                  degenerate, measures, cut, crease, fstamp, sums)
-            nx, ny, nz, normal_ok = vertex_normal(normals, p)
-            mu0, s1, s2 = sums[0], sums[1], sums[2]
-            total = 0.0
-            for c in range(MEASURES):
-                total += sums[c]
-            singular = not (mu0 > 0.0 and math.isfinite(total))
-            if not singular and normal_ok:
-                mean[p] = 0.5 * s1 / mu0
-                gaussian[p] = s2 / mu0
-                # W = M / mu0 in the tangent frame (U, V) of the vertex normal
-                ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
-                m00, m01, m02, m11, m12, m22 = sums[3], sums[4], sums[5], sums[6], sums[7], sums[8]
-                e = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, ux, uy, uz) / mu0
-                f_ = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, vx, vy, vz) / mu0
-                g = sym3_bilinear(m00, m01, m02, m11, m12, m22, vx, vy, vz, vx, vy, vz) / mu0
-                store_principal(p, e, f_, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2)
-                if from_measures:
-                    # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
-                    # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8.
-                    # H and K are sums of a few hundred clipped terms, rounded to tens of EPS.
-                    h, kk = mean[p], gaussian[p]
-                    disc = h * h - kk
-                    if disc <= 64.0 * EPS * (h * h + abs(kk)):
-                        disc = 0.0
-                    rad = math.sqrt(disc)
-                    k1[p] = mean[p] + rad
-                    k2[p] = mean[p] - rad
-                if not (math.isfinite(k1[p]) and math.isfinite(k2[p])):
-                    singular = True
-            else:
-                unset_row(p, k1, k2, d1, d2)
-            reason[p] = support_reason(singular, hit, normal_ok)
+            # one walk for every level, as in csm's kernel
+            count = start_ball_support(p, vstamp, queue)
+            head = pending = done = rim_count = 0
+            hit = 0
+            exact = True
+            acc[:] = 0.0
+            for level in range(levels):
+                r = radii[level, p]
+                count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, indptr, indices, x, y, z,
+                                                          vstamp, queue, count, head, waiting, waiting_d2, pending)
+                hit, exact = add_star_rows(queue, done, count, border, nonmanifold, clean, star, hit, exact, acc)
+                level_hit = hit
+                if exact:
+                    sums[:] = acc
+                    # the support's star sums hold every face inside the ball thrice by thirds; a face
+                    # (v, w, u) leaving the ball along v -> w has one or two thirds in: replace them by
+                    # the fraction of its area inside (only the last level's rim and the new vertices
+                    # may have such faces)
+                    kept = 0
+                    for i in range(rim_count + count - done):
+                        v = rim[i] if i < rim_count else queue[done + i - rim_count]
+                        if not may_leave(v, px, py, pz, r, x, y, z, longest):
+                            continue
+                        rim[kept] = v
+                        kept += 1
+                        leaving = crossing_faces(v, px, py, pz, r, x, y, z, vc_ptr, vc, after, link, tri,
+                                                 vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
+                        for a in range(leaving):
+                            f = out_h[a] // 3
+                            add_row(sums, min(out_area[a] / face_area[f], 1.0) - out_in[a] * (1.0 / 3.0), measures, f)
+                    rim_count = kept
+                else:
+                    sums[:] = 0.0
+                    level_hit |= _walk_sums(p, level_mark(p, level, levels), count, queue, r ** 2, x, y, z, vc_ptr,
+                                            vc, tri, vector_area, face_area, degenerate, measures, cut, crease, fstamp,
+                                            sums)
+                done = count
+                _icc_finish(p, level, sums, level_hit, normals, from_measures, k1, k2, d1, d2, mean, gaussian, reason)
 
 
 def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: int | None,
                    from_measures: bool = True, centres: np.ndarray | None = None, features=None):
-    """Run the kernel over chunks of vertices; returns ``(Principal, mean (n,), gaussian (n,))``."""
+    """Run the kernel over chunks of vertices at one or several levels of radii (``radii`` (n,) or
+    (levels, n), :func:`iter_icc`); returns ``(LevelOutputs, mean (levels, n), gaussian (levels, n))``."""
     tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
         mesh, centres, radii, features)
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
@@ -320,17 +351,19 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     after, link = corner_rings(mesh, touched[0])
     walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
-    vc_ptr, vc, width, vstamps, queues, fstamps, out = clipping_scratch(mesh, centres, walk)
+    levels = radii.shape[0]
+    vc_ptr, vc, width, vstamps, queues, fstamps, rims, outside, outside_d2, out = clipping_scratch(
+        mesh, centres, walk, levels)
     n = mesh.n_vertices
-    mean = np.empty(n)  # NaN at each centre before its sums (a region touches only its own pages)
-    gaussian = np.empty(n)
+    mean = np.empty((levels, n))  # NaN at each centre before its sums (a region touches only its own pages)
+    gaussian = np.empty((levels, n))
 
     def run(lo: int, hi: int) -> None:
         launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, after, link,
                star, clean,
                tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
                mesh.nonmanifold_vertices, cut, crease, normals, from_measures, width, vstamps, queues,
-               fstamps, out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
+               fstamps, rims, outside, outside_d2, out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return out, mean, gaussian
@@ -346,8 +379,11 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         Consistently oriented triangle mesh.
     normals : (n, 3) float64
         Unit vertex normals: the corrected normal field interpolates them over each triangle.
-    radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii` with ``uses_normals=False``).
+    radii : (n,) or (levels, n) float64
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii` with ``uses_normals=False``),
+        or of every vertex at each of several levels, ascending per vertex: one walk per centre
+        serves them all, as in :func:`curv.estimators.csm.iter_csm` (results to rounding of the
+        single-radius calls'; a list of one Principal per level).
     chunk : int, optional
         Vertices per kernel call; default adaptive (:func:`curv.core.jit.iter_chunks`).
     from_measures : bool
@@ -362,8 +398,10 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     It yields the fraction done and returns the :class:`~curv.core.result.Principal` (:data:`~curv.estimators.registry.EstimatorFunction`):
     ``k1 >= k2``, reasons as in the module notes.
     """
-    principal, _, _ = yield from _iter_measures(mesh, normals, radii, chunk, from_measures, centres, features)
-    return principal
+    out, _, _ = yield from _iter_measures(mesh, normals, radii, chunk, from_measures, centres, features)
+    if np.ndim(radii) == 2:
+        return [out.principal(level) for level in range(out.k1.shape[0])]
+    return out.principal(0)
 
 
 def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
@@ -383,12 +421,15 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
         while True:
             next(gen)
     except StopIteration as stop:
-        principal, mean, gaussian = stop.value
+        out, mean, gaussian = stop.value
+    principal, mean, gaussian = out.principal(0), mean[0], gaussian[0]
     bad = principal.reason != Reason.OK
     mean[bad] = np.nan
     gaussian[bad] = np.nan
     return mean, gaussian, principal.reason
 
+
+iter_icc.takes_levels = True  # several ranges in one call (curv.estimate_ranges)
 
 register(EstimatorSpec(
     name="icc", in_paper=False, title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4),

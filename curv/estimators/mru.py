@@ -172,7 +172,8 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         store_se3(p, suu, suv, 0.0, suu + svv, suv, svv, saa_bb, xatb, 2 * used, 0,
                   0.0, 0.0, 0.0, e, f, g, k1_se, k2_se, se_parts, e, f, g, tilt)
     # its noise level is of the normals, not of the heights: pooled with no other vertex's
-    se_parts[p, 1] = -se_parts[p, 1]
+    if se_parts.shape[0] > 0:
+        se_parts[p, 1] = -se_parts[p, 1]
     return touched, yv, jp
 
 
@@ -197,14 +198,19 @@ def _mru_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, nz, stam
 
 
 def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
-            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL):
+            centres: np.ndarray | None = None, features=None, noise_model: str = DEFAULT_NOISE_MODEL,
+            standard_errors: bool = True):
     """Normal-difference least squares over each vertex's support (within (k-1) longest 1-ring edges at Rk).
 
     ``noise_model`` (:data:`~curv.estimators._local_fit.NOISE_MODELS`) says how the standard errors
-    take the errors of the neighbours' normals; the curvatures do not depend on it."""
+    take the errors of the neighbours' normals; the curvatures do not depend on it.
+    ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk, centres=centres,
-                                 features=features, noise_model=checked_noise_model(noise_model)))
+                                 features=features, noise_model=checked_noise_model(noise_model),
+                                 standard_errors=standard_errors))
 
+
+iter_mru.skips_errors = True  # takes standard_errors=False (curv.estimate's keyword of that name)
 
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,

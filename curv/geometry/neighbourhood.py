@@ -36,7 +36,7 @@ from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii
 
-__all__ = ["ball_support", "mesh_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "latest_with_mesh", "supports", "support_sizes", "Neighbourhood",
+__all__ = ["ball_support", "mesh_ball_support", "start_ball_support", "widen_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "latest_with_mesh", "supports", "support_sizes", "Neighbourhood",
            "iter_neighbourhoods", "neighbourhood_matrix"]
 
 def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
@@ -119,6 +119,87 @@ def mesh_ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
                 queue[count] = q
                 count += 1
     return count, queue
+
+
+@jit
+def start_ball_support(p, stamp, queue):
+    """Begin a levelled support of ``p`` (:func:`widen_ball_support`): ``queue[0] = p``, p seen.
+    Returns the count, 1."""
+    stamp[p] = p + 1
+    queue[0] = p
+    return 1
+
+
+@jit
+def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp, queue, count, head, outside,
+                       outside_d2, pending):
+    """Widen the support of ``p`` to the ball of squared radius ``radius2`` (not smaller than the
+    last call's): one walk serves a whole series of radii.
+
+    The support at each radius is exactly :func:`mesh_ball_support`'s, the vertices connected to p
+    through vertices within that radius: the search goes on from where the last radius stopped,
+    and a vertex it met beyond the last radius (kept in ``outside`` with its squared distance)
+    joins the queue at the first radius that holds it. Every vertex of the queue has been
+    expanded once, so each of their neighbours is in the queue or in ``outside``: nothing
+    connected is missed. The order within the queue is the walk's, not the single search's.
+
+    Parameters
+    ----------
+    p : int
+        Centre vertex (start with :func:`start_ball_support`: ``count = 1``, ``head = pending = 0``).
+    radius2 : float
+        Squared radius of this level.
+    keep_outside : bool
+        Keep the vertices met beyond ``radius2`` for a later, larger radius (False on the last).
+    indptr, indices, x, y, z, stamp :
+        As in :func:`mesh_ball_support` (the same ``stamp`` mark ``p + 1`` across the levels).
+    queue : (n,) int64
+        ``queue[:count]`` the support so far.
+    count, head, pending : int
+        The state the last call returned: support size, the vertices already expanded, and how
+        many of ``outside`` wait.
+    outside : (n,) int64, outside_d2 : (n,) float64
+        The waiting vertices and their squared distances to p (size 0 when ``keep_outside`` is
+        never True).
+
+    Returns
+    -------
+    count, head, pending : int
+        ``queue[:count]`` is the support at ``radius2`` (p first); the rows added by this call
+        are those from the previous count on.
+    """
+    px, py, pz = x[p], y[p], z[p]
+    mark = p + 1
+    kept = 0
+    for i in range(pending):
+        if outside_d2[i] <= radius2:
+            queue[count] = outside[i]
+            count += 1
+        else:
+            outside[kept] = outside[i]
+            outside_d2[kept] = outside_d2[i]
+            kept += 1
+    pending = kept
+    while head < count:
+        v = queue[head]
+        head += 1
+        for j in range(indptr[v], indptr[v + 1]):
+            q = indices[j]
+            if stamp[q] == mark:
+                continue
+            stamp[q] = mark
+            dx = x[q] - px
+            dy = y[q] - py
+            dz = z[q] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 <= radius2:
+                queue[count] = q
+                count += 1
+            elif keep_outside:
+                outside[pending] = q
+                outside_d2[pending] = d2
+                pending += 1
+    return count, head, pending
 
 
 def new_scratch(n_vertices: int, parts: int) -> np.ndarray:

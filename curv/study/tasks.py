@@ -18,12 +18,29 @@ from .testmesh import build_test_mesh
 __all__ = ["run_task"]
 
 
-def _cheapest_errors(method: str) -> dict:
-    """The study measures k1, k2 and validity, never the standard errors: an estimator with a
-    choice of noise model for them (which the curvatures do not depend on) takes the cheapest."""
-    from ..estimators import get_spec
+def _plain_groups(variants: tuple[Variant, ...]) -> list[list[int]]:
+    """The variants' indices in groups estimated by one call: each method's plain-range variants
+    together (first-seen order), every smoothing variant alone."""
+    groups: dict = {}
+    for i, v in enumerate(variants):
+        key = v.method if v.smooth is Smoothing.NONE else ("alone", i)
+        groups.setdefault(key, []).append(i)
+    return list(groups.values())
 
-    return {"noise_model": "independent"} if "independent" in get_spec(method).options.get("noise_model", ()) else {}
+
+def _estimate_group(mesh, variants: list[Variant], normals, region) -> list:
+    """The results of ``variants`` (one method's plain ranges, or one smoothing variant): one
+    :func:`curv.api.estimate_ranges` call for the ranges (csm and icc share one walk over them, the
+    others the setup), without standard errors (the study reads none)."""
+    from ..api import estimate, estimate_ranges
+
+    v = variants[0]
+    if v.smooth is not Smoothing.NONE:
+        return [estimate(mesh, method=v.method, range=v.range, smooth=v.smooth,
+                         normals=None if v.smooth is Smoothing.MESH else normals,
+                         vertices=None if v.smooth is Smoothing.VALUES else region, standard_errors=False)]
+    return estimate_ranges(mesh, v.method, [u.range for u in variants], normals=normals, vertices=region,
+                           standard_errors=False)
 
 
 def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
@@ -34,8 +51,13 @@ def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
     vertices are estimated (a region, ``vertices=``, whose values equal the whole mesh's there):
     the others are never measured, and on the paper's coarse meshes they are most of the mesh.
     R2SV, which smooths the estimated values over the neighbours, still estimates everywhere.
+    The plain ranges of one estimator are estimated by one call (:func:`curv.api.estimate_ranges`:
+    the same values as one call per range, to rounding for csm and icc, which share one walk over
+    the ranges), and no estimate computes standard errors (the study reads none). The ``seconds``
+    of such a group's rows are the group's time shared equally among them.
     An estimator that raises does not stop the study: its row carries the error text and NaN
-    measures, and the report lists it.
+    measures, and the report lists it (a group that raises is run again one variant at a time, so
+    that each row carries its own error).
 
     Parameters
     ----------
@@ -45,9 +67,9 @@ def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
     Returns
     -------
     list of dict
-        One row per variant with the columns of :data:`curv.study.table.COLUMNS`.
+        One row per variant with the columns of :data:`curv.study.table.COLUMNS`, in the order of
+        ``variants``.
     """
-    from ..api import estimate
     from ..geometry.normals import cached_max_normals
 
     tm = build_test_mesh(task)
@@ -59,20 +81,32 @@ def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
         block=block_id(task.key, [v.id for v in variants]), block_rows=len(variants),
     )
     region = np.flatnonzero(tm.evaluated)
-    rows = []
-    for v in variants:
+    rows: list = [None] * len(variants)
+
+    def measured(res) -> tuple[dict, str]:
+        return summarize(tm.truth, res, tm.evaluated), ""
+
+    def failed(exc) -> tuple[dict, str]:
+        measures = {name: float("nan") for name in METRIC_COLUMNS}
+        measures.update(n_evaluated=int(tm.evaluated.sum()), n_invalid=-1, n_kept=-1)
+        return measures, f"{type(exc).__name__}: {exc}".replace("\n", " ")
+
+    for group in _plain_groups(variants):
+        members = [variants[i] for i in group]
         t0 = time.perf_counter()
         try:
-            res = estimate(tm.mesh, method=v.method, range=v.range, smooth=v.smooth,
-                           normals=None if v.smooth is Smoothing.MESH else normals,
-                           vertices=None if v.smooth is Smoothing.VALUES else region,
-                           **_cheapest_errors(v.method))
-            measures, error = summarize(tm.truth, res, tm.evaluated), ""
-        except Exception as exc:  # recorded in the row and reported; one bad estimator must not end a study
-            measures = {name: float("nan") for name in METRIC_COLUMNS}
-            measures.update(n_evaluated=int(tm.evaluated.sum()), n_invalid=-1, n_kept=-1)
-            error = f"{type(exc).__name__}: {exc}".replace("\n", " ")
-        rows.append({**base, "variant": v.id, "method": v.method, "range": v.range,
-                     "smooth": v.smooth.value, **measures,
-                     "seconds": time.perf_counter() - t0, "error": error})
+            outcomes = [measured(res) for res in _estimate_group(tm.mesh, members, normals, region)]
+            seconds = [(time.perf_counter() - t0) / len(group)] * len(group)
+        except Exception:  # recorded in the rows and reported; one bad estimator must not end a study
+            outcomes, seconds = [], []
+            for v in members:
+                t1 = time.perf_counter()
+                try:
+                    outcomes.append(measured(_estimate_group(tm.mesh, [v], normals, region)[0]))
+                except Exception as exc:
+                    outcomes.append(failed(exc))
+                seconds.append(time.perf_counter() - t1)
+        for i, v, (measures, error), sec in zip(group, members, outcomes, seconds):
+            rows[i] = {**base, "variant": v.id, "method": v.method, "range": v.range,
+                       "smooth": v.smooth.value, **measures, "seconds": sec, "error": error}
     return rows

@@ -88,10 +88,3 @@ def test_task_rows_equal_whole_mesh_estimates(tiny_settings):
         whole = curv.estimate(tm.mesh, v.method, v.range, normals=normals)
         for name, value in summarize(tm.truth, whole, tm.evaluated).items():
             assert row[name] == value or (np.isnan(row[name]) and np.isnan(value)), (v.id, name)
-
-
-def test_tasks_take_the_cheapest_noise_model_where_there_is_a_choice():
-    from curv.study.tasks import _cheapest_errors
-
-    assert _cheapest_errors("an") == _cheapest_errors("mru") == {"noise_model": "independent"}
-    assert _cheapest_errors("qs") == _cheapest_errors("csm") == {}

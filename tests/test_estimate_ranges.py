@@ -1,0 +1,102 @@
+"""``curv.api.estimate_ranges``: several ranges of one estimator in one call equal one call per range."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import curv
+from curv.api import estimate_ranges
+from curv.core.errors import EstimatorError
+from creased_meshes import box
+from meshes import hex_plane, icosphere, torus_grid
+
+RANGES = (3, 1, 4, 2.5, 2)
+
+
+def _noisy_torus():
+    mesh = torus_grid(36, 16)[0]
+    rng = np.random.default_rng(4)
+    return curv.Mesh(mesh.vertices + rng.normal(scale=0.03, size=mesh.vertices.shape), mesh.faces)
+
+
+def _open_patch():
+    # a paraboloid cap over a hexagon: borders, and supports that reach them at the larger ranges
+    flat = hex_plane(12)
+    v = flat.vertices.copy()
+    v[:, 2] = 0.4 * v[:, 0] ** 2 - 0.25 * v[:, 1] ** 2
+    return curv.Mesh(v, flat.faces)
+
+
+MESHES = {"sphere": lambda: icosphere(3), "noisy torus": _noisy_torus, "open patch": _open_patch}
+
+
+def _compare(one, many_res, shared: bool):
+    for name in ("reason", "valid"):
+        assert np.array_equal(getattr(one, name), getattr(many_res, name)), name
+    for name in ("k1", "k2", "d1", "d2", "k1_se", "k2_se"):
+        a, b = getattr(one, name), getattr(many_res, name)
+        if not shared:
+            assert np.array_equal(a, b, equal_nan=True), name
+        elif name in ("d1", "d2"):
+            # the sums over a support are added in another order: rounding only. The directions
+            # are those of the rounded tensor: only where k1 and k2 stand apart are they defined
+            apart = one.valid & (one.k1 - one.k2 > 1e-7 * np.abs(one.k1))
+            cos = np.abs(np.einsum("ij,ij->i", a[apart], b[apart]))
+            assert np.allclose(cos, 1.0, atol=1e-6), name
+        else:
+            assert np.allclose(a, b, rtol=1e-11, atol=1e-12, equal_nan=True), name
+    assert one.range == many_res.range and one.info["range_label"] == many_res.info["range_label"]
+
+
+@pytest.mark.parametrize("mesh_name", sorted(MESHES))
+@pytest.mark.parametrize("method", ["csm", "icc", "qs"])
+@pytest.mark.parametrize("region", [False, True], ids=["whole", "region"])
+def test_ranges_equal_one_call_each(mesh_name, method, region):
+    mesh = MESHES[mesh_name]()
+    idx = np.arange(3, mesh.n_vertices, 5) if region else None
+    many = estimate_ranges(mesh, method, RANGES, vertices=idx)
+    assert len(many) == len(RANGES)
+    for r, res in zip(RANGES, many):
+        _compare(curv.estimate(mesh, method, r, vertices=idx), res, shared=method in ("csm", "icc"))
+    if mesh_name == "open patch" and method != "qs":
+        # the wide balls reach the border where the narrow ones do not (BORDER for the clipping
+        # estimators): the levels differ
+        reasons = [np.count_nonzero(res.reason == curv.Reason.BORDER) for res in many]
+        assert reasons[RANGES.index(4)] > reasons[RANGES.index(1)]
+
+
+@pytest.mark.parametrize("method", ["csm", "icc"])
+def test_ranges_at_creases_and_in_chunks(method):
+    """Supports that stop at creases walk face by face, with a stamp of their own per range."""
+    mesh = box(4)
+    many = estimate_ranges(mesh, method, (1, 2, 3), features=30, block_size=7)
+    for r, res in zip((1, 2, 3), many):
+        _compare(curv.estimate(mesh, method, r, features=30), res, shared=True)
+
+
+def test_one_range_is_estimate():
+    mesh = icosphere(2)
+    (res,) = estimate_ranges(mesh, "csm", [2])
+    ref = curv.estimate(mesh, "csm", 2)
+    assert np.array_equal(res.k1, ref.k1) and np.array_equal(res.d2, ref.d2)
+    (single,) = estimate_ranges(mesh, "csm", "R2")
+    assert np.array_equal(single.k1, ref.k1)
+    pair = estimate_ranges(mesh, "qs", np.array([2, 1]))
+    assert [r.range for r in pair] == [2, 1] and np.array_equal(pair[1].k1, curv.estimate(mesh, "qs", 1).k1)
+
+
+def test_sphere_sign_and_value():
+    mesh = icosphere(4, radius=2.0)
+    for res in estimate_ranges(mesh, "icc", (1, 2, 4)):
+        assert np.allclose(res.k1[res.valid], 0.5, rtol=0.02) and np.allclose(res.k2[res.valid], 0.5, rtol=0.02)
+
+
+def test_refusals():
+    mesh = icosphere(1)
+    with pytest.raises(EstimatorError, match="radius"):
+        estimate_ranges(mesh, "csm", (1, 2), radius=0.3)
+    with pytest.raises(EstimatorError, match="at least one"):
+        estimate_ranges(mesh, "csm", ())
+    with pytest.raises(EstimatorError):
+        estimate_ranges(mesh, "csm", (1, 0.2))
