@@ -21,6 +21,7 @@ __version__ = "0.1.0"
 _LAZY = {
     "estimate": ("curv.api", "estimate"),
     "iter_estimate": ("curv.api", "iter_estimate"),
+    "estimate_ranges": ("curv.api", "estimate_ranges"),
     "ESTIMATORS": ("curv.estimators", "ESTIMATORS"),
     "vertex_normals": ("curv.geometry.normals", "vertex_normals"),
     "load": ("curv.io", "load"),

@@ -1,4 +1,4 @@
-"""``curv.api.estimate_ranges``: several ranges of one estimator in one call equal one call per range."""
+"""``curv.estimate_ranges``: several ranges of one estimator in one call equal one call per range."""
 
 from __future__ import annotations
 
@@ -100,3 +100,7 @@ def test_refusals():
         estimate_ranges(mesh, "csm", ())
     with pytest.raises(EstimatorError):
         estimate_ranges(mesh, "csm", (1, 0.2))
+
+
+def test_estimate_ranges_is_part_of_the_package():
+    assert curv.estimate_ranges is estimate_ranges and "estimate_ranges" in curv.__all__
