@@ -70,6 +70,17 @@ def test_jet_width_flag_is_the_librarys_option(tmp_path, capsys):
     assert "has no option 'width'" in capsys.readouterr().err
 
 
+def test_no_standard_errors_flag_keeps_the_curvatures_and_drops_the_errors(sphere_file, tmp_path):
+    out, ref = tmp_path / "no_se.ply", tmp_path / "se.ply"
+    assert main(["estimate", str(sphere_file), "-m", "an", "-r", "3", "--no-standard-errors", "-o", str(out), "-q"]) == 0
+    assert main(["estimate", str(sphere_file), "-m", "an", "-r", "3", "-o", str(ref), "-q"]) == 0
+    skipped, kept = plyfile.PlyData.read(str(out))["vertex"], plyfile.PlyData.read(str(ref))["vertex"]
+    assert np.isnan(skipped["k1_se"]).all() and np.isnan(skipped["k2_se"]).all()
+    assert np.isfinite(kept["k1_se"]).any()
+    np.testing.assert_array_equal(skipped["k1"], kept["k1"])
+    np.testing.assert_array_equal(skipped["k2"], kept["k2"])
+
+
 def test_noise_model_flag_is_the_librarys_option(tmp_path):
     noisy = curv.surfaces.make_surface("sphere", n_vertices=642, noise=0.05, seed=3).mesh
     path, out = tmp_path / "noisy.ply", tmp_path / "mru.ply"
