@@ -97,27 +97,9 @@ def mesh_ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     queue : (n,) int64
         The same queue (kept in the return so that callers read ``count, queue = ...``).
     """
-    px, py, pz = x[p], y[p], z[p]
-    mark = p + 1
-    queue[0] = p
-    stamp[p] = mark
-    head = 0
-    count = 1
-    while head < count:
-        v = queue[head]
-        head += 1
-        for j in range(indptr[v], indptr[v + 1]):
-            q = indices[j]
-            if stamp[q] == mark:
-                continue
-            # a vertex outside the ball stays outside: mark it seen either way
-            stamp[q] = mark
-            dx = x[q] - px
-            dy = y[q] - py
-            dz = z[q] - pz
-            if dx * dx + dy * dy + dz * dz <= radius2:
-                queue[count] = q
-                count += 1
+    # the levelled walk with one level (the range rule has one owner); nothing waits beyond it
+    count = start_ball_support(p, stamp, queue)
+    count, _, _ = widen_ball_support(p, radius2, False, indptr, indices, x, y, z, stamp, queue, count, 0, None, None, 0)
     return count, queue
 
 
@@ -136,10 +118,10 @@ def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp
     """Widen the support of ``p`` to the ball of squared radius ``radius2`` (not smaller than the
     last call's): one walk serves a whole series of radii.
 
-    The support at each radius is exactly :func:`mesh_ball_support`'s, the vertices connected to p
-    through vertices within that radius: the search goes on from where the last radius stopped,
-    and a vertex it met beyond the last radius (kept in ``outside`` with its squared distance)
-    joins the queue at the first radius that holds it. Every vertex of the queue has been
+    The support at each radius is the vertices connected to p through vertices within that radius
+    (the range rule; :func:`mesh_ball_support` is this walk with one level): the search goes on
+    from where the last radius stopped, and a vertex it met beyond the last radius (kept in
+    ``outside`` with its squared distance) joins the queue at the first radius that holds it. Every vertex of the queue has been
     expanded once, so each of their neighbours is in the queue or in ``outside``: nothing
     connected is missed. The order within the queue is the walk's, not the single search's.
 
@@ -158,9 +140,9 @@ def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp
     count, head, pending : int
         The state the last call returned: support size, the vertices already expanded, and how
         many of ``outside`` wait.
-    outside : (n,) int64, outside_d2 : (n,) float64
-        The waiting vertices and their squared distances to p (size 0 when ``keep_outside`` is
-        never True).
+    outside : (n,) int64, outside_d2 : (n,) float64, or both None
+        The waiting vertices and their squared distances to p (None for a single level: then
+        ``keep_outside`` is False and nothing waits).
 
     Returns
     -------
@@ -170,16 +152,17 @@ def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp
     """
     px, py, pz = x[p], y[p], z[p]
     mark = p + 1
-    kept = 0
-    for i in range(pending):
-        if outside_d2[i] <= radius2:
-            queue[count] = outside[i]
-            count += 1
-        else:
-            outside[kept] = outside[i]
-            outside_d2[kept] = outside_d2[i]
-            kept += 1
-    pending = kept
+    if outside is not None:  # (None: one level; numba drops the branch at compile time)
+        kept = 0
+        for i in range(pending):
+            if outside_d2[i] <= radius2:
+                queue[count] = outside[i]
+                count += 1
+            else:
+                outside[kept] = outside[i]
+                outside_d2[kept] = outside_d2[i]
+                kept += 1
+        pending = kept
     while head < count:
         v = queue[head]
         head += 1
@@ -196,9 +179,10 @@ def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp
                 queue[count] = q
                 count += 1
             elif keep_outside:
-                outside[pending] = q
-                outside_d2[pending] = d2
-                pending += 1
+                if outside is not None:
+                    outside[pending] = q
+                    outside_d2[pending] = d2
+                    pending += 1
     return count, head, pending
 
 
