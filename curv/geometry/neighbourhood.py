@@ -121,9 +121,10 @@ def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp
     The support at each radius is the vertices connected to p through vertices within that radius
     (the range rule; :func:`mesh_ball_support` is this walk with one level): the search goes on
     from where the last radius stopped, and a vertex it met beyond the last radius (kept in
-    ``outside`` with its squared distance) joins the queue at the first radius that holds it. Every vertex of the queue has been
-    expanded once, so each of their neighbours is in the queue or in ``outside``: nothing
-    connected is missed. The order within the queue is the walk's, not the single search's.
+    ``outside`` with its squared distance) joins the queue at the first radius that holds it.
+    Every vertex of the queue has been expanded once, so each of their neighbours is in the queue
+    or in ``outside``: nothing connected is missed. The order within the queue is the walk's (for
+    one level, breadth-first from p).
 
     Parameters
     ----------
