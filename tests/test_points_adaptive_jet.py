@@ -7,9 +7,8 @@ import pytest
 
 import curv
 from curv.core.errors import EstimatorError
-from curv.core.ranges import point_spacing
 from curv.estimators.jet_width import GAMMA, WIDTH_FRACTIONS, WIDTHS, ici_choice
-from curv.surfaces import Sphere, sample_points
+from tests.clouds import noisy_sphere_cloud
 from tests.meshes import icosphere
 
 HESSIAN = np.array([[1.6, 0.3], [0.3, -0.8]])
@@ -81,11 +80,7 @@ def test_the_adaptive_width_narrows_the_ball_where_higher_terms_bias_the_wide_fi
 
 @pytest.fixture(scope="module")
 def noisy_sphere():
-    s = sample_points(Sphere(2.0), 4000, sampling="blue", rng=5)
-    rng = np.random.default_rng(1)
-    points = s.cloud.points + rng.normal(scale=0.02, size=s.cloud.points.shape)
-    cloud = curv.PointCloud(points, normals=s.truth.normals)
-    return cloud, float(np.median(point_spacing(cloud)))
+    return noisy_sphere_cloud()
 
 
 def test_on_a_noisy_sphere_the_walk_goes_on_to_the_steadiest_fit(noisy_sphere):

@@ -8,9 +8,9 @@ from scipy.spatial.transform import Rotation
 
 import curv
 from curv.core.errors import EstimatorError
-from curv.core.ranges import point_spacing
 from curv.estimators.jet import WEIGHTS, smooth_weight
 from curv.surfaces import Sphere, Torus, sample_points
+from tests.clouds import noisy_sphere_cloud
 
 
 def _grid_cloud(height, n=21, step=0.05, side=1.0):
@@ -92,11 +92,7 @@ def test_rigid_motion_and_scale_invariance():
 
 @pytest.fixture(scope="module")
 def noisy_sphere():
-    s = sample_points(Sphere(2.0), 4000, sampling="blue", rng=5)
-    rng = np.random.default_rng(1)
-    points = s.cloud.points + rng.normal(scale=0.02, size=s.cloud.points.shape)
-    cloud = curv.PointCloud(points, normals=s.truth.normals)
-    return cloud, float(np.median(point_spacing(cloud)))
+    return noisy_sphere_cloud()
 
 
 @pytest.mark.parametrize("weights, continuous", [("smooth", True), ("uniform", False)])
