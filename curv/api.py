@@ -166,7 +166,7 @@ def _iter_estimates(
     """:func:`iter_estimate` at each of ``ranges``: returns the list of :class:`Curvature`, in that order.
 
     The setup (mesh checks, normals, flags, a region's rows) is done once; an estimator whose
-    function takes ``(levels, n)`` radii (its ``takes_levels`` attribute: ``csm``, ``icc``) runs the
+    function takes ``(levels, n)`` radii (``EstimatorSpec.takes_levels``: ``csm``, ``icc``) runs the
     ranges in one call, in ascending order; the others run once per range.
     """
     spec = get_spec(method)
@@ -202,7 +202,7 @@ def _iter_estimates(
                                                             smooth_iterations, smooth_strength, fit_range, feats)
         normals_label = _normals_label(normals, normal_weighting, fit_range)
     # a region's fits also run at its neighbours, whose residuals its standard errors pool
-    skips = getattr(spec.function, "skips_errors", False)
+    skips = spec.skips_errors
     fitted = (pool_members(work_mesh, centres) if skips and standard_errors and centres is not None
               and not isinstance(work_mesh, PointCloud) else centres)
     kernel_options = {**options, "standard_errors": bool(standard_errors)} if skips else options
@@ -215,7 +215,7 @@ def _iter_estimates(
         # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
                                           lambda: _without(used_normals, feats.vertices))
-    shared = len(rngs) > 1 and getattr(spec.function, "takes_levels", False) and all(
+    shared = len(rngs) > 1 and spec.takes_levels and all(
         rng.radius is None and rng.knn is None for rng in rngs)
     if shared:
         # one call for every range, narrowest first (radius = factor(k) * unit is ascending in k)
@@ -655,7 +655,7 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
     standard_errors : bool
         False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
         and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,
-        ``an``, ``mru``: the estimator functions marked ``skips_errors``, which take the keyword)
+        ``an``, ``mru``: the estimators whose spec says ``skips_errors``, which take the keyword)
         neither fit a region's neighbours nor run the pooling pass nor add up the standard
         errors' sums. k1, k2, the directions, ``valid`` and
         ``reason`` are the same either way. Default True.

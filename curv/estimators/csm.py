@@ -546,8 +546,6 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     return out.principal(0)
 
 
-iter_csm.takes_levels = True  # several ranges in one call (curv.estimate_ranges)
-
 register(EstimatorSpec(
     name="csm", title="Cohen-Steiner & Morvan normal cycle", ranges=(1, 2, 3, 4), function=iter_csm,
     # `curv estimate torus10M.ply -m csm -r 2`: 7.02 GB peak, 334 B a unit above the base and stamps; +35 % as mru
@@ -555,5 +553,5 @@ register(EstimatorSpec(
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",
-    kernels=(_star_terms, _corner_rings, _edge_beta_scale, _csm_chunk),
+    kernels=(_star_terms, _corner_rings, _edge_beta_scale, _csm_chunk), takes_levels=True,
 ))

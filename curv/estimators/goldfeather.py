@@ -475,27 +475,24 @@ def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
                                standard_errors=standard_errors))
 
 
-for _fit in (iter_nc, iter_qs, iter_an):
-    _fit.skips_errors = True  # takes standard_errors=False (curv.estimate's keyword of that name)
-
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
 
 register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_fit_kernel, POOL_KERNEL),
-    extra_bytes_per_unit=SE_PARTS_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True,
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_fit_kernel, POOL_KERNEL),
-    extra_bytes_per_unit=SE_PARTS_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True,
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
     summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL),
     options={"noise_model": NOISE_MODELS},
-    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES, skips_errors=True,
 ))

@@ -429,8 +429,6 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
     return mean, gaussian, principal.reason
 
 
-iter_icc.takes_levels = True  # several ranges in one call (curv.estimate_ranges)
-
 register(EstimatorSpec(
     name="icc", in_paper=False, title="Interpolated corrected curvature measures", ranges=(1, 2, 3, 4),
     # `curv estimate torus10M.ply -m icc -r 2`: 8.22 GB peak, 394 B a unit above the base and stamps; +35 % as mru
@@ -441,6 +439,6 @@ register(EstimatorSpec(
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
-    kernels=(_face_measures, _star_measures, _corner_rings, _icc_chunk),
+    kernels=(_face_measures, _star_measures, _corner_rings, _icc_chunk), takes_levels=True,
     options={"from_measures": (True, False)},
 ))

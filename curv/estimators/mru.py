@@ -210,13 +210,11 @@ def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
                                  standard_errors=standard_errors))
 
 
-iter_mru.skips_errors = True  # takes standard_errors=False (curv.estimate's keyword of that name)
-
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
     summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
     options={"noise_model": NOISE_MODELS},
-    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES,
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES, skips_errors=True,
 ))

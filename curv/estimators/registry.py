@@ -84,6 +84,13 @@ class EstimatorSpec:
     takes_points : bool
         Runs on a :class:`curv.PointCloud`: it needs only positions, normals and a support (no
         faces, no edges). The face-based estimators refuse point clouds (:func:`refusal`).
+    takes_levels : bool
+        ``function`` also takes ``radii`` of shape ``(levels, n)``, the radii of several ranges in
+        ascending order, and returns one result per level (``csm``, ``icc``: one walk serves every
+        range, :func:`curv.estimate_ranges`).
+    skips_errors : bool
+        ``function`` takes ``standard_errors=False`` and then skips their cost (the fits whose
+        standard errors pool neighbours: ``nc``, ``qs``, ``an``, ``mru``).
     """
 
     name: str
@@ -102,6 +109,8 @@ class EstimatorSpec:
     kernels: tuple = field(default=(), repr=False, compare=False)
     extra_bytes_per_unit: float = 0.0
     takes_points: bool = False
+    takes_levels: bool = False
+    skips_errors: bool = False
     min_neighbours: object = field(default=0, compare=False)
 
     def fewest_neighbours(self, options: dict | None = None) -> int:
