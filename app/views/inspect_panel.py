@@ -1,4 +1,4 @@
-"""The inspect panel: the active pane's estimator and range (one group), the display settings every
+"""The inspect panel: the active pane's estimator, range and options (one group), the display settings every
 pane shares (another group), and the histogram. Bound to the document: model events update the
 widgets (signals blocked while syncing), widget edits call the model's setters."""
 
@@ -22,6 +22,7 @@ from app.model import Document, Layer, LimitMode, Pane, Quantity, colormap_names
 from app.model.inputs import DEFAULT_KNN, POINT_SIZES, items_word, unit_length
 
 from .histogram import Histogram
+from .option_controls import OptionControls
 from .style import PANE_COLOURS
 
 __all__ = ["InspectPanel", "blocked", "estimator_tooltip"]
@@ -124,6 +125,7 @@ class InspectPanel(QWidget):
         self.point_size.setRange(*POINT_SIZES)
         self.point_size.setSuffix(" px")
         self.point_size.setToolTip(POINT_SIZE_TIP)
+        self.options = OptionControls()
         self.recompute = QPushButton("Recompute")
         self.recompute.setToolTip("Compute the active pane again (F5)")
         self.advise_button = QToolButton()  # the window binds it to its Advise action
@@ -185,6 +187,7 @@ class InspectPanel(QWidget):
         knn_row.addWidget(self.use_knn)
         knn_row.addWidget(self.knn, 1)
         pane_form.addRow("", knn_row)
+        pane_form.addRow(self.options)
         self.pane_form = pane_form  # the window adds the Feature angle row under the range
         pane_form.addRow("", self.advise_button)
         self.all_box = QGroupBox("All panes")
@@ -233,6 +236,7 @@ class InspectPanel(QWidget):
         self.radius.editingFinished.connect(self._radius_edited)
         self.use_knn.toggled.connect(self._knn_toggled)
         self.knn.valueChanged.connect(lambda _k: self._knn_edited())
+        self.options.options_edited.connect(lambda options: self._set_pane(options=options))
         self.point_size.valueChanged.connect(lambda px: doc.display.update(point_size=float(px)))
         self.recompute.clicked.connect(self.recompute_requested)
         self.quantity.currentEnumChanged.connect(lambda q: doc.display.update(quantity=q))
@@ -360,7 +364,7 @@ class InspectPanel(QWidget):
         letter = pane_letter(doc.active)
         colour = PANE_COLOURS[doc.active % len(PANE_COLOURS)]
         several = len(doc.panes) > 1
-        self.pane_box.setTitle(f"Pane {letter} (click a pane to switch)" if several else f"Pane {letter}: estimator and range")
+        self.pane_box.setTitle(f"Pane {letter} (click a pane to switch)" if several else f"Pane {letter}: estimator, range, options")
         self.pane_box.setStyleSheet(
             f"#pane_box {{ border: 2px solid {colour if several else '#c8c8c8'}; border-radius: 4px; margin-top: 1.2em; }}"
             "#pane_box::title { subcontrol-origin: margin; left: 8px; padding: 0 3px; }")
@@ -388,6 +392,7 @@ class InspectPanel(QWidget):
             self.knn.setEnabled(pane.knn is not None)
             if pane.knn is not None:
                 self.knn.setValue(pane.knn)
+            self.options.show_pane(pane, points=points)
             self.point_size.setValue(int(round(st.point_size)))
             self.point_size.setEnabled(points)
             self.edges.setEnabled(not points)  # a cloud has no edges and is drawn as points
