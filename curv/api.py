@@ -215,7 +215,7 @@ def _iter_estimates(
         # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
                                           lambda: _without(used_normals, feats.vertices))
-    shared = len(rngs) > 1 and spec.takes_levels and all(
+    shared = len(rngs) > 1 and spec.takes_levels and not isinstance(work_mesh, PointCloud) and all(
         rng.radius is None and rng.knn is None for rng in rngs)
     if shared:
         # one call for every range, narrowest first (radius = factor(k) * unit is ascending in k)
