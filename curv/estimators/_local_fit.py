@@ -1090,7 +1090,9 @@ def run_fit_levels(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, l
     single search's at its radius), adds the rows of the vertices each level brings to the normal
     equations of the last and solves them at every level. The sums are added in the walk's order,
     not the single search's, so the values agree with one call per range to rounding (the first
-    level's order is the single search's). Otherwise (standard errors, whose sums do not share, or a
+    level's order is the single search's: its values are bit for bit those of its own call where
+    the rows do not depend on the radius, nc, qs and mru; an's are summed in the widest level's
+    coordinates). Otherwise (standard errors, whose sums do not share, or a
     point cloud) each level runs :func:`run_fit` on its own.
 
     Parameters
