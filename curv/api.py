@@ -118,7 +118,11 @@ def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3
     the narrower one's plus the vertices it adds, and only the faces crossing each sphere are
     clipped per range; their sums are added in another order than a call with one range, so the
     values agree to a few units in the last place (and a value at a threshold, e.g. a tiny negative
-    discriminant, may land on the other side).
+    discriminant, may land on the other side). So do the fits ``nc``, ``qs``, ``an`` and ``mru`` with
+    ``standard_errors=False`` on a mesh: one walk, and each range's normal equations are the
+    narrower range's plus the rows of the vertices it adds
+    (:func:`curv.estimators._local_fit.run_fit_levels`); with standard errors, or on a point cloud,
+    they run each range on its own.
 
     Parameters
     ----------
@@ -166,8 +170,9 @@ def _iter_estimates(
     """:func:`iter_estimate` at each of ``ranges``: returns the list of :class:`Curvature`, in that order.
 
     The setup (mesh checks, normals, flags, a region's rows) is done once; an estimator whose
-    function takes ``(levels, n)`` radii (``EstimatorSpec.takes_levels``: ``csm``, ``icc``) runs the
-    ranges in one call, in ascending order; the others run once per range.
+    function takes ``(levels, n)`` radii (``EstimatorSpec.takes_levels``: ``csm``, ``icc``, the fits
+    ``nc``, ``qs``, ``an``, ``mru``) runs the ranges of a mesh in one call, in ascending order; the
+    others (and a point cloud's) run once per range.
     """
     spec = get_spec(method)
     rngs = [resolve(spec, r, radius, knn) for r in ranges]

@@ -203,6 +203,19 @@ def _accumulate(ata, atb, row, rhs):
 
 
 @jit
+def _accumulate_upper(ata, atb, row, rhs):
+    """:func:`_accumulate` on the upper triangle of ``ata`` only (the same products: the lower
+    triangle is its mirror)."""
+    m = row.size
+    for i in range(m):
+        ri = row[i]
+        if ri != 0.0:
+            atb[i] += ri * rhs
+            for j in range(i, m):
+                ata[i, j] += ri * row[j]
+
+
+@jit
 def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
                     factor, grads, row, ru, rv, agg, wrow):
     """an's equations' errors as noisy heights make them (the model of mru's ``_noise_model``).
@@ -502,7 +515,7 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
     divided by the widest radius R instead, its height equations are the same ones multiplied by
     ``t = R / r`` and its slope equations the same, with the unknowns rescaled by a diagonal
     (``t`` on the quadratic terms, ``t²`` on the cubic ones). So the height and slope equations are
-    summed apart in R's coordinates (``hta, htb`` and ``sta, stb``, (7, 7) and (7,)), level by
+    summed apart in R's coordinates (``hta, htb`` and ``sta, stb``, (7, 7) upper triangles and (7,)), level by
     level, and each level solves ``(t² H + S) y = t² h + s``: the Jacobi-scaled solve
     (:func:`~curv.estimators._local_fit.solve_scaled`) does not depend on the diagonal, and the
     second derivatives come back as ``-y / R``. Rows short enough for a wider level to drop: as in
@@ -540,20 +553,20 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
             banded = banded or not (l2 > band2)
             used += 1
             _height_row(u, v, row)
-            _accumulate(hta, htb, row, w)
+            _accumulate_upper(hta, htb, row, w)
             a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
             if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
                 continue
             _slope_rows(u, v, ru, rv)
-            _accumulate(sta, stb, ru, -a / c)
-            _accumulate(sta, stb, rv, -b / c)
+            _accumulate_upper(sta, stb, ru, -a / c)
+            _accumulate_upper(sta, stb, rv, -b / c)
         done = count
         t = widest / r
         t2 = t * t
         for j in range(7):
             atb[j] = t2 * htb[j] + stb[j]
-            for k in range(7):
-                ata[j, k] = t2 * hta[j, k] + sta[j, k]
+            for k in range(j, 7):
+                ata[j, k] = ata[k, j] = t2 * hta[j, k] + sta[j, k]
         singular = solve_scaled(ata, atb, sol)
         finish_fit(p, -sol[0] * inv_w, -sol[1] * inv_w, -sol[2] * inv_w, singular, used, frame, k1[level], k2[level],
                    d1[level], d2[level], reason[level])
