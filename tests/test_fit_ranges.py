@@ -1,4 +1,5 @@
-"""The fits' ranges in one walk (``standard_errors=False``): each range equals its own call to rounding."""
+"""The fits' ranges in one walk (nc, qs, an, mru with ``standard_errors=False``; the jet): each range
+equals its own call to rounding."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ import curv
 from curv.api import estimate_ranges
 from meshes import hex_plane, icosphere, torus_grid
 
-FITS = ("nc", "qs", "an", "mru")
-RANGES = {"nc": (3, 1, 4, 2.5, 2), "qs": (3, 1, 4, 2.5, 2), "an": (3, 4, 2.5, 2), "mru": (3, 4, 2.5, 2)}
+FITS = ("nc", "qs", "an", "mru", "jet")
+RANGES = {"nc": (3, 1, 4, 2.5, 2), "qs": (3, 1, 4, 2.5, 2), "an": (3, 4, 2.5, 2), "mru": (3, 4, 2.5, 2),
+          "jet": (3, 1, 4, 2.5, 2)}
 
 
 def _noisy_torus():
@@ -53,7 +55,7 @@ def test_fit_ranges_equal_one_call_each(mesh_name, method, region):
         _compare(curv.estimate(mesh, method, r, vertices=idx, standard_errors=False), res)
 
 
-@pytest.mark.parametrize("method", ["nc", "qs", "mru"])
+@pytest.mark.parametrize("method", ["nc", "qs", "mru", "jet"])
 def test_fit_ranges_first_level_is_bit_for_bit(method):
     """The narrowest range's sums are added in its own search's order (an's are in the widest
     range's coordinates: to rounding, above)."""
@@ -104,7 +106,7 @@ def test_fit_ranges_too_few_and_degenerate(method):
     n = xs.size
     faces = [(i, i + 1, n + i) for i in range(n - 1)] + [(i + 1, n + i + 1, n + i) for i in range(n - 1)]
     mesh = curv.Mesh(v, np.array(faces))
-    ranges = (4, 2) if method in ("an", "mru") else (4, 2, 1)
+    ranges = (4, 2) if method in ("an", "mru") else (4, 3, 2, 1)
     many = estimate_ranges(mesh, method, ranges, standard_errors=False)
     codes = set()
     for r, res in zip(ranges, many):
@@ -119,3 +121,16 @@ def test_fit_ranges_sphere_value():
     for method in FITS:
         for res in estimate_ranges(mesh, method, (2, 3, 4), standard_errors=False):
             assert np.allclose(res.k1[res.valid], 0.5, rtol=0.03) and np.allclose(res.k2[res.valid], 0.5, rtol=0.03)
+
+
+@pytest.mark.parametrize("weights", ["uniform", "smooth"])
+def test_jet_ranges_standard_errors(weights):
+    """The jet's standard errors come from each level's own fit: to rounding, as its values."""
+    mesh = _noisy_torus()
+    many = estimate_ranges(mesh, "jet", (2, 4, 1), weights=weights)
+    for r, res in zip((2, 4, 1), many):
+        one = curv.estimate(mesh, "jet", r, weights=weights)
+        assert np.array_equal(one.reason, res.reason)
+        assert np.allclose(one.k1_se, res.k1_se, rtol=1e-9, equal_nan=True)
+        assert np.allclose(one.k2_se, res.k2_se, rtol=1e-9, equal_nan=True)
+        assert np.isfinite(res.k1_se[res.valid]).all()
