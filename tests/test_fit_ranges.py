@@ -134,3 +134,16 @@ def test_jet_ranges_standard_errors(weights):
         assert np.allclose(one.k1_se, res.k1_se, rtol=1e-9, equal_nan=True)
         assert np.allclose(one.k2_se, res.k2_se, rtol=1e-9, equal_nan=True)
         assert np.isfinite(res.k1_se[res.valid]).all()
+
+
+@pytest.mark.parametrize("method", ["qs", "an"])
+def test_fit_ranges_at_creases_and_in_chunks(method):
+    """Supports that stop at creases, a few vertices per kernel call."""
+    from creased_meshes import box
+
+    mesh = box(4)
+    ranges = RANGES[method][:3]
+    many = estimate_ranges(mesh, method, ranges, features=30, block_size=7, standard_errors=False)
+    for r, res in zip(ranges, many):
+        _compare(curv.estimate(mesh, method, r, features=30, standard_errors=False), res)
+    assert (many[0].reason == curv.Reason.FEATURE).any()
