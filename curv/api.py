@@ -122,7 +122,8 @@ def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3
     ``standard_errors=False`` on a mesh: one walk, and each range's normal equations are the
     narrower range's plus the rows of the vertices it adds
     (:func:`curv.estimators._local_fit.run_fit_levels`); with standard errors, or on a point cloud,
-    they run each range on its own.
+    they run each range on its own. The ``jet`` walks once on a mesh and fits each range anew (its
+    frame follows the support): to rounding too, its standard errors included.
 
     Parameters
     ----------
@@ -171,7 +172,7 @@ def _iter_estimates(
 
     The setup (mesh checks, normals, flags, a region's rows) is done once; an estimator whose
     function takes ``(levels, n)`` radii (``EstimatorSpec.takes_levels``: ``csm``, ``icc``, the fits
-    ``nc``, ``qs``, ``an``, ``mru``) runs the ranges of a mesh in one call, in ascending order; the
+    ``nc``, ``qs``, ``an``, ``mru``, ``jet``) runs the ranges of a mesh in one call, in ascending order; the
     others (and a point cloud's) run once per range.
     """
     spec = get_spec(method)
