@@ -118,7 +118,12 @@ def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3
     the narrower one's plus the vertices it adds, and only the faces crossing each sphere are
     clipped per range; their sums are added in another order than a call with one range, so the
     values agree to a few units in the last place (and a value at a threshold, e.g. a tiny negative
-    discriminant, may land on the other side).
+    discriminant, may land on the other side). So do the fits ``nc``, ``qs``, ``an`` and ``mru`` with
+    ``standard_errors=False`` on a mesh: one walk, and each range's normal equations are the
+    narrower range's plus the rows of the vertices it adds
+    (:func:`curv.estimators._local_fit.run_fit_levels`); with standard errors, or on a point cloud,
+    they run each range on its own. The ``jet`` walks once on a mesh and fits each range anew (its
+    frame follows the support): to rounding too, its standard errors included.
 
     Parameters
     ----------
@@ -166,8 +171,9 @@ def _iter_estimates(
     """:func:`iter_estimate` at each of ``ranges``: returns the list of :class:`Curvature`, in that order.
 
     The setup (mesh checks, normals, flags, a region's rows) is done once; an estimator whose
-    function takes ``(levels, n)`` radii (``EstimatorSpec.takes_levels``: ``csm``, ``icc``) runs the
-    ranges in one call, in ascending order; the others run once per range.
+    function takes ``(levels, n)`` radii (``EstimatorSpec.takes_levels``: ``csm``, ``icc``, the fits
+    ``nc``, ``qs``, ``an``, ``mru``, ``jet``) runs the ranges of a mesh in one call, in ascending order; the
+    others (and a point cloud's) run once per range.
     """
     spec = get_spec(method)
     rngs = [resolve(spec, r, radius, knn) for r in ranges]
@@ -215,7 +221,7 @@ def _iter_estimates(
         # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
                                           lambda: _without(used_normals, feats.vertices))
-    shared = len(rngs) > 1 and spec.takes_levels and all(
+    shared = len(rngs) > 1 and spec.takes_levels and not isinstance(work_mesh, PointCloud) and all(
         rng.radius is None and rng.knn is None for rng in rngs)
     if shared:
         # one call for every range, narrowest first (radius = factor(k) * unit is ascending in k)

@@ -43,7 +43,7 @@ from ..core.result import Principal
 from ..core.validity import Reason
 from ._pooling import pool_members, pool_rings, pool_standard_errors, rad_bias
 
-__all__ = ["run_fit", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
+__all__ = ["run_fit", "run_fit_levels", "start_levels", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
            "mark_degenerate", "slice_bounds", "principal_gradients", "noise_variance", "sym3_inverse", "sym3_bilinear",
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
            "clear_parts", "store_parts", "store_se3_weighted", "sym3_sandwich", "ring_gradient", "gradient_column", "list_room", "list_slot", "centre_columns",
@@ -973,8 +973,11 @@ def sampled_scales(kernel, fitted, radius, adj_ptr, adj, x, y, z, nx, ny, nz, qu
 
 def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk: int | None = None,
             centres: np.ndarray | None = None, features=None, noise_model: str | None = None,
-            standard_errors: bool = True) -> Generator[float, None, Principal]:
+            standard_errors: bool = True, levels_kernel=None) -> Generator[float, None, Principal | list]:
     """Run a fit kernel over all (or some) vertices, a chunk of them per call, and assemble the result.
+
+    ``radii`` of shape ``(levels, n)`` (several ranges, ascending per vertex) gives one result per
+    level (:func:`run_fit_levels`).
 
     Parameters
     ----------
@@ -1010,9 +1013,16 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         and the result's ``k1_se``, ``k2_se`` are None. The curvatures, directions and reasons are
         the same either way (each vertex's fit reads only its own support).
 
+    levels_kernel : callable, optional
+        The kernel of :func:`run_fit_levels` for ``(levels, n)`` radii.
+
     It yields the fraction of vertices done and returns the :class:`~curv.core.result.Principal`,
     as the estimators' functions do (:data:`~curv.estimators.registry.EstimatorFunction`).
     """
+    if np.ndim(radii) == 2:
+        return (yield from run_fit_levels(mesh, normals, radii, kernel, levels_kernel, chunk=chunk, centres=centres,
+                                          features=features, noise_model=noise_model,
+                                          standard_errors=standard_errors))
     n = mesh.n_vertices
     given = centres is not None
     centres = all_centres(n, centres)
@@ -1067,3 +1077,90 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, *, chunk
         k1_se[extra] = np.nan
         k2_se[extra] = np.nan
     return Principal(k1=k1, k2=k2, d1=d1, d2=d2, reason=reason, k1_se=k1_se, k2_se=k2_se)
+
+
+def run_fit_levels(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, levels_kernel, *,
+                   chunk: int | None = None, centres: np.ndarray | None = None, features=None,
+                   noise_model: str | None = None, standard_errors: bool = True) -> Generator[float, None, list]:
+    """A fit at several ranges: one :class:`~curv.core.result.Principal` per row of ``radii``.
+
+    Without standard errors, on a mesh, the ranges share one walk per vertex and its sums:
+    ``levels_kernel`` widens the support level by level
+    (:func:`~curv.geometry.neighbourhood.widen_ball_support`: each level's support is exactly the
+    single search's at its radius), adds the rows of the vertices each level brings to the normal
+    equations of the last and solves them at every level. The sums are added in the walk's order,
+    not the single search's, so the values agree with one call per range to rounding (the first
+    level's order is the single search's: its values are bit for bit those of its own call where
+    the rows do not depend on the radius, nc, qs and mru; an's are summed in the widest level's
+    coordinates). Otherwise (standard errors, whose sums do not share, or a
+    point cloud) each level runs :func:`run_fit` on its own.
+
+    Parameters
+    ----------
+    mesh, normals, kernel, chunk, centres, features, noise_model, standard_errors :
+        As in :func:`run_fit`.
+    radii : (levels, n) float64
+        The radii of every vertex at each level, ascending per vertex.
+    levels_kernel : callable
+        ``levels_kernel(centres, lo, hi, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues,
+        outside, outside_d2, k1, k2, d1, d2, reason)``: the vertices ``centres[lo:hi]`` in
+        ``stamps.shape[0]`` slices, each with its row of the stamps, queues and the walk's waiting
+        vertices (``outside`` int64, ``outside_d2`` float64); writes column p of the ``(levels, n)``
+        ``k1, k2, reason`` and ``(levels, n, 3)`` ``d1, d2``.
+    """
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    count = radii.shape[0]
+    if standard_errors or levels_kernel is None or not isinstance(mesh, Mesh):
+        out = []
+        for level in range(count):
+            gen = run_fit(mesh, normals, radii[level], kernel, chunk=chunk, centres=centres, features=features,
+                          noise_model=noise_model, standard_errors=standard_errors)
+            while True:
+                try:
+                    done = next(gen)
+                except StopIteration as stop:
+                    out.append(stop.value)
+                    break
+                yield (level + done) / count
+        return out
+    n = mesh.n_vertices
+    centres = all_centres(n, centres)
+    adj_ptr, adj = expansion_adjacency(mesh, blocked_vertices(features))
+    x, y, z = coordinate_columns(mesh)
+    nx, ny, nz = (np.ascontiguousarray(normals[:, c]) for c in range(3))
+    stamps = new_scratch(n, max(1, min(threads(), centres.size)))
+    queues = new_queues(n, stamps.shape[0])
+    outside, outside_d2 = new_queues(n, stamps.shape[0]), np.empty((stamps.shape[0], n))
+    k1, k2 = np.empty((count, n)), np.empty((count, n))
+    d1, d2 = np.empty((count, n, 3)), np.empty((count, n, 3))
+    reason = np.empty((count, n), np.uint8)
+
+    def run(lo: int, hi: int) -> None:
+        launch(levels_kernel, centres, lo, hi, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, outside,
+               outside_d2, k1, k2, d1, d2, reason)
+
+    yield from iter_chunks(centres.size, run, chunk=chunk)
+    return [Principal(k1=k1[i], k2=k2[i], d1=d1[i], d2=d2[i], reason=reason[i]) for i in range(count)]
+
+
+@jit
+def start_levels(p, radii, nx, ny, nz, k1, k2, d1, d2, reason):
+    """Start vertex p's fit at every level (:func:`run_fit_levels`): its normal and tangent frame
+    (:func:`tangent_frame`) and ``(MIN_TANGENT_LENGTH * r)²`` at the widest level, the bound below
+    which a row's tangent length may count at one level and not at a wider one.
+
+    Returns
+    -------
+    n0, n1, n2 : float
+    frame : tuple of 6 float
+    band2 : float
+    ok : bool
+        False without a finite normal: every level's row p is marked (:func:`mark_degenerate`).
+    """
+    n0, n1, n2 = nx[p], ny[p], nz[p]
+    if not (math.isfinite(n0) and math.isfinite(n1) and math.isfinite(n2)):
+        for level in range(radii.shape[0]):
+            mark_degenerate(p, k1[level], k2[level], d1[level], d2[level], reason[level])
+        return n0, n1, n2, (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan), 0.0, False
+    band2 = (MIN_TANGENT_LENGTH * radii[radii.shape[0] - 1, p]) ** 2
+    return n0, n1, n2, tangent_frame(n0, n1, n2), band2, True

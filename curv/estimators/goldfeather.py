@@ -24,17 +24,31 @@ import numpy as np
 
 from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import ball_support
+from ..geometry.neighbourhood import ball_support, start_ball_support, widen_ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, checked_noise_model, normal_in_frame, offset_in_frame,
-                         principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, store_parts,
+                         principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, start_levels, store_parts,
                          store_se3, store_se3_weighted)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
 MIN_NORMAL_Z = 0.1
 """A neighbour normal tilted more than ~84 degrees from the centre normal gives no slope equation."""
+
+
+@jit
+def _nc_qs_row(u, v, w, l2, nc):
+    """The equation of a neighbour at offset ``(u, v, w)`` (``l2 = u² + v²``) in p's frame: nc's
+    (``nc`` True) or qs's row, right-hand side, and the columns of the frame's tilt (the standard
+    error's). Returns ``(c0, c1, c2, rhs, lu, lv)``."""
+    if nc:
+        rhs = -2.0 * w / (l2 + w * w)  # kn
+        # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
+        # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
+        return u * u / l2, 2.0 * u * v / l2, v * v / l2, rhs, u / l2, v / l2
+    # w = A/2 u^2 + B uv + C/2 v^2; a tilt of the frame adds a linear term to w
+    return 0.5 * u * u, u * v, 0.5 * v * v, w, u, v
 
 
 @jit_inlined
@@ -68,17 +82,7 @@ def _nc_qs_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k
             offs[used, 0] = u
             offs[used, 1] = v
         used += 1
-        if nc:
-            rhs = -2.0 * w / (l2 + w * w)  # kn
-            # row (tu^2, 2 tu tv, tv^2) of the unit tangent t = (u, v)/|(u, v)|
-            c0, c1, c2 = u * u / l2, 2.0 * u * v / l2, v * v / l2
-            # a tilt of the frame adds (u, v) / l² times its slopes to kn (the standard error's columns)
-            lu, lv = u / l2, v / l2
-        else:
-            rhs = w  # w = A/2 u^2 + B uv + C/2 v^2
-            c0, c1, c2 = 0.5 * u * u, u * v, 0.5 * v * v
-            # a tilt of the frame adds a linear term to w (the standard error's columns)
-            lu, lv = u, v
+        c0, c1, c2, rhs, lu, lv = _nc_qs_row(u, v, w, l2, nc)
         if errors:
             t0 += lu * lu
             t1 += lu * lv
@@ -195,6 +199,19 @@ def _accumulate(ata, atb, row, rhs):
         if ri != 0.0:
             atb[i] += ri * rhs
             for j in range(m):
+                ata[i, j] += ri * row[j]
+
+
+@jit
+def _accumulate_upper(ata, atb, row, rhs):
+    """:func:`_accumulate` on the upper triangle of ``ata`` only (the same products: the lower
+    triangle is its mirror)."""
+    m = row.size
+    for i in range(m):
+        ri = row[i]
+        if ri != 0.0:
+            atb[i] += ri * rhs
+            for j in range(i, m):
                 ata[i, j] += ri * row[j]
 
 
@@ -411,8 +428,175 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     return touched, yv, jp
 
 
+@jit
+def _nc_qs_add(p, queue, lo, hi, tiny2, band2, x, y, z, frame, n0, n1, n2, nc, acc):
+    """Add the equations of the neighbours ``queue[lo:hi]`` whose tangent length squared exceeds
+    ``tiny2`` to the 3-unknown fit's normal equations ``acc`` (9,): ``(a00, a01, a02, a11, a12,
+    a22, b0, b1, b2)`` (:func:`_nc_qs_row`).
+
+    Returns
+    -------
+    used : int
+        The equations added.
+    banded : bool
+        Whether one of them has a tangent length squared of at most ``band2``.
+    """
+    a00, a01, a02, a11, a12, a22 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5]
+    b0, b1, b2 = acc[6], acc[7], acc[8]
+    used = 0
+    banded = False
+    for i in range(lo, hi):
+        u, v, w = offset_in_frame(p, queue[i], x, y, z, frame, n0, n1, n2)
+        l2 = u * u + v * v
+        if not (l2 > tiny2):
+            continue
+        banded = banded or not (l2 > band2)
+        used += 1
+        c0, c1, c2, rhs, _, _ = _nc_qs_row(u, v, w, l2, nc)
+        a00 += c0 * c0
+        a01 += c0 * c1
+        a02 += c0 * c2
+        a11 += c1 * c1
+        a12 += c1 * c2
+        a22 += c2 * c2
+        b0 += c0 * rhs
+        b1 += c1 * rhs
+        b2 += c2 * rhs
+    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5] = a00, a01, a02, a11, a12, a22
+    acc[6], acc[7], acc[8] = b0, b1, b2
+    return used, banded
+
+
+@jit
+def _nc_qs_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1, k2, d1, d2,
+                     reason, acc, nc):
+    """nc (``nc`` True) or qs at vertex p at every level of ``radii`` (levels, n), in one walk
+    (:func:`~curv.estimators._local_fit.run_fit_levels`): the equations of each level's new
+    vertices are added to the last level's sums (their rows do not depend on the radius). A row whose
+    tangent length is so short that a wider level's bound would drop it (``banded``) makes the
+    following levels add up their whole support again, each with its own bound."""
+    n0, n1, n2, frame, band2, ok = start_levels(p, radii, nx, ny, nz, k1, k2, d1, d2, reason)
+    if not ok:
+        return
+    levels = radii.shape[0]
+    count = start_ball_support(p, stamp, queue)
+    head = pending = used = 0
+    done = 1
+    banded = False
+    acc[:] = 0.0
+    for level in range(levels):
+        r = radii[level, p]
+        count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, adj_ptr, adj, x, y, z, stamp, queue,
+                                                  count, head, waiting, waiting_d2, pending)
+        if banded:
+            acc[:] = 0.0
+            used = 0
+            done = 1
+            banded = False
+        added, new_band = _nc_qs_add(p, queue, done, count, (MIN_TANGENT_LENGTH * r) ** 2, band2, x, y, z, frame,
+                                     n0, n1, n2, nc, acc)
+        used += added
+        banded = banded or new_band
+        done = count
+        x0, x1, x2, singular = solve_sym3(acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6], acc[7], acc[8])
+        # nc solves for W = (e, f, g); qs for the Hessian of the height along N, W = -(A, B, C)
+        sign = 1.0 if nc else -1.0
+        finish_fit(p, sign * x0, sign * x1, sign * x2, singular, used, frame, k1[level], k2[level], d1[level],
+                   d2[level], reason[level])
+
+
+@jit
+def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1, k2, d1, d2,
+                  reason, hta, htb, sta, stb, ata, atb, row, ru, rv, sol):
+    """an at vertex p at every level of ``radii`` (levels, n), in one walk
+    (:func:`~curv.estimators._local_fit.run_fit_levels`).
+
+    A level of radius r fits in coordinates divided by r (:func:`_an_at`); written in coordinates
+    divided by the widest radius R instead, its height equations are the same ones multiplied by
+    ``t = R / r`` and its slope equations the same, with the unknowns rescaled by a diagonal
+    (``t`` on the quadratic terms, ``t²`` on the cubic ones). So the height and slope equations are
+    summed apart in R's coordinates (``hta, htb`` and ``sta, stb``, (7, 7) upper triangles and (7,)), level by
+    level, and each level solves ``(t² H + S) y = t² h + s``: the Jacobi-scaled solve
+    (:func:`~curv.estimators._local_fit.solve_scaled`) does not depend on the diagonal, and the
+    second derivatives come back as ``-y / R``. Rows short enough for a wider level to drop: as in
+    :func:`_nc_qs_levels_at`. Scratch: ``ata``, ``atb``, ``row``, ``ru``, ``rv``, ``sol``."""
+    n0, n1, n2, frame, _, ok = start_levels(p, radii, nx, ny, nz, k1, k2, d1, d2, reason)
+    if not ok:
+        return
+    levels = radii.shape[0]
+    widest = radii[levels - 1, p]
+    inv_w = 1.0 / widest
+    band2 = MIN_TANGENT_LENGTH ** 2
+    count = start_ball_support(p, stamp, queue)
+    head = pending = used = 0
+    done = 1
+    banded = True  # clears the sums below
+    for level in range(levels):
+        r = radii[level, p]
+        count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, adj_ptr, adj, x, y, z, stamp, queue,
+                                                  count, head, waiting, waiting_d2, pending)
+        if banded:
+            hta[:, :] = 0.0
+            htb[:] = 0.0
+            sta[:, :] = 0.0
+            stb[:] = 0.0
+            used = 0
+            done = 1
+            banded = False
+        tiny2 = (MIN_TANGENT_LENGTH * r * inv_w) ** 2
+        for i in range(done, count):
+            q = queue[i]
+            u, v, w = _scaled_offset(p, q, x, y, z, inv_w, frame, n0, n1, n2)
+            l2 = u * u + v * v
+            if not (l2 > tiny2):
+                continue
+            banded = banded or not (l2 > band2)
+            used += 1
+            _height_row(u, v, row)
+            _accumulate_upper(hta, htb, row, w)
+            a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
+            if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
+                continue
+            _slope_rows(u, v, ru, rv)
+            _accumulate_upper(sta, stb, ru, -a / c)
+            _accumulate_upper(sta, stb, rv, -b / c)
+        done = count
+        t = widest / r
+        t2 = t * t
+        for j in range(7):
+            atb[j] = t2 * htb[j] + stb[j]
+            for k in range(j, 7):
+                ata[j, k] = ata[k, j] = t2 * hta[j, k] + sta[j, k]
+        singular = solve_scaled(ata, atb, sol)
+        finish_fit(p, -sol[0] * inv_w, -sol[1] * inv_w, -sol[2] * inv_w, singular, used, frame, k1[level], k2[level],
+                   d1[level], d2[level], reason[level])
+
+
 NC, QS, AN = 0, 1, 2
 """The ``method`` of :func:`_fit_kernel`."""
+
+
+@jit_parallel
+def _levels_kernel(method, centres, lo, hi, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, outside,
+                   outside_d2, k1, k2, d1, d2, reason):
+    """The kernel of :func:`~curv.estimators._local_fit.run_fit_levels` for the three fits
+    (``method``: :data:`NC`, :data:`QS` or :data:`AN`); each slice of vertices has its own scratch."""
+    parts = stamps.shape[0]
+    for t in prange(parts):
+        queue, stamp, waiting, waiting_d2 = queues[t], stamps[t], outside[t], outside_d2[t]
+        acc = np.empty(9)
+        hta, htb, sta, stb = np.empty((7, 7)), np.empty(7), np.empty((7, 7)), np.empty(7)
+        ata, atb = np.empty((7, 7)), np.empty(7)
+        row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for i in range(start, stop):
+            p = centres[i]
+            if method == AN:
+                _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1, k2,
+                              d1, d2, reason, hta, htb, sta, stb, ata, atb, row, ru, rv, sol)
+            else:
+                _nc_qs_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1,
+                                 k2, d1, d2, reason, acc, method == NC)
 
 
 @jit_parallel
@@ -450,7 +634,8 @@ def iter_nc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
 
     ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, NC), chunk=chunk, centres=centres,
-                               features=features, standard_errors=standard_errors))
+                               features=features, standard_errors=standard_errors,
+                               levels_kernel=partial(_levels_kernel, NC)))
 
 
 def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
@@ -459,7 +644,8 @@ def iter_qs(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
 
     ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, QS), chunk=chunk, centres=centres,
-                               features=features, standard_errors=standard_errors))
+                               features=features, standard_errors=standard_errors,
+                               levels_kernel=partial(_levels_kernel, QS)))
 
 
 def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
@@ -472,7 +658,7 @@ def iter_an(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | 
     ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, partial(_fit_kernel, AN), chunk=chunk, centres=centres,
                                features=features, noise_model=checked_noise_model(noise_model),
-                               standard_errors=standard_errors))
+                               standard_errors=standard_errors, levels_kernel=partial(_levels_kernel, AN)))
 
 
 _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approximating principal direction vectors"
@@ -480,19 +666,19 @@ _GI = "Goldfeather & Interrante 2004, A novel cubic-order algorithm for approxim
 register(EstimatorSpec(
     name="nc", title="Normal curvature approximation", ranges=(1, 2, 3, 4), function=iter_nc,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_fit_kernel, POOL_KERNEL),
-    extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True,
+    summary="least squares of edge normal curvatures 2 (p-q).N/|p-q|^2", kernels=(_fit_kernel, _levels_kernel, POOL_KERNEL),
+    extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True, takes_levels=True,
 ))
 register(EstimatorSpec(
     name="qs", title="Quadratic surface approximation", ranges=(1, 2, 3, 4), function=iter_qs,
     triangles_only=False, uses_normals=False, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_fit_kernel, POOL_KERNEL),
-    extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True,
+    summary="least-squares height fit A/2 u^2 + B uv + C/2 v^2 in the tangent frame", kernels=(_fit_kernel, _levels_kernel, POOL_KERNEL),
+    extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True, takes_levels=True,
 ))
 register(EstimatorSpec(
     name="an", title="Adjacent-normal cubic approximation", ranges=(2, 3, 4), function=iter_an,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, reference=_GI, min_neighbours=MIN_PAIRS,
-    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, POOL_KERNEL),
+    summary="cubic height fit using positions and the neighbours' normals (7 unknowns)", kernels=(_fit_kernel, _levels_kernel, POOL_KERNEL),
     options={"noise_model": NOISE_MODELS},
-    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES, skips_errors=True,
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES, skips_errors=True, takes_levels=True,
 ))

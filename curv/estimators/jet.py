@@ -47,12 +47,14 @@ from ..core.errors import EstimatorError
 from ..core.filled import filled
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch
+from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
+                                      new_scratch, start_ball_support, widen_ball_support)
+from ..core.result import Principal
 from ..core.validity import Reason
 from ._local_fit import factor_whiten, noise_variance, principal_gradients, row_dot, slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
 from .jet_width import DEFAULT_WIDTH, WIDTHS, iter_adaptive_jet
-from .registry import EstimatorSpec, empty_principal, register
+from .registry import EstimatorSpec, register
 
 __all__ = ["iter_jet", "DEFAULT_DEGREE", "DEGREES", "DEFAULT_WEIGHTS", "WEIGHTS", "DEFAULT_WIDTH", "WIDTHS", "RCOND",
            "unknowns", "jet_normals", "smooth_weight"]
@@ -427,6 +429,38 @@ def _jet_kernel(centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, 
 
 
 @jit_parallel
+def _jet_levels_kernel(centres, lo, hi, degree, smooth, radii, indptr, indices, x, y, z, normals, stamps, queues,
+                       outside, outside_d2, k, d1, d2, reason, k_se):
+    """:func:`_jet_kernel` at every level of ``radii`` (levels, n), ascending per vertex, in one walk
+    (:func:`~curv.geometry.neighbourhood.widen_ball_support`: each level's support is exactly the
+    single search's). The PCA frame and the scale h follow the support, so every level fits its own
+    support anew: the walk is what the levels share. Writes ``k[level]``, ``d1[level]``, ...,
+    ``k_se[level]`` as :func:`_jet_kernel` writes its outputs."""
+    parts = stamps.shape[0]
+    levels = radii.shape[0]
+    nd = (degree + 1) * (degree + 2) // 2
+    for t in prange(parts):
+        stamp, queue, waiting, waiting_d2 = stamps[t], queues[t], outside[t], outside_d2[t]
+        m, vec, cov, frame, evec = _scratch()
+        grads = np.empty((2, MAX_UNKNOWNS))
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for i in range(start, stop):
+            p = centres[i]
+            count = start_ball_support(p, stamp, queue)
+            head = pending = 0
+            for level in range(levels):
+                r2 = radii[level, p] ** 2
+                count, head, pending = widen_ball_support(p, r2, level + 1 < levels, indptr, indices, x, y, z, stamp,
+                                                          queue, count, head, waiting, waiting_d2, pending)
+                code, h, ww = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
+                                      r2 if smooth else 0.0)
+                if code == _OK:
+                    code = jet_principal(vec, frame, h, normals, k[level], d1[level], d2[level], p)
+                    jet_se(vec, m, h, count, nd, ww, grads, k_se[level], p)
+                reason[level, p] = code
+
+
+@jit_parallel
 def _jet_normal_kernel(centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, normals, stamps, queues, out,
                        reason):
     parts = stamps.shape[0]
@@ -490,8 +524,12 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         Any polygon mesh.
     normals : (n, 3) float64
         Unit vertex normals; they orient each fit and its curvature sign (NaN rows: ``DEGENERATE``).
-    radii : (n,) float64
-        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`, ``uses_normals=False``).
+    radii : (n,) or (levels, n) float64
+        Ball radius of every vertex (:func:`curv.core.ranges.ball_radii`, ``uses_normals=False``), or
+        of every vertex at each of several levels, ascending per vertex (several ranges in one call:
+        on a mesh with the fixed width one walk serves them all, :func:`_jet_levels_kernel`; the
+        values agree with a call per level to rounding, as the support's sums are added in the
+        walk's order).
     chunk : int, optional
         Vertices per kernel call (default adaptive).
     degree : {2, 3, 4}
@@ -519,38 +557,54 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
     Returns
     -------
-    Principal
+    Principal, or a list of one per level
         k1 >= k2 of the jet, directions tangent to ``normals``; reasons ``TOO_FEW_NEIGHBOURS``,
         ``SINGULAR``, ``DEGENERATE`` where there is no fit.
     """
     degree = check_degree(degree)
     smooth = check_weights(weights)
+    levels = np.ndim(radii) == 2
+    if levels and (check_width(width) or not isinstance(mesh, Mesh)):
+        # the adaptive width, and a point cloud's grid: a fit per level
+        out = []
+        for level in range(len(radii)):
+            out.append((yield from iter_jet(mesh, normals, radii[level], chunk=chunk, degree=degree, weights=weights,
+                                            centres=centres, features=features, width=width)))
+        return out
     if check_width(width):
         return (yield from iter_adaptive_jet(mesh, normals, radii, chunk=chunk, degree=degree, weights=weights,
                                              centres=centres, features=features))
     n = mesh.n_vertices
     centres = all_centres(n, centres)
     whole = centres.size == n
-    out = empty_principal(n, most_written=whole)
-    k = filled((2, n), np.nan, most_written=whole)
-    k_se = filled((2, n), np.nan, most_written=whole)
+    count = len(radii) if levels else 1
+    k = filled((count, 2, n), np.nan, most_written=whole)
+    k_se = filled((count, 2, n), np.nan, most_written=whole)
+    d1, d2 = filled((count, n, 3), np.nan, most_written=whole), filled((count, n, 3), np.nan, most_written=whole)
+    reason = np.zeros((count, n), np.uint8)
     radius, indptr, indices, x, y, z, ref, stamps, queues = _inputs(mesh, normals, radii, centres, features)
+    if levels:
+        # the walk's vertices met beyond a level, waiting for a wider one: never past the mesh's size
+        outside, outside_d2 = np.empty_like(queues), np.empty(queues.shape)
 
     def run(lo, hi):
-        launch(_jet_kernel, centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, ref, stamps, queues,
-               k, out.d1, out.d2, out.reason, k_se)
+        if levels:
+            launch(_jet_levels_kernel, centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, ref, stamps,
+                   queues, outside, outside_d2, k, d1, d2, reason, k_se)
+        else:
+            launch(_jet_kernel, centres, lo, hi, degree, smooth, radius, indptr,
+                   indices, x, y, z, ref, stamps, queues, k[0], d1[0], d2[0], reason[0], k_se[0])
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
-    out.k1, out.k2 = k[0], k[1]
-    out.k1_se, out.k2_se = k_se[0], k_se[1]
-    bad = centres[out.reason[centres] != _OK]
-    out.d1[bad] = np.nan
-    out.d2[bad] = np.nan
-    out.k1[bad] = np.nan
-    out.k2[bad] = np.nan
-    out.k1_se[bad] = np.nan
-    out.k2_se[bad] = np.nan
-    return out
+    out = []
+    for level in range(count):
+        res = Principal(k1=k[level, 0], k2=k[level, 1], d1=d1[level], d2=d2[level], reason=reason[level],
+                        k1_se=k_se[level, 0], k2_se=k_se[level, 1])
+        bad = centres[res.reason[centres] != _OK]
+        for arr in (res.k1, res.k2, res.d1, res.d2, res.k1_se, res.k2_se):
+            arr[bad] = np.nan
+        out.append(res)
+    return out if levels else out[0]
 
 
 def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree: int = DEFAULT_DEGREE,
@@ -588,6 +642,6 @@ register(EstimatorSpec(
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     options={"degree": DEGREES, "weights": WEIGHTS, "width": WIDTHS},
-    kernels=(_jet_kernel,),
+    kernels=(_jet_kernel, _jet_levels_kernel), takes_levels=True,
     min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
 ))

@@ -15,11 +15,11 @@ import numpy as np
 
 from ..core.jit import jit, jit_parallel, prange
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import ball_support
+from ..geometry.neighbourhood import ball_support, start_ball_support, widen_ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
                          add_ring_columns, centre_columns, deviator_gradients, finish_fit, fit_frame, list_room,
                          checked_noise_model, normal_in_frame, offset_in_frame, principal_gradients, run_fit, slice_bounds,
-                         solve_sym3, store_parts, store_se3, sym3_inverse)
+                         solve_sym3, start_levels, store_parts, store_se3, sym3_inverse)
 from ._pooling import POOL_KERNEL
 from .registry import EstimatorSpec, register
 
@@ -108,6 +108,72 @@ def _noise_model(p, queue, count, tiny2, x, y, z, nx, ny, nz, frame, ring_ptr, r
 
 
 @jit
+def _mru_solve(suu, suv, svv, sau, sav, sbu, sbv):
+    """The fit's (e, f, g) from the sums of its equations' rows (u, v, 0) and (0, u, v):
+    ``AᵀA = [[uu, uv, 0], [uv, uu + vv, uv], [0, uv, vv]]``, ``Aᵀb = (au, av + bu, bv)``
+    (:func:`~curv.estimators._local_fit.solve_sym3`). Returns ``(e, f, g, singular)``."""
+    return solve_sym3(suu, suv, 0.0, suu + svv, suv, svv, sau, sav + sbu, sbv)
+
+
+@jit
+def _mru_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1, k2, d1, d2,
+                   reason):
+    """mru at vertex p at every level of ``radii`` (levels, n), in one walk
+    (:func:`~curv.estimators._local_fit.run_fit_levels`): the equations of each level's new
+    vertices are added to the last level's sums (their rows do not depend on the radius). A row whose
+    tangent length is so short that a wider level's bound would drop it makes the following levels
+    add up their whole support again, each with its own bound."""
+    n0, n1, n2, frame, band2, ok = start_levels(p, radii, nx, ny, nz, k1, k2, d1, d2, reason)
+    if not ok:
+        return
+    levels = radii.shape[0]
+    count = start_ball_support(p, stamp, queue)
+    head = pending = used = 0
+    done = 1
+    banded = True  # clears the sums below
+    suu = suv = svv = sau = sav = sbu = sbv = 0.0
+    for level in range(levels):
+        r = radii[level, p]
+        count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, adj_ptr, adj, x, y, z, stamp, queue,
+                                                  count, head, waiting, waiting_d2, pending)
+        if banded:
+            suu = suv = svv = sau = sav = sbu = sbv = 0.0
+            used = 0
+            done = 1
+            banded = False
+        tiny2 = (MIN_TANGENT_LENGTH * r) ** 2
+        for i in range(done, count):
+            u, v, a, b, usable = _neighbour(p, queue[i], x, y, z, nx, ny, nz, frame, n0, n1, n2, tiny2)
+            if not usable:
+                continue
+            banded = banded or not (u * u + v * v > band2)
+            used += 1
+            suu += u * u
+            suv += u * v
+            svv += v * v
+            sau += a * u
+            sav += a * v
+            sbu += b * u
+            sbv += b * v
+        done = count
+        e, f, g, singular = _mru_solve(suu, suv, svv, sau, sav, sbu, sbv)
+        finish_fit(p, e, f, g, singular, used, frame, k1[level], k2[level], d1[level], d2[level], reason[level])
+
+
+@jit_parallel
+def _mru_levels_kernel(centres, lo, hi, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamps, queues, outside, outside_d2,
+                       k1, k2, d1, d2, reason):
+    """The kernel of :func:`~curv.estimators._local_fit.run_fit_levels` for mru."""
+    parts = stamps.shape[0]
+    for t in prange(parts):
+        queue, stamp, waiting, waiting_d2 = queues[t], stamps[t], outside[t], outside_d2[t]
+        start, stop = slice_bounds(lo, hi, t, parts)
+        for i in range(start, stop):
+            _mru_levels_at(centres[i], radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2,
+                           k1, k2, d1, d2, reason)
+
+
+@jit
 def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, tilt,
             ring_ptr, ring, slots, touched, yv, jp, minv, grads, ru, rv):
     """Normal-difference least squares at vertex p over its support ``queue[1:count]``.
@@ -140,8 +206,7 @@ def _mru_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_
         sv += v
         sa += a
         sb += b
-    # AᵀA = [[uu, uv, 0], [uv, uu + vv, uv], [0, uv, vv]], Aᵀb = (au, av + bu, bv)
-    e, f, g, singular = solve_sym3(suu, suv, 0.0, suu + svv, suv, svv, sau, sav + sbu, sbv)
+    e, f, g, singular = _mru_solve(suu, suv, svv, sau, sav, sbu, sbv)
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
     xatb = e * sau + f * (sav + sbu) + g * sbv
     if slots.size > 0 and ring.size > 0 and used > 3 and not singular:  # slots given: noise_model="normals"
@@ -207,14 +272,14 @@ def iter_mru(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     ``standard_errors=False``: none (:func:`~curv.estimators._local_fit.run_fit`)."""
     return (yield from run_fit(mesh, normals, radii, _mru_kernel, chunk=chunk, centres=centres,
                                  features=features, noise_model=checked_noise_model(noise_model),
-                                 standard_errors=standard_errors))
+                                 standard_errors=standard_errors, levels_kernel=_mru_levels_kernel))
 
 
 register(EstimatorSpec(
     name="mru", title="Modified Rusinkiewicz", ranges=(2, 3, 4), function=iter_mru,
     triangles_only=False, uses_normals=True, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
     reference="Multivariate analysis of curvature estimators, §4.2 (after Rusinkiewicz 2004)",
-    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, POOL_KERNEL),
+    summary="per-vertex least squares of neighbour normal differences (eq. 4.1/4.2)", kernels=(_mru_kernel, _mru_levels_kernel, POOL_KERNEL),
     options={"noise_model": NOISE_MODELS},
-    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES, skips_errors=True,
+    extra_bytes_per_unit=SE_PARTS_BYTES + SLOT_BYTES, skips_errors=True, takes_levels=True,
 ))

@@ -86,8 +86,11 @@ class EstimatorSpec:
         faces, no edges). The face-based estimators refuse point clouds (:func:`refusal`).
     takes_levels : bool
         ``function`` also takes ``radii`` of shape ``(levels, n)``, the radii of several ranges in
-        ascending order, and returns one result per level (``csm``, ``icc``: one walk serves every
-        range, :func:`curv.estimate_ranges`).
+        ascending order, and returns one result per level (:func:`curv.estimate_ranges`): ``csm``,
+        ``icc`` (one walk serves every range), the fits ``nc``, ``qs``, ``an``, ``mru`` (one walk
+        and one set of sums without standard errors on a mesh, else a fit per level:
+        :func:`curv.estimators._local_fit.run_fit_levels`) and ``jet`` (one walk on a mesh with the
+        fixed width, a fit per level).
     skips_errors : bool
         ``function`` takes ``standard_errors=False`` and then skips their cost (the fits whose
         standard errors pool neighbours: ``nc``, ``qs``, ``an``, ``mru``).

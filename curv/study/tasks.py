@@ -30,8 +30,8 @@ def _plain_groups(variants: tuple[Variant, ...]) -> list[list[int]]:
 
 def _estimate_group(mesh, variants: list[Variant], normals, region) -> list:
     """The results of ``variants`` (one method's plain ranges, or one smoothing variant): one
-    :func:`curv.estimate_ranges` call for the ranges (csm and icc share one walk over them, the
-    others the setup), without standard errors (the study reads none)."""
+    :func:`curv.estimate_ranges` call for the ranges (csm, icc and the fits nc, qs, an, mru, jet
+    share one walk over them, the others the setup), without standard errors (the study reads none)."""
     from ..api import estimate, estimate_ranges
 
     v = variants[0]
@@ -52,9 +52,9 @@ def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
     the others are never measured, and on the paper's coarse meshes they are most of the mesh.
     R2SV, which smooths the estimated values over the neighbours, still estimates everywhere.
     The plain ranges of one estimator are estimated by one call (:func:`curv.estimate_ranges`:
-    the same values as one call per range, to rounding for csm and icc, which share one walk over
-    the ranges), and no estimate computes standard errors (the study reads none). The ``seconds``
-    of such a group's rows are the group's time shared equally among them.
+    the same values as one call per range, to rounding for csm, icc, nc, qs, an, mru and jet, which
+    share one walk over the ranges), and no estimate computes standard errors (the study reads
+    none). The ``seconds`` of such a group's rows are the group's time shared equally among them.
     An estimator that raises does not stop the study: its row carries the error text and NaN
     measures, and the report lists it (a group that raises is run again one variant at a time, so
     that each row carries its own error).
