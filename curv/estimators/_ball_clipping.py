@@ -561,9 +561,9 @@ def add_star_rows(queue, lo, hi, border, nonmanifold, clean, star, hit, exact, s
         The :func:`vertex_bits` of ``queue[:lo]``.
     exact : bool
         Every vertex of ``queue[:lo]`` is ``clean``.
-    sums : (k,) float64, k <= K
-        The sum of ``star[v, :k]`` over ``queue[:lo]`` while ``exact``; added to column by column,
-        in queue order (in a register: the support's rows stay in cache between the columns).
+    sums : (k,) float64, 7 <= k <= min(K, 9)
+        The sum of ``star[v, :k]`` over ``queue[:lo]`` while ``exact``; added to in queue order,
+        row by row (each row one cache line or two), every column in a register of its own.
         From the first vertex that is not clean it is no longer read (the caller walks face by face).
 
     Returns
@@ -577,11 +577,28 @@ def add_star_rows(queue, lo, hi, border, nonmanifold, clean, star, hit, exact, s
         if not clean[v]:
             exact = False
     if exact:
-        for c in range(sums.size):
-            acc = sums[c]
-            for i in range(lo, hi):
-                acc += star[queue[i], c]
-            sums[c] = acc
+        k = sums.size
+        s0, s1, s2, s3, s4, s5, s6 = sums[0], sums[1], sums[2], sums[3], sums[4], sums[5], sums[6]
+        s7 = sums[7] if k > 7 else 0.0
+        s8 = sums[8] if k > 8 else 0.0
+        for i in range(lo, hi):
+            v = queue[i]
+            s0 += star[v, 0]
+            s1 += star[v, 1]
+            s2 += star[v, 2]
+            s3 += star[v, 3]
+            s4 += star[v, 4]
+            s5 += star[v, 5]
+            s6 += star[v, 6]
+            if k > 7:
+                s7 += star[v, 7]
+                if k > 8:
+                    s8 += star[v, 8]
+        sums[0], sums[1], sums[2], sums[3], sums[4], sums[5], sums[6] = s0, s1, s2, s3, s4, s5, s6
+        if k > 7:
+            sums[7] = s7
+        if k > 8:
+            sums[8] = s8
     return hit, exact
 
 

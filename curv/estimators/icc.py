@@ -163,8 +163,8 @@ def _star_measures(ids, vc_ptr, vc, tri, measures, degenerate, nonmanifold, crea
     for i in prange(ids.size):
         v = ids[i]
         ok = not nonmanifold[v]
-        for c in range(MEASURES):
-            star[v, c] = 0.0
+        # the nine sums in registers, each added to in corner order (as a row of the output would be)
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = s8 = 0.0
         for j in range(vc_ptr[v], vc_ptr[v + 1]):
             f = vc[j] // 3
             if degenerate[f] or not _row_is_finite(measures, f):
@@ -172,8 +172,18 @@ def _star_measures(ids, vc_ptr, vc, tri, measures, degenerate, nonmanifold, crea
                 continue
             if touches(crease, tri, f):
                 ok = False  # the feature path leaves this face out
-            for c in range(MEASURES):
-                star[v, c] += measures[f, c] / 3.0
+            s0 += measures[f, 0] / 3.0
+            s1 += measures[f, 1] / 3.0
+            s2 += measures[f, 2] / 3.0
+            s3 += measures[f, 3] / 3.0
+            s4 += measures[f, 4] / 3.0
+            s5 += measures[f, 5] / 3.0
+            s6 += measures[f, 6] / 3.0
+            s7 += measures[f, 7] / 3.0
+            s8 += measures[f, 8] / 3.0
+        star[v, 0], star[v, 1], star[v, 2] = s0, s1, s2
+        star[v, 3], star[v, 4], star[v, 5] = s3, s4, s5
+        star[v, 6], star[v, 7], star[v, 8] = s6, s7, s8
         clean[v] = ok
 
 
