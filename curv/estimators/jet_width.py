@@ -59,8 +59,9 @@ point-cloud protocol at 13 spacings: 6.5, 8, 9, 10, 11.5 and 13 spacings; a 5-sp
 added noise, docs/ACCURACY.md)."""
 
 GAMMA = 5.0
-"""Half-width of the confidence intervals in standard errors (with :data:`RATIO`: 4-6 and 0.7-0.85
-give about the same on the noisy point clouds of docs/ACCURACY.md; 5 and 0.8 in the middle)."""
+"""Half-width of the confidence intervals in standard errors. With :data:`RATIO` it was tuned on the
+noisy point clouds of docs/ACCURACY.md (surfaces 0-2, checked on 3-5): a wider interval wants a
+higher ratio (4 and 0.7, 5 and 0.75-0.85, 6 and 0.8-0.9 about the same); 5 and 0.8 in the middle."""
 
 RATIO = 0.8
 """The relative stop: a walk goes on while the intersection keeps at least this share of the new
