@@ -28,12 +28,13 @@ Sucic (2008; "relative ICI", RICI):
    order k1 below k2 (near umbilics) the k1 walk's last candidate's own k1, k2 stay.
 
 The directions and k1's standard error are those of the k1 walk's last candidate, k2's standard
-error that of the k2 walk's (the mean mixes in the narrower, noisier fits: its spread is not below
-theirs by much); a point with no fit at all keeps the reason of the widest degree-``degree`` fit.
+error that of the k2 walk's (the mean also takes in the narrower, noisier fits: on a noisy sphere
+at 4 spacings its spread is 1.15x that of the last candidate, whose standard error it reports, so
+the reported one runs a little low there); a point with no fit at all keeps the reason of the widest degree-``degree`` fit.
 Every candidate's support lies within the given ball, so the validity rules (borders) read the
 given radius as for the fixed width. The cost is one jet per candidate (:data:`WIDTH_FRACTIONS`
-and the last fit: 7 fits, the narrower ones cheaper; about 4x the fixed degree-4 jet's CPU time on
-a 3169-point cloud at 13 spacings). Measured and tuned in docs/ACCURACY.md ("Adaptive width").
+and the last fit: 7 fits, the narrower ones cheaper; 4.2-4.5x the fixed degree-4 jet's CPU time
+on a 3136-point cloud at 13 spacings). Measured and tuned in docs/ACCURACY.md ("Adaptive width").
 """
 
 from __future__ import annotations
