@@ -7,7 +7,7 @@ import pytest
 
 import curv
 from curv.core.errors import EstimatorError
-from curv.estimators.jet_width import GAMMA, WIDTH_FRACTIONS, WIDTHS, ici_choice
+from curv.estimators.jet_width import GAMMA, RATIO, WIDTH_FRACTIONS, WIDTHS, ici_walk
 from tests.clouds import noisy_sphere_cloud
 from tests.meshes import icosphere
 
@@ -29,30 +29,36 @@ def _error_at(res, c):
     return abs(res.k1[c] - exact[0]) + abs(res.k2[c] - exact[1])
 
 
-def test_the_walk_keeps_the_last_candidate_whose_intervals_meet_all_before_it():
-    se = np.full((4, 5), 0.1)
-    k1 = np.array([[1.0, 1.0, 1.0, 1.0, np.nan],
-                   [1.1, 1.1, 1.0, 1.0, np.nan],
-                   [1.2, 2.0, 1.0, 1.0, np.nan],   # point 1: out of the intersection here
-                   [1.45, 1.0, 1.0, 9.0, np.nan]])  # point 0: 1.45 - 0.2 > 1.0 + 0.2; point 3: out
-    k2 = np.zeros((4, 5))
-    k2[1, 2] = 5.0  # point 2: k2 leaves at the second candidate
-    choice, mid1, mid2 = ici_choice(k1, k2, se, se, gamma=2.0)
-    assert choice.tolist() == [2, 1, 0, 2, -1]
-    # the estimate is the midpoint of the final intersection: point 0 keeps [1.0, 1.2] for k1
-    np.testing.assert_allclose(mid1[:4], [1.1, 1.05, 1.0, 1.0])
-    np.testing.assert_allclose(mid2[:4], 0.0, atol=1e-15)
-    assert np.isnan(mid1[4]) and np.isnan(mid2[4])
-    assert 2.0 <= GAMMA <= 3.0
+def test_the_walk_stops_where_the_intersection_shrinks_below_the_ratio_of_the_new_interval():
+    """gamma 2, ratio 0.5; columns: A all agree, B the second candidate moves off (plain ICI would go
+    on: the intersection is not empty), C an unfitted candidate is skipped, D none fitted, E the
+    first sits out (its standard error is NaN) and the walk starts at the second."""
+    nan = np.nan
+    k = np.array([[1.0, 1.0, 1.0, nan, 5.0],
+                  [1.0, 1.3, nan, nan, 1.0],
+                  [1.0, 1.0, 1.1, nan, 1.0]])
+    se = np.array([[0.2, 0.1, 0.1, 0.1, nan],
+                   [0.1, 0.1, 0.1, 0.1, 0.1],
+                   [0.05, 0.1, 0.05, 0.1, 0.1]])
+    choice, mean = ici_walk(k, se, gamma=2.0, ratio=0.5)
+    # B: [0.8, 1.2] then [1.1, 1.5]: the intersection (0.1 wide) is under half the new interval (0.4)
+    assert choice.tolist() == [2, 0, 2, -1, 2]
+    # the estimate is the inverse-variance mean of the kept candidates: C (1.0 * 100 + 1.1 * 400) / 500
+    np.testing.assert_allclose(mean[[0, 1, 2, 4]], [1.0, 1.0, 1.08, 1.0], rtol=1e-14)
+    assert np.isnan(mean[3])
+    # plain ICI (ratio 0) goes on at B while the intersection is not empty: all three kept
+    choice0, mean0 = ici_walk(k, se, gamma=2.0, ratio=0.0)
+    assert choice0[1] == 2
+    np.testing.assert_allclose(mean0[1], 1.1, rtol=1e-14)
+    assert 4.0 <= GAMMA <= 6.0 and 0.7 <= RATIO <= 0.85
 
 
-def test_an_unfitted_candidate_is_skipped_not_a_stop():
+def test_a_candidate_outside_the_intersection_ends_the_walk_even_if_a_later_one_agrees():
     se = np.full((3, 2), 0.1)
-    k1 = np.array([[1.0, np.nan], [np.nan, np.nan], [1.05, 1.0]])
-    k2 = np.zeros((3, 2))
-    se_missing = se.copy()
-    se_missing[0, 1] = np.nan
-    assert ici_choice(k1, k2, se_missing, se)[0].tolist() == [2, 2]
+    k = np.array([[1.0, 1.0], [2.0, 1.05], [1.0, 1.0]])
+    choice, mean = ici_walk(k, se, gamma=2.0, ratio=0.5)
+    assert choice.tolist() == [0, 2]
+    np.testing.assert_allclose(mean, [1.0, (1.0 + 1.05 + 1.0) / 3], rtol=1e-14)
 
 
 def test_the_adaptive_width_keeps_the_exact_degree_4_fit_where_the_degree_2_fit_is_biased():
@@ -83,17 +89,23 @@ def noisy_sphere():
     return noisy_sphere_cloud()
 
 
-def test_on_a_noisy_sphere_the_walk_goes_on_to_the_steadiest_fit(noisy_sphere):
+def test_on_a_noisy_sphere_the_walks_go_on_to_the_steadiest_fit(noisy_sphere):
     """A sphere has no term a degree-2 fit misses at 4 spacings that noise (0.12 spacings) does not
-    hide: the degree-2 smooth fit over the whole ball is chosen at most points (86 % on this sample),
-    and the median H is that fit's (within 0.1 % of 1/r) where the fixed degree-4 jet is 2.7 % high."""
+    hide: both walks reach the degree-2 smooth fit over the whole ball at nearly every point (all on
+    this sample), and the estimate, the inverse-variance mean of the candidates, leans on it: k1's
+    spread 0.110 against that fit's 0.096 (the fixed degree-4 jet 0.152), no point off it by more
+    than 0.12 (2.6 when the narrowest degree-4 fits took part, ``POINTS_PER_UNKNOWN`` 2), median H
+    0.9 % high where the fixed degree-4 jet is 2.7 % high."""
     cloud, spacing = noisy_sphere
     adaptive = curv.estimate(cloud, "jet", radius=4 * spacing, degree=4, width="adaptive")
     last = curv.estimate(cloud, "jet", radius=4 * spacing, degree=2, weights="smooth")
     fixed = curv.estimate(cloud, "jet", radius=4 * spacing, degree=4)
     assert adaptive.valid.mean() > 0.99
-    assert np.mean(np.abs(adaptive.k1 - last.k1) < 0.25 * np.nanstd(last.k1)) > 0.75
-    assert abs(np.nanmedian(adaptive.mean) - 0.5) < 0.2 * abs(np.nanmedian(fixed.mean) - 0.5)
+    # the standard errors reported are those of each walk's last candidate
+    assert np.mean(adaptive.k1_se == last.k1_se) > 0.95 and np.mean(adaptive.k2_se == last.k2_se) > 0.95
+    assert np.nanstd(adaptive.k1) < 1.3 * np.nanstd(last.k1) < np.nanstd(fixed.k1)
+    assert np.nanmax(np.abs(adaptive.k1 - last.k1)) < 0.5
+    assert abs(np.nanmedian(adaptive.mean) - 0.5) < 0.5 * abs(np.nanmedian(fixed.mean) - 0.5)
     assert (adaptive.k1[adaptive.valid] >= adaptive.k2[adaptive.valid]).all()
 
 
@@ -108,11 +120,16 @@ def test_fixed_is_the_default_and_unknown_widths_are_refused(noisy_sphere):
 
 
 def test_on_a_mesh_the_option_changes_nothing_unless_asked():
-    """The default mesh jet is untouched by the option; the adaptive one runs on a mesh too."""
+    """The default mesh jet is untouched by the option; the adaptive one runs on a mesh too. Where no
+    degree-4 candidate holds POINTS_PER_UNKNOWN points per unknown (R3: about 37 vertices) only the
+    degree-2 smooth fit takes part and its values are the estimate."""
     mesh = icosphere(3, 1.0)
     default = curv.estimate(mesh, "jet", 3, degree=4)
     fixed = curv.estimate(mesh, "jet", 3, degree=4, width="fixed")
     assert np.array_equal(default.k1, fixed.k1) and np.array_equal(default.d1, fixed.d1)
-    adaptive = curv.estimate(mesh, "jet", 3, degree=4, width="adaptive")
+    small = curv.estimate(mesh, "jet", 3, degree=4, width="adaptive")
+    last = curv.estimate(mesh, "jet", 3, degree=2, weights="smooth")
+    assert small.valid.all() and np.array_equal(small.k1, last.k1) and np.array_equal(small.k2, last.k2)
+    adaptive = curv.estimate(icosphere(4, 1.0), "jet", 6, degree=4, width="adaptive")
     assert adaptive.valid.all()
-    np.testing.assert_allclose(adaptive.mean, 1.0, rtol=2e-2)
+    np.testing.assert_allclose(adaptive.mean, 1.0, rtol=5e-3)
