@@ -187,9 +187,13 @@ class InspectPanel(QWidget):
         knn_row.addWidget(self.use_knn)
         knn_row.addWidget(self.knn, 1)
         pane_form.addRow("", knn_row)
-        pane_form.addRow(self.options)
         self.pane_form = pane_form  # the window adds the Feature angle row under the range
-        pane_form.addRow("", self.advise_button)
+        header_row = QHBoxLayout()  # the options' fold-out header beside Advise: no height while folded
+        header_row.addWidget(self.options.header)
+        header_row.addStretch(1)
+        header_row.addWidget(self.advise_button)
+        pane_form.addRow(header_row)
+        pane_form.addRow(self.options)
         self.all_box = QGroupBox("All panes")
         form = QFormLayout(self.all_box)  # the histogram high up: it must show without scrolling
         form.addRow("Quantity", self.quantity)

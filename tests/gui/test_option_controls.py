@@ -11,6 +11,7 @@ pytestmark = pytest.mark.gui
 
 import curv  # noqa: E402
 from curv.estimators import ESTIMATORS  # noqa: E402
+from PySide6.QtCore import Qt  # noqa: E402
 
 from app.model import SurfaceSource  # noqa: E402
 from app.model.options import option_rows, options_with  # noqa: E402
@@ -58,14 +59,18 @@ def test_choosing_options_computes_that_call_and_defaults_give_the_plain_pane(qt
     _set_method(window, "jet")
     ui.wait_ready()
     doc, options = window.doc, window.inspect.options
-    assert options.isVisible() and set(options.combos) == {"degree", "weights", "width", "fit_range"}
+    assert options.header.isVisible() and set(options.combos) == {"degree", "weights", "width", "fit_range"}
     assert options.combos["degree"].currentText() == "2 (default)"
+    # folded by default (the histogram below stays in view), unfolded by a click on the header
+    assert options.header.text() == "Options: defaults" and not options.combos["degree"].isVisible()
+    qtbot.mouseClick(options.header, Qt.MouseButton.LeftButton)
+    assert options.combos["degree"].isVisible()
     plain_key = doc.panes[0].key
     plain = doc.result(0)
 
     _choose(window, "degree", "4")
     ui.wait_ready()
-    assert doc.panes[0].options == (("degree", 4),)
+    assert doc.panes[0].options == (("degree", 4),) and options.header.text() == "Options: degree 4"
     assert window.grid.viewports[0].title.text().startswith("A: jet R2 degree 4")
     res, expected = doc.result(0), curv.estimate(doc.mesh, "jet", range=2, degree=4)
     np.testing.assert_array_equal(res.valid, expected.valid)
@@ -101,10 +106,10 @@ def test_point_clouds_show_only_the_estimator_options(qtbot, window, ui):
     options = window.inspect.options
     _set_method(window, "qs")
     ui.wait_ready()
-    assert not options.isVisible()                        # qs has no options, and a cloud no mesh normals
+    assert not options.header.isVisible()                        # qs has no options, and a cloud no mesh normals
     _set_method(window, "jet")
     ui.wait_ready()
-    assert options.isVisible() and set(options.combos) == {"degree", "weights", "width"}
+    assert options.header.isVisible() and set(options.combos) == {"degree", "weights", "width"}
     _choose(window, "weights", "smooth")
     ui.wait_ready()
     res = window.doc.result(0)
