@@ -88,7 +88,14 @@ every noise level, every candidate; and the measures and axes again::
     python -m curv.advice.table fill --table twins.json --out closed2.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 1000 1600 5000 --work /tmp/advisor-closed2 --workers 1
     python -m curv.advice.table refeature --table closed2.json --work /tmp/advisor-refeature --workers 1
 
-(189 meshes, 12,852 estimates, 502 s wall with 1 worker at niceness 10 on the loaded machine.) The coarse rows are
+(189 meshes, 12,852 estimates, 502 s wall with 1 worker at niceness 10 on the loaded machine.) Then every
+mesh is measured again for the residual measures (``noise_raw4``, ``residual_ratio``:
+:mod:`curv.advice.residuals`, which tell a quadric's model error from noise) and the axes chosen
+again, over the packaged table (no estimator runs)::
+
+    python -m curv.advice.table refeature --table closed2.json --work /tmp/advisor-refeature2 --workers 1
+
+(2736 meshes measured in 1114 s wall with 1 worker at niceness 10 on the loaded machine.) The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
