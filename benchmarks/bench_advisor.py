@@ -6,6 +6,7 @@ Run by hand (not part of the test suite)::
     .venv/bin/python benchmarks/bench_advisor.py --meshes 80 --seed 11000 --workers 1 --runs runs11000.json   # docs/ADVISOR.md
     .venv/bin/python benchmarks/bench_advisor.py --meshes 60 --seed 2000 --workers 2 --runs runs2000.json
     .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
+    .venv/bin/python benchmarks/bench_advisor.py --refeature old.json --runs new.json  # add the residual measures to old runs
 
 Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000; the table's study
 uses seed 0) and at settings between and beyond the table's grid points: noise level 0 for
