@@ -6,6 +6,7 @@ Run by hand (not part of the test suite)::
     .venv/bin/python benchmarks/bench_advisor.py --meshes 80 --seed 11000 --workers 1 --runs runs11000.json   # docs/ADVISOR.md
     .venv/bin/python benchmarks/bench_advisor.py --meshes 60 --seed 2000 --workers 2 --runs runs2000.json
     .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
+    .venv/bin/python benchmarks/bench_advisor.py --refeature old.json --runs new.json  # add the residual measures to old runs
 
 Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000; the table's study
 uses seed 0) and at settings between and beyond the table's grid points: noise level 0 for
@@ -102,7 +103,8 @@ def _mesh(setting: dict, noise_level: float):
 def evaluate(setting: dict) -> dict:
     """Every candidate's median e_rel on one held-out mesh, and the advisor's answer."""
     from curv import advise
-    from curv.advice.advisor import SHAPE_MEASURES, angle_deviation_deg, fan_triangles, load_table, valid_shares
+    from curv.advice.advisor import (RESIDUAL_MEASURES, SHAPE_MEASURES, angle_deviation_deg, fan_triangles, load_table,
+                                     valid_shares)
     from curv.advice.table import option_variants, variant_errors
 
     mesh, truth, evaluated, irr_true = _mesh(setting, setting["noise_level"])
@@ -114,7 +116,7 @@ def evaluate(setting: dict) -> dict:
     t_adv = time.perf_counter() - t0
     erel = variant_errors(mesh, truth, evaluated, variants)  # a failing candidate (NaN) cannot be the best one
     raw = {k: getattr(adv.features, k) for k in ("noise_raw", "irregularity_raw_deg", "density", "border_share",
-                                                 *SHAPE_MEASURES)}
+                                                 *SHAPE_MEASURES, *RESIDUAL_MEASURES)}
     return {**setting, "erel": erel, "advised": adv.best.variant.id, "expected": adv.expected_erel, "raw": raw,
             "shares": valid_shares(mesh, variants), "n_evaluated": int(evaluated.sum()),
             "noise_est": adv.features.noise, "irr_est": adv.features.irregularity_deg,
@@ -244,11 +246,27 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
     return "\n".join(lines), numbers
 
 
+def residual_row(setting: dict) -> dict:
+    """The residual measures (:func:`curv.advice.advisor.residual_measures`) of a run's mesh, rebuilt
+    from its setting (no estimator runs, no score is read)."""
+    from curv.advice.advisor import residual_measures
+
+    return residual_measures(_mesh(setting, setting["noise_level"])[0])
+
+
+def refeature_runs(runs: list[dict], pool) -> list[dict]:
+    """The runs with the residual measures added to their stored raw measures (``raw``), for runs
+    made before those measures existed; the other raw measures and the estimators' errors are kept."""
+    keep = ("index", "seed", "function", "closed", "n_vertices", "noise_level", "irregularity", "params")
+    rows = list(pool.map(residual_row, [{k: r[k] for k in keep} for r in runs]))
+    return [{**r, "raw": {**r["raw"], **row}} for r, row in zip(runs, rows)]
+
+
 def readvise(runs: list[dict], table: dict) -> list[dict]:
     """The runs with the advice of another table, from their stored raw measures (no estimator runs
     again): the same calibration, prediction and candidates as :func:`curv.advise`."""
-    from curv.advice.advisor import (SHAPE_MEASURES, MeshFeatures, calibrate_irregularity, calibrate_noise, candidates,
-                              predict, rank)
+    from curv.advice.advisor import (RESIDUAL_MEASURES, SHAPE_MEASURES, MeshFeatures, calibrate_irregularity,
+                                     calibrate_noise, candidates, predict, rank)
 
     cal = table["calibration"]
     out = []
@@ -257,7 +275,7 @@ def readvise(runs: list[dict], table: dict) -> list[dict]:
         feats = MeshFeatures(irregularity_deg=calibrate_irregularity(r["raw"]["irregularity_raw_deg"], noise, cal),
                              noise=noise, density=r["raw"]["density"], border_share=r["raw"]["border_share"],
                              polygon_kinds={3: 1}, noise_raw=r["raw"]["noise_raw"],
-                             **{k: r["raw"].get(k, float("nan")) for k in SHAPE_MEASURES})
+                             **{k: r["raw"].get(k, float("nan")) for k in (*SHAPE_MEASURES, *RESIDUAL_MEASURES)})
         pred = predict(table, feats)
         ok = [v for v in candidates(table, feats) if np.isfinite(pred[v])]
         choice = rank({v: pred[v] for v in ok}, r.get("shares", {}))[0]
@@ -280,8 +298,18 @@ def main(argv=None) -> int:
     parser.add_argument("--runs", help="also write every mesh's numbers here (JSON)")
     parser.add_argument("--rescore", metavar="RUNS", help="re-advise the meshes of a --runs file with --table "
                         "instead of running anything (triangle meshes; the estimators' errors are the file's)")
+    parser.add_argument("--refeature", metavar="RUNS", help="add the residual measures to the raw measures of a "
+                        "--runs file made before they existed (meshes rebuilt, nothing scored) and write it to --runs")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
+    if args.refeature:
+        if not args.runs:
+            parser.error("--refeature needs --runs (where to write)")
+        with open_executor(workers=args.workers) as pool:
+            runs = refeature_runs(json.loads(Path(args.refeature).read_text()), pool)
+        Path(args.runs).write_text(json.dumps(runs, default=float))
+        print(f"wrote {args.runs}: {len(runs)} runs, {time.perf_counter() - t0:.0f} s wall")
+        return 0
     table = load_table(args.table)
     if args.rescore:
         runs = readvise(json.loads(Path(args.rescore).read_text()), table)

@@ -35,6 +35,7 @@ from ..core.mesh import Mesh
 
 __all__ = ["Advice", "Candidate", "MeshFeatures", "advise", "measure_features", "load_table", "valid_shares",
            "TABLE_RESOURCE", "FIT_METHOD", "FIT_RANGE", "VALID_SHARE_SLACK", "VALID_SAMPLE", "SHAPE_MEASURES",
+           "RESIDUAL_MEASURES", "residual_measures",
            "BASE_COLUMNS", "kernel_axes", "table_coordinates", "feature_values", "shape_measures"]
 
 TABLE_RESOURCE = "data/advisor_table.json"
@@ -118,8 +119,17 @@ class MeshFeatures:
         curvature is spread over the surface (0 on a sphere).
     hyperbolic_share : float
         Share of the same vertices with ``k1 k2 < 0`` (saddle-shaped).
+    noise_raw4 : float
+        Median over sampled vertices of the residual spread of a quartic height fit over the R3
+        ball, over the mean edge (:func:`curv.advice.residuals.fit_residual_spreads`): the quartic
+        absorbs most of the model error a quadric leaves (a coarse or irregularly lifted mesh's, a
+        strongly curved surface's) and none of the noise, so this reads noise where :attr:`noise_raw`
+        reads both.
+    residual_ratio : float
+        Median over the same vertices of the quartic's residual spread over the quadric's: about 1
+        where noise dominates the residuals, near 0 where the surface's own shape does.
 
-    The last five, :attr:`noise_raw` and :attr:`border_share` are measures the table's kernel may
+    The shape measures, :attr:`noise_raw`, the residual measures and :attr:`border_share` are measures the table's kernel may
     use as further axes (which, and how wide, is chosen when the table is built:
     ``kernel["axes"]``); the open/closed distinction is :attr:`border_share`.
     """
@@ -138,6 +148,8 @@ class MeshFeatures:
     anisotropy: float = float("nan")
     curvature_spread: float = float("nan")
     hyperbolic_share: float = float("nan")
+    noise_raw4: float = float("nan")
+    residual_ratio: float = float("nan")
 
     @property
     def noise_level(self) -> float:
@@ -341,7 +353,7 @@ def raw_measures(mesh: Mesh, *, normals=None) -> dict:
     dict
         Keys ``noise_raw``, ``irregularity_raw_deg``, ``density``, ``border_share``,
         ``polygon_kinds``, ``n_vertices``, ``mean_edge`` and the shape and tessellation measures
-        :data:`SHAPE_MEASURES` (see :class:`MeshFeatures`).
+        :data:`SHAPE_MEASURES` and :data:`RESIDUAL_MEASURES` (see :class:`MeshFeatures`).
 
     Raises
     ------
@@ -370,11 +382,40 @@ def raw_measures(mesh: Mesh, *, normals=None) -> dict:
         "n_vertices": int(mesh.n_vertices),
         "mean_edge": edge,
         **shape_measures(mesh, k1, k2),
+        **residual_measures(mesh, normals=res.normals),
     }
 
 
 SHAPE_MEASURES = ("edge_cv", "valence_sd", "anisotropy", "curvature_spread", "hyperbolic_share")
 """The shape and tessellation measures of :class:`MeshFeatures` (raw: no calibration)."""
+
+RESIDUAL_MEASURES = ("noise_raw4", "residual_ratio")
+"""The measures of :class:`MeshFeatures` that tell model error from noise (raw: no calibration)."""
+
+
+def residual_measures(mesh: Mesh, *, normals=None) -> dict:
+    """:data:`RESIDUAL_MEASURES` from the quadratic and quartic fits'
+    residual spreads (:func:`curv.advice.residuals.fit_residual_spreads`; see :class:`MeshFeatures`).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    normals : (n, 3) array_like, optional
+        Unit vertex normals of the fits' frames; default Max-weighted.
+
+    Returns
+    -------
+    dict
+        :data:`RESIDUAL_MEASURES` -> float (NaN when no vertex can be fitted).
+    """
+    from .residuals import fit_residual_spreads
+
+    s2, s4 = fit_residual_spreads(mesh, normals=normals)
+    ok = np.isfinite(s2) & np.isfinite(s4) & (s2 > 0)
+    if not ok.any():
+        return {"noise_raw4": float("nan"), "residual_ratio": float("nan")}
+    return {"noise_raw4": float(np.median(s4[ok])) / float(mesh.mean_edge_length),
+            "residual_ratio": float(np.median(s4[ok] / s2[ok]))}
 
 
 def shape_measures(mesh: Mesh, k1: np.ndarray, k2: np.ndarray) -> dict:

@@ -88,7 +88,14 @@ every noise level, every candidate; and the measures and axes again::
     python -m curv.advice.table fill --table twins.json --out closed2.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 1000 1600 5000 --work /tmp/advisor-closed2 --workers 1
     python -m curv.advice.table refeature --table closed2.json --work /tmp/advisor-refeature --workers 1
 
-(189 meshes, 12,852 estimates, 502 s wall with 1 worker at niceness 10 on the loaded machine.) The coarse rows are
+(189 meshes, 12,852 estimates, 502 s wall with 1 worker at niceness 10 on the loaded machine.) Then every
+mesh is measured again for the residual measures (``noise_raw4``, ``residual_ratio``:
+:mod:`curv.advice.residuals`, which tell a quadric's model error from noise) and the axes chosen
+again, over the packaged table (no estimator runs)::
+
+    python -m curv.advice.table refeature --table closed2.json --work /tmp/advisor-refeature2 --workers 1
+
+(2736 meshes measured in 1114 s wall with 1 worker at niceness 10 on the loaded machine.) The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
@@ -113,7 +120,7 @@ __all__ = ["DEFAULT_OUT", "table_settings", "mesh_features", "random_closed_para
            "measure_rows", "fit_calibration", "table_points", "choose_bandwidth", "fit_kernel", "make_table",
            "build_table", "main", "table_mesh", "fill_jobs", "fill_table", "feature_row", "noise_groups",
            "select_axes", "refeature_table", "loo_regret", "EXTRA_COLUMNS", "EREL_FLOOR", "surface_groups",
-           "coarse_jobs", "noise_jobs"]
+           "coarse_jobs", "noise_jobs", "FEATURE_MEASURES"]
 
 DEFAULT_OUT = Path(__file__).parents[1] / "data" / "advisor_table.json"
 BANDWIDTHS = (0.15, 0.25, 0.35, 0.5, 0.7, 1.0, 1.5)
@@ -956,11 +963,11 @@ def fill_main(argv) -> int:
 
 # ---------------------------------------------------------------------------- further axes: shape and tessellation
 EXTRA_COLUMNS = ("border_share", "edge_cv", "valence_sd", "anisotropy", "curvature_spread", "hyperbolic_share",
-                 "noise_raw")
+                 "noise_raw", "noise_raw4", "residual_ratio")
 """Point columns beyond the base three: the open/closed distinction, the shape and tessellation
-measures of :class:`curv.advice.advisor.MeshFeatures` and the uncalibrated noise measure,
-candidates for further kernel axes."""
-EXTRA_TRANSFORMS = {"border_share": "sqrt", "noise_raw": "log"}
+measures of :class:`curv.advice.advisor.MeshFeatures`, the uncalibrated noise measure and the
+residual measures that tell model error from noise, candidates for further kernel axes."""
+EXTRA_TRANSFORMS = {"border_share": "sqrt", "noise_raw": "log", "noise_raw4": "log"}
 """Axis transforms of the extra columns (default linear): a border share spans 0 (closed) to a
 fifth (the coarsest patch), and its square root separates the small shares of dense patches from
 a closed surface; the raw noise measure spans five decades (a noise-free dense patch's quadric
@@ -981,6 +988,11 @@ the prediction (:func:`curv.advice.advisor.log_erel`) and in the regret the sele
 MIN_GAIN = 0.02
 """A further axis is taken only when it lowers the grouped leave-one-out mean regret by more (each
 axis thins the table around a mesh: an axis must pay for it)."""
+
+
+FEATURE_MEASURES = MEASURES + ", shape v1, residuals v1"
+"""What the cached rows of ``refeature`` were measured with; a cache of other measures is measured
+again (residuals v1: :mod:`curv.advice.residuals` at R3 on 1000 sampled vertices)."""
 
 
 def feature_row(key) -> dict:
@@ -1143,8 +1155,8 @@ def refeature_main(argv) -> int:
     work.mkdir(parents=True, exist_ok=True)
     path = work / "features.json"
     rows = json.loads(path.read_text()) if path.exists() else {}
-    if rows.get("measures") != MEASURES + ", shape v1":
-        rows = {"measures": MEASURES + ", shape v1"}
+    if rows.get("measures") != FEATURE_MEASURES:
+        rows = {"measures": FEATURE_MEASURES}
     todo = [k for k in table["truth"]["key"] if _key_text(k) not in rows]
     t0, c0 = time.perf_counter(), time.process_time()
     with open_executor(workers=args.workers) as ex:
