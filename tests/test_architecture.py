@@ -42,3 +42,32 @@ def test_every_package_folder_ships():
     found = {".".join(p.parent.relative_to(ROOT).parts) for top in ("curv", "app")
              for p in (ROOT / top).rglob("__init__.py") if "__pycache__" not in p.parts}
     assert found <= listed, sorted(found - listed)
+
+
+def test_parallel_kernels_are_declared_and_launched_through_the_jit_owner():
+    """numba's workqueue layer aborts the process when two threads launch parallel kernels at once
+    (the viewer's workers do): every parallel kernel is ``@jit_parallel`` and every call of one goes
+    through ``launch``, which takes the one lock (curv.core.jit)."""
+    import re
+
+    sources = {p: p.read_text() for p in (ROOT / "curv").rglob("*.py") if "__pycache__" not in p.parts}
+    jit_module = ROOT / "curv" / "core" / "jit.py"
+    raw = [str(p.relative_to(ROOT)) for p, s in sources.items() if p != jit_module and "parallel=True" in s]
+    assert not raw, f"parallel kernels declared outside curv.core.jit: {raw}"
+    kernels = {m.group(1) for s in sources.values()
+               for m in re.finditer(r"^@jit_parallel\s*\ndef (\w+)", s, flags=re.MULTILINE)}
+    assert len(kernels) > 10
+
+
+    def seen(s: str) -> set:
+        """The kernels a module's source can call: not those it shadows with a plain function."""
+        plain = {m.group(1) for m in re.finditer(r"^(?!@jit_parallel\s*\n)[^\n]*\n\s*def (\w+)\(", s,
+                                                 flags=re.MULTILINE)}
+        own = {m.group(1) for m in re.finditer(r"^@jit_parallel\s*\ndef (\w+)", s, flags=re.MULTILINE)}
+        return kernels - (plain - own)
+
+    direct = [f"{p.relative_to(ROOT)}:{i}: {line.strip()}"
+              for p, s in sources.items() for name in seen(s) for i, line in enumerate(s.splitlines(), 1)
+              if re.search(rf"(?<![\w.]){name}\(", line) and not line.lstrip().startswith("def ")
+              and f"launch({name}" not in line]
+    assert not direct, "parallel kernels called without launch:\n" + "\n".join(direct)

@@ -13,8 +13,8 @@ vertices; :func:`curv.advice.advisor.raw_measures` turns them into the ``noise_r
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
 
 __all__ = ["RESIDUAL_RANGE", "RESIDUAL_SAMPLE", "fit_residual_spreads"]
@@ -34,7 +34,7 @@ _MIN_POINTS = _N4 + 6
 freedom left to the quartic)."""
 
 
-@njit(cache=True, nogil=True)
+@jit
 def _spreads_at(p, lo, hi, indices, x, y, z, normals, a):
     """(quadric spread, quartic spread) at centre ``p`` (NaN, NaN where it cannot be fitted).
 
@@ -91,7 +91,7 @@ def _spreads_at(p, lo, hi, indices, x, y, z, normals, a):
     return out2, out4
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@jit_parallel
 def _spreads(centres, indptr, indices, x, y, z, normals, width, out2, out4):
     for c in prange(centres.size):
         a = np.empty((width, _N4))
@@ -135,5 +135,5 @@ def fit_residual_spreads(mesh: Mesh, *, normals: np.ndarray | None = None,
     x, y, z = (np.ascontiguousarray(mesh.vertices[:, i]) for i in range(3))
     width = int(np.diff(indptr).max(initial=0)) + 1
     out2, out4 = np.empty(centres.size), np.empty(centres.size)
-    _spreads(centres, indptr, indices, x, y, z, normals, width, out2, out4)
+    launch(_spreads, centres, indptr, indices, x, y, z, normals, width, out2, out4)
     return out2, out4
