@@ -324,6 +324,8 @@ def _cmd_advise(args) -> int:
     print(f"  irregularity {f.irregularity_deg:.1f} degrees RMS from 60")
     print(f"  density      {f.density:.4f} (mean edge x median |k1|+|k2|)")
     print(f"  spreads      valence {f.valence_sd:.2f} (sd), curvature {f.curvature_spread:.2f} (IQR of log |k1|+|k2|)")
+    print(f"  shape        anisotropy {f.anisotropy:.2f}, model residual {f.residual_ratio:.2g} (quartic / quadric "
+          f"fit residual: about 1 noise, near 0 the surface's own shape)")
     print(f"advice: {adv.why}")
     print(f"  call: {adv.call}")
     print(f"  or:   curv estimate {args.input} {cli_arguments(adv.kwargs)}")

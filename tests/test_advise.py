@@ -154,6 +154,8 @@ def test_cli_text(tmp_path, capsys, noisy):
     assert f"  call: {adv.call}" in out
     f = adv.features  # the table's other axes are said too
     assert f"  spreads      valence {f.valence_sd:.2f} (sd), curvature {f.curvature_spread:.2f} (IQR of log |k1|+|k2|)" in out
+    assert any(line.startswith(f"  shape        anisotropy {f.anisotropy:.2f}, model residual {f.residual_ratio:.2g} ")
+               for line in out)
     rows = [line for line in out if line[:4].strip().isdigit()]
     assert [r.split()[0] for r in rows] == ["1", "2", "3", "4", "5"]
     for row, c in zip(rows, adv.ranking):

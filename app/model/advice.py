@@ -95,8 +95,8 @@ def polygon_text(kinds: dict) -> str:
     return ", ".join(parts) or "no faces"
 
 
-FEATURE_LABELS = ("Irregularity", "Noise", "Density", "Valence spread", "Curvature spread", "Border", "Polygons",
-                  "Vertices")
+FEATURE_LABELS = ("Irregularity", "Noise", "Density", "Model residual", "Valence spread", "Curvature spread",
+                  "Anisotropy", "Border", "Polygons", "Vertices")
 """The rows of :func:`feature_rows`, in order (the Advice panel lays its form out from them)."""
 
 
@@ -110,13 +110,21 @@ def feature_rows(features) -> list[FeatureRow]:
     Returns
     -------
     list of FeatureRow
-        Irregularity, noise, density, valence spread, curvature spread, border, polygons, vertices.
+        Irregularity, noise, density, model residual, valence spread, curvature spread, anisotropy,
+        border, polygons, vertices. A measure's tooltip says whether the packaged table predicts
+        with it (:func:`curv.advice.advisor.kernel_axes`).
     """
-    from curv.advice.advisor import FIT_METHOD, FIT_RANGE
+    from curv.advice.advisor import FIT_METHOD, FIT_RANGE, kernel_axes, load_table
     from curv.estimators import ESTIMATORS
     from curv.variants import NOISE_FRACTION
 
     f = features
+    axes = {column for column, _how, _scale in kernel_axes(load_table())}
+
+    def axis(column: str) -> str:
+        return (" One of the table's axes: the prediction weighs it." if column in axes
+                else " Measured, not one of the table's axes.")
+
     fit = f"{FIT_METHOD} {ranges.range_label(FIT_RANGE)}"
     closed = ", ".join(name for name, spec in ESTIMATORS.items() if spec.closed_ring)
     return [
@@ -132,16 +140,24 @@ def feature_rows(features) -> list[FeatureRow]:
                    "Dimensionless resolution: the mean edge length times the median of |k1| + |k2| of a local "
                    f"quadratic fit ({fit}). Small: finely sampled for its curvature; a sphere of radius r meshed "
                    "with edges h gives about 2 h / r. Noise inflates it."),
+        FeatureRow("Model residual", f"{f.residual_ratio:.2g} (quartic / quadric fit residual)",
+                   "Median ratio of what a quartic and a quadric height fit over the R3 ball leave over, at up "
+                   "to 1000 sampled vertices: about 1 where noise dominates the residuals, near 0 where the "
+                   "surface's own shape (coarse sampling, strong curvature) does. It tells a noise-free coarse "
+                   "mesh from a noisy one, which the noise measure alone confuses." + axis("residual_ratio")),
         FeatureRow("Valence spread", f"{f.valence_sd:.2f}",
                    "Standard deviation of the vertex valence off the border: 0 on a regular grid, a little above "
-                   "on a geodesic sphere, larger on a scan. One of the table's axes: which calls win changes "
-                   "with the kind of tessellation."),
+                   "on a geodesic sphere, larger on a scan." + axis("valence_sd")),
         FeatureRow("Curvature spread", f"{f.curvature_spread:.2f}",
                    f"Interquartile range of log(|k1| + |k2|) of the same fit ({fit}): 0 on a sphere, larger where "
-                   "the surface bends unevenly. One of the table's axes."),
+                   "the surface bends unevenly." + axis("curvature_spread")),
+        FeatureRow("Anisotropy", f"{f.anisotropy:.2f}",
+                   f"Median of (k1 - k2) / (|k1| + |k2|) of the same fit ({fit}): 0 where the surface is umbilic "
+                   "(a sphere), up to 1 where it bends one way only (a cylinder)." + axis("anisotropy")),
         FeatureRow("Border", f"{percent_text(f.border_share)} of the vertices",
                    "Share of the vertices on a border. Border vertices are invalid for every estimator; the "
-                   f"closed-ring estimators ({closed}) also lose every vertex whose support reaches one."),
+                   f"closed-ring estimators ({closed}) also lose every vertex whose support reaches one."
+                   + axis("border_share")),
         FeatureRow("Polygons", polygon_text(f.polygon_kinds),
                    "Face sizes. On a mesh with other polygons than triangles the triangle-only estimators "
                    "are left out of the ranking."),

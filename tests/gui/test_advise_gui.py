@@ -71,6 +71,8 @@ def test_advise_runs_in_the_background_and_fills_the_panel(qtbot, window, ui):
     assert values["Polygons"] == f"{f.polygon_kinds[3]} triangles"
     assert values["Vertices"].startswith("817 ")
     assert values["Valence spread"] == f"{f.valence_sd:.2f}" and values["Curvature spread"] == f"{f.curvature_spread:.2f}"
+    assert values["Anisotropy"] == f"{f.anisotropy:.2f}"
+    assert values["Model residual"].startswith(f"{f.residual_ratio:.2g} ") and 0.2 < f.residual_ratio < 1.5  # noisy
     assert all(label.toolTip() for label in panel.feature_values.values())
     assert all(label.toolTip() for label in panel.feature_labels.values())
 
@@ -321,9 +323,18 @@ def test_ranking_rows_mark_exactly_the_recommendation():
     first = [r.expected_erel for r in rows if r.valid_share >= rows[0].valid_share - 0.02]
     assert [r.expected_erel for r in rows[: len(first)]] == sorted(first)
     labels = [f.label for f in feature_rows(advice.features)]
-    assert labels == list(FEATURE_LABELS) == ["Irregularity", "Noise", "Density", "Valence spread", "Curvature spread",
-                                               "Border", "Polygons", "Vertices"]
+    assert labels == list(FEATURE_LABELS) == ["Irregularity", "Noise", "Density", "Model residual", "Valence spread",
+                                               "Curvature spread", "Anisotropy", "Border", "Polygons", "Vertices"]
     assert all(f.text and f.tooltip for f in feature_rows(advice.features))
+    # the tooltips say which measures the packaged table predicts with, as the table has it
+    from curv.advice.advisor import kernel_axes, load_table
+
+    axes = {column for column, _how, _scale in kernel_axes(load_table())}
+    tips = {f.label: f.tooltip for f in feature_rows(advice.features)}
+    for label, column in (("Model residual", "residual_ratio"), ("Valence spread", "valence_sd"),
+                          ("Curvature spread", "curvature_spread"), ("Anisotropy", "anisotropy"),
+                          ("Border", "border_share")):
+        assert ("One of the table's axes" in tips[label]) == (column in axes), label
 
 
 def test_snapshot_with_advise_waits_for_the_advice(qtbot, window, ui, tmp_path):
