@@ -291,6 +291,16 @@ def test_samplings_lie_on_the_surface_with_their_truth():
     assert np.abs(np.linalg.norm(noisy.cloud.points, axis=1) - 1).max() > 0.1 * noisy.info["spacing"]
 
 
+def test_a_surface_is_sampled_by_name_too_and_a_bad_one_refused_by_name():
+    by_name = sample_points("sphere", 1000, rng=5)
+    by_object = sample_points(Sphere(), 1000, rng=5)
+    np.testing.assert_array_equal(by_name.cloud.points, by_object.cloud.points)
+    with pytest.raises(ValueError, match="unknown surface 'spere'; choose one of sphere"):
+        sample_points("spere", 1000)
+    with pytest.raises(ValueError, match=r"^Box .*cannot be sampled as points"):
+        sample_points("box", 1000)
+
+
 @pytest.mark.parametrize("method", ["qs", "jet"])
 def test_whole_cloud_in_grid_order_equals_the_points_in_their_own_order(method):
     """A whole cloud is estimated in its grid's cell order (for the cache); every row stays its own point's."""

@@ -114,16 +114,17 @@ def _thin(indices, distances, d):
     return keep
 
 
-def sample_points(surface: Surface, n_points: int, *, sampling: str = "uniform", noise: float = 0.0,
+def sample_points(surface: Surface | str, n_points: int, *, sampling: str = "uniform", noise: float = 0.0,
                   ratio: float = 4.0, with_normals: bool = False, rng=None,
                   fine_vertices: int = 20000) -> SampledPoints:
     """Sample ``surface`` as about ``n_points`` points (module notes) with the exact curvature.
 
     Parameters
     ----------
-    surface : Surface
+    surface : Surface or str
         A smooth analytic surface with ``project`` (Monge patches, sphere, ellipsoid, torus,
-        cylinder).
+        cylinder), or its name in :data:`curv.surfaces.SURFACES` (built with its default
+        parameters, as :func:`curv.surfaces.make_surface` names it).
     n_points : int
         Wanted count (exact for ``"uniform"``, within a few percent otherwise).
     sampling : {"uniform", "blue", "rows"}
@@ -143,8 +144,15 @@ def sample_points(surface: Surface, n_points: int, *, sampling: str = "uniform",
     """
     if sampling not in SAMPLINGS:
         raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}; got {sampling!r}")
+    if isinstance(surface, str):
+        from . import SURFACES
+
+        if surface not in SURFACES:
+            raise ValueError(f"unknown surface {surface!r}; choose one of {', '.join(SURFACES)}")
+        surface = SURFACES[surface]()
     if not hasattr(surface, "project"):
-        raise ValueError(f"{surface.title} cannot be sampled as points (no smooth projection)")
+        name = getattr(surface, "title", type(surface).__name__)
+        raise ValueError(f"{name} cannot be sampled as points (no smooth projection)")
     if noise < 0:
         raise ValueError(f"noise must be >= 0, got {noise}")
     gen = np.random.default_rng(rng)
