@@ -30,6 +30,7 @@ def sphere_points(n: int) -> np.ndarray:
 def main() -> None:
     import curv
     from curv import point_normals as pn
+    from curv.core.jit import run_to_end
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
     method = sys.argv[2] if len(sys.argv) > 2 else "qs"
@@ -52,7 +53,7 @@ def main() -> None:
     border = phase("border radii", lambda: pn.border_radii(cloud))
     r2, spreads = pn._radii(cloud, 2), pn._default_spreads(cloud)
     found = phase("one pass (frames, jet, line checks)",
-                  lambda: pn._run(pn._one_pass(cloud, border, r2, jet=True, spreads=spreads)))
+                  lambda: run_to_end(pn._one_pass(cloud, border, r2, jet=True, spreads=spreads)))
     phase("neighbour graph", lambda: cloud.adjacency)
     phase("orientation", lambda: pn.orient_normals(cloud, found.normal_a))
     phase("coincident points", lambda: cloud.coincident_points)

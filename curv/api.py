@@ -15,7 +15,7 @@ import numpy as np
 from .core.errors import EstimatorError, MeshError
 from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
 from .estimators._pooling import pool_members
-from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, jit_parallel, launch, prange
+from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, jit_parallel, launch, prange, run_to_end
 from .convert import as_mesh
 from .core.mesh import Mesh
 from .core.pointcloud import PointCloud
@@ -140,12 +140,7 @@ def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3
         One per range, in the order of ``ranges``; each one's ``info["seconds"]`` counts from the
         start of the call.
     """
-    gen = iter_estimate_ranges(mesh, method, ranges, **keywords)
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            return stop.value
+    return run_to_end(iter_estimate_ranges(mesh, method, ranges, **keywords))
 
 
 def _iter_estimates(
@@ -682,12 +677,7 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
     MeshError
         A mesh the estimator cannot handle (e.g. quads for a triangle-only estimator).
     """
-    gen = iter_estimate(mesh, method, range, **keywords)
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            return stop.value
+    return run_to_end(iter_estimate(mesh, method, range, **keywords))
 
 
 # the keywords and their defaults are iter_estimate's, written once; help() and editors show them here too

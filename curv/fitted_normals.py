@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .core.jit import run_to_end
 from .estimators.jet import jet_normals
 from .core.mesh import Mesh
 from .geometry.normals import unusable_normal_vertices, vertex_normals
@@ -71,13 +72,8 @@ def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
         reference[bad] = np.nan
     radii = ball_radii(mesh, rng, uses_normals=False)
     on_crease = features is not None and features.any
-    gen = jet_normals(mesh, reference, radii, degree=degree, features=features if on_crease else None)
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            normals, _ = stop.value
-            break
+    normals, _ = run_to_end(jet_normals(mesh, reference, radii, degree=degree,
+                                        features=features if on_crease else None))
     # the jet normal lies within 90 degrees of the PCA axis, which was turned towards the Max
     # normal; a strongly tilted fit may still end up on the other side
     normals[np.einsum("ij,ij->i", normals, reference) < 0] *= -1.0

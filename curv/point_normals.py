@@ -51,7 +51,7 @@ from .estimators._local_fit import slice_bounds
 from .estimators._small_linalg import sym3_eigen
 from .estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
 from .estimators.jet import _scratch as jet_scratch
-from .core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from .core.jit import iter_chunks, jit, jit_parallel, launch, prange, run_to_end, threads
 from .core.knn import GRAPH_NEIGHBOURS, build_grid, grid_gather
 from .geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                             latest_with_mesh, new_queues, new_scratch)
@@ -771,14 +771,6 @@ class PointNormals:
     label: str
 
 
-def _run(gen):
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            return stop.value
-
-
 def _radii(cloud: PointCloud, k, *, uses_normals: bool = False, knn=None) -> np.ndarray:
     rng = resolve(get_spec("jet"), None if knn is not None else k, None, knn)
     return ball_radii(cloud, rng, uses_normals=uses_normals)
@@ -856,7 +848,7 @@ def _frames(cloud: PointCloud):
     """PCA normals and angular gaps at :data:`BORDER_RANGE`, computed once per cloud (read-only)."""
     def build():
         spread_radii = _default_spreads(cloud)
-        found = _run(_one_pass(cloud, border_radii(cloud), spreads=spread_radii))
+        found = run_to_end(_one_pass(cloud, border_radii(cloud), spreads=spread_radii))
         _keep(cloud, found, spread_radii)
         return found.normal_a, found.gap_a
 
@@ -893,7 +885,7 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     # the jet normals at the fits' range (module notes, "One pass"), the default line checks
     spread_radii = _default_spreads(cloud)
     found = latest_with_mesh(cloud, "normals pass", (rng.label, method),
-                             lambda: _run(_one_pass(cloud, border_radii(cloud), radii,
+                             lambda: run_to_end(_one_pass(cloud, border_radii(cloud), radii,
                                                     jet=method == "jet", normals_b=method == "pca",
                                                     spreads=spread_radii)))
     _keep(cloud, found, spread_radii)

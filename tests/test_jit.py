@@ -4,6 +4,7 @@ import importlib
 import sys
 
 import numpy as np
+import pytest
 
 from curv.core import jit as J
 
@@ -67,3 +68,40 @@ def test_each_state_of_the_sources_has_its_own_kernel_cache(tmp_path):
     curv_sources = Path(J.__file__).resolve().parents[1]
     if not J.os.environ.get("NUMBA_CACHE_DIR"):
         assert Path(J.numba.config.CACHE_DIR).name == f"numba-{J.source_fingerprint(curv_sources)}"
+
+
+def test_rescaled_maps_a_parts_fractions_keeps_messages_and_returns_its_value():
+    from curv.core.jit import Progress, rescaled, run_to_end
+
+    closed = []
+
+    def part():
+        try:
+            yield 0.5
+            yield Progress(1.0, "compiling")
+            return "result"
+        finally:
+            closed.append(True)
+
+    def whole():
+        first = yield from rescaled(part(), 0.2, 0.6)
+        second = yield from rescaled(part(), 0.6, 1.0)
+        return first, second
+
+    steps = []
+    gen = whole()
+    while True:
+        try:
+            steps.append(next(gen))
+        except StopIteration as stop:
+            assert stop.value == ("result", "result")
+            break
+    assert steps == pytest.approx([0.4, 0.6, 0.8, 1.0])
+    assert [getattr(s, "message", "") for s in steps] == ["", "compiling", "", "compiling"]
+    assert run_to_end(whole()) == ("result", "result")
+    # a cancelled caller (the viewer closes its generator) closes the part it was in
+    closed.clear()
+    gen = rescaled(part(), 0.0, 1.0)
+    next(gen)
+    gen.close()
+    assert closed == [True]

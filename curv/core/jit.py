@@ -33,8 +33,9 @@ import numba
 from numba import njit
 
 __all__ = [
-    "jit", "jit_parallel", "jit_inlined", "prange", "threads", "launch", "iter_chunks", "thread_slices",
-    "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK", "source_fingerprint",
+    "jit", "jit_parallel", "jit_inlined", "prange", "threads", "launch", "iter_chunks", "run_to_end",
+    "rescaled", "thread_slices", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
+    "source_fingerprint",
 ]
 
 # must be chosen before the first parallel launch of the process
@@ -220,6 +221,31 @@ def iter_chunks(n: int, run: Callable[[int, int], None], *, chunk: int | None = 
             size = max(MIN_CHUNK, min(MAX_CHUNK, 4 * size, wanted))
         lo = hi
         yield start_fraction + span * hi / max(n, 1)
+
+
+def run_to_end(gen: Generator):
+    """Drive a progress generator (an ``iter_*`` function's) to its end and return its value: what
+    the functions without the ``iter_`` prefix do."""
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+
+def rescaled(gen: Generator, start: float, end: float) -> Generator[Progress, None, object]:
+    """``yield from gen`` with its fractions mapped to ``start .. end`` (a part of a larger piece of
+    work), messages kept; returns ``gen``'s value. Closing this closes ``gen``."""
+    span = end - start
+    try:
+        while True:
+            try:
+                done = next(gen)
+            except StopIteration as stop:
+                return stop.value
+            yield Progress(start + span * float(done), getattr(done, "message", ""))
+    finally:
+        gen.close()
 
 
 def compile_pending(kernels: Iterable) -> bool:

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..core.errors import EstimatorError
 from ..core.filled import filled
-from ..core.jit import iter_chunks, jit, jit_inlined, launch, threads
+from ..core.jit import iter_chunks, jit, jit_inlined, launch, rescaled, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
 from ..core.result import Principal
@@ -1115,13 +1115,7 @@ def run_fit_levels(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, kernel, l
         for level in range(count):
             gen = run_fit(mesh, normals, radii[level], kernel, chunk=chunk, centres=centres, features=features,
                           noise_model=noise_model, standard_errors=standard_errors)
-            while True:
-                try:
-                    done = next(gen)
-                except StopIteration as stop:
-                    out.append(stop.value)
-                    break
-                yield (level + done) / count
+            out.append((yield from rescaled(gen, level / count, (level + 1) / count)))
         return out
     n = mesh.n_vertices
     centres = all_centres(n, centres)

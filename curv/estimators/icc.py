@@ -61,7 +61,7 @@ import math
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, run_to_end
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ..core.validity import Reason
@@ -426,12 +426,7 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
         ``H = mu1 / (2 mu0)`` and ``K = mu2 / mu0``; NaN where ``reason`` is not OK.
     reason : (n,) uint8
     """
-    gen = _iter_measures(mesh, normals, radii, None)
-    try:
-        while True:
-            next(gen)
-    except StopIteration as stop:
-        out, mean, gaussian = stop.value
+    out, mean, gaussian = run_to_end(_iter_measures(mesh, normals, radii, None))
     principal, mean, gaussian = out.principal(0), mean[0], gaussian[0]
     bad = principal.reason != Reason.OK
     mean[bad] = np.nan

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.jit import rescaled
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import all_centres, support_sizes
 from ..core.validity import Reason
@@ -197,13 +198,7 @@ def iter_adaptive_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chu
     for j, (fraction, deg, wts) in enumerate(fits):
         gen = iter_jet(mesh, normals, radii * fraction, chunk=chunk, degree=deg, weights=wts, centres=centres,
                        features=features, width="fixed")
-        while True:
-            try:
-                done = next(gen)
-            except StopIteration as stop:
-                results.append(stop.value)
-                break
-            yield (j + done) / len(fits)
+        results.append((yield from rescaled(gen, j / len(fits), (j + 1) / len(fits))))
         # too few residuals for a trustworthy standard error: the candidate sits out at that point
         counts, _ = support_sizes(mesh, radii * fraction, where)
         few.append(where[counts + 1 < POINTS_PER_UNKNOWN * unknowns(deg)])

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Generator
 
+from ..core.jit import run_to_end
 from .executors import open_executor, parallelism, stop_executor
 from .protocol import StudySettings, Task, Variant
 from .store import ResultsFile
@@ -171,12 +172,7 @@ def iter_study(
 
 def run(settings: StudySettings, out_dir, **kwargs) -> Table:
     """Run :func:`iter_study` to the end and return its table (keyword arguments as there)."""
-    gen = iter_study(settings, out_dir, **kwargs)
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            return stop.value
+    return run_to_end(iter_study(settings, out_dir, **kwargs))
 
 
 def select(table: Table, settings: StudySettings) -> Table:
