@@ -69,3 +69,19 @@ def hex_plane(s: int):
     cross = (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]
     tri[cross < 0] = tri[cross < 0][:, ::-1]
     return curv.Mesh(np.column_stack([pts, np.zeros(len(pts))]), tri)
+
+
+def noisy_torus(n_major: int, n_minor: int, *, scale: float = 0.03, seed: int = 0) -> curv.Mesh:
+    """:func:`torus_grid` with Gaussian vertex noise of standard deviation ``scale`` (mesh units)."""
+    mesh = torus_grid(n_major, n_minor)[0]
+    rng = np.random.default_rng(seed)
+    return curv.Mesh(mesh.vertices + rng.normal(scale=scale, size=mesh.vertices.shape), mesh.faces)
+
+
+def paraboloid_patch(s: int) -> curv.Mesh:
+    """The saddle-like cap z = 0.4 x² - 0.25 y² over :func:`hex_plane` (s): borders, and supports that
+    reach them at the larger ranges."""
+    flat = hex_plane(s)
+    v = flat.vertices.copy()
+    v[:, 2] = 0.4 * v[:, 0] ** 2 - 0.25 * v[:, 1] ** 2
+    return curv.Mesh(v, flat.faces)

@@ -9,23 +9,17 @@ import curv
 from curv.api import estimate_ranges
 from curv.core.errors import EstimatorError
 from creased_meshes import box
-from meshes import hex_plane, icosphere, torus_grid
+from meshes import icosphere, noisy_torus, paraboloid_patch
 
 RANGES = (3, 1, 4, 2.5, 2)
 
 
 def _noisy_torus():
-    mesh = torus_grid(36, 16)[0]
-    rng = np.random.default_rng(4)
-    return curv.Mesh(mesh.vertices + rng.normal(scale=0.03, size=mesh.vertices.shape), mesh.faces)
+    return noisy_torus(36, 16, seed=4)
 
 
 def _open_patch():
-    # a paraboloid cap over a hexagon: borders, and supports that reach them at the larger ranges
-    flat = hex_plane(12)
-    v = flat.vertices.copy()
-    v[:, 2] = 0.4 * v[:, 0] ** 2 - 0.25 * v[:, 1] ** 2
-    return curv.Mesh(v, flat.faces)
+    return paraboloid_patch(12)
 
 
 MESHES = {"sphere": lambda: icosphere(3), "noisy torus": _noisy_torus, "open patch": _open_patch}

@@ -8,7 +8,7 @@ import pytest
 
 import curv
 from curv.api import estimate_ranges
-from meshes import hex_plane, icosphere, torus_grid
+from meshes import hex_plane, icosphere, noisy_torus, paraboloid_patch
 
 FITS = ("nc", "qs", "an", "mru", "jet")
 RANGES = {"nc": (3, 1, 4, 2.5, 2), "qs": (3, 1, 4, 2.5, 2), "an": (3, 4, 2.5, 2), "mru": (3, 4, 2.5, 2),
@@ -16,16 +16,11 @@ RANGES = {"nc": (3, 1, 4, 2.5, 2), "qs": (3, 1, 4, 2.5, 2), "an": (3, 4, 2.5, 2)
 
 
 def _noisy_torus():
-    mesh = torus_grid(30, 14)[0]
-    rng = np.random.default_rng(7)
-    return curv.Mesh(mesh.vertices + rng.normal(scale=0.03, size=mesh.vertices.shape), mesh.faces)
+    return noisy_torus(30, 14, seed=7)
 
 
 def _open_patch():
-    flat = hex_plane(10)
-    v = flat.vertices.copy()
-    v[:, 2] = 0.4 * v[:, 0] ** 2 - 0.25 * v[:, 1] ** 2
-    return curv.Mesh(v, flat.faces)
+    return paraboloid_patch(10)
 
 
 MESHES = {"sphere": lambda: icosphere(3), "noisy torus": _noisy_torus, "open patch": _open_patch}
