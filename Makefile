@@ -10,7 +10,7 @@ DEB_PKGS := xvfb xauth libgl1 libegl1 libglx-mesa0 libgl1-mesa-dri libxkbcommon-
 	libxcb-xinerama0 libxcb-xinput0 libxcb-xfixes0 libxrender1 libxi6 libdbus-1-3 libfontconfig1 \
 	libxt6 libsm6 libice6
 
-.PHONY: run test test-all venv sysdeps bench bench-viewer study-quick clean
+.PHONY: run test test-all venv warm sysdeps bench bench-viewer study-quick clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -19,6 +19,11 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 venv: $(STAMP)
+
+# numba compiles each kernel on first use; compile them here, once per state of the sources, so
+# the viewer's first estimate does not wait for it (a failure only means they compile on first use)
+warm: venv
+	@$(PY) -m curv.warmup --if-needed || echo "curvlab: warm-up failed; kernels will compile on first use"
 
 sysdeps:
 	@missing=$$(for p in $(DEB_PKGS); do dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; done); \
@@ -32,16 +37,16 @@ sysdeps:
 		fi; \
 	fi
 
-run: sysdeps venv
+run: sysdeps venv warm
 	@if [ -z "$$DISPLAY" ] && [ -z "$$WAYLAND_DISPLAY" ]; then \
 		echo "no display: running the viewer under xvfb-run"; \
 		xvfb-run -a -s '-screen 0 1600x1000x24' $(VENV)/bin/curvlab $(ARGS); \
 	else $(VENV)/bin/curvlab $(ARGS); fi
 
-test: sysdeps venv
+test: sysdeps venv warm
 	$(PY) -m pytest -q $(PYTEST_ARGS)
 
-test-all: sysdeps venv
+test-all: sysdeps venv warm
 	$(PY) -m pytest -q -m '' $(PYTEST_ARGS)
 
 bench: venv
