@@ -565,9 +565,9 @@ class Mesh(PointSet):
         from .features import SHARP_DEGREES
 
         indptr, corners = self.vertex_corners
-        counts = _kernels.edge_counts(indptr, corners, self._indices, self.corner_next, self.corner_prev,
-                                      self.corner_face, self.face_vector_areas, self.face_areas,
-                                      self.degenerate_faces, SHARP_DEGREES)
+        corner_face = _NO_STEPS[0] if self.is_triangular else self.corner_face
+        counts = _kernels.edge_counts(indptr, corners, self._indices, *self.corner_steps, corner_face,
+                                      self.face_vector_areas, self.face_areas, self.degenerate_faces, SHARP_DEGREES)
         loops = 0
         if counts["border"]:
             be = self.edges[self.border_edges]
