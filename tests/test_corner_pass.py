@@ -114,3 +114,30 @@ def test_grouping_by_vertex_is_a_stable_sort(h, n):
     indptr, items = connectivity.group_corners(keys, n)
     assert np.array_equal(items, np.argsort(keys, kind="stable"))
     assert np.array_equal(indptr, np.concatenate([[0], np.cumsum(np.bincount(keys, minlength=n))]))
+
+
+def _hinges(degrees: np.ndarray) -> curv.Mesh:
+    """One pair of triangles per angle, sharing an edge along x, their normals ``degrees`` apart."""
+    v, f = [], []
+    for i, angle in enumerate(np.radians(degrees)):
+        o = 3.0 * i
+        v += [[o, 0, 0], [o + 1, 0, 0], [o + 0.5, 1, 0], [o + 0.5, -np.cos(angle), np.sin(angle)]]
+        f += [[4 * i, 4 * i + 1, 4 * i + 2], [4 * i + 1, 4 * i, 4 * i + 3]]
+    return curv.Mesh(np.array(v), np.array(f))
+
+
+def test_edge_counts_sharp_near_the_threshold_and_beyond_a_right_angle():
+    # the report's edge walk clears most edges by a test without atan2: its count must be what the
+    # angles say, at the threshold (within rounding of it) and where the normals point apart (> 90 degrees)
+    from curv.core.features import SHARP_DEGREES
+
+    sweep = SHARP_DEGREES + np.concatenate([np.linspace(-10, 10, 81), [-1e-9, -1e-12, 0, 1e-12, 1e-9],
+                                            np.linspace(50, 150, 21)])
+    mesh = _hinges(sweep)
+    angles = mesh.dihedral_angles[mesh.edge_face_count == 2]
+    assert np.allclose(np.sort(angles), np.sort(sweep), atol=1e-6)
+    indptr, corners = mesh.vertex_corners
+    for threshold in (SHARP_DEGREES, 0.5 * SHARP_DEGREES, 100.0):
+        counts = connectivity.edge_counts(indptr, corners, mesh.face_indices, *mesh.corner_steps, np.empty(0, np.int32),
+                                          mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, threshold)
+        assert counts["sharp"] == int((angles > threshold).sum())

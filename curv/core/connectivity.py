@@ -167,11 +167,11 @@ def _upper_halfedges(u, corners_u, indices, corner_next, corner_prev, key, halfe
     k = 0
     for i in range(corners_u.size):
         c = corners_u[i]
-        w = indices[corner_next[c]]
+        w = indices[next_corner(c, corner_next)]
         if w > u:  # leaving u: u -> w
             key[k], halfedge[k] = 2 * w, c
             k += 1
-        h = corner_prev[c]
+        h = prev_corner(c, corner_prev)
         w = indices[h]
         if w > u:  # arriving at u: w -> u
             key[k], halfedge[k] = 2 * w + 1, h
@@ -208,6 +208,7 @@ def _walk_edges(ring, width, parts, low_edges, table, shape, totals):
         edge_start, edges, halfedge_edge, face_count, edge_faces, edge_halfedges, forward_count = table
     if shape is not None:
         vector_area, area, degenerate, sharp_angle = shape
+        within2 = _within_squared(sharp_angle)
     n = indptr.size - 1
     for t in prange(parts):
         key, halfedge = np.empty(width, np.int64), np.empty(width, np.int64)
@@ -231,7 +232,7 @@ def _walk_edges(ring, width, parts, low_edges, table, shape, totals):
                         h = halfedge[j]
                         halfedge_edge[h] = e
                         if j - start < 2:
-                            edge_faces[e, j - start] = corner_face[h]
+                            edge_faces[e, j - start] = _face_of(h, corner_face)
                             edge_halfedges[e, j - start] = h
                         forward_count[e] += 1 - (key[j] & 1)
                 if totals is not None:  # the counts of EDGE_COUNTS
@@ -243,8 +244,9 @@ def _walk_edges(ring, width, parts, low_edges, table, shape, totals):
                     else:
                         if (key[start] & 1) == (key[start + 1] & 1):  # both run the same way
                             counted[3] += 1
-                        f, g = corner_face[halfedge[start]], corner_face[halfedge[start + 1]]
-                        if shape is not None and not (degenerate[f] or degenerate[g]):
+                        f, g = _face_of(halfedge[start], corner_face), _face_of(halfedge[start + 1], corner_face)
+                        if (shape is not None and not (degenerate[f] or degenerate[g])
+                                and not _clearly_within(vector_area, f, g, within2)):
                             # the unit normals as Mesh.face_normals divides them, without that (m, 3) array
                             af, ag = area[f], area[g]
                             nf = (vector_area[f, 0] / af, vector_area[f, 1] / af, vector_area[f, 2] / af)
@@ -795,6 +797,42 @@ def _angle_between(a, b):
     return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * (180.0 / math.pi)
 
 
+SHARP_TEST_MARGIN = 1e-6
+"""The quick test of :func:`_clearly_within` clears an edge only below ``(1 - this)`` of the squared
+tangent of the sharp angle: far above the rounding of either computation of the angle."""
+
+
+@jit
+def _within_squared(sharp_angle):
+    """The bound of :func:`_clearly_within` for ``sharp_angle`` degrees: ``tan^2`` of it less the margin,
+    or -1 (no quick test) outside (0, 90) degrees, where the tangent does not grow with the angle."""
+    if not 0.0 < sharp_angle < 90.0:
+        return -1.0
+    t = math.tan(sharp_angle * (math.pi / 180.0))
+    return t * t * (1.0 - SHARP_TEST_MARGIN)
+
+
+@jit
+def _clearly_within(vector_area, f, g, within2):
+    """Whether the normals of faces f and g (rows of ``vector_area``, not degenerate) are clearly less
+    than the sharp angle apart, from ``|a x b|^2 < within2 (a . b)^2``: no division, root or ``atan2``
+    for the many edges of a smooth surface; the others take :func:`_angle_between` (the same count)."""
+    ax, ay, az = vector_area[f, 0], vector_area[f, 1], vector_area[f, 2]
+    bx, by, bz = vector_area[g, 0], vector_area[g, 1], vector_area[g, 2]
+    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    dot = ax * bx + ay * by + az * bz
+    return dot > 0.0 and cx * cx + cy * cy + cz * cz < within2 * dot * dot
+
+
+@jit
+def _face_of(c, corner_face):
+    """The face of corner c: ``corner_face[c]``, or ``c // 3`` when ``corner_face`` is empty (a triangle mesh,
+    as :func:`next_corner`)."""
+    if corner_face.size:
+        return np.int64(corner_face[c])
+    return c // 3
+
+
 @jit
 def _dihedral(face_normals, f, g):
     """Degrees between the unit normals of faces f and g (rows of ``face_normals``)."""
@@ -890,7 +928,10 @@ def edge_counts(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     ----------
     indptr, corners : (n + 1,), (h,) int64
         Corners grouped by vertex.
-    indices, corner_next, corner_prev, corner_face : (h,) int64
+    indices : (h,) int64
+    corner_next, corner_prev, corner_face : (h,) int32 or int64, or all three empty
+        Empty on a triangle mesh: its corners and faces follow by arithmetic (:func:`next_corner`),
+        so the report builds neither the corner links nor the corner-to-face array.
     vector_area, area, degenerate : (m, 3) float64, (m,) float64, (m,) bool
         :attr:`Mesh.face_vector_areas`, :attr:`Mesh.face_areas`, :attr:`Mesh.degenerate_faces`: the unit
         normal is their quotient, none at a degenerate face (as :attr:`Mesh.face_normals`).

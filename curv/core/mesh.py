@@ -101,8 +101,14 @@ def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
         if f.size and not np.issubdtype(f.dtype, np.integer):
             if not np.all(np.mod(f, 1) == 0):
                 raise MeshError("face indices must be integers")
+        low = f.min() if f.size else -1
+        if low >= 0 and f.shape[1] >= 3 and f.max() < n_vertices:
+            # the usual input, a plain (m, k) array of valid indices: no padding mask, no sizes to add up
+            # and one pass for each bound, read from the caller's (often int32) array before the copy
+            m, k = f.shape
+            return f.astype(np.int64).reshape(-1), np.arange(0, m * k + 1, k, dtype=np.int64)
         f = f.astype(np.int64)
-        if f.size and f.min() >= 0:  # no padding: every row is a whole polygon (no mask to build)
+        if f.size and low >= 0:  # no padding: every row is a whole polygon (no mask to build)
             sizes = np.full(f.shape[0], f.shape[1], np.int64)
             indices = f.reshape(-1)
         else:
@@ -565,9 +571,9 @@ class Mesh(PointSet):
         from .features import SHARP_DEGREES
 
         indptr, corners = self.vertex_corners
-        counts = _kernels.edge_counts(indptr, corners, self._indices, self.corner_next, self.corner_prev,
-                                      self.corner_face, self.face_vector_areas, self.face_areas,
-                                      self.degenerate_faces, SHARP_DEGREES)
+        corner_face = _NO_STEPS[0] if self.is_triangular else self.corner_face
+        counts = _kernels.edge_counts(indptr, corners, self._indices, *self.corner_steps, corner_face,
+                                      self.face_vector_areas, self.face_areas, self.degenerate_faces, SHARP_DEGREES)
         loops = 0
         if counts["border"]:
             be = self.edges[self.border_edges]
