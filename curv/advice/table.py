@@ -100,6 +100,11 @@ measured with the base table's calibration; the kernel is refitted by leave-one-
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
 and a rerun over a finished directory only refits the calibration and the kernel (seconds).
+
+Last, the anisotropy axis became logarithmic (:data:`EXTRA_TRANSFORMS`) and the axes were chosen
+again over the packaged table's stored points (nothing measured or run; 579 s wall at niceness 10)::
+
+    python -m curv.advice.table reselect
 """
 
 from __future__ import annotations
@@ -967,13 +972,15 @@ EXTRA_COLUMNS = ("border_share", "edge_cv", "valence_sd", "anisotropy", "curvatu
 """Point columns beyond the base three: the open/closed distinction, the shape and tessellation
 measures of :class:`curv.advice.advisor.MeshFeatures`, the uncalibrated noise measure and the
 residual measures that tell model error from noise, candidates for further kernel axes."""
-EXTRA_TRANSFORMS = {"border_share": "sqrt", "noise_raw": "log", "noise_raw4": "log"}
+EXTRA_TRANSFORMS = {"border_share": "sqrt", "noise_raw": "log", "noise_raw4": "log", "anisotropy": "log"}
 """Axis transforms of the extra columns (default linear): a border share spans 0 (closed) to a
 fifth (the coarsest patch), and its square root separates the small shares of dense patches from
 a closed surface; the raw noise measure spans five decades (a noise-free dense patch's quadric
 misses its neighbours by a few millionths of an edge, a noisy coarse one by a tenth), and its
 logarithm keeps what the calibrated noise level clips to zero: a thousandth of the paper's level
-on a dense mesh, or the noise a coarse mesh's density term swallows."""
+on a dense mesh, or the noise a coarse mesh's density term swallows. The anisotropy's logarithm
+tells a noise-free ellipsoid (0.07 and up) from a noise-free sphere (0.001): on a linear axis the
+two stood within one bandwidth and the spheres' exact calls were advised on ellipsoids."""
 AXIS_WEIGHTS = (0.5, 1.0, 2.0)
 """Weights tried for an extra axis (its scale is its standard deviation over the table divided by
 the weight: 2 makes it count twice as much as a base axis)."""
@@ -1126,15 +1133,52 @@ def refeature_table(table: dict, rows: dict, *, command: str = "", progress=None
         pts.append([r["density"], noise / NOISE_FRACTION, calibrate_irregularity(r["irregularity_raw_deg"], noise, cal),
                     *(r[c] for c in EXTRA_COLUMNS)])
     pts = np.array(pts, float)
-    erel = np.array(table["median_erel"], float)
-    kernel = select_axes(pts, columns, erel, [surface_groups(keys), noise_groups(keys)], progress=progress,
-                         note="the mean of two grouped leave-one-outs: each mesh advised from the other surfaces "
-                              "(its random surface at every density, irregularity and noise level left out), and "
-                              "from all but its twins at the other noise levels")
     meta = dict(table["metadata"])
     meta.update(refeature_command=command, created=time.strftime("%Y-%m-%d %H:%M:%S %Z"))
-    return {**table, "kernel": kernel, "metadata": meta, "columns": columns,
-            "points": [[_round(x, POINT_DIGITS) for x in p] for p in pts]}
+    return {**table, "kernel": _grouped_selection(table, pts, columns, progress), "metadata": meta,
+            "columns": columns, "points": [[_round(x, POINT_DIGITS) for x in p] for p in pts]}
+
+
+def _grouped_selection(table: dict, pts: np.ndarray, columns, progress) -> dict:
+    """The kernel :func:`select_axes` chooses over ``table``'s meshes at ``pts`` (``(p, c)``, the
+    point columns ``columns``), scored by the mean of the by-surface and by-noise-level groupings."""
+    keys = table["truth"]["key"]
+    return select_axes(pts, columns, np.array(table["median_erel"], float), [surface_groups(keys), noise_groups(keys)],
+                       progress=progress,
+                       note="the mean of two grouped leave-one-outs: each mesh advised from the other surfaces "
+                            "(its random surface at every density, irregularity and noise level left out), and "
+                            "from all but its twins at the other noise levels")
+
+
+def reselect_table(table: dict, *, command: str = "", progress=None) -> dict:
+    """``table`` with the kernel chosen again (:func:`select_axes`) over its stored point columns,
+    nothing measured: for a change of the selection's rules (e.g. an axis transform,
+    :data:`EXTRA_TRANSFORMS`). The points are the stored ones (:data:`POINT_DIGITS` significant digits)."""
+    pts = np.array([[np.nan if x is None else x for x in p] for p in table["points"]], float)
+    meta = dict(table["metadata"])
+    meta.update(reselect_command=command, created=time.strftime("%Y-%m-%d %H:%M:%S %Z"))
+    return {**table, "kernel": _grouped_selection(table, pts, table["columns"], progress), "metadata": meta}
+
+
+def reselect_main(argv) -> int:
+    """``python -m curv.advice.table reselect``: choose the kernel's axes again over a table's stored
+    points (no mesh is built or measured)."""
+    parser = argparse.ArgumentParser(prog="python -m curv.advice.table reselect", description=reselect_main.__doc__)
+    parser.add_argument("--table", default=str(DEFAULT_OUT), help="table to reselect; default the packaged one")
+    parser.add_argument("--out", default=str(DEFAULT_OUT))
+    args = parser.parse_args(argv)
+    with open(args.table) as fh:
+        table = json.load(fh)
+    t0 = time.perf_counter()
+    out = reselect_table(table, command="python -m curv.advice.table reselect " + " ".join(argv),
+                         progress=lambda t: print(t, flush=True))
+    out["metadata"]["reselect_seconds"] = round(time.perf_counter() - t0, 1)
+    with open(args.out, "w") as fh:
+        json.dump(out, fh, separators=(",", ":"))
+    k = out["kernel"]
+    print(f"wrote {args.out}: axes {[a[0] for a in k['axes']]}, bandwidth {k['bandwidth']} "
+          f"(grouped LOO mean regret {k['loo_mean_regret'][str(k['bandwidth'])]})", flush=True)
+    return 0
 
 
 def refeature_main(argv) -> int:
@@ -1186,6 +1230,8 @@ def main(argv=None) -> int:
         return fill_main(argv[1:])
     if argv[:1] == ["refeature"]:
         return refeature_main(argv[1:])
+    if argv[:1] == ["reselect"]:
+        return reselect_main(argv[1:])
     parser = argparse.ArgumentParser(prog="python -m curv.advice.table", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="table to write; default the packaged one")
     parser.add_argument("--work", default="advisor-study", help="study directory (resumes); default ./advisor-study")
