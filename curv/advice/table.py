@@ -1160,6 +1160,16 @@ def reselect_table(table: dict, *, command: str = "", progress=None) -> dict:
     return {**table, "kernel": _grouped_selection(table, pts, table["columns"], progress), "metadata": meta}
 
 
+def _write_selected(table: dict, path) -> int:
+    """Write a table whose axes were just chosen and say which (the end of ``refeature`` and ``reselect``)."""
+    with open(path, "w") as fh:
+        json.dump(table, fh, separators=(",", ":"))
+    k = table["kernel"]
+    print(f"wrote {path}: axes {[a[0] for a in k['axes']]}, bandwidth {k['bandwidth']} "
+          f"(grouped LOO mean regret {k['loo_mean_regret'][str(k['bandwidth'])]})", flush=True)
+    return 0
+
+
 def reselect_main(argv) -> int:
     """``python -m curv.advice.table reselect``: choose the kernel's axes again over a table's stored
     points (no mesh is built or measured)."""
@@ -1173,12 +1183,7 @@ def reselect_main(argv) -> int:
     out = reselect_table(table, command="python -m curv.advice.table reselect " + " ".join(argv),
                          progress=lambda t: print(t, flush=True))
     out["metadata"]["reselect_seconds"] = round(time.perf_counter() - t0, 1)
-    with open(args.out, "w") as fh:
-        json.dump(out, fh, separators=(",", ":"))
-    k = out["kernel"]
-    print(f"wrote {args.out}: axes {[a[0] for a in k['axes']]}, bandwidth {k['bandwidth']} "
-          f"(grouped LOO mean regret {k['loo_mean_regret'][str(k['bandwidth'])]})", flush=True)
-    return 0
+    return _write_selected(out, args.out)
 
 
 def refeature_main(argv) -> int:
@@ -1214,12 +1219,7 @@ def refeature_main(argv) -> int:
     out = refeature_table(table, rows, command=command, progress=lambda t: print(t, flush=True))
     out["metadata"]["refeature_seconds"] = round(time.perf_counter() - t0, 1)
     out["metadata"]["refeature_cpu_seconds_main_process"] = round(time.process_time() - c0, 1)
-    with open(args.out, "w") as fh:
-        json.dump(out, fh, separators=(",", ":"))
-    k = out["kernel"]
-    print(f"wrote {args.out}: axes {[a[0] for a in k['axes']]}, bandwidth {k['bandwidth']} "
-          f"(grouped LOO mean regret {k['loo_mean_regret'][str(k['bandwidth'])]})", flush=True)
-    return 0
+    return _write_selected(out, args.out)
 
 
 def main(argv=None) -> int:
