@@ -735,11 +735,11 @@ def test_the_selection_leaves_out_an_axis_that_only_names_the_surface():
     wins = rng.random(surfaces)[surf] < 0.5  # which variant wins: a property of the surface only
     points = np.c_[np.exp(rng.uniform(-4, -1, p)), rng.uniform(0, 1, p), rng.uniform(0, 30, p), name]
     erel = np.where(wins[:, None], [0.01, 0.05], [0.05, 0.01]) * np.exp(rng.normal(0, 0.1, (p, 2)))
-    cols = ["density", "noise_level", "irregularity_deg", "anisotropy"]
+    cols = ["density", "noise_level", "irregularity_deg", "valence_sd"]  # a column on a linear axis
     by_mesh = select_axes(points, cols, erel, np.arange(p))
     by_surface = select_axes(points, cols, erel, surf)
-    assert "anisotropy" in [a[0] for a in by_mesh["axes"]]
-    assert "anisotropy" not in [a[0] for a in by_surface["axes"]]
+    assert "valence_sd" in [a[0] for a in by_mesh["axes"]]
+    assert "valence_sd" not in [a[0] for a in by_surface["axes"]]
     both = select_axes(points, cols, erel, [surf, np.arange(p)])  # the score is the mean of the two
     step = both["selection"][0]["loo_mean_regret"]
     one = [select_axes(points, cols[:3], erel, g)["selection"][0]["loo_mean_regret"] for g in (surf, np.arange(p))]
