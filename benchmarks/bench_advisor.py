@@ -7,6 +7,7 @@ Run by hand (not part of the test suite)::
     .venv/bin/python benchmarks/bench_advisor.py --meshes 60 --seed 2000 --workers 2 --runs runs2000.json
     .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
     .venv/bin/python benchmarks/bench_advisor.py --refeature old.json --runs new.json  # add the residual measures to old runs
+    .venv/bin/python benchmarks/bench_advisor.py --twin-bound [--table other.json]    # the table's own bound, no runs
 
 Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000; the table's study
 uses seed 0) and at settings between and beyond the table's grid points: noise level 0 for
@@ -35,7 +36,10 @@ of the paper's level) and the irregularity estimate to the 3D irregularity of th
 noise (what the noise correction should recover) and to the planar irregularity the patch was made
 with. ``--rescore`` re-advises the meshes of a ``--runs`` file from their stored raw measures with
 another table (the estimators' errors do not depend on the table): it compares tables on the
-same held-out meshes in a second, and must not be used to tune a table on them.
+same held-out meshes in a second, and must not be used to tune a table on them. ``--twin-bound``
+runs nothing: on the table's own meshes it scores each mesh with the best call of the other random
+surfaces made at its setting (:func:`twin_regrets`), what a rule that knew the setting exactly
+could reach, beside the advisor's leave-one-out.
 """
 
 from __future__ import annotations
@@ -246,6 +250,106 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
     return "\n".join(lines), numbers
 
 
+def setting_twins(keys) -> list[np.ndarray]:
+    """The table's meshes grouped by setting: one index array per (surface kind, vertex count,
+    irregularity, noise level), its meshes the different random surfaces (a key's seed and sample)
+    made at that setting (keys as in :func:`curv.advice.table.table_mesh`)."""
+    groups: dict = {}
+    for i, k in enumerate(keys):
+        groups.setdefault((k[1], int(k[2]), float(k[3]), float(k[4])), []).append(i)
+    return [np.array(g) for g in groups.values()]
+
+
+def twin_regrets(keys, log_values: np.ndarray) -> dict:
+    """What a rule that knew a mesh's setting exactly, and nothing else, could reach on the table.
+
+    Each mesh is given the best call of another random surface at its setting (its twin) and, in a
+    second reading, the call with the lowest mean log e_rel over all its twins (the best single call
+    for the setting, the mesh itself left out), and in a third over the setting's meshes including
+    itself (the best setting-level rule fitted on these very meshes: optimistic). A call is chosen
+    among those the mesh has a value for (and, pooled, every twin too), as the advisor chooses
+    among the variants a table mesh has; regret is over the best value the mesh has.
+
+    Parameters
+    ----------
+    keys : (p,) sequence of table keys
+    log_values : (p, v) float64
+        log median e_rel, floored as the advisor floors it (NaN where missing).
+
+    Returns
+    -------
+    dict
+        ``pair_mesh`` (q,) int64 and ``pair_regret`` (q,) float64: one entry per (mesh, twin) pair;
+        ``pooled`` and ``in_sample`` (p,) float64: per mesh (NaN where no call is shared).
+    """
+    have = np.isfinite(log_values)
+    best = np.nanmin(np.where(have, log_values, np.nan), axis=1)
+    pair_mesh, pair_regret = [], []
+    pooled = np.full(len(keys), np.nan)
+    in_sample = np.full(len(keys), np.nan)
+
+    def regret(i, score):  # the mesh's error with the call of the lowest score, over its best
+        score = np.where(np.isfinite(score) & have[i], score, np.inf)
+        return np.exp(log_values[i, np.argmin(score)] - best[i]) if np.isfinite(score.min()) else np.nan
+
+    for group in setting_twins(keys):
+        for i in group:
+            twins = group[group != i]
+            for j in twins:
+                pair_mesh.append(i)
+                pair_regret.append(regret(i, log_values[j]))
+            pooled[i] = regret(i, log_values[twins].mean(axis=0))  # NaN where a twin lacks the call
+            in_sample[i] = regret(i, log_values[group].mean(axis=0))
+    return {"pair_mesh": np.array(pair_mesh, np.int64), "pair_regret": np.array(pair_regret),
+            "pooled": pooled, "in_sample": in_sample}
+
+
+def twin_bound_report(table: dict) -> str:
+    """Markdown: the regret of :func:`twin_regrets` on ``table``, overall and per cell family, beside
+    the advisor's own leave-one-out regret with each mesh's random surface left out (its kernel and
+    features, :func:`curv.advice.table.loo_regret` by :func:`curv.advice.table.surface_groups`)."""
+    from curv.advice.advisor import log_erel, table_coordinates
+    from curv.advice.table import loo_regret, surface_groups
+
+    keys = table["truth"]["key"]
+    log_values = log_erel(table)
+    tw = twin_regrets(keys, log_values)
+    points = np.array([[np.nan if x is None else x for x in p] for p in table["points"]], float)
+    loo = loo_regret(table_coordinates(table, *points.T), log_values, table["kernel"]["bandwidth"],
+                     surface_groups(keys))
+    closed = np.array([k[1] in CLOSED for k in keys])
+    n = np.array([k[2] for k in keys])
+    noise = np.array([k[4] for k in keys], float)
+    families = [("all", np.ones(len(keys), bool)), ("Monge patches", ~closed), ("closed surfaces", closed)]
+    for kind, km in (("patches", ~closed), ("closed", closed)):
+        for size, sm in (("< 817 vertices", n < 817), (">= 817 vertices", n >= 817)):
+            for nl, nm in (("noise-free", noise == 0), ("noise 0.015-0.1", (noise > 0) & (noise <= 0.1)),
+                           ("noise 0.2-1", noise > 0.1)):
+                families.append((f"{kind}, {size}, {nl}", km & sm & nm))
+
+    def cells(r):  # p90 / worst / share within 1.3
+        r = r[np.isfinite(r)]
+        return f" {np.percentile(r, 90):.2f} / {r.max():.2f} / {100 * np.mean(r <= 1.3):.0f} % |" if r.size else " |"
+
+    lines = ["Regret p90 / worst / share <= 1.3 (medians in the text):", "",
+             "| table meshes | n | one twin's best call | the twins' pooled best call "
+             "| pooled with the mesh itself | the advisor, its surface left out |",
+             "|---|---|---|---|---|---|"]
+    for label, mask in families:
+        if mask.any():
+            pair = tw["pair_regret"][mask[tw["pair_mesh"]]]
+            lines.append(f"| {label} | {int(mask.sum())} |{cells(pair)}{cells(tw['pooled'][mask])}"
+                         f"{cells(tw['in_sample'][mask])}{cells(loo[mask])}")
+    missing = int(np.sum(~np.isfinite(tw["pooled"])))
+    medians = ", ".join(f"{name} {np.nanmedian(r):.3f}" for name, r in (
+        ("one twin", tw["pair_regret"]), ("pooled twins", tw["pooled"]), ("pooled with itself", tw["in_sample"]),
+        ("advisor", loo)))
+    lines += ["", f"{len(keys)} table meshes in {len(setting_twins(keys))} settings (surface kind, vertex count, "
+              f"irregularity, noise level); regret over the best call each mesh has a value for, errors floored "
+              f"at {table['kernel'].get('erel_floor', 0.0):g}; {missing} meshes without a call shared by all their "
+              f"twins (left out of the pooled columns). Median regret overall: {medians}."]
+    return "\n".join(lines)
+
 def residual_row(setting: dict) -> dict:
     """The residual measures (:func:`curv.advice.advisor.residual_measures`) of a run's mesh, rebuilt
     from its setting (no estimator runs, no score is read)."""
@@ -300,8 +404,13 @@ def main(argv=None) -> int:
                         "instead of running anything (triangle meshes; the estimators' errors are the file's)")
     parser.add_argument("--refeature", metavar="RUNS", help="add the residual measures to the raw measures of a "
                         "--runs file made before they existed (meshes rebuilt, nothing scored) and write it to --runs")
+    parser.add_argument("--twin-bound", action="store_true", help="print what a rule knowing each table mesh's "
+                        "setting could reach: each mesh given its twins' best calls (--table or the packaged one)")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
+    if args.twin_bound:
+        print(twin_bound_report(load_table(args.table)))
+        return 0
     if args.refeature:
         if not args.runs:
             parser.error("--refeature needs --runs (where to write)")
