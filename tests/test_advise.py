@@ -327,6 +327,16 @@ def test_rounding_in_the_table_changes_predictions_by_less_than_a_percent():
 
 
 # ------------------------------------------------------------------ the packaged table
+def test_the_table_commands_name_files_not_the_directories_they_ran_in():
+    import curv.advice.table as at
+
+    assert at.table_command(["--table", "/scratch/a/t.json", "--out", "out/u.json", "--work", "w", "--workers", "1"],
+                            "fill") == "python -m curv.advice.table fill --table t.json --out u.json --work w --workers 1"
+    meta = load_table()["metadata"]
+    commands = [v for k, v in meta.items() if k.endswith("command")] + meta["fill_commands"]
+    assert len(commands) >= 10 and not any("/" in c for c in commands)
+
+
 def test_the_packaged_table_is_what_the_documented_commands_write():
     import curv.advice.table as at
 
