@@ -260,19 +260,22 @@ def setting_twins(keys) -> list[np.ndarray]:
     return [np.array(g) for g in groups.values()]
 
 
-def twin_regrets(keys, log_values: np.ndarray) -> dict:
+def twin_regrets(groups, log_values: np.ndarray) -> dict:
     """What a rule that knew a mesh's setting exactly, and nothing else, could reach on the table.
 
     Each mesh is given the best call of another random surface at its setting (its twin) and, in a
     second reading, the call with the lowest mean log e_rel over all its twins (the best single call
     for the setting, the mesh itself left out), and in a third over the setting's meshes including
-    itself (the best setting-level rule fitted on these very meshes: optimistic). A call is chosen
-    among those the mesh has a value for (and, pooled, every twin too), as the advisor chooses
-    among the variants a table mesh has; regret is over the best value the mesh has.
+    itself (the best setting-level rule fitted on these very meshes: optimistic). The calls admitted
+    are those every mesh of the setting has a value for (every candidate runs on every held-out
+    mesh; in the table some option columns are empty on samples 1 and 2), both for the choice and
+    for the best call the regret divides by.
 
     Parameters
     ----------
-    keys : (p,) sequence of table keys
+    groups : list of (k,) int arrays
+        The meshes of one setting each (:func:`setting_twins`; or the noise draws of one mesh,
+        :func:`noise_draw_report`).
     log_values : (p, v) float64
         log median e_rel, floored as the advisor floors it (NaN where missing).
 
@@ -280,26 +283,28 @@ def twin_regrets(keys, log_values: np.ndarray) -> dict:
     -------
     dict
         ``pair_mesh`` (q,) int64 and ``pair_regret`` (q,) float64: one entry per (mesh, twin) pair;
-        ``pooled`` and ``in_sample`` (p,) float64: per mesh (NaN where no call is shared).
+        ``pooled`` and ``in_sample`` (p,) float64: per mesh (NaN where the setting's meshes share
+        no call).
     """
-    have = np.isfinite(log_values)
-    best = np.nanmin(np.where(have, log_values, np.nan), axis=1)
     pair_mesh, pair_regret = [], []
-    pooled = np.full(len(keys), np.nan)
-    in_sample = np.full(len(keys), np.nan)
-
-    def regret(i, score):  # the mesh's error with the call of the lowest score, over its best
-        score = np.where(np.isfinite(score) & have[i], score, np.inf)
-        return np.exp(log_values[i, np.argmin(score)] - best[i]) if np.isfinite(score.min()) else np.nan
-
-    for group in setting_twins(keys):
+    pooled = np.full(len(log_values), np.nan)
+    in_sample = np.full(len(log_values), np.nan)
+    for group in groups:
+        common = np.isfinite(log_values[group]).all(axis=0)
+        if not common.any():
+            continue
+        values = np.where(common, log_values, np.inf)
         for i in group:
             twins = group[group != i]
+
+            def regret(score):  # the mesh's error with the call of the lowest score, over its best
+                return np.exp(values[i, np.argmin(np.where(common, score, np.inf))] - values[i].min())
+
             for j in twins:
                 pair_mesh.append(i)
-                pair_regret.append(regret(i, log_values[j]))
-            pooled[i] = regret(i, log_values[twins].mean(axis=0))  # NaN where a twin lacks the call
-            in_sample[i] = regret(i, log_values[group].mean(axis=0))
+                pair_regret.append(regret(values[j]))
+            pooled[i] = regret(values[twins].mean(axis=0))
+            in_sample[i] = regret(values[group].mean(axis=0))
     return {"pair_mesh": np.array(pair_mesh, np.int64), "pair_regret": np.array(pair_regret),
             "pooled": pooled, "in_sample": in_sample}
 
@@ -313,7 +318,7 @@ def twin_bound_report(table: dict) -> str:
 
     keys = table["truth"]["key"]
     log_values = log_erel(table)
-    tw = twin_regrets(keys, log_values)
+    tw = twin_regrets(setting_twins(keys), log_values)
     points = np.array([[np.nan if x is None else x for x in p] for p in table["points"]], float)
     loo = loo_regret(table_coordinates(table, *points.T), log_values, table["kernel"]["bandwidth"],
                      surface_groups(keys))
@@ -345,10 +350,72 @@ def twin_bound_report(table: dict) -> str:
         ("one twin", tw["pair_regret"]), ("pooled twins", tw["pooled"]), ("pooled with itself", tw["in_sample"]),
         ("advisor", loo)))
     lines += ["", f"{len(keys)} table meshes in {len(setting_twins(keys))} settings (surface kind, vertex count, "
-              f"irregularity, noise level); regret over the best call each mesh has a value for, errors floored "
-              f"at {table['kernel'].get('erel_floor', 0.0):g}; {missing} meshes without a call shared by all their "
-              f"twins (left out of the pooled columns). Median regret overall: {medians}."]
+              f"irregularity, noise level); regret over the best admitted call, errors floored "
+              f"at {table['kernel'].get('erel_floor', 0.0):g}; the calls admitted: those every mesh of the setting has "
+              f"a value for (the advisor's column: every call the mesh has); {missing} meshes left out (no call "
+              f"shared). Median regret overall: {medians}."]
     return "\n".join(lines)
+
+def noise_draw_errors(args: tuple) -> dict:
+    """Every candidate's median e_rel on a table mesh with a fresh noise draw.
+
+    Parameters
+    ----------
+    args : (key, draw, variants)
+        A table key (:func:`curv.advice.table.table_mesh`), the draw's seed and the candidates: the
+        same surface, tessellation and noise level as the table mesh, the noise drawn from
+        ``[key's seed, 91, draw]`` (evaluated as the held-out meshes are).
+    """
+    from curv.advice.table import evaluated_for_table, table_mesh, variant_errors
+    from curv.study.protocol import NOISE_FRACTION
+
+    key, draw, variants = args
+    seed, name, n, irr, level, sample = key
+    mesh, truth, _ = table_mesh([seed, name, n, irr, 0.0, sample])
+    rng = np.random.default_rng([int(seed), 91, int(draw)])
+    mesh = mesh.with_vertices(mesh.vertices + rng.normal(scale=level * NOISE_FRACTION * mesh.mean_edge_length,
+                                                         size=mesh.vertices.shape))
+    return variant_errors(mesh, truth, evaluated_for_table(mesh), variants)
+
+
+def noise_draw_report(table: dict, n_meshes: int, draws: int, pool, *, seed: int = 5) -> tuple[str, list]:
+    """Markdown: :func:`twin_regrets` over noise draws (:func:`noise_draw_errors`) of ``n_meshes`` noisy
+    table meshes drawn at random (a third of them below 817 vertices, the rest 817-3169; patches and
+    closed surfaces as the table holds them). Two draws differ in nothing a feature of the setting or
+    the surface can see, so their regret is what no advice from such features avoids; and the rows."""
+    from curv.advice.table import option_variants
+
+    variants = list(dict.fromkeys([*table["variants"], *option_variants()]))
+    keys = [k for k in table["truth"]["key"] if k[4] > 0 and k[2] <= 3169]
+    rng = np.random.default_rng(seed)
+    coarse = [k for k in keys if k[2] < 817]
+    dense = [k for k in keys if k[2] >= 817]
+    n_coarse = min(len(coarse), (2 * n_meshes) // 3)
+    pick = [coarse[i] for i in rng.choice(len(coarse), n_coarse, replace=False)] + [
+        dense[i] for i in rng.choice(len(dense), n_meshes - n_coarse, replace=False)]
+    jobs = [(k, d, variants) for k in pick for d in range(draws)]
+    errors = list(pool.map(noise_draw_errors, jobs))
+    rows = [{"key": k, "draw": d, "erel": e} for (k, d, _), e in zip(jobs, errors)]
+    floor = table["kernel"].get("erel_floor", 0.0)
+    E = np.array([[e.get(v, np.nan) for v in variants] for e in errors], float)
+    log_values = np.log(np.where(E > 0, np.maximum(E, floor), np.nan))
+    tw = twin_regrets([np.arange(i * draws, (i + 1) * draws) for i in range(len(pick))], log_values)
+    n = np.repeat([k[2] for k in pick], draws)
+    closed = np.repeat([k[1] in CLOSED for k in pick], draws)
+    lines = [f"| noise draws of a table mesh ({draws} each) | meshes | one other draw's best call "
+             f"| the other draws' pooled best call |", "|---|---|---|---|"]
+    for label, mask in (("all", n > 0), ("patches < 817 vertices", (n < 817) & ~closed),
+                        ("patches 817-3169 vertices", (n >= 817) & ~closed), ("closed < 817 vertices", (n < 817) & closed),
+                        ("closed 817-3169 vertices", (n >= 817) & closed)):
+        if mask.any():
+            pair = tw["pair_regret"][mask[tw["pair_mesh"]]]
+            cells = [f"{np.median(r):.3f} / {np.percentile(r, 90):.2f} / {r.max():.2f} / {100 * np.mean(r <= 1.3):.0f} %"
+                     for r in (pair[np.isfinite(pair)], tw["pooled"][mask][np.isfinite(tw["pooled"][mask])])]
+            lines.append(f"| {label} | {int(mask.sum()) // draws} | {cells[0]} | {cells[1]} |")
+    lines += ["", "Regret median / p90 / worst / share <= 1.3 over every (mesh, draw); the same surface, "
+              "tessellation and noise level, only the noise drawn again."]
+    return "\n".join(lines), rows
+
 
 def residual_row(setting: dict) -> dict:
     """The residual measures (:func:`curv.advice.advisor.residual_measures`) of a run's mesh, rebuilt
@@ -406,10 +473,20 @@ def main(argv=None) -> int:
                         "--runs file made before they existed (meshes rebuilt, nothing scored) and write it to --runs")
     parser.add_argument("--twin-bound", action="store_true", help="print what a rule knowing each table mesh's "
                         "setting could reach: each mesh given its twins' best calls (--table or the packaged one)")
+    parser.add_argument("--noise-draws", type=int, metavar="N", help="with --twin-bound: also run every candidate "
+                        "on 4 fresh noise draws of N noisy table meshes (--runs: where to keep their errors)")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
     if args.twin_bound:
-        print(twin_bound_report(load_table(args.table)))
+        text = twin_bound_report(load_table(args.table))
+        if args.noise_draws:
+            with open_executor(workers=args.workers) as pool:
+                more, rows = noise_draw_report(load_table(args.table), args.noise_draws, 4, pool)
+            if args.runs:
+                Path(args.runs).write_text(json.dumps(rows, default=float))
+            cmd = "benchmarks/bench_advisor.py " + " ".join(sys.argv[1:] if argv is None else argv)
+            text += f"\n\n{more}\n\nCommand: `{cmd}`; {time.perf_counter() - t0:.0f} s wall with {args.workers} workers."
+        print(text)
         return 0
     if args.refeature:
         if not args.runs:
