@@ -8,6 +8,7 @@ Run by hand (not part of the test suite)::
     .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
     .venv/bin/python benchmarks/bench_advisor.py --refeature old.json --runs new.json  # add the residual measures to old runs
     .venv/bin/python benchmarks/bench_advisor.py --twin-bound [--table other.json]    # the table's own bound, no runs
+    .venv/bin/python benchmarks/bench_advisor.py --twin-bound --noise-draws 90 --workers 1 --runs draws.json
 
 Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000; the table's study
 uses seed 0) and at settings between and beyond the table's grid points: noise level 0 for
@@ -39,7 +40,8 @@ another table (the estimators' errors do not depend on the table): it compares t
 same held-out meshes in a second, and must not be used to tune a table on them. ``--twin-bound``
 runs nothing: on the table's own meshes it scores each mesh with the best call of the other random
 surfaces made at its setting (:func:`twin_regrets`), what a rule that knew the setting exactly
-could reach, beside the advisor's leave-one-out.
+could reach, beside the advisor's leave-one-out; with ``--noise-draws`` it also runs every candidate
+on fresh noise draws of table meshes (:func:`noise_draw_report`).
 """
 
 from __future__ import annotations
