@@ -51,3 +51,16 @@ def test_twin_regret_admits_the_calls_every_mesh_of_the_setting_has():
     # gets call 1 (0.2 / 0.1), mesh 1 call 2 over its best admitted call 1 (0.5 / 0.05, not / 0.01)
     np.testing.assert_allclose(tw["pair_regret"], [2.0, 10.0])
     np.testing.assert_allclose(tw["pooled"], [2.0, 10.0])
+
+
+def test_noise_draws_change_the_noise_of_the_table_mesh_and_nothing_else():
+    from curv.advice.table import evaluated_for_table, table_mesh, variant_errors
+
+    bench = _bench()
+    calls = ["nc:R1", "jet:R2"]
+    noisy = [0, "quadratic", 331, 8.0, 0.6, 0]
+    first, again, other = (bench.noise_draw_errors((noisy, d, calls)) for d in (0, 0, 1))
+    assert first == again and all(first[c] != other[c] for c in calls)
+    clean = [0, "quadratic", 331, 8.0, 0.0, 0]
+    mesh, truth, _ = table_mesh(clean)  # at level 0 every draw is the table's noise-free mesh
+    assert bench.noise_draw_errors((clean, 3, calls)) == variant_errors(mesh, truth, evaluated_for_table(mesh), calls)
