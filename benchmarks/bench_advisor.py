@@ -7,6 +7,8 @@ Run by hand (not part of the test suite)::
     .venv/bin/python benchmarks/bench_advisor.py --meshes 60 --seed 2000 --workers 2 --runs runs2000.json
     .venv/bin/python benchmarks/bench_advisor.py --rescore runs.json --table other.json  # another table, same meshes
     .venv/bin/python benchmarks/bench_advisor.py --refeature old.json --runs new.json  # add the residual measures to old runs
+    .venv/bin/python benchmarks/bench_advisor.py --twin-bound [--table other.json]    # the table's own bound, no runs
+    .venv/bin/python benchmarks/bench_advisor.py --twin-bound --noise-draws 90 --workers 1 --runs draws.json
 
 Held-out meshes, drawn from seeds the table never used (``--seed``, default 1000; the table's study
 uses seed 0) and at settings between and beyond the table's grid points: noise level 0 for
@@ -35,7 +37,11 @@ of the paper's level) and the irregularity estimate to the 3D irregularity of th
 noise (what the noise correction should recover) and to the planar irregularity the patch was made
 with. ``--rescore`` re-advises the meshes of a ``--runs`` file from their stored raw measures with
 another table (the estimators' errors do not depend on the table): it compares tables on the
-same held-out meshes in a second, and must not be used to tune a table on them.
+same held-out meshes in a second, and must not be used to tune a table on them. ``--twin-bound``
+runs nothing: on the table's own meshes it scores each mesh with the best call of the other random
+surfaces made at its setting (:func:`twin_regrets`), what a rule that knew the setting exactly
+could reach, beside the advisor's leave-one-out; with ``--noise-draws`` it also runs every candidate
+on fresh noise draws of table meshes (:func:`noise_draw_report`).
 """
 
 from __future__ import annotations
@@ -246,6 +252,173 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
     return "\n".join(lines), numbers
 
 
+def setting_twins(keys) -> list[np.ndarray]:
+    """The table's meshes grouped by setting: one index array per (surface kind, vertex count,
+    irregularity, noise level), its meshes the different random surfaces (a key's seed and sample)
+    made at that setting (keys as in :func:`curv.advice.table.table_mesh`)."""
+    groups: dict = {}
+    for i, k in enumerate(keys):
+        groups.setdefault((k[1], int(k[2]), float(k[3]), float(k[4])), []).append(i)
+    return [np.array(g) for g in groups.values()]
+
+
+def twin_regrets(groups, log_values: np.ndarray) -> dict:
+    """What a rule that knew a mesh's setting exactly, and nothing else, could reach on the table.
+
+    Each mesh is given the best call of another random surface at its setting (its twin) and, in a
+    second reading, the call with the lowest mean log e_rel over all its twins (the best single call
+    for the setting, the mesh itself left out), and in a third over the setting's meshes including
+    itself (the best setting-level rule fitted on these very meshes: optimistic). The calls admitted
+    are those every mesh of the setting has a value for (every candidate runs on every held-out
+    mesh; in the table some option columns are empty on samples 1 and 2), both for the choice and
+    for the best call the regret divides by.
+
+    Parameters
+    ----------
+    groups : list of (k,) int arrays
+        The meshes of one setting each (:func:`setting_twins`; or the noise draws of one mesh,
+        :func:`noise_draw_report`).
+    log_values : (p, v) float64
+        log median e_rel, floored as the advisor floors it (NaN where missing).
+
+    Returns
+    -------
+    dict
+        ``pair_mesh`` (q,) int64 and ``pair_regret`` (q,) float64: one entry per (mesh, twin) pair;
+        ``pooled`` and ``in_sample`` (p,) float64: per mesh (NaN where the setting's meshes share
+        no call).
+    """
+    pair_mesh, pair_regret = [], []
+    pooled = np.full(len(log_values), np.nan)
+    in_sample = np.full(len(log_values), np.nan)
+    for group in groups:
+        common = np.isfinite(log_values[group]).all(axis=0)
+        if not common.any():
+            continue
+        values = np.where(common, log_values, np.inf)
+        for i in group:
+            twins = group[group != i]
+
+            def regret(score):  # the mesh's error with the call of the lowest score, over its best
+                return np.exp(values[i, np.argmin(np.where(common, score, np.inf))] - values[i].min())
+
+            for j in twins:
+                pair_mesh.append(i)
+                pair_regret.append(regret(values[j]))
+            pooled[i] = regret(values[twins].mean(axis=0))
+            in_sample[i] = regret(values[group].mean(axis=0))
+    return {"pair_mesh": np.array(pair_mesh, np.int64), "pair_regret": np.array(pair_regret),
+            "pooled": pooled, "in_sample": in_sample}
+
+
+def twin_bound_report(table: dict) -> str:
+    """Markdown: the regret of :func:`twin_regrets` on ``table``, overall and per cell family, beside
+    the advisor's own leave-one-out regret with each mesh's random surface left out (its kernel and
+    features, :func:`curv.advice.table.loo_regret` by :func:`curv.advice.table.surface_groups`)."""
+    from curv.advice.advisor import log_erel, table_coordinates
+    from curv.advice.table import loo_regret, surface_groups
+
+    keys = table["truth"]["key"]
+    log_values = log_erel(table)
+    tw = twin_regrets(setting_twins(keys), log_values)
+    points = np.array([[np.nan if x is None else x for x in p] for p in table["points"]], float)
+    loo = loo_regret(table_coordinates(table, *points.T), log_values, table["kernel"]["bandwidth"],
+                     surface_groups(keys))
+    closed = np.array([k[1] in CLOSED for k in keys])
+    n = np.array([k[2] for k in keys])
+    noise = np.array([k[4] for k in keys], float)
+    families = [("all", np.ones(len(keys), bool)), ("Monge patches", ~closed), ("closed surfaces", closed)]
+    for kind, km in (("patches", ~closed), ("closed", closed)):
+        for size, sm in (("< 817 vertices", n < 817), (">= 817 vertices", n >= 817)):
+            for nl, nm in (("noise-free", noise == 0), ("noise 0.015-0.1", (noise > 0) & (noise <= 0.1)),
+                           ("noise 0.2-1", noise > 0.1)):
+                families.append((f"{kind}, {size}, {nl}", km & sm & nm))
+
+    def cells(r):  # p90 / worst / share within 1.3
+        r = r[np.isfinite(r)]
+        return f" {np.percentile(r, 90):.2f} / {r.max():.2f} / {100 * np.mean(r <= 1.3):.0f} % |" if r.size else " |"
+
+    lines = ["Regret p90 / worst / share <= 1.3 (medians in the text):", "",
+             "| table meshes | n | one twin's best call | the twins' pooled best call "
+             "| pooled with the mesh itself | the advisor, its surface left out |",
+             "|---|---|---|---|---|---|"]
+    for label, mask in families:
+        if mask.any():
+            pair = tw["pair_regret"][mask[tw["pair_mesh"]]]
+            lines.append(f"| {label} | {int(mask.sum())} |{cells(pair)}{cells(tw['pooled'][mask])}"
+                         f"{cells(tw['in_sample'][mask])}{cells(loo[mask])}")
+    missing = int(np.sum(~np.isfinite(tw["pooled"])))
+    medians = ", ".join(f"{name} {np.nanmedian(r):.3f}" for name, r in (
+        ("one twin", tw["pair_regret"]), ("pooled twins", tw["pooled"]), ("pooled with itself", tw["in_sample"]),
+        ("advisor", loo)))
+    lines += ["", f"{len(keys)} table meshes in {len(setting_twins(keys))} settings (surface kind, vertex count, "
+              f"irregularity, noise level); regret over the best admitted call, errors floored "
+              f"at {table['kernel'].get('erel_floor', 0.0):g}; the calls admitted: those every mesh of the setting has "
+              f"a value for (the advisor's column: every call the mesh has); {missing} meshes left out (no call "
+              f"shared). Median regret overall: {medians}."]
+    return "\n".join(lines)
+
+def noise_draw_errors(args: tuple) -> dict:
+    """Every candidate's median e_rel on a table mesh with a fresh noise draw.
+
+    Parameters
+    ----------
+    args : (key, draw, variants)
+        A table key (:func:`curv.advice.table.table_mesh`), the draw's seed and the candidates: the
+        same surface, tessellation and noise level as the table mesh, the noise drawn from
+        ``[key's seed, 91, draw]`` (evaluated as the held-out meshes are).
+    """
+    from curv.advice.table import evaluated_for_table, table_mesh, variant_errors
+    from curv.study.protocol import NOISE_FRACTION
+
+    key, draw, variants = args
+    seed, name, n, irr, level, sample = key
+    mesh, truth, _ = table_mesh([seed, name, n, irr, 0.0, sample])
+    rng = np.random.default_rng([int(seed), 91, int(draw)])
+    mesh = mesh.with_vertices(mesh.vertices + rng.normal(scale=level * NOISE_FRACTION * mesh.mean_edge_length,
+                                                         size=mesh.vertices.shape))
+    return variant_errors(mesh, truth, evaluated_for_table(mesh), variants)
+
+
+def noise_draw_report(table: dict, n_meshes: int, draws: int, pool, *, seed: int = 5) -> tuple[str, list]:
+    """Markdown: :func:`twin_regrets` over noise draws (:func:`noise_draw_errors`) of ``n_meshes`` noisy
+    table meshes drawn at random (a third of them below 817 vertices, the rest 817-3169; patches and
+    closed surfaces as the table holds them). Two draws differ in nothing a feature of the setting or
+    the surface can see, so their regret is what no advice from such features avoids; and the rows."""
+    from curv.advice.table import option_variants
+
+    variants = list(dict.fromkeys([*table["variants"], *option_variants()]))
+    keys = [k for k in table["truth"]["key"] if k[4] > 0 and k[2] <= 3169]
+    rng = np.random.default_rng(seed)
+    coarse = [k for k in keys if k[2] < 817]
+    dense = [k for k in keys if k[2] >= 817]
+    n_coarse = min(len(coarse), (2 * n_meshes) // 3)
+    pick = [coarse[i] for i in rng.choice(len(coarse), n_coarse, replace=False)] + [
+        dense[i] for i in rng.choice(len(dense), n_meshes - n_coarse, replace=False)]
+    jobs = [(k, d, variants) for k in pick for d in range(draws)]
+    errors = list(pool.map(noise_draw_errors, jobs))
+    rows = [{"key": k, "draw": d, "erel": e} for (k, d, _), e in zip(jobs, errors)]
+    floor = table["kernel"].get("erel_floor", 0.0)
+    E = np.array([[e.get(v, np.nan) for v in variants] for e in errors], float)
+    log_values = np.log(np.where(E > 0, np.maximum(E, floor), np.nan))
+    tw = twin_regrets([np.arange(i * draws, (i + 1) * draws) for i in range(len(pick))], log_values)
+    n = np.repeat([k[2] for k in pick], draws)
+    closed = np.repeat([k[1] in CLOSED for k in pick], draws)
+    lines = [f"| noise draws of a table mesh ({draws} each) | meshes | one other draw's best call "
+             f"| the other draws' pooled best call |", "|---|---|---|---|"]
+    for label, mask in (("all", n > 0), ("patches < 817 vertices", (n < 817) & ~closed),
+                        ("patches 817-3169 vertices", (n >= 817) & ~closed), ("closed < 817 vertices", (n < 817) & closed),
+                        ("closed 817-3169 vertices", (n >= 817) & closed)):
+        if mask.any():
+            pair = tw["pair_regret"][mask[tw["pair_mesh"]]]
+            cells = [f"{np.median(r):.3f} / {np.percentile(r, 90):.2f} / {r.max():.2f} / {100 * np.mean(r <= 1.3):.0f} %"
+                     for r in (pair[np.isfinite(pair)], tw["pooled"][mask][np.isfinite(tw["pooled"][mask])])]
+            lines.append(f"| {label} | {int(mask.sum()) // draws} | {cells[0]} | {cells[1]} |")
+    lines += ["", "Regret median / p90 / worst / share <= 1.3 over every (mesh, draw); the same surface, "
+              "tessellation and noise level, only the noise drawn again."]
+    return "\n".join(lines), rows
+
+
 def residual_row(setting: dict) -> dict:
     """The residual measures (:func:`curv.advice.advisor.residual_measures`) of a run's mesh, rebuilt
     from its setting (no estimator runs, no score is read)."""
@@ -300,8 +473,23 @@ def main(argv=None) -> int:
                         "instead of running anything (triangle meshes; the estimators' errors are the file's)")
     parser.add_argument("--refeature", metavar="RUNS", help="add the residual measures to the raw measures of a "
                         "--runs file made before they existed (meshes rebuilt, nothing scored) and write it to --runs")
+    parser.add_argument("--twin-bound", action="store_true", help="print what a rule knowing each table mesh's "
+                        "setting could reach: each mesh given its twins' best calls (--table or the packaged one)")
+    parser.add_argument("--noise-draws", type=int, metavar="N", help="with --twin-bound: also run every candidate "
+                        "on 4 fresh noise draws of N noisy table meshes (--runs: where to keep their errors)")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
+    if args.twin_bound:
+        text = twin_bound_report(load_table(args.table))
+        if args.noise_draws:
+            with open_executor(workers=args.workers) as pool:
+                more, rows = noise_draw_report(load_table(args.table), args.noise_draws, 4, pool)
+            if args.runs:
+                Path(args.runs).write_text(json.dumps(rows, default=float))
+            cmd = "benchmarks/bench_advisor.py " + " ".join(sys.argv[1:] if argv is None else argv)
+            text += f"\n\n{more}\n\nCommand: `{cmd}`; {time.perf_counter() - t0:.0f} s wall with {args.workers} workers."
+        print(text)
+        return 0
     if args.refeature:
         if not args.runs:
             parser.error("--refeature needs --runs (where to write)")

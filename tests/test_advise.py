@@ -327,6 +327,16 @@ def test_rounding_in_the_table_changes_predictions_by_less_than_a_percent():
 
 
 # ------------------------------------------------------------------ the packaged table
+def test_the_table_commands_name_files_not_the_directories_they_ran_in():
+    import curv.advice.table as at
+
+    assert at.table_command(["--table", "/scratch/a/t.json", "--out", "out/u.json", "--work", "w", "--workers", "1"],
+                            "fill") == "python -m curv.advice.table fill --table t.json --out u.json --work w --workers 1"
+    meta = load_table()["metadata"]
+    commands = [v for k, v in meta.items() if k.endswith("command")] + meta["fill_commands"]
+    assert len(commands) >= 10 and not any("/" in c for c in commands)
+
+
 def test_the_packaged_table_is_what_the_documented_commands_write():
     import curv.advice.table as at
 
@@ -663,10 +673,51 @@ def test_the_packaged_table_has_the_selected_axes_and_the_floor():
     assert [a[0] for a in axes[:3]] == list(BASE_COLUMNS) and {a[0] for a in axes} <= set(table["columns"])
     assert table["kernel"]["erel_floor"] == at.EREL_FLOOR
     doc = " ".join(at.__doc__.replace("\\\n", " ").split())
-    for step in ("fill", "refeature"):
+    for step in ("fill", "refeature", "reselect"):
         cmd = table["metadata"][f"{step}_command"].split()
         assert cmd[:4] == ["python", "-m", "curv.advice.table", step]
         assert f"python -m curv.advice.table {step}" in doc
+
+
+def test_reselection_separates_a_nearly_umbilic_surface_from_an_umbilic_one_by_the_anisotropys_log():
+    """Noise-free spheres (anisotropy about 0.001) and ellipsoids (0.02-0.04) have different winners
+    (the sphere's exact call is far from the best on an ellipsoid); the patches' anisotropies (0.3-1)
+    set the axis's spread, so on a linear axis the two stand within one bandwidth. The reselection
+    (stored points, nothing measured) takes the axis logarithmic and advises the ellipsoids apart."""
+    from curv.advice.table import loo_regret, reselect_table
+    from curv.advice.advisor import table_coordinates
+
+    rng = np.random.default_rng(3)
+    p = 300
+    kind = rng.choice(3, p, p=[0.25, 0.25, 0.5])  # sphere, ellipsoid, patch
+    aniso = np.choose(kind, [rng.uniform(5e-4, 2e-3, p), rng.uniform(0.02, 0.04, p), rng.uniform(0.3, 1.0, p)])
+    points = np.c_[np.exp(rng.uniform(-4, -1, p)), np.zeros(p), rng.uniform(0, 30, p), aniso]
+    best = np.array([[1e-6, 1e-3, 1e-2], [1e-3, 1e-4, 1e-2], [1e-2, 1e-2, 1e-3]])[kind]  # (p, 3): each kind's winner
+    erel = best * np.exp(rng.normal(0, 0.1, (p, 3)))
+    table = {"columns": ["density", "noise_level", "irregularity_deg", "anisotropy"],
+             "points": points.tolist(), "median_erel": erel.tolist(), "metadata": {},
+             "truth": {"key": [[0, "surface", 817, 0.0, 0.0, i] for i in range(p)]}}
+    out = reselect_table(table, command="python -m curv.advice.table reselect")
+    axes = out["kernel"]["axes"]
+    assert axes[-1][:2] == ["anisotropy", "log"]
+    assert out["points"] == table["points"] and out["metadata"]["reselect_command"].endswith("reselect")
+    coords = table_coordinates(out, *points.T)
+    regret = loo_regret(coords, np.log(erel), out["kernel"]["bandwidth"])
+    assert np.percentile(regret[kind == 1], 90) < 1.5
+
+
+def test_a_noise_free_ellipsoid_is_not_advised_the_spheres_exact_call():
+    """nc R1 is exact on a noise-free sphere and 8 times the best error on a noise-free ellipsoid of
+    4400 vertices; the packaged table tells the two apart (its anisotropy axis is logarithmic)."""
+    from curv.advice.table import variant_errors
+
+    for name, params, exact in (("sphere", {}, True), ("ellipsoid", dict(a=1.06, b=1.01, c=0.93), False)):
+        s = make_surface(name, n_vertices=4447, noise=0.0, seed=1, **params)
+        adv = advise(s.mesh)
+        assert (adv.label == "nc R1") == exact
+        if not exact:
+            e = variant_errors(s.mesh, s.truth, np.ones(s.mesh.n_vertices, bool), [adv.best.variant.id, "nc:R1"])
+            assert e[adv.best.variant.id] < e["nc:R1"] / 2
 
 
 def test_surface_groups_hold_one_random_surface_at_every_setting():
@@ -694,11 +745,11 @@ def test_the_selection_leaves_out_an_axis_that_only_names_the_surface():
     wins = rng.random(surfaces)[surf] < 0.5  # which variant wins: a property of the surface only
     points = np.c_[np.exp(rng.uniform(-4, -1, p)), rng.uniform(0, 1, p), rng.uniform(0, 30, p), name]
     erel = np.where(wins[:, None], [0.01, 0.05], [0.05, 0.01]) * np.exp(rng.normal(0, 0.1, (p, 2)))
-    cols = ["density", "noise_level", "irregularity_deg", "anisotropy"]
+    cols = ["density", "noise_level", "irregularity_deg", "valence_sd"]  # a column on a linear axis
     by_mesh = select_axes(points, cols, erel, np.arange(p))
     by_surface = select_axes(points, cols, erel, surf)
-    assert "anisotropy" in [a[0] for a in by_mesh["axes"]]
-    assert "anisotropy" not in [a[0] for a in by_surface["axes"]]
+    assert "valence_sd" in [a[0] for a in by_mesh["axes"]]
+    assert "valence_sd" not in [a[0] for a in by_surface["axes"]]
     both = select_axes(points, cols, erel, [surf, np.arange(p)])  # the score is the mean of the two
     step = both["selection"][0]["loo_mean_regret"]
     one = [select_axes(points, cols[:3], erel, g)["selection"][0]["loo_mean_regret"] for g in (surf, np.arange(p))]

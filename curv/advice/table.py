@@ -25,7 +25,7 @@ Monge patches x 3 samples; plus sphere, ellipsoid and torus at 642, 2562 and 102
 same noise levels x 3 random shapes: 1449 meshes; 28.5 CPU-minutes, 32 minutes wall with 2 workers
 on 2 cores shared with another study run, from scratch)::
 
-    python -m curv.advice.table --work /tmp/advisor-study-3 --workers 2
+    python -m curv.advice.table --work advisor-study-3 --workers 2
 
 Every grid setting is a default (``--samples``, ``--densities``, ``--noise``,
 ``--irregularity``, ``--closed``, ``--closed-vertices`` change them).
@@ -38,7 +38,7 @@ of 217, 331 and 469 vertices, evaluated away from the border at the largest of R
 at least 30 vertices, and sphere, ellipsoid and torus at 162, 252 and 362 vertices, one sample
 each::
 
-    python -m curv.advice.table extend --base base.json --work /tmp/advisor-ext --workers 2
+    python -m curv.advice.table extend --base base.json --work advisor-ext --workers 2
 
 Then the option candidates are run on the closed surfaces of the other two samples too (the closed
 surfaces are few beside the patches; their option columns were empty there), two more random
@@ -49,9 +49,9 @@ anisotropy, curvature spread, saddle share, uncalibrated noise measure; the mesh
 their keys, only the measuring fit runs), which a forward selection by grouped leave-one-out regret
 turns into further kernel axes (:func:`select_axes`)::
 
-    python -m curv.advice.table fill --table extended.json --out filled.json --work /tmp/advisor-fill --workers 2
-    python -m curv.advice.table fill --table filled.json --out coarse.json --kinds --coarse-samples 3 --work /tmp/advisor-coarse --workers 2
-    python -m curv.advice.table refeature --table coarse.json --work /tmp/advisor-refeature --workers 1
+    python -m curv.advice.table fill --table extended.json --out filled.json --work advisor-fill --workers 2
+    python -m curv.advice.table fill --table filled.json --out coarse.json --kinds --coarse-samples 3 --work advisor-coarse --workers 2
+    python -m curv.advice.table refeature --table coarse.json --work advisor-refeature --workers 1
 
 (``base.json``: the base table the first command writes, ``--out base.json``; ``extended.json``
 the second's ``--out``). The fill ran 150 meshes (5036 estimates) in 151 s wall with 2 workers,
@@ -66,9 +66,9 @@ call), closed surfaces of about 480 vertices (between the coarse 362 and the gri
 random shapes, every candidate) are added as rows, and the extra columns and axes are measured and
 chosen again (the rows of the meshes measured before come from the same ``--work``)::
 
-    python -m curv.advice.table fill --table shipped.json --out options.json --kinds quadratic ellipsoid_patch trigonometric --sizes 817 1801 3169 --work /tmp/advisor-options --workers 1
-    python -m curv.advice.table fill --table options.json --out closed.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 --work /tmp/advisor-closed --workers 1
-    python -m curv.advice.table refeature --table closed.json --work /tmp/advisor-refeature --workers 1
+    python -m curv.advice.table fill --table shipped.json --out options.json --kinds quadratic ellipsoid_patch trigonometric --sizes 817 1801 3169 --work advisor-options --workers 1
+    python -m curv.advice.table fill --table options.json --out closed.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 --work advisor-closed --workers 1
+    python -m curv.advice.table refeature --table closed.json --work advisor-refeature --workers 1
 
 (504 meshes, 20,160 estimates, 356 CPU-s; 63 meshes, 105 CPU-s; with 1 worker each.) Then the
 option candidates are run on the 7057-vertex patches of samples 1 and 2, a noise level between the
@@ -76,30 +76,35 @@ grid's 0 and 0.05 of the paper's is added where the noise measure resolves it: t
 0.015 of every noise-free mesh of 2562-10242 vertices (the same surface, tessellation and noise
 directions, :func:`noise_jobs`), every candidate, as rows; and the measures and axes again::
 
-    python -m curv.advice.table fill --out options7057.json --kinds quadratic ellipsoid_patch trigonometric --sizes 7057 --work /tmp/advisor-twins --workers 1
-    python -m curv.advice.table fill --table options7057.json --out twins.json --kinds --noise-levels 0.015 --sizes 2562 3169 7057 10242 --work /tmp/advisor-twins --workers 1
-    python -m curv.advice.table refeature --table twins.json --work /tmp/advisor-refeature --workers 1
+    python -m curv.advice.table fill --out options7057.json --kinds quadratic ellipsoid_patch trigonometric --sizes 7057 --work advisor-twins --workers 1
+    python -m curv.advice.table fill --table options7057.json --out twins.json --kinds --noise-levels 0.015 --sizes 2562 3169 7057 10242 --work advisor-twins --workers 1
+    python -m curv.advice.table refeature --table twins.json --work advisor-refeature --workers 1
 
 (168 meshes, 6720 estimates, 331 CPU-s; 90 meshes, 6120 estimates.) Then closed surfaces between
 the grid's sizes are added as rows, where the winners of the noise-free ellipsoids change (nc R1 up
 to 642 vertices, jet R2 degree 4 from 2562): 1000, 1600 and 5000 vertices, three random shapes at
 every noise level, every candidate; and the measures and axes again::
 
-    python -m curv.advice.table fill --table twins.json --out closed2.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 1000 1600 5000 --work /tmp/advisor-closed2 --workers 1
-    python -m curv.advice.table refeature --table closed2.json --work /tmp/advisor-refeature --workers 1
+    python -m curv.advice.table fill --table twins.json --out closed2.json --kinds --coarse-samples 3 --coarse-closed-vertices 162 252 362 482 1000 1600 5000 --work advisor-closed2 --workers 1
+    python -m curv.advice.table refeature --table closed2.json --work advisor-refeature --workers 1
 
 (189 meshes, 12,852 estimates, 502 s wall with 1 worker at niceness 10 on the loaded machine.) Then every
 mesh is measured again for the residual measures (``noise_raw4``, ``residual_ratio``:
 :mod:`curv.advice.residuals`, which tell a quadric's model error from noise) and the axes chosen
 again, over the packaged table (no estimator runs)::
 
-    python -m curv.advice.table refeature --table closed2.json --work /tmp/advisor-refeature2 --workers 1
+    python -m curv.advice.table refeature --table closed2.json --work advisor-refeature2 --workers 1
 
 (2736 meshes measured in 1114 s wall with 1 worker at niceness 10 on the loaded machine.) The coarse rows are
 measured with the base table's calibration; the kernel is refitted by leave-one-out over all rows. 217 vertices is left out: on
 its hexagon no vertex is farther than R4 from the border, so the study evaluates none. The study
 directory resumes and keeps the measured rows (``advisor_rows.json``), so a long run may be split
 and a rerun over a finished directory only refits the calibration and the kernel (seconds).
+
+Last, the anisotropy axis became logarithmic (:data:`EXTRA_TRANSFORMS`) and the axes were chosen
+again over the packaged table's stored points (nothing measured or run; 579 s wall at niceness 10)::
+
+    python -m curv.advice.table reselect
 """
 
 from __future__ import annotations
@@ -481,6 +486,15 @@ def _percentile(values: np.ndarray, q: float):
     return _round(float(np.percentile(values, q)), 4) if values.size else None
 
 
+def table_command(argv, sub: str = "") -> str:
+    """The command line stored in a table's metadata: ``python -m curv.advice.table [sub] argv``
+    with every path argument reduced to its file name (the directories it ran in are the machine's,
+    not the table's)."""
+    words = ["python", "-m", "curv.advice.table", *([sub] if sub else []),
+             *(Path(a).name if "/" in a and not a.startswith("-") else a for a in argv)]
+    return " ".join(words)
+
+
 def make_table(settings: StudySettings, rows: list[dict], erel: np.ndarray, *, command: str = "",
                closed=(), closed_vertices=(), seconds: dict | None = None) -> dict:
     """The advisor's table from measured ``rows`` and their ``erel`` (see :func:`measure_rows`)."""
@@ -794,7 +808,7 @@ def extend_main(argv) -> int:
         return 0
     t0 = time.process_time()
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
-    command = "python -m curv.advice.table extend " + " ".join(argv)
+    command = table_command(argv, "extend")
     table = extend_table(base, done, command=command, jobs=jobs)
     table["metadata"]["extension_cpu_seconds_main_process"] = round(time.process_time() - t0, 1)
     with open(args.out, "w") as fh:
@@ -950,7 +964,7 @@ def fill_main(argv) -> int:
         print(f"{len(jobs)} jobs, {sum(len(j[1]) for j in jobs)} estimates")
         return 0
     done = run_extension(jobs, args.work, workers=args.workers, progress=lambda t: print(t, flush=True))
-    out = fill_table(table, done, command="python -m curv.advice.table fill " + " ".join(argv),
+    out = fill_table(table, done, command=table_command(argv, "fill"),
                      new_keys=[j[0] for j in new], closed_vertices=sizes)
     if args.noise_levels:  # the levels between the grid's, as rows of every noise-free mesh's twins
         meta = out["metadata"]
@@ -967,13 +981,15 @@ EXTRA_COLUMNS = ("border_share", "edge_cv", "valence_sd", "anisotropy", "curvatu
 """Point columns beyond the base three: the open/closed distinction, the shape and tessellation
 measures of :class:`curv.advice.advisor.MeshFeatures`, the uncalibrated noise measure and the
 residual measures that tell model error from noise, candidates for further kernel axes."""
-EXTRA_TRANSFORMS = {"border_share": "sqrt", "noise_raw": "log", "noise_raw4": "log"}
+EXTRA_TRANSFORMS = {"border_share": "sqrt", "noise_raw": "log", "noise_raw4": "log", "anisotropy": "log"}
 """Axis transforms of the extra columns (default linear): a border share spans 0 (closed) to a
 fifth (the coarsest patch), and its square root separates the small shares of dense patches from
 a closed surface; the raw noise measure spans five decades (a noise-free dense patch's quadric
 misses its neighbours by a few millionths of an edge, a noisy coarse one by a tenth), and its
 logarithm keeps what the calibrated noise level clips to zero: a thousandth of the paper's level
-on a dense mesh, or the noise a coarse mesh's density term swallows."""
+on a dense mesh, or the noise a coarse mesh's density term swallows. The anisotropy's logarithm
+tells a noise-free ellipsoid (0.07 and up) from a noise-free sphere (0.001): on a linear axis the
+two stood within one bandwidth and the spheres' exact calls were advised on ellipsoids."""
 AXIS_WEIGHTS = (0.5, 1.0, 2.0)
 """Weights tried for an extra axis (its scale is its standard deviation over the table divided by
 the weight: 2 makes it count twice as much as a base axis)."""
@@ -1126,15 +1142,57 @@ def refeature_table(table: dict, rows: dict, *, command: str = "", progress=None
         pts.append([r["density"], noise / NOISE_FRACTION, calibrate_irregularity(r["irregularity_raw_deg"], noise, cal),
                     *(r[c] for c in EXTRA_COLUMNS)])
     pts = np.array(pts, float)
-    erel = np.array(table["median_erel"], float)
-    kernel = select_axes(pts, columns, erel, [surface_groups(keys), noise_groups(keys)], progress=progress,
-                         note="the mean of two grouped leave-one-outs: each mesh advised from the other surfaces "
-                              "(its random surface at every density, irregularity and noise level left out), and "
-                              "from all but its twins at the other noise levels")
     meta = dict(table["metadata"])
     meta.update(refeature_command=command, created=time.strftime("%Y-%m-%d %H:%M:%S %Z"))
-    return {**table, "kernel": kernel, "metadata": meta, "columns": columns,
-            "points": [[_round(x, POINT_DIGITS) for x in p] for p in pts]}
+    return {**table, "kernel": _grouped_selection(table, pts, columns, progress), "metadata": meta,
+            "columns": columns, "points": [[_round(x, POINT_DIGITS) for x in p] for p in pts]}
+
+
+def _grouped_selection(table: dict, pts: np.ndarray, columns, progress) -> dict:
+    """The kernel :func:`select_axes` chooses over ``table``'s meshes at ``pts`` (``(p, c)``, the
+    point columns ``columns``), scored by the mean of the by-surface and by-noise-level groupings."""
+    keys = table["truth"]["key"]
+    return select_axes(pts, columns, np.array(table["median_erel"], float), [surface_groups(keys), noise_groups(keys)],
+                       progress=progress,
+                       note="the mean of two grouped leave-one-outs: each mesh advised from the other surfaces "
+                            "(its random surface at every density, irregularity and noise level left out), and "
+                            "from all but its twins at the other noise levels")
+
+
+def reselect_table(table: dict, *, command: str = "", progress=None) -> dict:
+    """``table`` with the kernel chosen again (:func:`select_axes`) over its stored point columns,
+    nothing measured: for a change of the selection's rules (e.g. an axis transform,
+    :data:`EXTRA_TRANSFORMS`). The points are the stored ones (:data:`POINT_DIGITS` significant digits)."""
+    pts = np.array([[np.nan if x is None else x for x in p] for p in table["points"]], float)
+    meta = dict(table["metadata"])
+    meta.update(reselect_command=command, created=time.strftime("%Y-%m-%d %H:%M:%S %Z"))
+    return {**table, "kernel": _grouped_selection(table, pts, table["columns"], progress), "metadata": meta}
+
+
+def _write_selected(table: dict, path) -> int:
+    """Write a table whose axes were just chosen and say which (the end of ``refeature`` and ``reselect``)."""
+    with open(path, "w") as fh:
+        json.dump(table, fh, separators=(",", ":"))
+    k = table["kernel"]
+    print(f"wrote {path}: axes {[a[0] for a in k['axes']]}, bandwidth {k['bandwidth']} "
+          f"(grouped LOO mean regret {k['loo_mean_regret'][str(k['bandwidth'])]})", flush=True)
+    return 0
+
+
+def reselect_main(argv) -> int:
+    """``python -m curv.advice.table reselect``: choose the kernel's axes again over a table's stored
+    points (no mesh is built or measured)."""
+    parser = argparse.ArgumentParser(prog="python -m curv.advice.table reselect", description=reselect_main.__doc__)
+    parser.add_argument("--table", default=str(DEFAULT_OUT), help="table to reselect; default the packaged one")
+    parser.add_argument("--out", default=str(DEFAULT_OUT))
+    args = parser.parse_args(argv)
+    with open(args.table) as fh:
+        table = json.load(fh)
+    t0 = time.perf_counter()
+    out = reselect_table(table, command=table_command(argv, "reselect"),
+                         progress=lambda t: print(t, flush=True))
+    out["metadata"]["reselect_seconds"] = round(time.perf_counter() - t0, 1)
+    return _write_selected(out, args.out)
 
 
 def refeature_main(argv) -> int:
@@ -1166,16 +1224,11 @@ def refeature_main(argv) -> int:
                 rows[_key_text(k)] = row
             path.write_text(json.dumps(rows))
             print(f"{min(b + 64, len(todo))}/{len(todo)} meshes measured, {time.perf_counter() - t0:.0f} s", flush=True)
-    command = "python -m curv.advice.table refeature " + " ".join(argv)
+    command = table_command(argv, "refeature")
     out = refeature_table(table, rows, command=command, progress=lambda t: print(t, flush=True))
     out["metadata"]["refeature_seconds"] = round(time.perf_counter() - t0, 1)
     out["metadata"]["refeature_cpu_seconds_main_process"] = round(time.process_time() - c0, 1)
-    with open(args.out, "w") as fh:
-        json.dump(out, fh, separators=(",", ":"))
-    k = out["kernel"]
-    print(f"wrote {args.out}: axes {[a[0] for a in k['axes']]}, bandwidth {k['bandwidth']} "
-          f"(grouped LOO mean regret {k['loo_mean_regret'][str(k['bandwidth'])]})", flush=True)
-    return 0
+    return _write_selected(out, args.out)
 
 
 def main(argv=None) -> int:
@@ -1186,6 +1239,8 @@ def main(argv=None) -> int:
         return fill_main(argv[1:])
     if argv[:1] == ["refeature"]:
         return refeature_main(argv[1:])
+    if argv[:1] == ["reselect"]:
+        return reselect_main(argv[1:])
     parser = argparse.ArgumentParser(prog="python -m curv.advice.table", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="table to write; default the packaged one")
     parser.add_argument("--work", default="advisor-study", help="study directory (resumes); default ./advisor-study")
@@ -1201,7 +1256,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     settings = table_settings(samples=args.samples, densities=args.densities, noise=args.noise,
                               irregularity=args.irregularity, seed=args.seed)
-    command = "python -m curv.advice.table " + " ".join(sys.argv[1:] if argv is None else argv)
+    command = table_command(argv)
     table = build_table(settings, args.work, workers=args.workers, command=command,
                         closed=tuple(args.closed), closed_vertices=tuple(args.closed_vertices),
                         progress=lambda text: print(text, flush=True))
