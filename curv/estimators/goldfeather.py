@@ -26,7 +26,7 @@ from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support, start_ball_support, widen_ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
-                         add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
+                         add_ring_columns, centre_columns, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, checked_noise_model, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, start_levels, store_parts,
                          store_se3, store_se3_weighted)
@@ -344,12 +344,13 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
 
 @jit
 def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, ata, atb, row, ru,
-           rv, sol, ata0, atb0, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
+           rv, sol, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
     """Adjacent-normal cubic fit at vertex p.
 
-    Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``ru``, ``rv``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
-    normal equations the solve overwrites; ``grads`` (7, 7): the k1, k2 gradients, the three shared
-    columns, the deviator's two components (the eigen step's bias, as in ``store_se3``).
+    Scratch: ``ata`` (8, 7): the normal equations, then their scaled Cholesky factor (the solve's,
+    :func:`~curv.estimators._local_fit.solve_scaled`, and the standard error's); ``atb``, ``row``, ``ru``,
+    ``rv``, ``sol`` (7,); ``grads`` (7, 7): the k1, k2 gradients, the three shared columns, the
+    deviator's two components (the eigen step's bias, as in ``store_se3``).
 
     Heights and slopes enter the fit with equal weight in the radius-scaled coordinates. On a mesh
     the standard error models the equations' errors from the heights' (:func:`_an_noise_model`;
@@ -411,14 +412,7 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         equations += 2
         sloped += 1
     _normal_equations(0.0, sums, sums, ata, atb)
-    if errors:
-        height_sums, u_sums, v_sums = (h0, h1, h2, h3, h4, h5, h6), (r0, r1, 0.0, r2, r4, r5, 0.0), (0.0, r0, r1, 0.0, r3, r4, r6)
-        for j in range(7):
-            grads[2, j], grads[3, j], grads[4, j] = height_sums[j], u_sums[j], v_sums[j]
-            atb0[j] = atb[j]
-            for k in range(7):
-                ata0[j, k] = ata[j, k]
-    singular = solve_scaled(ata, atb, sol)
+    singular, factored = solve_scaled(ata, 7, ata, atb, sol)
     # second derivatives back in unscaled coordinates
     e, f, g = -sol[0] * inv_r, -sol[1] * inv_r, -sol[2] * inv_r
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
@@ -426,7 +420,10 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         return touched, yv, jp
     xatb = 0.0
     for j in range(7):
-        xatb += sol[j] * atb0[j]
+        xatb += sol[j] * atb[j]
+    height_sums, u_sums, v_sums = (h0, h1, h2, h3, h4, h5, h6), (r0, r1, 0.0, r2, r4, r5, 0.0), (0.0, r0, r1, 0.0, r3, r4, r6)
+    for j in range(7):
+        grads[2, j], grads[3, j], grads[4, j] = height_sums[j], u_sums[j], v_sums[j]
     # k_i's gradient over the 7 unknowns: (c², 2cs, s²) on the quadratic terms, 0 on the cubic ones
     for j in range(7):
         grads[0, j] = 0.0
@@ -437,13 +434,13 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         grads[5, j] = 0.0
         grads[6, j] = 0.0
     grads[5, 0], grads[5, 1], grads[5, 2], grads[6, 0], grads[6, 1], grads[6, 2] = deviator_gradients(e, f, g)
-    if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
-        factor_whiten(ata0, ata0, 7, 7, grads)
+    if equations > 7 and factored:
+        factor_whiten(ata, ata, 7, 7, grads)
         scale = inv_r * inv_r  # the variances in unscaled coordinates
         if slots.size > 0 and ring.size > 0 and not singular:  # slots given: noise_model="normals"
             var1, var2, var_dev, spare, ok, touched, yv, jp = _an_noise_model(
                 p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
-                ata0, grads, row, ru, rv, agg, wrow)
+                ata, grads, row, ru, rv, agg, wrow)
             if ok and spare > 0.0:
                 store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, spare,
                             var_dev * scale, math.hypot(0.5 * (e - g), f))
@@ -560,7 +557,7 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
     summed apart in R's coordinates (two :data:`AN_SUMS` tuples), level by level, and each level solves ``(t² H + S) y = t² h + s``: the Jacobi-scaled solve
     (:func:`~curv.estimators._local_fit.solve_scaled`) does not depend on the diagonal, and the
     second derivatives come back as ``-y / R``. Rows short enough for a wider level to drop: as in
-    :func:`_nc_qs_levels_at`. Scratch: ``ata`` (7, 7), ``atb``, ``sol`` (7,)."""
+    :func:`_nc_qs_levels_at`. Scratch: ``ata`` (8, 7), ``atb``, ``sol`` (7,)."""
     n0, n1, n2, frame, _, ok = start_levels(p, radii, nx, ny, nz, k1, k2, d1, d2, reason)
     if not ok:
         return
@@ -599,7 +596,7 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
         done = count
         t = widest / r
         _normal_equations(t * t, heights, slopes, ata, atb)
-        singular = solve_scaled(ata, atb, sol)
+        singular, _ = solve_scaled(ata, 7, ata, atb, sol)
         finish_fit(p, -sol[0] * inv_w, -sol[1] * inv_w, -sol[2] * inv_w, singular, used, frame, k1[level], k2[level],
                    d1[level], d2[level], reason[level])
 
@@ -617,7 +614,7 @@ def _levels_kernel(method, centres, lo, hi, radii, adj_ptr, adj, x, y, z, nx, ny
     for t in prange(parts):
         queue, stamp, waiting, waiting_d2 = queues[t], stamps[t], outside[t], outside_d2[t]
         acc = np.empty(9)
-        ata, atb, sol = np.empty((7, 7)), np.empty(7), np.empty(7)
+        ata, atb, sol = np.empty((8, 7)), np.empty(7), np.empty(7)
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
@@ -640,9 +637,8 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
         stamp = stamps[t]
         slot = slots[t]
         tilt, meat, offs = np.empty(13), np.empty(21), np.empty((64, 2))
-        ata, atb = np.empty((7, 7)), np.empty(7)
+        ata, atb, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
-        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         touched, yv, jp = np.empty(64, np.int64), np.empty((64, 7)), np.empty((64, 2))
         agg, wrow = np.empty((5, 7)), np.empty((1, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
@@ -651,7 +647,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             if method == AN:
                 touched, yv, jp = _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
-                                         k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, ata0, atb0, grads,
+                                         k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, grads,
                                          ring_ptr, ring, slot, touched, yv, jp, agg, wrow)
             else:
                 offs = _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se,
