@@ -194,6 +194,7 @@ AN_SUMS = 35
 """The normal equations of an's 7 unknowns as one tuple of scalars: the upper triangle of ``AᵀA``
 row by row (28 entries), then ``Aᵀb`` (7): :func:`_add_height`, :func:`_add_slopes`."""
 NO_SUMS = (0.0,) * AN_SUMS
+"""The sums before any equation."""
 
 
 @jit_inlined
@@ -421,7 +422,8 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     xatb = 0.0
     for j in range(7):
         xatb += sol[j] * atb[j]
-    height_sums, u_sums, v_sums = (h0, h1, h2, h3, h4, h5, h6), (r0, r1, 0.0, r2, r4, r5, 0.0), (0.0, r0, r1, 0.0, r3, r4, r6)
+    height_sums = (h0, h1, h2, h3, h4, h5, h6)
+    u_sums, v_sums = (r0, r1, 0.0, r2, r4, r5, 0.0), (0.0, r0, r1, 0.0, r3, r4, r6)
     for j in range(7):
         grads[2, j], grads[3, j], grads[4, j] = height_sums[j], u_sums[j], v_sums[j]
     # k_i's gradient over the 7 unknowns: (c², 2cs, s²) on the quadratic terms, 0 on the cubic ones
@@ -554,7 +556,8 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
     divided by the widest radius R instead, its height equations are the same ones multiplied by
     ``t = R / r`` and its slope equations the same, with the unknowns rescaled by a diagonal
     (``t`` on the quadratic terms, ``t²`` on the cubic ones). So the height and slope equations are
-    summed apart in R's coordinates (two :data:`AN_SUMS` tuples), level by level, and each level solves ``(t² H + S) y = t² h + s``: the Jacobi-scaled solve
+    summed apart in R's coordinates (two :data:`AN_SUMS` tuples), level by level, and each level
+    solves ``(t² H + S) y = t² h + s``: the Jacobi-scaled solve
     (:func:`~curv.estimators._local_fit.solve_scaled`) does not depend on the diagonal, and the
     second derivatives come back as ``-y / R``. Rows short enough for a wider level to drop: as in
     :func:`_nc_qs_levels_at`. Scratch: ``ata`` (8, 7), ``atb``, ``sol`` (7,)."""
