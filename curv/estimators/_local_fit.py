@@ -147,70 +147,57 @@ def solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2):
 
 
 @jit
-def solve_scaled(ata, atb, x):
-    """Solve a small symmetric system ``ata x = atb`` after Jacobi scaling, in place.
+def solve_scaled(ata, size, factor, atb, x):
+    """Solve a small symmetric positive definite system ``A x = atb`` after Jacobi scaling.
 
-    The scaled matrix ``S A S`` (``S = diag(1/sqrt(a_ii))``) has a unit diagonal; it is called
-    singular when its determinant is at most ``RCOND**2`` (or a diagonal entry is not positive).
-    Gaussian elimination with partial pivoting; ``ata`` and ``atb`` are overwritten.
+    The scaled matrix ``D A D`` (``D = diag(A)^(-1/2)``) has a unit diagonal; it is factored by
+    Cholesky (:func:`cholesky_scaled`), and the system is called singular when the factorisation
+    breaks down (or a diagonal entry is not finite) or the scaled matrix's determinant is at most
+    ``RCOND**2``.
 
     Parameters
     ----------
-    ata : (p, p) float64
-    atb : (p,) float64
-    x : (p,) float64
-        Receives the solution (NaN if singular).
+    ata : (K, K) float64
+        A in the lower triangle of its leading ``size`` block.
+    size : int
+    factor : (K + 1, K) float64
+        Receives L and D (:func:`cholesky_scaled` with ``srow = size``); may be ``ata`` itself.
+    atb : (K,) float64
+        Kept.
+    x : (K,) float64
+        Receives the solution ``D L⁻ᵀ L⁻¹ D atb`` (NaN if singular).
 
     Returns
     -------
-    bool
-        Whether the system is singular.
+    singular : bool
+    factored : bool
+        Whether the factorisation held (``factor`` then serves :func:`factor_whiten`).
     """
-    p = atb.size
-    scale = np.empty(p)
-    for i in range(p):
-        d = ata[i, i]
-        if not (d > 0.0 and math.isfinite(d)):
-            x[:] = math.nan
-            return True
-        scale[i] = 1.0 / math.sqrt(d)
-    for i in range(p):
-        atb[i] *= scale[i]
-        for j in range(p):
-            ata[i, j] *= scale[i] * scale[j]
+    for i in range(size):
+        if not math.isfinite(ata[i, i]):
+            x[:size] = math.nan
+            return True, False
+    if not cholesky_scaled(ata, size, factor, size):
+        x[:size] = math.nan
+        return True, False
     det = 1.0
-    for col in range(p):
-        piv = col
-        for r in range(col + 1, p):
-            if abs(ata[r, col]) > abs(ata[piv, col]):
-                piv = r
-        if piv != col:
-            det = -det
-            for j in range(p):
-                ata[col, j], ata[piv, j] = ata[piv, j], ata[col, j]
-            atb[col], atb[piv] = atb[piv], atb[col]
-        pivot = ata[col, col]
-        det *= pivot
-        if pivot == 0.0:
-            x[:] = math.nan
-            return True
-        for r in range(col + 1, p):
-            factor = ata[r, col] / pivot
-            if factor != 0.0:
-                for j in range(col, p):
-                    ata[r, j] -= factor * ata[col, j]
-                atb[r] -= factor * atb[col]
-    if not (det > RCOND * RCOND):
-        x[:] = math.nan
-        return True
-    for i in range(p - 1, -1, -1):
-        acc = atb[i]
-        for j in range(i + 1, p):
-            acc -= ata[i, j] * x[j]
-        x[i] = acc / ata[i, i]
-    for i in range(p):
-        x[i] *= scale[i]
-    return False
+    for i in range(size):
+        t = atb[i] * factor[size, i]
+        for k in range(i):
+            t -= factor[i, k] * x[k]
+        x[i] = t / factor[i, i]
+        det *= factor[i, i] * factor[i, i]
+    if not det > RCOND * RCOND:
+        x[:size] = math.nan
+        return True, True
+    for i in range(size - 1, -1, -1):
+        t = x[i]
+        for k in range(i + 1, size):
+            t -= factor[k, i] * x[k]
+        x[i] = t / factor[i, i]
+    for i in range(size):
+        x[i] *= factor[size, i]
+    return False, True
 
 
 @jit

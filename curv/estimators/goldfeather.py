@@ -26,7 +26,7 @@ from ..core.jit import jit, jit_inlined, jit_parallel, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import ball_support, start_ball_support, widen_ball_support
 from ._local_fit import (DEFAULT_NOISE_MODEL, MIN_PAIRS, MIN_TANGENT_LENGTH, NOISE_MODELS, SE_PARTS_BYTES, SLOT_BYTES,
-                         add_ring_columns, centre_columns, cholesky_scaled, deviator_gradients, factor_whiten, finish_fit,
+                         add_ring_columns, centre_columns, deviator_gradients, factor_whiten, finish_fit,
                          fit_frame, list_room, list_slot, checked_noise_model, normal_in_frame, offset_in_frame,
                          principal_gradients, row_dot, run_fit, slice_bounds, solve_scaled, solve_sym3, start_levels, store_parts,
                          store_se3, store_se3_weighted)
@@ -190,29 +190,60 @@ def _slope_rows(u, v, ru, rv):
     rv[0], rv[1], rv[2], rv[3], rv[4], rv[5], rv[6] = 0.0, u, v, 0.0, uu, 2.0 * uv, 3.0 * vv
 
 
-@jit
-def _accumulate(ata, atb, row, rhs):
-    """Add the equation ``row . x = rhs`` to the normal equations."""
-    m = row.size
-    for i in range(m):
-        ri = row[i]
-        if ri != 0.0:
-            atb[i] += ri * rhs
-            for j in range(m):
-                ata[i, j] += ri * row[j]
+AN_SUMS = 35
+"""The normal equations of an's 7 unknowns as one tuple of scalars: the upper triangle of ``AᵀA``
+row by row (28 entries), then ``Aᵀb`` (7): :func:`_add_height`, :func:`_add_slopes`."""
+NO_SUMS = (0.0,) * AN_SUMS
+"""The sums before any equation."""
+
+
+@jit_inlined
+def _add_height(s, u, v, w):
+    """The sums ``s`` (:data:`AN_SUMS` float tuple) with the height equation
+    ``(u²/2, uv, v²/2, u³, u²v, uv², v³) · x = w`` (:func:`_height_row`) added.
+
+    Scalars, not arrays: each product lands in a register, where a row array and a loop over it
+    cost a load and a store per entry."""
+    uu, uv, vv = u * u, u * v, v * v
+    h0, h1, h2, h3, h4, h5, h6 = 0.5 * uu, uv, 0.5 * vv, uu * u, uu * v, u * vv, vv * v
+    return (
+            s[0] + h0 * h0, s[1] + h0 * h1, s[2] + h0 * h2, s[3] + h0 * h3, s[4] + h0 * h4, s[5] + h0 * h5,
+            s[6] + h0 * h6, s[7] + h1 * h1, s[8] + h1 * h2, s[9] + h1 * h3, s[10] + h1 * h4, s[11] + h1 * h5,
+            s[12] + h1 * h6, s[13] + h2 * h2, s[14] + h2 * h3, s[15] + h2 * h4, s[16] + h2 * h5, s[17] + h2 * h6,
+            s[18] + h3 * h3, s[19] + h3 * h4, s[20] + h3 * h5, s[21] + h3 * h6, s[22] + h4 * h4, s[23] + h4 * h5,
+            s[24] + h4 * h6, s[25] + h5 * h5, s[26] + h5 * h6, s[27] + h6 * h6, s[28] + h0 * w, s[29] + h1 * w,
+            s[30] + h2 * w, s[31] + h3 * w, s[32] + h4 * w, s[33] + h5 * w, s[34] + h6 * w,
+    )
+
+
+@jit_inlined
+def _add_slopes(s, u, v, a, b):
+    """The sums ``s`` (:data:`AN_SUMS` float tuple) with the slope equations ``w_u = a`` and
+    ``w_v = b`` (:func:`_slope_rows`) added, the u-slope's products before the v-slope's; their
+    rows' zeros are left out."""
+    uu, uv2, vv = u * u, 2.0 * (u * v), v * v
+    su3, sv3 = 3.0 * uu, 3.0 * vv
+    return (
+            s[0] + u * u, s[1] + u * v, s[2], s[3] + u * su3, s[4] + u * uv2, s[5] + u * vv, s[6],
+            s[7] + v * v + u * u, s[8] + u * v, s[9] + v * su3, s[10] + v * uv2 + u * uu, s[11] + v * vv + u * uv2,
+            s[12] + u * sv3, s[13] + v * v, s[14], s[15] + v * uu, s[16] + v * uv2, s[17] + v * sv3, s[18] + su3 * su3,
+            s[19] + su3 * uv2, s[20] + su3 * vv, s[21], s[22] + uv2 * uv2 + uu * uu, s[23] + uv2 * vv + uu * uv2,
+            s[24] + uu * sv3, s[25] + vv * vv + uv2 * uv2, s[26] + uv2 * sv3, s[27] + sv3 * sv3, s[28] + u * a,
+            s[29] + v * a + u * b, s[30] + v * b, s[31] + su3 * a, s[32] + uv2 * a + uu * b, s[33] + vv * a + uv2 * b,
+            s[34] + sv3 * b,
+    )
 
 
 @jit
-def _accumulate_upper(ata, atb, row, rhs):
-    """:func:`_accumulate` on the upper triangle of ``ata`` only (the same products: the lower
-    triangle is its mirror)."""
-    m = row.size
-    for i in range(m):
-        ri = row[i]
-        if ri != 0.0:
-            atb[i] += ri * rhs
-            for j in range(i, m):
-                ata[i, j] += ri * row[j]
+def _normal_equations(t2, h, s, ata, atb):
+    """``ata`` (7, 7) and ``atb`` (7,) from the sums ``h`` times ``t2`` plus ``s`` (both
+    :data:`AN_SUMS` tuples; ``t2 = 0``: ``s`` alone, as it is)."""
+    k = 0
+    for i in range(7):
+        for j in range(i, 7):
+            ata[i, j] = ata[j, i] = t2 * h[k] + s[k]
+            k += 1
+        atb[i] = t2 * h[28 + i] + s[28 + i]
 
 
 @jit
@@ -314,12 +345,13 @@ def _an_noise_model(p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr
 
 @jit
 def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se, k2_se, se_parts, ata, atb, row, ru,
-           rv, sol, ata0, atb0, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
+           rv, sol, grads, ring_ptr, ring, slots, touched, yv, jp, agg, wrow):
     """Adjacent-normal cubic fit at vertex p.
 
-    Scratch: ``ata`` (7, 7), ``atb``, ``row``, ``ru``, ``rv``, ``sol`` (7,); ``ata0`` (8, 7), ``atb0`` (7,) keep the
-    normal equations the solve overwrites; ``grads`` (7, 7): the k1, k2 gradients, the three shared
-    columns, the deviator's two components (the eigen step's bias, as in ``store_se3``).
+    Scratch: ``ata`` (8, 7): the normal equations, then their scaled Cholesky factor (the solve's,
+    :func:`~curv.estimators._local_fit.solve_scaled`, and the standard error's); ``atb``, ``row``, ``ru``,
+    ``rv``, ``sol`` (7,); ``grads`` (7, 7): the k1, k2 gradients, the three shared columns, the
+    deviator's two components (the eigen step's bias, as in ``store_se3``).
 
     Heights and slopes enter the fit with equal weight in the radius-scaled coordinates. On a mesh
     the standard error models the equations' errors from the heights' (:func:`_an_noise_model`;
@@ -336,12 +368,13 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
     # balance of the two kinds of equation (and so the result) does not depend on the mesh's scale.
     inv_r = 1.0 / r
     tiny2 = MIN_TANGENT_LENGTH ** 2
-    ata[:, :] = 0.0
-    atb[:] = 0.0
+    sums = NO_SUMS
     bb = 0.0
     equations = 0
     sloped = 0
-    grads[:, :] = 0.0  # rows 2-4 sum the rows of the height, u-slope and v-slope equations
+    # the sums of the height, u-slope and v-slope rows (rows 2-4 of grads below): of u², uv, v², u³, u²v,
+    # uv², v³ over every neighbour, of u, v, 3u², u², 2uv, v², 3v² over the sloped ones
+    h0 = h1 = h2 = h3 = h4 = h5 = h6 = r0 = r1 = r2 = r3 = r4 = r5 = r6 = 0.0
     used = 0
     for i in range(1, count):
         q = queue[i]
@@ -350,33 +383,37 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
             continue
         used += 1
         # height: w = A/2 u^2 + B uv + C/2 v^2 + D u^3 + E u^2 v + F u v^2 + G v^3
-        _height_row(u, v, row)
-        _accumulate(ata, atb, row, w)
+        sums = _add_height(sums, u, v, w)
         bb += w * w
         equations += 1
         if errors:
-            for j in range(7):
-                grads[2, j] += row[j]
+            uu, vv = u * u, v * v
+            h0 += 0.5 * uu
+            h1 += u * v
+            h2 += 0.5 * vv
+            h3 += uu * u
+            h4 += uu * v
+            h5 += u * vv
+            h6 += vv * v
         a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
         if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
             continue
         # slopes of the neighbour's normal: w_u = -a/c, w_v = -b/c
-        _slope_rows(u, v, ru, rv)
-        _accumulate(ata, atb, ru, -a / c)
-        _accumulate(ata, atb, rv, -b / c)
+        sums = _add_slopes(sums, u, v, -a / c, -b / c)
         if errors:
-            for j in range(7):
-                grads[3, j] += ru[j]
-                grads[4, j] += rv[j]
+            uu, vv = u * u, v * v
+            r0 += u
+            r1 += v
+            r2 += 3.0 * uu
+            r3 += uu
+            r4 += 2.0 * (u * v)
+            r5 += vv
+            r6 += 3.0 * vv
         bb += (a * a + b * b) / (c * c)
         equations += 2
         sloped += 1
-    if errors:
-        for j in range(7):
-            atb0[j] = atb[j]
-            for k in range(7):
-                ata0[j, k] = ata[j, k]
-    singular = solve_scaled(ata, atb, sol)
+    _normal_equations(0.0, sums, sums, ata, atb)
+    singular, factored = solve_scaled(ata, 7, ata, atb, sol)
     # second derivatives back in unscaled coordinates
     e, f, g = -sol[0] * inv_r, -sol[1] * inv_r, -sol[2] * inv_r
     finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason)
@@ -384,7 +421,11 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         return touched, yv, jp
     xatb = 0.0
     for j in range(7):
-        xatb += sol[j] * atb0[j]
+        xatb += sol[j] * atb[j]
+    height_sums = (h0, h1, h2, h3, h4, h5, h6)
+    u_sums, v_sums = (r0, r1, 0.0, r2, r4, r5, 0.0), (0.0, r0, r1, 0.0, r3, r4, r6)
+    for j in range(7):
+        grads[2, j], grads[3, j], grads[4, j] = height_sums[j], u_sums[j], v_sums[j]
     # k_i's gradient over the 7 unknowns: (c², 2cs, s²) on the quadratic terms, 0 on the cubic ones
     for j in range(7):
         grads[0, j] = 0.0
@@ -395,13 +436,13 @@ def _an_at(p, queue, count, r, x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_s
         grads[5, j] = 0.0
         grads[6, j] = 0.0
     grads[5, 0], grads[5, 1], grads[5, 2], grads[6, 0], grads[6, 1], grads[6, 2] = deviator_gradients(e, f, g)
-    if equations > 7 and cholesky_scaled(ata0, 7, ata0, 7):
-        factor_whiten(ata0, ata0, 7, 7, grads)
+    if equations > 7 and factored:
+        factor_whiten(ata, ata, 7, 7, grads)
         scale = inv_r * inv_r  # the variances in unscaled coordinates
         if slots.size > 0 and ring.size > 0 and not singular:  # slots given: noise_model="normals"
             var1, var2, var_dev, spare, ok, touched, yv, jp = _an_noise_model(
                 p, queue, count, inv_r, x, y, z, nx, ny, nz, frame, ring_ptr, ring, slots, touched, yv, jp,
-                ata0, grads, row, ru, rv, agg, wrow)
+                ata, grads, row, ru, rv, agg, wrow)
             if ok and spare > 0.0:
                 store_parts(p, k1_se, k2_se, se_parts, var1 * scale, var2 * scale, bb - xatb, spare,
                             var_dev * scale, math.hypot(0.5 * (e - g), f))
@@ -507,7 +548,7 @@ def _nc_qs_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, 
 
 @jit
 def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1, k2, d1, d2,
-                  reason, hta, htb, sta, stb, ata, atb, row, ru, rv, sol):
+                  reason, ata, atb, sol):
     """an at vertex p at every level of ``radii`` (levels, n), in one walk
     (:func:`~curv.estimators._local_fit.run_fit_levels`).
 
@@ -515,11 +556,11 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
     divided by the widest radius R instead, its height equations are the same ones multiplied by
     ``t = R / r`` and its slope equations the same, with the unknowns rescaled by a diagonal
     (``t`` on the quadratic terms, ``t²`` on the cubic ones). So the height and slope equations are
-    summed apart in R's coordinates (``hta, htb`` and ``sta, stb``, (7, 7) upper triangles and (7,)), level by
-    level, and each level solves ``(t² H + S) y = t² h + s``: the Jacobi-scaled solve
+    summed apart in R's coordinates (two :data:`AN_SUMS` tuples), level by level, and each level
+    solves ``(t² H + S) y = t² h + s``: the Jacobi-scaled solve
     (:func:`~curv.estimators._local_fit.solve_scaled`) does not depend on the diagonal, and the
     second derivatives come back as ``-y / R``. Rows short enough for a wider level to drop: as in
-    :func:`_nc_qs_levels_at`. Scratch: ``ata``, ``atb``, ``row``, ``ru``, ``rv``, ``sol``."""
+    :func:`_nc_qs_levels_at`. Scratch: ``ata`` (8, 7), ``atb``, ``sol`` (7,)."""
     n0, n1, n2, frame, _, ok = start_levels(p, radii, nx, ny, nz, k1, k2, d1, d2, reason)
     if not ok:
         return
@@ -531,15 +572,13 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
     head = pending = used = 0
     done = 1
     banded = True  # clears the sums below
+    heights = slopes = NO_SUMS
     for level in range(levels):
         r = radii[level, p]
         count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, adj_ptr, adj, x, y, z, stamp, queue,
                                                   count, head, waiting, waiting_d2, pending)
         if banded:
-            hta[:, :] = 0.0
-            htb[:] = 0.0
-            sta[:, :] = 0.0
-            stb[:] = 0.0
+            heights = slopes = NO_SUMS
             used = 0
             done = 1
             banded = False
@@ -552,22 +591,15 @@ def _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, wai
                 continue
             banded = banded or not (l2 > band2)
             used += 1
-            _height_row(u, v, row)
-            _accumulate_upper(hta, htb, row, w)
+            heights = _add_height(heights, u, v, w)
             a, b, c = normal_in_frame(q, nx, ny, nz, frame, n0, n1, n2)
             if not (c > MIN_NORMAL_Z) or not (math.isfinite(a) and math.isfinite(b)):
                 continue
-            _slope_rows(u, v, ru, rv)
-            _accumulate_upper(sta, stb, ru, -a / c)
-            _accumulate_upper(sta, stb, rv, -b / c)
+            slopes = _add_slopes(slopes, u, v, -a / c, -b / c)
         done = count
         t = widest / r
-        t2 = t * t
-        for j in range(7):
-            atb[j] = t2 * htb[j] + stb[j]
-            for k in range(j, 7):
-                ata[j, k] = ata[k, j] = t2 * hta[j, k] + sta[j, k]
-        singular = solve_scaled(ata, atb, sol)
+        _normal_equations(t * t, heights, slopes, ata, atb)
+        singular, _ = solve_scaled(ata, 7, ata, atb, sol)
         finish_fit(p, -sol[0] * inv_w, -sol[1] * inv_w, -sol[2] * inv_w, singular, used, frame, k1[level], k2[level],
                    d1[level], d2[level], reason[level])
 
@@ -585,15 +617,13 @@ def _levels_kernel(method, centres, lo, hi, radii, adj_ptr, adj, x, y, z, nx, ny
     for t in prange(parts):
         queue, stamp, waiting, waiting_d2 = queues[t], stamps[t], outside[t], outside_d2[t]
         acc = np.empty(9)
-        hta, htb, sta, stb = np.empty((7, 7)), np.empty(7), np.empty((7, 7)), np.empty(7)
-        ata, atb = np.empty((7, 7)), np.empty(7)
-        row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
+        ata, atb, sol = np.empty((8, 7)), np.empty(7), np.empty(7)
         start, stop = slice_bounds(lo, hi, t, parts)
         for i in range(start, stop):
             p = centres[i]
             if method == AN:
                 _an_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1, k2,
-                              d1, d2, reason, hta, htb, sta, stb, ata, atb, row, ru, rv, sol)
+                              d1, d2, reason, ata, atb, sol)
             else:
                 _nc_qs_levels_at(p, radii, adj_ptr, adj, x, y, z, nx, ny, nz, stamp, queue, waiting, waiting_d2, k1,
                                  k2, d1, d2, reason, acc, method == NC)
@@ -610,9 +640,8 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
         stamp = stamps[t]
         slot = slots[t]
         tilt, meat, offs = np.empty(13), np.empty(21), np.empty((64, 2))
-        ata, atb = np.empty((7, 7)), np.empty(7)
+        ata, atb, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         row, ru, rv, sol = np.empty(7), np.empty(7), np.empty(7), np.empty(7)
-        ata0, atb0, grads = np.empty((8, 7)), np.empty(7), np.empty((7, 7))
         touched, yv, jp = np.empty(64, np.int64), np.empty((64, 7)), np.empty((64, 2))
         agg, wrow = np.empty((5, 7)), np.empty((1, 7))
         start, stop = slice_bounds(lo, hi, t, parts)
@@ -621,7 +650,7 @@ def _fit_kernel(method, centres, lo, hi, radius, adj_ptr, adj, x, y, z, nx, ny, 
             count, queue = ball_support(p, radius[p] ** 2, adj_ptr, adj, x, y, z, stamp, queue)
             if method == AN:
                 touched, yv, jp = _an_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason,
-                                         k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, ata0, atb0, grads,
+                                         k1_se, k2_se, se_parts, ata, atb, row, ru, rv, sol, grads,
                                          ring_ptr, ring, slot, touched, yv, jp, agg, wrow)
             else:
                 offs = _nc_qs_at(p, queue, count, radius[p], x, y, z, nx, ny, nz, k1, k2, d1, d2, reason, k1_se,
