@@ -31,7 +31,11 @@ from ._local_fit import slice_bounds, store_principal, sym3_bilinear, tangent_fr
 from ._small_linalg import sym3_eigen
 
 __all__ = ["segment_in_ball", "csm_walk_sums", "csm_finish", "icc_walk_sums", "icc_finish", "add_edge_crossings",
-           "add_face_crossings", "run_clipping", "CsmTerms", "IccTerms", "MEASURES", "EPS"]
+           "add_face_crossings", "run_clipping", "CsmTerms", "IccTerms", "MEASURES", "EPS", "CLIPPING_PASS"]
+
+CLIPPING_PASS = "ball clipping"
+"""The shared pass ``csm`` and ``icc`` name (:attr:`~curv.estimators.EstimatorSpec.shared_pass`), run by
+:func:`curv.estimators.clipping_pair.iter_csm_icc`."""
 
 
 # ---------------------------------------------------------------------------- csm: the normal-cycle tensor

@@ -55,7 +55,7 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ._ball_clipping import (_corner_rings, clipping_inputs, corner_rings, corner_width, element_list, touched_elements,
                              touches)
-from ._clipped_sums import CsmTerms, _clip_chunk, run_clipping, segment_in_ball
+from ._clipped_sums import CLIPPING_PASS, CsmTerms, _clip_chunk, run_clipping, segment_in_ball
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_csm", "csm_terms", "segment_in_ball", "edge_beta_scale", "star_terms"]
@@ -325,4 +325,5 @@ register(EstimatorSpec(
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",
     kernels=(_star_terms, _corner_rings, _edge_beta_scale, _clip_chunk), takes_levels=True,
+    shared_pass=CLIPPING_PASS,
 ))

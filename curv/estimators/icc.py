@@ -66,7 +66,7 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ..core.validity import Reason
 from ._ball_clipping import _corner_rings, clipping_inputs, corner_rings, element_list, touches
-from ._clipped_sums import MEASURES, IccTerms, _clip_chunk, _row_is_finite, run_clipping
+from ._clipped_sums import CLIPPING_PASS, MEASURES, IccTerms, _clip_chunk, _row_is_finite, run_clipping
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_icc", "icc_terms", "icc_mean_gaussian", "face_measures", "star_measures"]
@@ -294,5 +294,6 @@ register(EstimatorSpec(
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
     kernels=(_face_measures, _star_measures, _corner_rings, _clip_chunk), takes_levels=True,
+    shared_pass=CLIPPING_PASS,
     options={"from_measures": (True, False)},
 ))
