@@ -137,6 +137,14 @@ def _kept_share(e, edge_faces, crease, tri):
 
 
 @jit
+def _unset(level, p, k1, k2, d1, d2):
+    """NaN curvatures and directions in row ``(level, p)`` of the outputs."""
+    k1[level, p] = k2[level, p] = math.nan
+    for c in range(3):
+        d1[level, p, c] = d2[level, p, c] = math.nan
+
+
+@jit
 def csm_walk_sums(p, mark, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri,
                vector_area, face_area, degenerate, cut, crease, estamp, fstamp, sums):
     """The sums of a centre whose support is not clean (or that stops at creases), face by face and edge by edge.
@@ -199,9 +207,7 @@ def csm_finish(p, level, sums, hit, normals, tensor, vectors, res, k1, k2, d1, d
         if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
             singular = True
     else:
-        k1[level, p] = k2[level, p] = math.nan
-        for c in range(3):
-            d1[level, p, c] = d2[level, p, c] = math.nan
+        _unset(level, p, k1, k2, d1, d2)
     reason[level, p] = support_reason(singular, hit, normal_ok)
 
 
@@ -287,9 +293,7 @@ def icc_finish(p, level, sums, hit, normals, from_measures, k1, k2, d1, d2, mean
         if not (math.isfinite(k1[level, p]) and math.isfinite(k2[level, p])):
             singular = True
     else:
-        k1[level, p] = k2[level, p] = math.nan
-        for c in range(3):
-            d1[level, p, c] = d2[level, p, c] = math.nan
+        _unset(level, p, k1, k2, d1, d2)
     reason[level, p] = support_reason(singular, hit, normal_ok)
 
 

@@ -23,8 +23,9 @@ intersection and ``area(B ∩ face)`` the exact area of the triangle within the 
 
 How it runs
 -----------
-One parallel kernel per chunk of vertices (:func:`curv.core.jit.iter_chunks`); per vertex it searches
-the support. What neighbouring centres share is computed once per call (:func:`star_terms`): for
+One parallel kernel per chunk of vertices (:func:`curv.core.jit.iter_chunks`), the one icc runs too
+(:mod:`curv.estimators._clipped_sums`: run together, :mod:`curv.estimators.clipping_pair`, the two
+share the search and the clips below); per vertex it searches the support. What neighbouring centres share is computed once per call (:func:`star_terms`): for
 every vertex v, half of ``beta(e) |e| ê êᵀ`` summed over its edges and a third of the area of its
 faces. Summed over a support, these hold every edge and face inside the (convex) ball whole, each
 edge twice by halves and each face thrice by thirds; the only elements left to correct are those

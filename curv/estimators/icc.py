@@ -34,7 +34,8 @@ noise of 0.1 mean edge lengths on the 3169-vertex patches, median e_rel at R4 0.
 against 0.15-0.68 from mu1 and mu2. :func:`icc_mean_gaussian` returns H and K themselves.
 
 The measures of the triangles are computed once per call, and a third of them summed at each vertex
-(:func:`star_measures`); summed over a support, these hold every triangle inside the ball whole,
+(:func:`star_measures`; the kernel is csm's too, :mod:`curv.estimators._clipped_sums`, and run
+together, :mod:`curv.estimators.clipping_pair`, the two share the search and the clips); summed over a support, these hold every triangle inside the ball whole,
 by thirds. Only the triangles that cross the sphere are clipped: each is found once, as its one
 halfedge v -> w leaving the ball (v in the support; each vertex's ring read once,
 :func:`curv.estimators._ball_clipping.corner_rings`), and its thirds in the sum are replaced by its
