@@ -22,6 +22,7 @@ _LAZY = {
     "estimate": ("curv.api", "estimate"),
     "iter_estimate": ("curv.api", "iter_estimate"),
     "estimate_ranges": ("curv.api", "estimate_ranges"),
+    "estimate_table": ("curv.api", "estimate_table"),
     "ESTIMATORS": ("curv.estimators", "ESTIMATORS"),
     "vertex_normals": ("curv.geometry.normals", "vertex_normals"),
     "load": ("curv.io", "load"),

@@ -13,7 +13,7 @@ from typing import Generator
 import numpy as np
 
 from .core.errors import EstimatorError, MeshError
-from .estimators import DEFAULT_ESTIMATOR, get_spec, refusal
+from .estimators import DEFAULT_ESTIMATOR, SHARED_PASSES, get_spec, refusal
 from .estimators._pooling import pool_members
 from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, jit_parallel, launch, prange, run_to_end
 from .convert import as_mesh
@@ -28,7 +28,8 @@ from .core.result import Curvature
 from .geometry.smoothing import smooth_positions, smooth_values
 from .core.validity import Reason
 
-__all__ = ["estimate", "iter_estimate", "estimate_ranges", "iter_estimate_ranges", "Smoothing", "parse_range"]
+__all__ = ["estimate", "iter_estimate", "estimate_ranges", "iter_estimate_ranges", "estimate_table",
+           "iter_estimate_table", "Smoothing", "parse_range"]
 
 builtins_range = builtins.range  # the keyword ``range`` shadows it in the functions below
 
@@ -86,24 +87,19 @@ def iter_estimate(
     Parameters as in :func:`estimate`.
     """
     results = yield from _iter_estimates(
-        mesh, method, (range,), radius=radius, normals=normals, normal_weighting=normal_weighting, smooth=smooth,
+        mesh, (method,), (range,), radius=radius, normals=normals, normal_weighting=normal_weighting, smooth=smooth,
         smooth_iterations=smooth_iterations, smooth_strength=smooth_strength, fit_range=fit_range,
         block_size=block_size, features=features, vertices=vertices, knn=knn, orient=orient,
         standard_errors=standard_errors, **options)
-    return results[0]
+    return results[method][0]
 
 
 def iter_estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords
                          ) -> Generator[float, None, list]:
     """:func:`estimate_ranges` step by step: yields the fraction done, returns the list of
     :class:`Curvature` (as :func:`iter_estimate` does for one range)."""
-    ranges = (ranges,) if isinstance(ranges, (str, int, float, np.number)) else tuple(ranges)
-    if not ranges:
-        raise EstimatorError("ranges must name at least one range")
-    for name in ("radius", "knn"):
-        if keywords.get(name) is not None:
-            raise EstimatorError(f"estimate_ranges takes ranges, not {name}=; estimate one {name} with curv.estimate")
-    return (yield from _iter_estimates(mesh, method, ranges, **keywords))
+    results = yield from iter_estimate_table(mesh, (method,), ranges, **keywords)
+    return results[method]
 
 
 def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords) -> list:
@@ -143,9 +139,85 @@ def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3
     return run_to_end(iter_estimate_ranges(mesh, method, ranges, **keywords))
 
 
+def _range_tuple(ranges) -> tuple:
+    """``ranges`` as a non-empty tuple (one range alone is a tuple of it)."""
+    ranges = (ranges,) if isinstance(ranges, (str, int, float, np.number)) else tuple(ranges)
+    if not ranges:
+        raise EstimatorError("ranges must name at least one range")
+    return ranges
+
+
+def iter_estimate_table(mesh: Mesh, methods, ranges=(1, 2, 3, 4), **keywords) -> Generator[float, None, dict]:
+    """:func:`estimate_table` step by step: yields the fraction done, returns the dict of lists of
+    :class:`Curvature`."""
+    methods = (methods,) if isinstance(methods, str) else tuple(methods)
+    if not methods or len(set(methods)) != len(methods):
+        raise EstimatorError(f"methods must name each estimator once; got {list(methods)}")
+    wanted = {m: _range_tuple(ranges[m] if isinstance(ranges, dict) else ranges) for m in methods}
+    for name in ("radius", "knn"):
+        if keywords.get(name) is not None:
+            raise EstimatorError(f"estimate_ranges and estimate_table take ranges, not {name}=; "
+                                 f"estimate one {name} with curv.estimate")
+    groups: dict = {}
+    for m in methods:
+        spec = get_spec(m)
+        groups.setdefault(spec.shared_pass or ("alone", m), []).append(m)
+    results = {}
+    for group in groups.values():
+        # a shared pass runs every range any of its estimators asks for (each range a level)
+        union = tuple(dict.fromkeys(r for m in group for r in wanted[m]))
+        table = yield from _iter_estimates(mesh, tuple(group), union, **keywords)
+        for m in group:
+            results[m] = [table[m][union.index(r)] for r in wanted[m]]
+    return {m: results[m] for m in methods}
+
+
+def estimate_table(mesh: Mesh, methods, ranges=(1, 2, 3, 4), **keywords) -> dict:
+    """Estimate several estimators at several ranges on the same mesh: ``{method: [Curvature per range]}``.
+
+    Each method's list equals ``estimate_ranges(mesh, method, its ranges, **keywords)``. Estimators
+    whose specs name the same shared pass (:attr:`~curv.estimators.EstimatorSpec.shared_pass`) run
+    in it together: ``csm`` and ``icc`` search each vertex's ball once per range and clip each
+    face crossing its sphere once, for both (:mod:`curv.estimators.clipping_pair`); what they share
+    with the others is done once per pass, as in :func:`estimate_ranges`. Asked for the same ranges,
+    their results are :func:`estimate_ranges`' bit for bit; with different ranges the pass runs
+    every range either asks for, and the values agree to rounding (the sums of a range are the
+    narrower one's plus the vertices it adds). The other estimators run one
+    :func:`estimate_ranges` each.
+
+    Parameters
+    ----------
+    mesh :
+        As in :func:`estimate`.
+    methods : sequence of str
+        Registry names, each once.
+    ranges : sequence of (int, float or str), or dict
+        The ranges of every method, or ``{method: ranges}``.
+    **keywords
+        As in :func:`estimate_ranges`; an estimator option goes to the methods that take it (it must
+        be one's).
+
+    Returns
+    -------
+    dict
+        ``{method: [Curvature per range]}`` in the order of ``methods`` and of each one's ranges.
+    """
+    return run_to_end(iter_estimate_table(mesh, methods, ranges, **keywords))
+
+
+def _split_options(specs, options: dict) -> dict:
+    """``{name: its options}``: each estimator gets the options it takes; an option none takes is refused
+    (by the first estimator's message, which names its options)."""
+    taken = {spec.name: spec.check_options({k: v for k, v in options.items() if k in spec.options})
+             for spec in specs}
+    unknown = {k: v for k, v in options.items() if not any(k in spec.options for spec in specs)}
+    specs[0].check_options(unknown)
+    return taken
+
+
 def _iter_estimates(
     mesh: Mesh,
-    method: str = DEFAULT_ESTIMATOR,
+    methods: tuple = (DEFAULT_ESTIMATOR,),
     ranges=(None,),
     *,
     radius: float | None = None,
@@ -162,21 +234,30 @@ def _iter_estimates(
     orient="up",
     standard_errors: bool = True,
     **options,
-) -> Generator[float, None, list]:
-    """:func:`iter_estimate` at each of ``ranges``: returns the list of :class:`Curvature`, in that order.
+) -> Generator[float, None, dict]:
+    """:func:`iter_estimate` of each of ``methods`` at each of ``ranges``: returns ``{method: [Curvature
+    per range]}``, in the order of ``ranges``.
 
     The setup (mesh checks, normals, flags, a region's rows) is done once; an estimator whose
     function takes ``(levels, n)`` radii (``EstimatorSpec.takes_levels``: ``csm``, ``icc``, the fits
     ``nc``, ``qs``, ``an``, ``mru``, ``jet``) runs the ranges of a mesh in one call, in ascending order; the
-    others (and a point cloud's) run once per range.
+    others (and a point cloud's) run once per range. Several ``methods`` must name one shared pass
+    (:attr:`~curv.estimators.EstimatorSpec.shared_pass`), which runs them and their ranges in one call.
     """
-    spec = get_spec(method)
+    specs = [get_spec(m) for m in methods]
+    spec = specs[0]  # the estimators of one pass take the same normals, ranges and supports
+    if len(specs) > 1 and not (spec.shared_pass and all(s.shared_pass == spec.shared_pass for s in specs)):
+        raise EstimatorError(f"{list(methods)} do not share a pass: estimate them one by one")
     rngs = [resolve(spec, r, radius, knn) for r in ranges]
-    options = spec.check_options(options)
+    for other in specs[1:]:
+        for r in ranges:
+            resolve(other, r, radius, knn)
+    options_of = _split_options(specs, options)
     mesh = mesh if isinstance(mesh, PointCloud) else as_mesh(mesh)
-    why_not = refusal(spec, mesh)
-    if why_not is not None:
-        raise MeshError(why_not)
+    for s in specs:
+        why_not = refusal(s, mesh)
+        if why_not is not None:
+            raise MeshError(why_not)
     smooth = Smoothing(smooth or Smoothing.NONE)
     centres = _check_vertices(vertices, mesh.n_vertices)
     twin = _grid_ordered(mesh) if isinstance(mesh, PointCloud) else _locality_ordered(mesh, centres, features)
@@ -192,7 +273,8 @@ def _iter_estimates(
         raise EstimatorError("features= and smooth= need a mesh's edges and faces; a point cloud takes neither")
     feats = None if features is None else _feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
-    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*spec.kernels, _settle)) else "")
+    kernels = tuple(k for s in specs for k in s.kernels)
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, _settle)) else "")
     t0 = time.perf_counter()
     if isinstance(mesh, PointCloud):
         work_mesh = mesh
@@ -206,7 +288,8 @@ def _iter_estimates(
     skips = spec.skips_errors
     fitted = (pool_members(work_mesh, centres) if skips and standard_errors and centres is not None
               and not isinstance(work_mesh, PointCloud) else centres)
-    kernel_options = {**options, "standard_errors": bool(standard_errors)} if skips else options
+    kernel_options = {s.name: {**options_of[s.name], "standard_errors": bool(standard_errors)} if skips
+                      else options_of[s.name] for s in specs}
     radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
                 for rng in rngs]
     on_crease = feats is not None and feats.any
@@ -218,15 +301,22 @@ def _iter_estimates(
                                           lambda: _without(used_normals, feats.vertices))
     shared = len(rngs) > 1 and spec.takes_levels and not isinstance(work_mesh, PointCloud) and all(
         rng.radius is None and rng.knn is None for rng in rngs)
-    if shared:
+    if len(specs) > 1 or shared:
         # one call for every range, narrowest first (radius = factor(k) * unit is ascending in k)
         ascending = sorted(builtins_range(len(rngs)), key=lambda i: rngs[i].k)
-        levels = yield from spec.function(work_mesh, kernel_normals, np.stack([radii_of[i] for i in ascending]),
-                                          chunk=block_size, centres=centres,
-                                          features=feats if on_crease else None, **kernel_options)
-        raws = [None] * len(rngs)
-        for i, level in zip(ascending, levels):
-            raws[i] = level
+        stacked = np.stack([radii_of[i] for i in ascending])
+        common = dict(chunk=block_size, centres=centres, features=feats if on_crease else None)
+        if len(specs) > 1:
+            by_method = yield from SHARED_PASSES[spec.shared_pass](
+                work_mesh, kernel_normals, stacked, tuple(methods), options=kernel_options, **common)
+        else:
+            by_method = {spec.name: (yield from spec.function(work_mesh, kernel_normals, stacked, **common,
+                                                              **kernel_options[spec.name]))}
+        raws_of = {}
+        for name, levels in by_method.items():
+            raws_of[name] = [None] * len(rngs)
+            for i, level in zip(ascending, levels):
+                raws_of[name][i] = level
     else:
         raws = []
         for radii in radii_of:
@@ -237,15 +327,19 @@ def _iter_estimates(
                 # slower); every point writes its own rows, so the result is the same
                 order = work_mesh.ball_grid(radii)[0][3]
             raws.append((yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
-                                                  features=feats if on_crease else None, **kernel_options)))
+                                                  features=feats if on_crease else None,
+                                                  **kernel_options[spec.name])))
+        raws_of = {spec.name: raws}
     # the neighbours an estimator that reads their normals can use (a NaN normal is left out)
     usable = (np.isfinite(kernel_normals).all(axis=1)
               if spec.uses_normals and kernel_normals is not None else None)
-    results = []
-    for rng, radii, raw in zip(rngs, radii_of, raws):
-        results.append((yield from _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres,
-                                           feats, on_crease, smooth, smooth_iterations, smooth_strength,
-                                           standard_errors, normals_label, options, twin, t0)))
+    results = {}
+    for s in specs:
+        results[s.name] = []
+        for rng, radii, raw in zip(rngs, radii_of, raws_of[s.name]):
+            results[s.name].append((yield from _finish(
+                mesh, s, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
+                smooth_iterations, smooth_strength, standard_errors, normals_label, options_of[s.name], twin, t0)))
     yield 1.0
     return results
 

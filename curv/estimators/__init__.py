@@ -3,8 +3,9 @@
 from . import meyer, csm, goldfeather, rusinkiewicz, mru  # noqa: F401  (registration side effects, paper order)
 from . import jet  # noqa: F401
 from . import icc  # noqa: F401
-from .registry import (DEFAULT_ESTIMATOR, ESTIMATORS, EstimatorSpec, all_variants, get_spec, polygon_estimators, point_estimators,
-                       refusal, register)
+from . import clipping_pair  # noqa: F401  (the pass csm and icc share)
+from .registry import (DEFAULT_ESTIMATOR, ESTIMATORS, SHARED_PASSES, EstimatorSpec, all_variants, get_spec,
+                       polygon_estimators, point_estimators, refusal, register)
 
-__all__ = ["ESTIMATORS", "EstimatorSpec", "DEFAULT_ESTIMATOR", "get_spec", "register", "all_variants",
+__all__ = ["ESTIMATORS", "SHARED_PASSES", "EstimatorSpec", "DEFAULT_ESTIMATOR", "get_spec", "register", "all_variants",
            "polygon_estimators", "point_estimators", "refusal"]

@@ -11,15 +11,15 @@ import math
 
 import numpy as np
 
-from ..core.jit import jit, jit_parallel, launch, prange, threads
+from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, cached_with_mesh, coordinate_columns,
-                                      expansion_adjacency, new_queues, new_scratch, start_ball_support,
+                                      expansion_adjacency, start_ball_support,
                                       widen_ball_support)
 from ..core.jit import jit_inlined
 from ..core.validity import Reason
 
-__all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs", "clipping_scratch",
+__all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs",
            "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
            "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "add_row",
            "vertex_normal", "unset_row", "level_radii", "start_ball_support", "widen_ball_support", "add_star_rows",
@@ -806,38 +806,6 @@ def clipping_inputs(mesh: Mesh, centres: np.ndarray | None, radii: np.ndarray, f
     # the widest level's supports hold every narrower one's
     touched = touched_elements(mesh, centres, radii[-1], indptr, indices, edges=False) if small else (None, None, None)
     return tri, centres, x, y, z, indptr, indices, blocked is not None, crease, radii, touched
-
-
-def clipping_scratch(mesh: Mesh, centres: np.ndarray, walk: bool, levels: int = 1):
-    """The per-call arrays of a ``csm`` or ``icc`` kernel over ``centres`` at ``levels`` radii.
-
-    Returns
-    -------
-    vc_ptr, vc : (n+1,), (3 m,) int64
-        :attr:`curv.Mesh.vertex_corners`.
-    width : int
-        :func:`corner_width`.
-    vstamps, queues : (parts, n) int64
-        A row per thread slice (:func:`~curv.geometry.neighbourhood.new_scratch`, ``new_queues``).
-    fstamps : (parts, m or 0) int32 (int64 where the level marks need it)
-        Zeroed face stamps of the face-by-face walk (none without ``walk``; :func:`level_mark` fits
-        in 32 bits for a mesh of fewer than 2**31 / levels vertices: half the cache lines).
-    rims : (parts, n) int64
-        Per thread, the support vertices whose edges may leave the last level's ball (the only ones
-        that may leave a wider one, besides the vertices it adds).
-    outside, outside_d2 : (parts, n) int64 and float64
-        :func:`widen_ball_support`'s waiting vertices (size 0 with one level).
-    out : LevelOutputs
-        Unset: the kernel writes every centre's rows, a region touches only its own pages.
-    """
-    vc_ptr, vc = mesh.vertex_corners
-    n = mesh.n_vertices
-    parts = max(1, min(threads(), centres.size))
-    stamp_type = np.int32 if (n + 1) * levels < 2**31 else np.int64
-    fstamps = np.zeros((parts, mesh.n_faces if walk else 0), stamp_type)
-    wide = n if levels > 1 else 0
-    return (vc_ptr, vc, corner_width(mesh), new_scratch(n, parts), new_queues(n, parts), fstamps,
-            new_queues(n, parts), new_queues(wide, parts), np.empty((parts, wide)), LevelOutputs(levels, n))
 
 
 def element_list(count: int, touched: np.ndarray | None) -> np.ndarray:

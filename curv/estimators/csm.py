@@ -23,8 +23,9 @@ intersection and ``area(B ∩ face)`` the exact area of the triangle within the 
 
 How it runs
 -----------
-One parallel kernel per chunk of vertices (:func:`curv.core.jit.iter_chunks`); per vertex it searches
-the support. What neighbouring centres share is computed once per call (:func:`star_terms`): for
+One parallel kernel per chunk of vertices (:func:`curv.core.jit.iter_chunks`), the one icc runs too
+(:mod:`curv.estimators._clipped_sums`: run together, :mod:`curv.estimators.clipping_pair`, the two
+share the search and the clips below); per vertex it searches the support. What neighbouring centres share is computed once per call (:func:`star_terms`): for
 every vertex v, half of ``beta(e) |e| ê êᵀ`` summed over its edges and a third of the area of its
 faces. Summed over a support, these hold every edge and face inside the (convex) ball whole, each
 edge twice by halves and each face thrice by thirds; the only elements left to correct are those
@@ -50,77 +51,15 @@ import math
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..core.jit import jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
-from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_star_rows, clipping_inputs, clipping_scratch,
-                             corner_rings, corner_width, crossing_faces, level_mark, may_leave, crossing_scratch,
-                             element_list, face_in_ball_area, start_ball_support, support_reason, touched_elements,
-                             touches, vertex_normal, widen_ball_support)
-from ._local_fit import slice_bounds
-from ._small_linalg import sym3_eigen
+from ._ball_clipping import (_corner_rings, clipping_inputs, corner_rings, corner_width, element_list, touched_elements,
+                             touches)
+from ._clipped_sums import CLIPPING_PASS, CsmTerms, _clip_chunk, run_clipping, segment_in_ball
 from .registry import EstimatorSpec, register
 
-__all__ = ["iter_csm", "segment_in_ball", "edge_beta_scale", "star_terms"]
-
-
-# ---------------------------------------------------------------------------- clipping helpers
-@jit
-def segment_in_ball(sx, sy, sz, dx, dy, dz, radius2):
-    """Fraction of the segment ``s + t d``, t in [0, 1], inside the ball of squared radius ``radius2`` at 0.
-
-    Solves ``|s + t d|^2 = radius2`` for t and clips the root interval to [0, 1]; 0 when the line
-    misses the ball.
-    """
-    a = dx * dx + dy * dy + dz * dz
-    b = dx * sx + dy * sy + dz * sz
-    c = sx * sx + sy * sy + sz * sz - radius2
-    disc = b * b - a * c
-    if not (disc > 0.0 and a > 0.0):
-        return 0.0
-    sq = math.sqrt(disc)
-    t1 = min(max((-b - sq) / a, 0.0), 1.0)
-    t2 = min(max((-b + sq) / a, 0.0), 1.0)
-    return t2 - t1
-
-
-# ---------------------------------------------------------------------------- eigen
-@jit
-def _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, out):
-    """Curvatures and directions of a normal-cycle tensor T at a vertex with unit normal n.
-
-    Drops the eigenvector closest to n; of the other two (ascending), each eigenvector is the
-    principal direction of the *other* eigenvalue. ``tensor`` (3, 3) is overwritten, ``vectors``
-    (4, 3) is scratch for :func:`sym3_eigen`. Writes ``out[:] = ka, kb, da (3), db (3)`` with
-    ``ka <= kb``, ``db`` the tangent-projected eigenvector of ka and ``da = n x db``.
-    """
-    sym3_eigen(tensor, vectors)  # vectors[:3, j]: eigenvector of the eigenvalue vectors[3, j]
-    drop = 0
-    best = -1.0
-    for j in range(3):
-        along = abs(vectors[0, j] * nx + vectors[1, j] * ny + vectors[2, j] * nz)
-        if along > best:
-            best = along
-            drop = j
-    ia = 1 if drop == 0 else 0
-    ib = 1 if drop == 2 else 2
-    bx, by, bz = vectors[0, ia], vectors[1, ia], vectors[2, ia]
-    dn = bx * nx + by * ny + bz * nz
-    bx -= dn * nx
-    by -= dn * ny
-    bz -= dn * nz
-    norm = math.sqrt(bx * bx + by * by + bz * bz)
-    bx /= norm
-    by /= norm
-    bz /= norm
-    out[0] = vectors[3, ia]
-    out[1] = vectors[3, ib]
-    out[2] = ny * bz - nz * by
-    out[3] = nz * bx - nx * bz
-    out[4] = nx * by - ny * bx
-    out[5] = bx
-    out[6] = by
-    out[7] = bz
+__all__ = ["iter_csm", "csm_terms", "segment_in_ball", "edge_beta_scale", "star_terms"]
 
 
 # ---------------------------------------------------------------------------- per-mesh arrays
@@ -173,47 +112,7 @@ def edge_beta_scale(mesh: Mesh, ids: np.ndarray | None = None) -> np.ndarray:
     return out
 
 
-# ---------------------------------------------------------------------------- the kernel
-@jit
-def _add_outer(sums, w, dx, dy, dz):
-    """Add ``w d dᵀ`` (upper triangle: xx, xy, xz, yy, yz, zz) to ``sums[:6]``."""
-    wx, wy = w * dx, w * dy
-    sums[0] += wx * dx
-    sums[1] += wx * dy
-    sums[2] += wx * dz
-    sums[3] += wy * dy
-    sums[4] += wy * dz
-    sums[5] += w * dz * dz
-
-
-@jit
-def _add_edge_term(sums, ax, ay, az, bx, by, bz, r2, scale):
-    """Add ``beta(e) |e ∩ B| ê êᵀ`` (``scale * frac * d dᵀ``, :func:`_add_outer`) of the edge a -> b.
-
-    ``a`` and ``b`` are the ends' offsets from the ball's centre, ``a`` inside the ball; ``scale``
-    is ``beta(e) / |e|``.
-    """
-    dx, dy, dz = bx - ax, by - ay, bz - az
-    frac = 1.0  # both ends in the (convex) ball: all of e
-    if bx * bx + by * by + bz * bz > r2:
-        frac = segment_in_ball(ax, ay, az, dx, dy, dz, r2)
-    _add_outer(sums, scale * frac, dx, dy, dz)
-
-
-@jit
-def _kept_share(e, edge_faces, crease, tri):
-    """The share of edge e's dihedral term that belongs to the faces kept next to a crease.
-
-    Each of its two faces carries half of it (the dual strip of an edge is half in each face);
-    a face touching a crease vertex is left out, and so is its half: 1, 1/2 or 0.
-    """
-    share = 0.0
-    for side in range(2):
-        if not touches(crease, tri, edge_faces[e, side]):
-            share += 0.5
-    return share
-
-
+# ---------------------------------------------------------------------------- the star terms
 STAR = 8
 """Columns of the per-vertex star terms: half of each edge's ``beta |e| ê êᵀ`` (xx, xy, xz, yy, yz, zz), a third
 of each face's area, and a pad to one cache line."""
@@ -325,143 +224,6 @@ def star_terms(mesh: Mesh, ids: np.ndarray | None = None, crease: np.ndarray | N
     return half_scale, star, clean
 
 
-@jit
-def _walk_sums(p, mark, count, queue, r2, x, y, z, vc_ptr, vc, halfedge_edge, beta_scale, edge_faces, tri,
-               vector_area, face_area, degenerate, cut, crease, estamp, fstamp, sums):
-    """The sums of a centre whose support is not clean (or that stops at creases), face by face and edge by edge.
-
-    Adds the upper triangle of T and the area to ``sums`` (as :func:`_csm_chunk` has them); returns
-    the DEGENERATE_BIT if a degenerate face was met. ``mark``: this walk's stamp
-    (:func:`~curv.estimators._ball_clipping.level_mark`; the stamps start zeroed).
-    """
-    px, py, pz = x[p], y[p], z[p]
-    hit = 0
-    for i in range(count):
-        v = queue[i]
-        vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
-        for j in range(vc_ptr[v], vc_ptr[v + 1]):
-            h = vc[j]
-            f = h // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
-            if cut and crease[v]:
-                if degenerate[f]:
-                    hit |= DEGENERATE_BIT
-                continue
-            if fstamp[f] != mark:
-                fstamp[f] = mark
-                if degenerate[f]:
-                    hit |= DEGENERATE_BIT
-                elif not (cut and touches(crease, tri, f)):
-                    sums[6] += face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
-            # the edge out of v in triangle f: on a consistently oriented mesh every interior
-            # edge of v is one (border and non-manifold edges have no dihedral term)
-            e = halfedge_edge[h]
-            if e < 0 or estamp[e] == mark:
-                continue
-            estamp[e] = mark
-            s = beta_scale[e]
-            if cut and s != 0.0:
-                s *= _kept_share(e, edge_faces, crease, tri)
-            if s != 0.0:
-                w = tri[f, (h - 3 * f + 1) % 3]  # the edge runs from v to the next corner of f
-                _add_edge_term(sums, vx, vy, vz, x[w] - px, y[w] - py, z[w] - pz, r2, s)
-    return hit
-
-
-@jit
-def _csm_finish(p, level, sums, hit, normals, tensor, vectors, res, k1, k2, d1, d2, reason):
-    """Centre p's principal curvatures at ``level`` from its sums (upper triangle of T, area), into
-    row ``(level, p)`` of the outputs."""
-    nx, ny, nz, normal_ok = vertex_normal(normals, p)
-    area = sums[6]
-    singular = not (area > 0.0 and math.isfinite(sums[0] + sums[1] + sums[2] + sums[3] + sums[4] + sums[5]))
-    if not singular and normal_ok:
-        inv = 1.0 / area
-        tensor[0, 0], tensor[1, 1], tensor[2, 2] = sums[0] * inv, sums[3] * inv, sums[5] * inv
-        tensor[0, 1] = tensor[1, 0] = sums[1] * inv
-        tensor[0, 2] = tensor[2, 0] = sums[2] * inv
-        tensor[1, 2] = tensor[2, 1] = sums[4] * inv
-        _principal_from_normal_cycle(tensor, nx, ny, nz, vectors, res)
-        k1[level, p], k2[level, p] = res[0], res[1]
-        for c in range(3):
-            d1[level, p, c] = res[2 + c]
-            d2[level, p, c] = res[5 + c]
-        if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
-            singular = True
-    else:
-        k1[level, p] = k2[level, p] = math.nan
-        for c in range(3):
-            d1[level, p, c] = d2[level, p, c] = math.nan
-    reason[level, p] = support_reason(singular, hit, normal_ok)
-
-
-@jit_parallel
-def _csm_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, half_scale, star,
-               clean,
-               halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area, degenerate, border,
-               nonmanifold, cut, crease, normals, width, vstamps, queues, estamps, fstamps, rims, outside, outside_d2,
-               k1, k2, d1, d2, reason):
-    parts = vstamps.shape[0]
-    levels = radii.shape[0]
-    for t in prange(parts):
-        vectors = np.empty((4, 3))
-        tensor = np.empty((3, 3))
-        res = np.empty(8)
-        acc = np.empty(7)  # the support's star sums so far
-        sums = np.empty(7)  # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle), area(B ∩ mesh)
-        out_h, out_w, out_t, out_area, out_in, ring = crossing_scratch(width)
-        queue, vstamp, estamp, fstamp, rim = queues[t], vstamps[t], estamps[t], fstamps[t], rims[t]
-        waiting, waiting_d2 = outside[t], outside_d2[t]
-        start, stop = slice_bounds(lo, hi, t, parts)
-        for k in range(start, stop):
-            p = centres[k]
-            px, py, pz = x[p], y[p], z[p]
-            # one walk for every level: each level's support is the single search's at its radius
-            # (widen_ball_support), its star sums the last level's plus the rows it added
-            count = start_ball_support(p, vstamp, queue)
-            head = pending = done = rim_count = 0
-            hit = 0
-            exact = True
-            acc[:] = 0.0
-            for level in range(levels):
-                r = radii[level, p]
-                count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, indptr, indices, x, y, z,
-                                                          vstamp, queue, count, head, waiting, waiting_d2, pending)
-                hit, exact = add_star_rows(queue, done, count, border, nonmanifold, clean, star, hit, exact, acc)
-                level_hit = hit
-                if exact:
-                    sums[:] = acc
-                    # every edge and face inside the ball whole: the support's star terms hold each edge
-                    # twice by halves and each face thrice by thirds; an edge v -> w leaving the ball has
-                    # one half in, and its face (v, w, u) one or two thirds: replace them by what is
-                    # inside. Only the last level's rim and the new vertices may have such edges.
-                    kept = 0
-                    for i in range(rim_count + count - done):
-                        v = rim[i] if i < rim_count else queue[done + i - rim_count]
-                        if not may_leave(v, px, py, pz, r, x, y, z, longest):
-                            continue
-                        rim[kept] = v
-                        kept += 1
-                        leaving = crossing_faces(v, px, py, pz, r, x, y, z, vc_ptr, vc, after, link, tri,
-                                                 vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
-                        for a in range(leaving):
-                            h, w = out_h[a], out_w[a]
-                            f = h // 3
-                            s = half_scale[h]
-                            if s != 0.0:
-                                vx, vy, vz = x[v] - px, y[v] - py, z[v] - pz
-                                _add_outer(sums, s * (out_t[a] - 0.5), (x[w] - px) - vx, (y[w] - py) - vy,
-                                           (z[w] - pz) - vz)
-                            sums[6] += out_area[a] - out_in[a] * (face_area[f] / 3.0)
-                    rim_count = kept
-                else:
-                    sums[:] = 0.0
-                    level_hit |= _walk_sums(p, level_mark(p, level, levels), count, queue, r ** 2, x, y, z, vc_ptr,
-                                            vc, halfedge_edge, beta_scale, edge_faces, tri, vector_area, face_area,
-                                            degenerate, cut, crease, estamp, fstamp, sums)
-                done = count
-                _csm_finish(p, level, sums, level_hit, normals, tensor, vectors, res, k1, k2, d1, d2, reason)
-
-
 def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
              centres: np.ndarray | None = None, features=None):
     """Normal-cycle tensor over the ball of radius ``radii[p]`` around every vertex p.
@@ -511,14 +273,41 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     levels = np.ndim(radii) == 2
     tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
         mesh, centres, radii, features)
-    touched = touched[0]
+    terms = yield from csm_terms(mesh, centres, radii, indptr, indices, touched[0], crease)
+    after, link = corner_rings(mesh, touched[0])
+    normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
+    out, _ = yield from run_clipping(mesh, centres, radii, (tri, x, y, z, indptr, indices, cut, crease, after, link),
+                                     normals, csm=terms, chunk=chunk)
+    if levels:
+        return [out.principal(level) for level in range(radii.shape[0])]
+    return out.principal(0)
+
+
+def csm_terms(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, indptr: np.ndarray, indices: np.ndarray,
+              touched: np.ndarray | None, crease: np.ndarray):
+    """csm's per-mesh terms for the supports of ``centres``, a generator (yields 0.0 after each pass).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Triangle mesh.
+    centres : (c,) int64
+    radii : (levels, n) float64
+    indptr, indices, crease :
+        :func:`~curv.estimators._ball_clipping.clipping_inputs`.
+    touched : (k,) int64 or None
+        The vertices a region's supports hold (None: every vertex).
+
+    Returns
+    -------
+    CsmTerms
+        :func:`star_terms`, and the edge table only where a support is not clean (or near a crease):
+        those supports are summed edge by edge.
+    """
     half_scale, star, clean = star_terms(mesh, touched, crease)
-    after, link = corner_rings(mesh, touched)
     yield 0.0
-    # the edge table only where a support is not clean (or near a crease): they walk edge by edge
     walk = not (clean.all() if touched is None else clean[touched].all())
     if walk:
-        edges = mesh.edges
         edge_ids = None if touched is None else touched_elements(mesh, centres, radii[-1], indptr, indices,
                                                                  edges=True)[2]
         beta_scale = edge_beta_scale(mesh, edge_ids)
@@ -526,24 +315,7 @@ def iter_csm(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         yield 0.0
     else:
         beta_scale, halfedge_edge, edge_faces = np.empty(0), np.empty(0, np.int64), np.empty((0, 2), np.int64)
-    normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
-    vc_ptr, vc, width, vstamps, queues, fstamps, rims, outside, outside_d2, out = clipping_scratch(
-        mesh, centres, walk, radii.shape[0])
-    estamps = np.zeros((vstamps.shape[0], beta_scale.size), fstamps.dtype)  # the level marks fit; half the cache lines
-
-    def run(lo: int, hi: int) -> None:
-        launch(_csm_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, after, link,
-               half_scale,
-               star, clean, halfedge_edge, beta_scale, edge_faces, tri, mesh.face_vector_areas,
-               mesh.face_areas, mesh.degenerate_faces, mesh.border_vertices, mesh.nonmanifold_vertices,
-               cut, crease,
-               normals, width, vstamps, queues, estamps, fstamps, rims, outside, outside_d2, out.k1, out.k2, out.d1,
-               out.d2, out.reason)
-
-    yield from iter_chunks(centres.size, run, chunk=chunk)
-    if levels:
-        return [out.principal(level) for level in range(radii.shape[0])]
-    return out.principal(0)
+    return CsmTerms(half_scale, star, clean, walk, halfedge_edge, beta_scale, edge_faces)
 
 
 register(EstimatorSpec(
@@ -553,5 +325,6 @@ register(EstimatorSpec(
     triangles_only=True, uses_normals=False, closed_ring=True,
     reference="Cohen-Steiner & Morvan 2003, Restricted Delaunay triangulations and normal cycle",
     summary="signed dihedral angle x clipped edge length x ê êᵀ summed in a ball, over the area in it",
-    kernels=(_star_terms, _corner_rings, _edge_beta_scale, _csm_chunk), takes_levels=True,
+    kernels=(_star_terms, _corner_rings, _edge_beta_scale, _clip_chunk), takes_levels=True,
+    shared_pass=CLIPPING_PASS,
 ))

@@ -34,7 +34,8 @@ noise of 0.1 mean edge lengths on the 3169-vertex patches, median e_rel at R4 0.
 against 0.15-0.68 from mu1 and mu2. :func:`icc_mean_gaussian` returns H and K themselves.
 
 The measures of the triangles are computed once per call, and a third of them summed at each vertex
-(:func:`star_measures`); summed over a support, these hold every triangle inside the ball whole,
+(:func:`star_measures`; the kernel is csm's too, :mod:`curv.estimators._clipped_sums`, and run
+together, :mod:`curv.estimators.clipping_pair`, the two share the search and the clips); summed over a support, these hold every triangle inside the ball whole,
 by thirds. Only the triangles that cross the sphere are clipped: each is found once, as its one
 halfedge v -> w leaving the ball (v in the support; each vertex's ring read once,
 :func:`curv.estimators._ball_clipping.corner_rings`), and its thirds in the sum are replaced by its
@@ -61,24 +62,15 @@ import math
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, run_to_end
+from ..core.jit import jit_parallel, launch, prange, run_to_end
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ..core.validity import Reason
-from ._local_fit import slice_bounds, store_principal, sym3_bilinear, tangent_frame
-from ._ball_clipping import (DEGENERATE_BIT, _corner_rings, add_row, add_star_rows, clipping_inputs, clipping_scratch,
-                             corner_rings, crossing_faces, level_mark, may_leave, crossing_scratch, element_list,
-                             face_in_ball_area, start_ball_support, support_reason, touches, vertex_normal,
-                             widen_ball_support)
+from ._ball_clipping import _corner_rings, clipping_inputs, corner_rings, element_list, touches
+from ._clipped_sums import CLIPPING_PASS, MEASURES, IccTerms, _clip_chunk, _row_is_finite, run_clipping
 from .registry import EstimatorSpec, register
 
-__all__ = ["iter_icc", "icc_mean_gaussian", "face_measures", "star_measures"]
-
-
-EPS = float(np.finfo(np.float64).eps)
-
-MEASURES = 9
-"""Columns of :func:`face_measures`: mu0, mu1, mu2 and the symmetric part of M (xx, xy, xz, yy, yz, zz)."""
+__all__ = ["iter_icc", "icc_terms", "icc_mean_gaussian", "face_measures", "star_measures"]
 
 
 @jit_parallel
@@ -150,14 +142,6 @@ def face_measures(mesh: Mesh, normals: np.ndarray, ids: np.ndarray | None = None
     return out
 
 
-@jit
-def _row_is_finite(a, r):
-    for c in range(a.shape[1]):
-        if not math.isfinite(a[r, c]):
-            return False
-    return True
-
-
 @jit_parallel
 def _star_measures(ids, vc_ptr, vc, tri, measures, degenerate, nonmanifold, crease, star, clean):
     for i in prange(ids.size):
@@ -219,134 +203,15 @@ def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = Non
     return star, clean
 
 
-@jit
-def _walk_sums(p, mark, count, queue, r2, x, y, z, vc_ptr, vc, tri, vector_area, face_area, degenerate, measures, cut,
-               crease, fstamp, sums):
-    """The nine sums of a centre whose support is not clean (or that stops at creases), face by face.
-
-    Adds them to ``sums`` (9,); returns the DEGENERATE_BIT if a degenerate face or a face without
-    measures was met. ``mark``: this walk's stamp (:func:`~curv.estimators._ball_clipping.level_mark`;
-    the stamps start zeroed).
-    """
-    px, py, pz = x[p], y[p], z[p]
-    hit = 0
-    for i in range(count):
-        v = queue[i]
-        for j in range(vc_ptr[v], vc_ptr[v + 1]):
-            f = vc[j] // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
-            if fstamp[f] == mark:
-                continue
-            fstamp[f] = mark
-            if degenerate[f]:
-                hit |= DEGENERATE_BIT
-                continue
-            if cut and touches(crease, tri, f):
-                continue  # the surface ends at a crease for this centre: its faces are left out
-            if not _row_is_finite(measures, f):
-                hit |= DEGENERATE_BIT  # a corner without a normal
-                continue
-            # weight: the fraction of the face's area inside B
-            inside = face_in_ball_area(tri, f, x, y, z, vector_area, face_area, px, py, pz, r2)
-            w = min(inside / face_area[f], 1.0)
-            if w > 0.0:
-                add_row(sums, w, measures, f)
-    return hit
-
-
-@jit
-def _icc_finish(p, level, sums, hit, normals, from_measures, k1, k2, d1, d2, mean, gaussian, reason):
-    """Centre p's curvatures at ``level`` from its nine sums, into row ``(level, p)`` of the outputs."""
-    nx, ny, nz, normal_ok = vertex_normal(normals, p)
-    mean[level, p] = gaussian[level, p] = math.nan
-    mu0, s1, s2 = sums[0], sums[1], sums[2]
-    total = 0.0
-    for c in range(MEASURES):
-        total += sums[c]
-    singular = not (mu0 > 0.0 and math.isfinite(total))
-    if not singular and normal_ok:
-        h = mean[level, p] = 0.5 * s1 / mu0
-        kk = gaussian[level, p] = s2 / mu0
-        # W = M / mu0 in the tangent frame (U, V) of the vertex normal
-        ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
-        m00, m01, m02, m11, m12, m22 = sums[3], sums[4], sums[5], sums[6], sums[7], sums[8]
-        e = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, ux, uy, uz) / mu0
-        f_ = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, vx, vy, vz) / mu0
-        g = sym3_bilinear(m00, m01, m02, m11, m12, m22, vx, vy, vz, vx, vy, vz) / mu0
-        store_principal(p, e, f_, g, ux, uy, uz, vx, vy, vz, k1[level], k2[level], d1[level], d2[level])
-        if from_measures:
-            # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
-            # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8.
-            # H and K are sums of a few hundred clipped terms, rounded to tens of EPS.
-            disc = h * h - kk
-            if disc <= 64.0 * EPS * (h * h + abs(kk)):
-                disc = 0.0
-            rad = math.sqrt(disc)
-            k1[level, p] = h + rad
-            k2[level, p] = h - rad
-        if not (math.isfinite(k1[level, p]) and math.isfinite(k2[level, p])):
-            singular = True
-    else:
-        k1[level, p] = k2[level, p] = math.nan
-        for c in range(3):
-            d1[level, p, c] = d2[level, p, c] = math.nan
-    reason[level, p] = support_reason(singular, hit, normal_ok)
-
-
-@jit_parallel
-def _icc_chunk(centres, lo, hi, radii, indptr, indices, x, y, z, longest, vc_ptr, vc, after, link, star, clean, tri,
-               vector_area,
-               face_area, degenerate, measures, border, nonmanifold, cut, crease, normals, from_measures, width,
-               vstamps, queues, fstamps, rims, outside, outside_d2, k1, k2, d1, d2, mean, gaussian, reason):
-    parts = vstamps.shape[0]
-    levels = radii.shape[0]
-    for t in prange(parts):
-        acc = np.empty(MEASURES)  # the support's star sums so far
-        sums = np.empty(MEASURES)
-        out_h, out_w, out_t, out_area, out_in, ring = crossing_scratch(width)
-        queue, vstamp, fstamp, rim = queues[t], vstamps[t], fstamps[t], rims[t]
-        waiting, waiting_d2 = outside[t], outside_d2[t]
-        start, stop = slice_bounds(lo, hi, t, parts)
-        for k in range(start, stop):
-            p = centres[k]
-            px, py, pz = x[p], y[p], z[p]
-            # one walk for every level, as in csm's kernel
-            count = start_ball_support(p, vstamp, queue)
-            head = pending = done = rim_count = 0
-            hit = 0
-            exact = True
-            acc[:] = 0.0
-            for level in range(levels):
-                r = radii[level, p]
-                count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, indptr, indices, x, y, z,
-                                                          vstamp, queue, count, head, waiting, waiting_d2, pending)
-                hit, exact = add_star_rows(queue, done, count, border, nonmanifold, clean, star, hit, exact, acc)
-                level_hit = hit
-                if exact:
-                    sums[:] = acc
-                    # the support's star sums hold every face inside the ball thrice by thirds; a face
-                    # (v, w, u) leaving the ball along v -> w has one or two thirds in: replace them by
-                    # the fraction of its area inside (only the last level's rim and the new vertices
-                    # may have such faces)
-                    kept = 0
-                    for i in range(rim_count + count - done):
-                        v = rim[i] if i < rim_count else queue[done + i - rim_count]
-                        if not may_leave(v, px, py, pz, r, x, y, z, longest):
-                            continue
-                        rim[kept] = v
-                        kept += 1
-                        leaving = crossing_faces(v, px, py, pz, r, x, y, z, vc_ptr, vc, after, link, tri,
-                                                 vector_area, face_area, out_h, out_w, out_t, out_area, out_in, ring)
-                        for a in range(leaving):
-                            f = out_h[a] // 3
-                            add_row(sums, min(out_area[a] / face_area[f], 1.0) - out_in[a] * (1.0 / 3.0), measures, f)
-                    rim_count = kept
-                else:
-                    sums[:] = 0.0
-                    level_hit |= _walk_sums(p, level_mark(p, level, levels), count, queue, r ** 2, x, y, z, vc_ptr,
-                                            vc, tri, vector_area, face_area, degenerate, measures, cut, crease, fstamp,
-                                            sums)
-                done = count
-                _icc_finish(p, level, sums, level_hit, normals, from_measures, k1, k2, d1, d2, mean, gaussian, reason)
+def icc_terms(mesh: Mesh, normals: np.ndarray, touched: tuple, crease: np.ndarray, from_measures: bool = True
+              ) -> IccTerms:
+    """icc's per-mesh terms: :func:`face_measures` and :func:`star_measures` (a region's only,
+    ``touched``: :func:`~curv.estimators._ball_clipping.clipping_inputs`), and whether a support is
+    summed face by face. ``normals`` (n, 3) float64 C-contiguous."""
+    measures = face_measures(mesh, normals, touched[1])
+    star, clean = star_measures(mesh, measures, touched[0], crease)
+    walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
+    return IccTerms(measures, star, clean, walk, from_measures)
 
 
 def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: int | None,
@@ -356,27 +221,12 @@ def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: in
     tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
         mesh, centres, radii, features)
     normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
-    measures = face_measures(mesh, normals, touched[1])
-    star, clean = star_measures(mesh, measures, touched[0], crease)
+    terms = icc_terms(mesh, normals, touched, crease, from_measures)
     after, link = corner_rings(mesh, touched[0])
-    walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
     yield 0.0
-    levels = radii.shape[0]
-    vc_ptr, vc, width, vstamps, queues, fstamps, rims, outside, outside_d2, out = clipping_scratch(
-        mesh, centres, walk, levels)
-    n = mesh.n_vertices
-    mean = np.empty((levels, n))  # NaN at each centre before its sums (a region touches only its own pages)
-    gaussian = np.empty((levels, n))
-
-    def run(lo: int, hi: int) -> None:
-        launch(_icc_chunk, centres, lo, hi, radii, indptr, indices, x, y, z, mesh.longest_edge, vc_ptr, vc, after, link,
-               star, clean,
-               tri, mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, measures, mesh.border_vertices,
-               mesh.nonmanifold_vertices, cut, crease, normals, from_measures, width, vstamps, queues,
-               fstamps, rims, outside, outside_d2, out.k1, out.k2, out.d1, out.d2, mean, gaussian, out.reason)
-
-    yield from iter_chunks(centres.size, run, chunk=chunk)
-    return out, mean, gaussian
+    _, out = yield from run_clipping(mesh, centres, radii, (tri, x, y, z, indptr, indices, cut, crease, after, link),
+                                     normals, icc=terms, chunk=chunk)
+    return out
 
 
 def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
@@ -444,6 +294,7 @@ register(EstimatorSpec(
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
-    kernels=(_face_measures, _star_measures, _corner_rings, _icc_chunk), takes_levels=True,
+    kernels=(_face_measures, _star_measures, _corner_rings, _clip_chunk), takes_levels=True,
+    shared_pass=CLIPPING_PASS,
     options={"from_measures": (True, False)},
 ))

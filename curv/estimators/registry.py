@@ -17,6 +17,7 @@ from ..core.pointcloud import PointCloud
 from ..core.result import Principal
 
 __all__ = ["EstimatorSpec", "ESTIMATORS", "DEFAULT_ESTIMATOR", "register", "get_spec", "EstimatorFunction",
+           "SHARED_PASSES", "SharedPass", "register_pass",
            "polygon_estimators", "point_estimators", "refusal"]
 
 DEFAULT_ESTIMATOR = "mru"
@@ -94,6 +95,11 @@ class EstimatorSpec:
     skips_errors : bool
         ``function`` takes ``standard_errors=False`` and then skips their cost (the fits whose
         standard errors pool neighbours: ``nc``, ``qs``, ``an``, ``mru``).
+    shared_pass : str
+        A pass (:data:`SHARED_PASSES`) that runs this estimator together with the others naming it
+        and shares their work (``csm`` and ``icc``: one search and one clip of the crossing faces per
+        vertex and range, :func:`curv.estimate_table`); empty: it runs alone. The estimators of one
+        pass take the same normals, ranges and supports (``uses_normals``, ``has_support``).
     """
 
     name: str
@@ -115,6 +121,7 @@ class EstimatorSpec:
     takes_levels: bool = False
     skips_errors: bool = False
     min_neighbours: object = field(default=0, compare=False)
+    shared_pass: str = field(default="", compare=False)
 
     def fewest_neighbours(self, options: dict | None = None) -> int:
         """:attr:`min_neighbours` for these estimator options."""
@@ -147,6 +154,24 @@ def register(spec: EstimatorSpec) -> EstimatorSpec:
         raise ValueError(f"estimator {spec.name!r} is registered twice")
     ESTIMATORS[spec.name] = spec
     return spec
+
+
+SharedPass = Callable[..., Generator[float, None, dict]]
+"""``fn(mesh, normals, radii, methods, *, chunk, centres, features, options) -> {name: [Principal]}``:
+the estimators ``methods`` (names whose spec names this pass) at every level of ``radii``
+(levels, n), ascending per vertex, one Principal per level each; ``options`` maps each name to its
+estimator options. Otherwise as :data:`EstimatorFunction`."""
+
+SHARED_PASSES: dict[str, SharedPass] = {}
+"""Registry: pass name -> the function running its estimators together (:attr:`EstimatorSpec.shared_pass`)."""
+
+
+def register_pass(name: str, function: SharedPass) -> SharedPass:
+    """Add a shared pass to :data:`SHARED_PASSES` (the name must be new)."""
+    if name in SHARED_PASSES:
+        raise ValueError(f"shared pass {name!r} is registered twice")
+    SHARED_PASSES[name] = function
+    return function
 
 
 def get_spec(name: str) -> EstimatorSpec:

@@ -19,28 +19,36 @@ __all__ = ["run_task"]
 
 
 def _plain_groups(variants: tuple[Variant, ...]) -> list[list[int]]:
-    """The variants' indices in groups estimated by one call: each method's plain-range variants
-    together (first-seen order), every smoothing variant alone."""
+    """The variants' indices in groups estimated by one call: the plain-range variants of each
+    method together, and of the methods that share a pass (csm and icc) together (first-seen
+    order), every smoothing variant alone."""
+    from ..estimators import get_spec
+
     groups: dict = {}
     for i, v in enumerate(variants):
-        key = v.method if v.smooth is Smoothing.NONE else ("alone", i)
+        key = (get_spec(v.method).shared_pass or v.method) if v.smooth is Smoothing.NONE else ("alone", i)
         groups.setdefault(key, []).append(i)
     return list(groups.values())
 
 
 def _estimate_group(mesh, variants: list[Variant], normals, region) -> list:
-    """The results of ``variants`` (one method's plain ranges, or one smoothing variant): one
-    :func:`curv.estimate_ranges` call for the ranges (csm, icc and the fits nc, qs, an, mru, jet
-    share one walk over them, the others the setup), without standard errors (the study reads none)."""
-    from ..api import estimate, estimate_ranges
+    """The results of ``variants`` (the plain ranges of one method or of the methods of one shared
+    pass, or one smoothing variant), in their order: one :func:`curv.estimate_table` call for the
+    ranges (csm and icc share one walk and one clip of the crossing faces, the fits nc, qs, an,
+    mru, jet one walk over their ranges, the others the setup), without standard errors (the
+    study reads none)."""
+    from ..api import estimate, estimate_table
 
     v = variants[0]
     if v.smooth is not Smoothing.NONE:
         return [estimate(mesh, method=v.method, range=v.range, smooth=v.smooth,
                          normals=None if v.smooth is Smoothing.MESH else normals,
                          vertices=None if v.smooth is Smoothing.VALUES else region, standard_errors=False)]
-    return estimate_ranges(mesh, v.method, [u.range for u in variants], normals=normals, vertices=region,
-                           standard_errors=False)
+    ranges: dict = {}
+    for u in variants:
+        ranges.setdefault(u.method, []).append(u.range)
+    table = estimate_table(mesh, list(ranges), ranges, normals=normals, vertices=region, standard_errors=False)
+    return [table[u.method][ranges[u.method].index(u.range)] for u in variants]
 
 
 def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
@@ -51,10 +59,11 @@ def run_task(task: Task, variants: tuple[Variant, ...]) -> list[dict]:
     vertices are estimated (a region, ``vertices=``, whose values equal the whole mesh's there):
     the others are never measured, and on the paper's coarse meshes they are most of the mesh.
     R2SV, which smooths the estimated values over the neighbours, still estimates everywhere.
-    The plain ranges of one estimator are estimated by one call (:func:`curv.estimate_ranges`:
-    the same values as one call per range, to rounding for csm, icc, nc, qs, an, mru and jet, which
-    share one walk over the ranges), and no estimate computes standard errors (the study reads
-    none). The ``seconds`` of such a group's rows are the group's time shared equally among them.
+    The plain ranges of one estimator, or of the estimators that share a pass (csm and icc), are
+    estimated by one call (:func:`curv.estimate_table`: the same values as one call per range, to
+    rounding for csm, icc, nc, qs, an, mru and jet, which share one walk over the ranges), and no
+    estimate computes standard errors (the study reads none). The ``seconds`` of such a group's
+    rows are the group's time shared equally among them (csm's and icc's rows share their pass's).
     An estimator that raises does not stop the study: its row carries the error text and NaN
     measures, and the report lists it (a group that raises is run again one variant at a time, so
     that each row carries its own error).

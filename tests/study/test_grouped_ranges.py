@@ -48,7 +48,7 @@ def test_a_failing_group_gives_each_row_its_error(tiny_settings, monkeypatch):
     def fails(*args, **kwargs):
         raise RuntimeError("broken\nestimator")
 
-    monkeypatch.setattr("curv.api.estimate_ranges", fails)
+    monkeypatch.setattr("curv.api.estimate_table", fails)
     monkeypatch.setattr("curv.api.estimate", fails)
     rows = tasks.run_task(task, settings.variants_for(task))
     assert [r["error"] for r in rows] == ["RuntimeError: broken estimator"] * 2

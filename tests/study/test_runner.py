@@ -87,8 +87,9 @@ def test_task_rows_equal_whole_mesh_estimates(tiny_settings):
     for v, row in zip(variants, rows):
         whole = curv.estimate(tm.mesh, v.method, v.range, normals=normals)
         for name, value in summarize(tm.truth, whole, tm.evaluated).items():
-            if v.method == "mru" and isinstance(value, float):
-                # mru's two ranges share one walk: the sums are added in another order
+            if v.method in ("mru", "icc") and isinstance(value, float):
+                # mru's two ranges share one walk, and icc's R4 csm's R2 (one pass runs both at both
+                # ranges): the sums are added in another order
                 assert np.isclose(row[name], value, rtol=1e-9, atol=1e-12, equal_nan=True), (v.id, name)
             else:
                 assert row[name] == value or (np.isnan(row[name]) and np.isnan(value)), (v.id, name)
