@@ -81,9 +81,9 @@ def _mesh_step() -> None:
 
 def _estimator_step(name: str) -> None:
     """One estimator on a closed, an open, a creased (with features) and, where it takes polygons, a quad mesh;
-    its ranges in one call; and on a cloud where it takes one."""
+    its ranges in one call, with the estimators it shares a pass with; and on a cloud where it takes one."""
     import curv
-    from curv.estimators import get_spec, polygon_estimators
+    from curv.estimators import ESTIMATORS, get_spec, polygon_estimators
 
     spec = get_spec(name)
     k = spec.ranges[min(1, len(spec.ranges) - 1)] if spec.has_support else None
@@ -96,6 +96,9 @@ def _estimator_step(name: str) -> None:
         curv.estimate(_quad_mesh(), name, k)
     if spec.takes_levels:
         curv.estimate_ranges(_mesh(), name, spec.ranges, standard_errors=False)
+    if spec.shared_pass:  # the study's path: the estimators sharing the pass in one call
+        partners = [other for other in ESTIMATORS if get_spec(other).shared_pass == spec.shared_pass]
+        curv.estimate_table(_mesh(), partners, spec.ranges, standard_errors=False)
     if spec.takes_points:
         curv.estimate(_cloud(), name, k)
 
