@@ -76,7 +76,7 @@ def iter_estimate(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, Curvature]:
@@ -231,7 +231,7 @@ def _iter_estimates(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, dict]:
@@ -482,12 +482,14 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
 
     n = cloud.n_points
     ambiguous = one_sided = np.zeros(n, bool)
+    orientation = None  # normals not estimated here are not turned
     if normals is None and cloud.normals is not None:
         used, label = normalize_rows(np.asarray(cloud.normals)), "file"
     elif normals is None or (isinstance(normals, str) and normals in ("pca", "fit")):
         method = "pca" if isinstance(normals, str) and normals == "pca" else "jet"
         est = point_normals(cloud, method=method, range=fit_range, orient=orient)
         used, ambiguous, one_sided, label = est.normals, est.ambiguous, est.one_sided, f"{method} {est.label}"
+        orientation = est.orient if isinstance(est.orient, str) else tuple(float(v) for v in est.orient)
     elif isinstance(normals, str):
         raise EstimatorError(f"normals on a point cloud must be an (n, 3) array, 'pca' or 'fit'; got {normals!r}")
     else:
@@ -502,7 +504,8 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
         (coincident, Reason.DEGENERATE),
         # on the rim of an open scan the fits see one side only, as on a mesh border
         (border, Reason.BORDER),
-    ), info={"points": True, "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
+    ), info={"points": True, "orientation": orientation,
+             "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
              "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum())},
                    support_marks=(_line_supports(cloud),))
     return used, flags, label
@@ -743,10 +746,13 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
         full run's at these vertices.
     knn : int, optional
         Point clouds only, instead of ``range``: each point's support is its ``knn`` nearest points.
-    orient : {"up", "outward"} or (3,) array_like
-        Point clouds whose normals are estimated: turn each connected part up (+z at its highest
-        point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
-        viewpoint (a scanner's position).
+    orient : {"up", "top", "outward"} or (3,) array_like, optional
+        Point clouds whose normals are estimated: every normal up (nz >= 0 point by point, as
+        PDAL does; a normal within 3 degrees of horizontal is ``Reason.ORIENTATION``), each
+        connected part turned up at its highest point or outward and propagated (Hoppe et al.
+        1992), or every normal towards this viewpoint (a scanner's position). Default
+        (:func:`curv.point_normals.default_orientation`): ``"up"`` for a georeferenced cloud
+        (LAS/LAZ), ``"top"`` for any other; ``info["orientation"]`` says which ran.
     standard_errors : bool
         False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
         and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,

@@ -83,12 +83,17 @@ class PointCloud(PointSet):
     normals : (n, 3) array_like, optional
         Per-point normals as given (rows of zero length or NaN are allowed: such points have no
         usable normal). None when the input has none.
+    georeferenced : bool
+        The points are a scan in a map's coordinates with z up (aerial or terrestrial LiDAR; the
+        LAS/LAZ reader says so): estimated normals are then turned up at every point by default
+        (:func:`curv.point_normals.default_orientation`).
 
     The arrays are read-only copies: a point cloud is immutable, like :class:`curv.Mesh`.
     """
 
-    def __init__(self, points, normals=None):
+    def __init__(self, points, normals=None, *, georeferenced: bool = False):
         self._vertices = as_positions(points)
+        self._georeferenced = bool(georeferenced)
         if normals is None:
             self._normals = None
         else:
@@ -106,6 +111,11 @@ class PointCloud(PointSet):
     def normals(self) -> np.ndarray | None:
         """(n, 3) float64 normals given with the points (read-only), or None."""
         return self._normals
+
+    @property
+    def georeferenced(self) -> bool:
+        """Whether the points are a scan in a map's coordinates with z up (see the class notes)."""
+        return self._georeferenced
 
     @cached_property
     def grid(self):
@@ -230,4 +240,5 @@ class PointCloud(PointSet):
 
     def __repr__(self) -> str:
         with_normals = "with normals" if self._normals is not None else "without normals"
-        return f"PointCloud({self.n_points} points, {with_normals})"
+        where = ", georeferenced" if self._georeferenced else ""
+        return f"PointCloud({self.n_points} points, {with_normals}{where})"
