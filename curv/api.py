@@ -349,16 +349,19 @@ def _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cen
     """The :class:`Curvature` of one range from the estimator's raw result: the validity rules,
     the settling pass, smoothing of the values, a region's full-length rows (a generator, as the
     support checks of a point cloud are)."""
-    for mask_of in flags.support_marks:
-        # checks of the supports themselves (points: a support along a curve), on the estimated rows
-        mask, code = yield from mask_of(radii, centres, usable)
-        flags = flags.marked(mask, code)
-    if fused:
-        used_normals = raw.normals
-
     def at(flags: np.ndarray) -> np.ndarray:
         """The rows of a per-vertex array that this call estimates."""
         return flags if centres is None else flags[centres]
+
+    found = {}
+    for mask_of in flags.support_marks:
+        # checks of the supports themselves (points: a support along a curve, or a few steps of the
+        # coordinates' grid wide), on the estimated rows; the info counts each check's points
+        mask, code, name = yield from mask_of(radii, centres, usable)
+        flags = flags.marked(mask, code)
+        found[name] = int(at(mask).sum())
+    if fused:
+        used_normals = raw.normals
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
     k1_se, k2_se = _standard_errors(raw if standard_errors else None, at, smooth, k1.shape[0])
@@ -401,7 +404,7 @@ def _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cen
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
               "feature_edges": 0 if feats is None else feats.count,
-              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info},
+              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info, **found},
     )
     return result if twin is None else _rows_back(result, twin[1])
 
@@ -420,8 +423,9 @@ class _Flags:
     info: dict
     forced: tuple = ()
     support_marks: tuple = ()
-    """Generators ``(radii, centres, usable) -> (mask, Reason)`` run after the estimate; ``usable``
-    (n,) bool marks the points whose normals the estimator reads (None: it reads none)."""
+    """Generators ``(radii, centres, usable) -> (mask, Reason, name)`` run after the estimate; ``usable``
+    (n,) bool marks the points whose normals the estimator reads (None: it reads none); the
+    result's ``info[name]`` counts the estimated points the mask holds."""
 
     def marked(self, mask: np.ndarray, code) -> "_Flags":
         """These flags with one more ``(mask, code)`` mark, applied last."""
@@ -478,10 +482,10 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
     ``normals``: None (the cloud's if it has them, else jet fits), ``"fit"`` (jet), ``"pca"``, or
     an (n, 3) array.
     """
-    from .point_normals import border_points, point_normals
+    from .point_normals import border_points, point_normals, support_floor
 
     n = cloud.n_points
-    ambiguous = one_sided = np.zeros(n, bool)
+    ambiguous = one_sided = widened = np.zeros(n, bool)
     orientation = None  # normals not estimated here are not turned
     if normals is None and cloud.normals is not None:
         used, label = normalize_rows(np.asarray(cloud.normals)), "file"
@@ -490,6 +494,7 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
         est = point_normals(cloud, method=method, range=fit_range, orient=orient)
         used, ambiguous, one_sided, label = est.normals, est.ambiguous, est.one_sided, f"{method} {est.label}"
         orientation = est.orient if isinstance(est.orient, str) else tuple(float(v) for v in est.orient)
+        widened = est.widened
     elif isinstance(normals, str):
         raise EstimatorError(f"normals on a point cloud must be an (n, 3) array, 'pca' or 'fit'; got {normals!r}")
     else:
@@ -506,8 +511,10 @@ def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
         (border, Reason.BORDER),
     ), info={"points": True, "orientation": orientation,
              "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
-             "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum())},
-                   support_marks=(_line_supports(cloud),))
+             "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum()),
+             "coordinate_step": cloud.coordinate_step, "support_floor": support_floor(cloud),
+             "widened_normals": int(widened.sum())},
+                   support_marks=(_line_supports(cloud), _quantised_supports(cloud)))
     return used, flags, label
 
 
@@ -519,7 +526,19 @@ def _line_supports(cloud: PointCloud):
 
     def check(radii, centres, usable=None):
         spread = yield from support_spread(cloud, radii, centres, usable=usable)
-        return ~(spread >= MIN_SPREAD), Reason.SINGULAR
+        return ~(spread >= MIN_SPREAD), Reason.SINGULAR, "line_supports"
+
+    return check
+
+
+def _quantised_supports(cloud: PointCloud):
+    """A support check: supports only a few steps of the grid the coordinates are stored on wide
+    see its stairs, not the surface: SINGULAR (:data:`curv.point_normals.MIN_SUPPORT_STEPS`)."""
+    from .point_normals import quantised_supports
+
+    def check(radii, centres, usable=None):
+        yield 1.0
+        return quantised_supports(cloud, radii), Reason.SINGULAR, "quantised_supports"
 
     return check
 

@@ -76,15 +76,15 @@ from .core.knn import GRAPH_NEIGHBOURS, build_grid, grid_gather
 from .geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                             latest_with_mesh, new_queues, new_scratch)
 from .core.pointcloud import PointCloud
-from .core.ranges import ball_radii, point_spacing, resolve
+from .core.ranges import TIE_TOLERANCE, ball_radii, point_spacing, resolve
 from .core.validity import Reason
 
 _FIT_OK = int(Reason.OK)
 
 __all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "default_orientation",
            "describe_orientation", "border_points", "border_radii", "ORIENTATIONS",
-           "support_spread",
-           "MIN_SPREAD", "ONE_SIDED_GAP", "BORDER_RANGE",
+           "support_spread", "support_floor", "quantised_supports", "range_above_grid",
+           "MIN_SPREAD", "MIN_SUPPORT_STEPS", "ONE_SIDED_GAP", "BORDER_RANGE",
            "NORMAL_RANGE", "BORDER_GAP", "AGREE_COSINE", "GRAZING_COSINE", "NORMAL_METHODS"]
 
 NORMAL_RANGE = 2
@@ -125,6 +125,19 @@ often holds the point's row and one neighbouring row only; its jet normal tilts,
 errors in H up to 40x the largest |H| of the patch there (99th percentile 22.7). Leaving those
 points' normals out (NaN, ``Reason.SINGULAR``) brought the 99th percentile to 0.022 and cost 0.3 %
 of the points of a uniform random sphere (0.8 % at 135 degrees)."""
+
+MIN_SUPPORT_STEPS = 10
+"""A support must be at least this many coordinate steps wide (in radius) for its fit to be trusted
+(:func:`support_floor`). On coordinates stored on a grid of step q (a LAS file's scale; ``plane.laz``
+in laspy's samples: a plane on a 1 cm grid with 1.4 cm spacing), a fit over a ball of radius r sees
+the grid's stairs: measured on that plane and on a sphere of radius 1 rounded to 1 cm (0.5 cm
+spacing), the error in H that the grid alone causes is about q / r² in the median (0.7-1.0 x at
+r = 6-16 q, qs and jet) and up to about 10 x that at the extremes. Below r = 10 q that reaches 1 / r,
+the largest curvature a support of radius r can hold: the value can be anything (qs on the plane at
+R2, r = 2.8 q: |H| up to 1.1e5 where the truth is 0). Such estimates are ``SINGULAR`` (ill-conditioned
+at the coordinates' resolution), and the normals are fitted over at least this radius
+(:func:`point_normals`): with R2 normals qs on the plane at R8 still reached |H| 506, with normals
+over 10 q at most 4.7."""
 
 MIN_SPREAD = 0.05
 """A support whose offsets' second principal spread (what a quadratic function of the first does
@@ -518,6 +531,30 @@ def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | N
     return spread
 
 
+def support_floor(cloud: PointCloud) -> float:
+    """The narrowest support radius trusted on this cloud: :data:`MIN_SUPPORT_STEPS` steps of the
+    grid its coordinates are stored on (:attr:`curv.PointCloud.coordinate_step`; about 1e-5 of the
+    spacing for coordinates of full precision, where it changes nothing)."""
+    return MIN_SUPPORT_STEPS * cloud.coordinate_step
+
+
+def range_above_grid(cloud: PointCloud, *, uses_normals: bool = False) -> int:
+    """The smallest whole range Rk whose supports reach :func:`support_floor` at 95 % of the points
+    (those with the 5 % smallest spacings may stay below): what to ask for on a coarse grid."""
+    spacing = point_spacing(cloud)
+    low = float(np.percentile(spacing[np.isfinite(spacing)], 5)) if np.isfinite(spacing).any() else 0.0
+    if not low > 0.0:
+        return NORMAL_RANGE
+    k = max(NORMAL_RANGE, math.ceil(support_floor(cloud) / low - 1e-9))
+    return k + 1 if uses_normals else k
+
+
+def quantised_supports(cloud: PointCloud, radii: np.ndarray) -> np.ndarray:
+    """(n,) bool: the supports of these radii (n,) narrower than :func:`support_floor`, whose fits
+    see the coordinates' grid rather than the surface (``SINGULAR`` in an estimate)."""
+    return np.asarray(radii) < support_floor(cloud)
+
+
 def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = None):
     """Unoriented PCA normals and angular gaps over each point's ball support (a generator).
 
@@ -849,6 +886,8 @@ class PointNormals:
         ``"pca"`` or ``"jet"``; the range label, e.g. ``"R2"``.
     orient : str or (3,) float64
         The orientation rule that ran (:data:`ORIENTATIONS`, or the viewpoint).
+    widened : (n,) bool or None
+        Points whose fit was widened to :func:`support_floor` (coordinates on a coarse grid).
     """
 
     normals: np.ndarray
@@ -859,6 +898,7 @@ class PointNormals:
     method: str
     label: str
     orient: object = "top"
+    widened: np.ndarray | None = None
 
 
 def _radii(cloud: PointCloud, k, *, uses_normals: bool = False, knn=None) -> np.ndarray:
@@ -971,16 +1011,22 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         range = None
     rng = resolve(get_spec("jet"), range, radius, knn)
     radii = ball_radii(cloud, rng, uses_normals=False)
+    # on coordinates stored on a coarse grid, fits over fewer than MIN_SUPPORT_STEPS steps see its
+    # stairs: the normals are fitted over at least that radius (the estimates there are SINGULAR)
+    floor = support_floor(cloud)
+    widened = radii < floor
+    if widened.any():
+        radii = np.where(widened, floor * (1.0 + TIE_TOLERANCE), radii)
     # one pass: the frames at BORDER_RANGE (borders; the PCA normals that orient), the frame and
     # the jet normals at the fits' range (module notes, "One pass"), the default line checks
     spread_radii = _default_spreads(cloud)
-    found = latest_with_mesh(cloud, "normals pass", (rng.label, method),
+    found = latest_with_mesh(cloud, "normals pass", (rng.label, method, floor),
                              lambda: run_to_end(_one_pass(cloud, border_radii(cloud), radii,
                                                     jet=method == "jet", normals_b=method == "pca",
                                                     spreads=spread_radii)))
     _keep(cloud, found, spread_radii)
     pca, gap = _frames(cloud)
-    if method == "pca" and rng.label != resolve(get_spec("jet"), BORDER_RANGE).label:
+    if method == "pca" and (rng.label != resolve(get_spec("jet"), BORDER_RANGE).label or widened.any()):
         pca = found.normal_b
     orient = default_orientation(cloud) if orient is None else orient
     one_sided = np.zeros(cloud.n_points, bool)
@@ -995,7 +1041,8 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
             one_sided = (found.gap_b > ONE_SIDED_GAP) & ~(gap > BORDER_GAP) & np.isfinite(oriented).all(axis=1)
             oriented[one_sided] = np.nan
         return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
-                            border=gap > BORDER_GAP, method=method, label=rng.label, orient=orient)
+                            border=gap > BORDER_GAP, method=method, label=rng.label, orient=orient,
+                            widened=widened)
     oriented, ambiguous = orient_normals(cloud, pca, orient=orient)
     if method == "jet":
         fitted = found.fitted.copy()
@@ -1007,7 +1054,7 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         fitted[one_sided] = np.nan
         oriented = fitted
     return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
-                        border=gap > BORDER_GAP, method=method, label=rng.label, orient=orient)
+                        border=gap > BORDER_GAP, method=method, label=rng.label, orient=orient, widened=widened)
 
 
 def grid_ordered(cloud: PointCloud):

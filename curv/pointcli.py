@@ -95,4 +95,26 @@ def report_lines(args, cloud, res) -> list[str]:
         lines.append(f"  ambiguous normals {info['ambiguous_normals']:,} (orientation undecided: no estimate there)")
     if info.get("one_sided_normals"):
         lines.append(f"  one-sided normals {info['one_sided_normals']:,} (fitted across an empty side: no estimate there)")
+    lines += _grid_lines(args, cloud, info)
+    return lines
+
+
+def _grid_lines(args, cloud, info) -> list[str]:
+    """What the coordinates' grid did (:data:`curv.point_normals.MIN_SUPPORT_STEPS`): the normals
+    widened to it, the estimates over narrower supports marked, and the range that clears it."""
+    from .estimators import get_spec
+    from .point_normals import MIN_SUPPORT_STEPS, range_above_grid
+
+    widened, marked = info.get("widened_normals", 0), info.get("quantised_supports", 0)
+    if not (widened or marked):
+        return []
+    step, floor = info["coordinate_step"], info["support_floor"]
+    lines = [f"  coordinates on a {step:.4g} grid: fits narrower than {floor:.4g} ({MIN_SUPPORT_STEPS} steps) "
+             f"see its stairs"]
+    if widened:
+        lines.append(f"  normals fitted over at least {floor:.4g} at {widened:,} points")
+    if marked:
+        k = range_above_grid(cloud, uses_normals=get_spec(args.method).uses_normals)
+        lines.append(f"  {marked:,} estimates over narrower supports are SINGULAR (no estimate there): "
+                     f"try -r {k} or more")
     return lines

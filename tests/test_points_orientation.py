@@ -39,7 +39,7 @@ def test_real_aerial_scans_are_oriented_up_at_every_point(name):
     res = curv.estimate(cloud, "qs", 2)
     assert res.info["orientation"] == "up"
     finite, undecided = _check_up(res)
-    assert res.valid.mean() > 0.6
+    assert finite.mean() > 0.7  # (simple1_4.las is on a 1 m grid at 2.4 m spacing: no estimate at R2)
     # walls and fences: edge-on, or their sides wobble across the horizontal; a few percent at most
     assert 0 < undecided.sum() < 0.2 * cloud.n_points
     # asked for by name on the bare points (not georeferenced): the same normals

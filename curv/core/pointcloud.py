@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import MeshError
-from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, symmetric_graph
+from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, neighbour_steps, symmetric_graph
 
 __all__ = ["PointCloud", "PointSet", "as_positions"]
 
@@ -186,6 +186,25 @@ class PointCloud(PointSet):
             out.setflags(write=False)
             cache[k] = out
         return cache[k]
+
+    @cached_property
+    def coordinate_step(self) -> float:
+        """The resolution the coordinates are stored with: the step of their grid, 0.0 for floats of
+        full precision.
+
+        Per axis, the smallest non-zero coordinate difference between a point and its nearest
+        points (:func:`curv.core.knn.neighbour_steps`); the step is the finest of the three (an
+        axis that never varies is exact: 0.0, and rounding along the others only moves points
+        within the surface). E.g. 0.01 for a LAS file whose points lie on a
+        1 cm grid, about 1e-6 of the spacing for full-precision floats. An axis whose step is
+        coarser than that is a sampling lattice (a raster's x and y, with the heights measured
+        exactly there), not a rounding of the positions. A support only a few steps wide sees the
+        grid's stairs rather than the surface (:mod:`curv.point_normals`, the quantisation check).
+        """
+        twin = self.__dict__.get("_twin")
+        if twin is not None:
+            return twin[0].coordinate_step
+        return float(neighbour_steps(self._vertices, self.nearest[0]).min())
 
     @cached_property
     def adjacency(self) -> sp.csr_matrix:
