@@ -20,6 +20,7 @@ from .core.mesh import Mesh
 from .core.pointcloud import PointCloud
 from .core.ranges import ball_radii, parse_range, resolve
 from .core.result import Curvature
+from .core.validity import mark_ok_rows
 from .estimate_finish import finish, settle
 from .estimate_setup import (Smoothing, cached_feature_set, check_vertices, mesh_normals_label, mesh_setup, point_setup,
                              without_rows)
@@ -249,7 +250,7 @@ def _iter_estimates(
     feats = None if features is None else cached_feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
     kernels = tuple(k for s in specs for k in s.kernels)
-    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, settle)) else "")
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, settle, mark_ok_rows)) else "")
     t0 = time.perf_counter()
     if isinstance(mesh, PointCloud):
         work_mesh = mesh

@@ -16,7 +16,7 @@ import numpy as np
 from .core.filled import filled
 from .core.jit import jit_parallel, launch, prange
 from .core.result import Curvature
-from .core.validity import Reason
+from .core.validity import OK, PRECEDENCE, SINGULAR, Reason, mark_ok_rows
 from .estimate_setup import Smoothing
 from .geometry.smoothing import smooth_values
 from .locality import rows_back
@@ -50,9 +50,11 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
     if on_crease:
         # the smooth curvature is undefined on a crease; a large value there is the error to avoid
         reason[at(feats.vertices) & ~isolated] = Reason.FEATURE
-    # in the order of precedence: the first that applies to a vertex names it
+    # the input's flags mark the rows the estimator left OK, in the one precedence (curv.core.validity)
+    marks = np.zeros((len(PRECEDENCE), reason.size), bool)
     for mask, code in flags.marks:
-        reason[(reason == Reason.OK) & at(mask)] = code
+        marks[PRECEDENCE.index(code)] |= at(mask)
+    launch(mark_ok_rows, reason, marks)
     # non-finite values are SINGULAR; k1 >= k2 (the estimators order them already: the rare rows they
     # did not are repaired in place, the arrays are this call's own); (d1, d2, N) right-handed so
     # results are reproducible. One parallel pass over the rows.
@@ -119,9 +121,6 @@ def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
 
 _NO_ROWS = np.empty(0, np.int64)
 
-_OK, _SINGULAR = np.uint8(Reason.OK), np.uint8(Reason.SINGULAR)
-
-
 @jit_parallel
 def settle(k1, k2, d1, d2, k1_se, k2_se, normals, rows, reason):
     """In place, per row i of this call's outputs: ``reason`` SINGULAR where it is OK but k1 or k2 is not
@@ -138,8 +137,8 @@ def settle(k1, k2, d1, d2, k1_se, k2_se, normals, rows, reason):
     reason : (c,) uint8
     """
     for i in prange(k1.size):
-        if reason[i] == _OK and not (math.isfinite(k1[i]) and math.isfinite(k2[i])):
-            reason[i] = _SINGULAR
+        if reason[i] == OK and not (math.isfinite(k1[i]) and math.isfinite(k2[i])):
+            reason[i] = SINGULAR
         if k2[i] > k1[i]:
             k1[i], k2[i] = k2[i], k1[i]
             k1_se[i], k2_se[i] = k2_se[i], k1_se[i]

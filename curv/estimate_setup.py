@@ -57,8 +57,10 @@ class Flags:
     """What the input says about its vertices, for the validity rules of :func:`curv.api.iter_estimate`.
 
     ``isolated`` (n,) bool: no face or no other point; ``forced``: ``(mask, Reason)`` pairs set
-    whatever the estimator found (later pairs win); ``marks``: pairs applied in order to the
-    vertices still OK; ``info``: extra entries of the result's info.
+    whatever the estimator found (later pairs win); ``marks``: ``(mask, Reason)`` pairs of the
+    causes in :data:`curv.core.validity.PRECEDENCE`, which the vertices the estimator left OK take
+    in that precedence (:func:`curv.core.validity.mark_ok_rows`); ``info``: extra entries of the
+    result's info.
     """
 
     isolated: np.ndarray
@@ -106,7 +108,7 @@ def mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_itera
             used_normals = used_normals.copy()
             used_normals[meaningless] = np.nan
     flags = Flags(isolated=mesh.isolated_vertices, info={"points": False},
-                   forced=((mesh.isolated_vertices, Reason.DEGENERATE),), marks=(
+                  forced=((mesh.isolated_vertices, Reason.DEGENERATE),), marks=(
         # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
         (mesh.nonmanifold_vertices, Reason.NONMANIFOLD),
         # faces of opposite orientation meet here: the vertex normal is meaningless
@@ -141,16 +143,16 @@ def point_setup(cloud: PointCloud, normals, *, orient, fit_range):
     border = border_points(cloud)
     coincident = cloud.coincident_points
     flags = Flags(isolated=cloud.isolated_vertices,
-                   # a normal fitted across an empty side is not trusted
-                   forced=((cloud.isolated_vertices, Reason.DEGENERATE), (one_sided, Reason.SINGULAR),
-                           (ambiguous, Reason.ORIENTATION)), marks=(
+                  # a normal fitted across an empty side is not trusted
+                  forced=((cloud.isolated_vertices, Reason.DEGENERATE), (one_sided, Reason.SINGULAR),
+                          (ambiguous, Reason.ORIENTATION)), marks=(
         # a repeat of an earlier point: that one stands for it
         (coincident, Reason.DEGENERATE),
         # on the rim of an open scan the fits see one side only, as on a mesh border
         (border, Reason.BORDER),
     ), info={"points": True, "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
              "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum())},
-                   support_marks=(_line_supports(cloud),))
+                  support_marks=(_line_supports(cloud),))
     return used, flags, label
 
 

@@ -14,15 +14,13 @@ import numpy as np
 from ..core.jit import iter_chunks, jit_parallel, launch, prange, threads
 from ..core.knn import grid_gather
 from ..core.pointcloud import PointCloud
-from ..core.validity import Reason
+from ..core.validity import OK
 from ..estimators._local_fit import slice_bounds
 from ..estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
 from ..estimators.jet import _scratch as jet_scratch
 from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                                       new_queues, new_scratch)
 from .frames import GAP_BINS, _frame, _spread, _widest_gap, _within
-
-_FIT_OK = int(Reason.OK)
 
 __all__ = ["local_frames", "support_spread"]
 
@@ -72,7 +70,7 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
                     evec[3, 0] = math.nan
                     code, _, _ = fit_jet(i, c, sub, x, y, z, normal_a, degree, m, vec, cov_jet, frame, evec)
                     reason[p] = code
-                    if code == _FIT_OK:
+                    if code == OK:
                         jet_normal(vec, frame, fitted, p)
                     else:
                         fitted[p, 0] = fitted[p, 1] = fitted[p, 2] = math.nan
