@@ -22,7 +22,7 @@ from ..core.validity import precedence
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs",
            "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
            "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "add_row",
-           "vertex_normal", "unset_row", "level_radii", "start_ball_support", "widen_ball_support", "add_star_rows",
+           "vertex_normal", "level_radii", "start_ball_support", "widen_ball_support", "add_star_rows",
            "level_mark", "LevelOutputs"]
 
 REGION_WALK_SHARE = 0.05
@@ -636,13 +636,6 @@ def vertex_normal(normals, p):
     nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
     return nx, ny, nz, math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
 
-
-@jit
-def unset_row(p, k1, k2, d1, d2):
-    """NaN curvatures and directions at vertex p."""
-    k1[p] = k2[p] = math.nan
-    for c in range(3):
-        d1[p, c] = d2[p, c] = math.nan
 
 
 @jit
