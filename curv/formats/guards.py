@@ -13,7 +13,7 @@ one-line :class:`LoadError` naming the file and the field:
 - OFF: the vertex and face counts are not negative and fit in the file's lines;
 - STL: a binary file's face count times 50 bytes plus its 84-byte header is the file's size, else
   the file is ASCII (``solid ...``);
-- glTF / GLB: the GLB container's length and chunks fit in the file; every buffer's byteLength
+- glTF / GLB: the GLB container's length and every chunk fit in the file; every buffer's byteLength
   fits in its data (the BIN chunk, a ``data:`` URI or the file it names), every bufferView in its
   buffer, every accessor (count, byteOffset, byteStride) in its bufferView; an accessor without
   one (zero-filled) holds at most :data:`ZERO_ACCESSOR_RATIO` times the file's size;
@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..core.errors import LoadError
+from ..core.paths import one_line
 from .lasheader import check_las_header
 
 __all__ = ["check_header", "read_ply_header", "PlyHeader", "check_ply_header", "check_off_header",
@@ -204,6 +205,7 @@ def check_stl_header(path) -> None:
 
 # --- glTF / GLB ---------------------------------------------------------------------------------
 
+_GLB_BIN = 0x004E4942
 _GLTF_COMPONENT = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
 _GLTF_TYPE = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 
@@ -226,18 +228,25 @@ def check_gltf_header(path) -> None:
             if 20 + json_length > length:
                 _fail(path, f"GLB JSON chunk length {json_length} runs past the file's length {length}")
             text = fh.read(json_length)
-            at = 20 + json_length  # trimesh reads the next chunk right after the JSON (aligned in valid files)
-            if at + 8 <= length:
+            # every chunk trimesh will read: it reads one after the other from the end of the JSON
+            # (aligned in valid files) while it has read less than the header's length, and stops
+            # at a short chunk header; each chunk takes 8 bytes at least
+            start = at = 20 + json_length
+            while at - start < length and at + 8 <= size:
                 fh.seek(at)
-                bin_length = struct.unpack("<I", fh.read(4))[0]
-                if at + 8 + bin_length > length:
-                    _fail(path, f"GLB BIN chunk length {bin_length} runs past the file's length {length}")
+                chunk_length, chunk_type = struct.unpack("<II", fh.read(8))
+                kind = "BIN" if chunk_type == _GLB_BIN else f"chunk at byte {at}"
+                if at + 8 + chunk_length > size:
+                    _fail(path, f"GLB {kind} length {chunk_length} runs past the end of the file ({size} bytes)")
+                if chunk_type == _GLB_BIN and bin_length is None:
+                    bin_length = chunk_length
+                at += 8 + chunk_length
     try:
         doc = json.loads(text)
-    except (ValueError, RecursionError):
-        return  # not JSON: trimesh says so
+    except (ValueError, RecursionError) as exc:
+        _fail(path, f"glTF JSON does not parse ({one_line(exc)})")
     if not isinstance(doc, dict):
-        return
+        _fail(path, "glTF JSON is not an object")
     available = []
     for index, buffer in enumerate(_items(doc, "buffers")):
         have = _buffer_bytes(path, buffer, bin_length if index == 0 else None)

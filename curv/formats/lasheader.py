@@ -23,8 +23,11 @@ What is checked (LAS 1.0-1.5, the public header of the ASPRS specification):
   summing to the record length, the chunk size), the chunk table's offset (within the file), its
   number of chunks (each chunk takes at least a byte), its chunks' sizes (they fit in the point
   data) and point counts (they add up to the point count), and at most
-  :data:`LAZ_MAX_POINTS_PER_BYTE` points per compressed byte in every chunk. A LAZ file is
-  compressed, so its point count is checked against its chunks, not against the file's size.
+  :data:`LAZ_MAX_POINTS_PER_BYTE` points per compressed byte in every chunk (for chunks of a fixed
+  size, the chunk size: lazrs allocates that many records for each chunk, the last one too). A
+  LAZ file is compressed, so its point count is checked against its chunks, not against the
+  file's size; in layered chunks (point formats 6-10) each chunk's point count and layer sizes
+  are checked against the chunk's bytes (a decompressor allocates a layer's size before reading it).
 
 :func:`check_las_header` is the one owner of these rules: whatever reads or streams LAS/LAZ
 files calls it first and uses the :class:`LasHeaderInfo` it returns (the point data's byte
@@ -291,10 +294,47 @@ def _check_laszip(path: Path, fh, vlrs, record_length: int, point_count: int, of
         _fail(path, f"LAS point count {point_count} differs from the {sum(p for p, _ in chunks)} points "
                     f"of the LAZ chunk table")
     for index, (points, nbytes) in enumerate(chunks):
-        if points > LAZ_MAX_POINTS_PER_BYTE * nbytes:
-            _fail(path, f"LAZ chunk {index} holds {points} points in {nbytes} bytes, more than "
-                        f"{LAZ_MAX_POINTS_PER_BYTE} points per byte")
+        # a decompressor allocates a fixed-size chunk's whole size, even for the last, partial one
+        allotted = points if chunk_size == _VARIABLE_CHUNKS else chunk_size
+        if allotted > LAZ_MAX_POINTS_PER_BYTE * nbytes:
+            if chunk_size == _VARIABLE_CHUNKS:
+                _fail(path, f"LAZ chunk {index} holds {points} points in {nbytes} bytes, more than "
+                            f"{LAZ_MAX_POINTS_PER_BYTE} points per byte")
+            _fail(path, f"laszip VLR's chunk size {chunk_size} is more than {LAZ_MAX_POINTS_PER_BYTE} points per "
+                        f"byte of LAZ chunk {index} ({nbytes} bytes)")
+    if compressor == 3:
+        _check_layers(path, fh, items, record_length, offset + 8, chunks)
     return LaszipInfo(compressor, chunk_size, items, record, table, chunks)
+
+
+_LAYERS = {10: 9, 11: 1, 12: 2, 13: 1}
+"""Layers of each layered (v3) laszip item in a chunk: a point's 9, RGB 1, RGB and NIR 2, a wave packet 1
+(an extra bytes item, type 14, has one layer per byte)."""
+
+
+def _check_layers(path: Path, fh, items, record_length: int, start: int, chunks) -> None:
+    """Each layered chunk's own header: its point count and layer sizes against the chunk's bytes.
+
+    A chunk opens with its first point (raw), its point count and the byte size of every layer;
+    a decompressor allocates each layer's size before it reads it.
+    """
+    layers = sum(size if kind == 14 else _LAYERS.get(kind, 0) for kind, size, _ in items)
+    head = record_length + 4 + 4 * layers
+    at = start
+    for index, (points, nbytes) in enumerate(chunks):
+        if points:
+            if head > nbytes:
+                _fail(path, f"LAZ chunk {index} of {nbytes} bytes cannot hold its first point, point count and "
+                            f"{layers} layer sizes ({head} bytes)")
+            fh.seek(at + record_length)
+            count, *sizes = struct.unpack(f"<{1 + layers}I", fh.read(4 + 4 * layers))
+            if count != points:
+                _fail(path, f"LAZ chunk {index} says it holds {count} points; the chunk table and point count "
+                            f"give it {points}")
+            if head + sum(sizes) > nbytes:
+                _fail(path, f"LAZ chunk {index}'s layer sizes add up to {sum(sizes)} bytes; the chunk holds "
+                            f"{nbytes - head} after its first point and layer sizes")
+        at += nbytes
 
 
 def _read_chunk_table(path: Path, fh, record: bytes, offset: int, data_end: int, size: int

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..core.errors import LoadError
 from ..core.paths import one_line
+from ..core.wording import count_text
 
 __all__ = ["read_pts_arrays", "EXPE_SIGNATURE"]
 
@@ -65,6 +66,8 @@ def _read_leica(path: Path) -> np.ndarray:
     newlines = np.flatnonzero(np.frombuffer(raw, np.uint8) == 10)
     starts = np.concatenate([[0], newlines + 1])
     ends = np.concatenate([newlines, [len(raw)]])
+    if raw.endswith(b"\n"):  # the newline ends the last line; no empty line after it
+        starts, ends = starts[:-1], ends[:-1]
     blocks, index = [], 0
     while index < starts.size:  # each pass consumes a line at least
         text = raw[starts[index]:ends[index]]
@@ -78,7 +81,7 @@ def _read_leica(path: Path) -> np.ndarray:
         count = int(match.group(1))
         if index + count >= starts.size:
             _fail(path, f"PTS point count {count} on line {index + 1} is more than the "
-                        f"{starts.size - index - 1} lines after it")
+                        f"{count_text(starts.size - index - 1, 'line', 'lines')} after it")
         block = raw[starts[index + 1]:ends[index + count]] if count else b""
         blocks.append(_leica_block(path, block, count, index + 1))
         index += count + 1
@@ -96,7 +99,8 @@ def _leica_block(path: Path, text: bytes, count: int, line: int) -> np.ndarray:
     except (ValueError, UnicodeDecodeError) as exc:
         _fail(path, f"PTS rows after line {line} are not numbers ({one_line(exc)})")
     if table.shape[0] != count:
-        _fail(path, f"PTS point count {count} on line {line} is followed by {table.shape[0]} rows")
+        _fail(path, f"PTS point count {count} on line {line} is followed by "
+                    f"{count_text(table.shape[0], 'row', 'rows')}")
     if table.shape[1] not in _LEICA_COLUMNS:
         _fail(path, f"PTS rows after line {line} have {table.shape[1]} columns; Leica PTS has x y z, x y z i, "
                     f"x y z r g b or x y z i r g b")
