@@ -10,7 +10,7 @@ one-line :class:`LoadError` naming the file and the field:
 - PLY: every element's count times the least bytes one of its rows takes (binary: the fixed
   properties' sizes plus each list's length field; ascii: a character and a separator per
   property) fits in the data after the header; counts are not negative;
-- OFF: the vertex and face counts are not negative and fit in the file's lines;
+- OFF: the vertex and face counts are not negative, and each fits a line of 2 bytes in the file;
 - STL: a binary file's face count times 50 bytes plus its 84-byte header is the file's size, else
   the file is ASCII (``solid ...``);
 - glTF / GLB: the GLB container's length and every chunk fit in the file; every buffer's byteLength
@@ -25,7 +25,6 @@ The point readers' own formats (PCD, PTS, text) are bounded by their readers (:m
 
 from __future__ import annotations
 
-import base64
 import json
 import re
 import struct
@@ -146,24 +145,24 @@ def check_ply_header(path) -> PlyHeader:
             row, unit = sum(sizes), "bytes"
         else:
             row, unit = max(1, 2 * len(element.properties)), "characters"
+        before = need
         need += element.count * row
-        if need > body + (0 if binary else 1):
+        if need > body + (0 if binary else 1):  # an ascii file's last row may lack its newline
+            after = f" after the {before} bytes of the elements before it" if before else ""
             _fail(path, f"PLY header's element {element.name} count {element.count} needs at least "
-                        f"{element.count * row} bytes ({row} {unit} a row), and with the elements before it "
-                        f"{need}; the file holds {body} bytes after its header")
+                        f"{element.count * row} bytes ({row} {unit} a row){after}; the file holds {body} "
+                        f"bytes after its header")
     return header
 
 
 # --- OFF ----------------------------------------------------------------------------------------
 
 def check_off_header(path) -> None:
-    """An OFF file's vertex and face counts: integers, not negative, at most the file's lines."""
+    """An OFF file's vertex and face counts: integers, not negative, each a line of 2 bytes at least."""
     path = Path(path)
+    size = path.stat().st_size
     with open(path, "rb") as fh:
         head = fh.read(_HEADER_BLOCK)
-        lines = head.count(b"\n") + 1
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            lines += block.count(b"\n")
     words = []
     for raw in head.split(b"\n")[:64]:
         words += raw.split(b"#", 1)[0].split()
@@ -171,16 +170,16 @@ def check_off_header(path) -> None:
             break
     if not words or not words[0].upper().endswith(b"OFF"):
         return  # the reader says it is not an OFF file
-    counts = words[1:3]
-    for name, word in zip(("vertex", "face"), counts):
+    for name, word in zip(("vertex", "face"), words[1:3]):
         try:
             value = int(word)
         except ValueError:
             _fail(path, f"OFF {name} count {word.decode('ascii', 'replace')[:20]!r} is not an integer")
         if value < 0:
             _fail(path, f"OFF {name} count {value} is negative")
-        if value > lines:
-            _fail(path, f"OFF {name} count {value} is more than the file's {lines} lines")
+        if 2 * value > size:
+            _fail(path, f"OFF {name} count {value} needs a line of 2 bytes at least for each; the file has "
+                        f"{size} bytes")
 
 
 # --- STL ----------------------------------------------------------------------------------------
@@ -315,12 +314,9 @@ def _buffer_bytes(path: Path, buffer: dict, bin_length: int | None) -> int | Non
     if not isinstance(uri, str):
         return None
     if uri.startswith("data:"):
-        payload = uri.partition(",")[2]
-        if ";base64" in uri.partition(",")[0]:
-            try:
-                return len(base64.b64decode(payload, validate=False))
-            except ValueError:
-                return None
+        meta, _, payload = uri.partition(",")
+        if ";base64" in meta:  # 4 characters for 3 bytes; trimesh reports malformed base64 itself
+            return len(payload.rstrip("=")) * 3 // 4
         return len(payload)
     target = path.parent / uri
     return target.stat().st_size if target.is_file() else None
