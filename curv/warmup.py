@@ -107,7 +107,7 @@ def _cloud_step() -> None:
     """A point cloud's spacing, normals, orientation and border test, with the default estimator."""
     import curv
 
-    curv.estimate(_cloud(), "mru", 2)
+    curv.estimate(_cloud(), range=2)
 
 
 def _advice_step() -> None:
