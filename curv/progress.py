@@ -23,7 +23,8 @@ Interface:
 - :meth:`PhaseProgress.update`: a float, the fraction (0..1) of the current phase done, or a
   :class:`curv.core.jit.Progress`: a new non-empty ``phase`` starts that phase first, a new
   non-empty ``message`` is shown once as a note. A fraction below the last one starts the
-  phase's timing again (a new pass over the points).
+  phase's timing again (a new pass over the points); a phase whose fractions are all 0 so far
+  shows its elapsed time alone (a step without chunks, such as orienting the normals).
 - :meth:`PhaseProgress.note`: a line for a person (e.g. the first-run compilation).
 - :meth:`PhaseProgress.follow`: drives a generator through :meth:`update` and returns its value.
 - :meth:`PhaseProgress.close` (or leaving the ``with`` block): ends the last phase; a second call
@@ -83,6 +84,8 @@ class _Phase:
 
     def record(self, fraction: float, now: float) -> None:
         fraction = min(max(float(fraction), 0.0), 1.0)
+        if fraction == 0.0 and not self.fraction:
+            return  # nothing measured yet (a step that reports no fraction): no "0 %" shown
         if self.fraction is not None and fraction < self.fraction:
             self.origin = None  # a new pass within the phase: its rate is measured anew
         self.fraction = fraction

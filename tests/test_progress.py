@@ -203,3 +203,11 @@ def test_the_command_writes_progress_lines_on_a_pipe(cloud, tmp_path, capsys, mo
     assert "normals" in phases and phases <= {"load", "normals", "orientation", "estimate", "checks", "write"}
     assert main(["estimate", str(path), "-q"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_a_phase_without_fractions_shows_its_time_alone():
+    phase = P._Phase("orientation", now=0.0)
+    phase.record(0.0, now=1.0)
+    assert phase.words(6.7) == "orientation after 6.7 s"
+    phase.record(0.25, now=7.0)
+    assert phase.words(7.0).startswith("orientation 25 % after 7.0 s")
