@@ -108,8 +108,8 @@ def _cloud_step() -> None:
     test, with the default estimator."""
     import curv
 
-    curv.estimate(_cloud(), "mru", 2)
-    curv.estimate(_cloud(), "mru", 2, orient="up")
+    curv.estimate(_cloud(), range=2)
+    curv.estimate(_cloud(), range=2, orient="up")
 
 
 def _advice_step() -> None:
