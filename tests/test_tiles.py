@@ -186,3 +186,16 @@ def test_a_region_that_covers_everything_has_unbounded_room():
 def test_what_tiles_cannot_run_is_refused_in_one_line(torus_mesh, keywords, words):
     with pytest.raises(EstimatorError, match=words):
         estimate_tiled(torus_mesh, "qs", tile_size=700, **keywords)
+
+
+def test_a_quantised_scan_with_ties_everywhere_keeps_the_whole_calls_neighbours():
+    """Coordinates on a 1 cm grid over a 10 cm lattice: most nearest neighbours tie in distance. A
+    tile searches the whole cloud's grid cells in the whole cloud's order, so it keeps the same
+    neighbours (a tile laying its own grid kept others: 107 directions of 14,400 points differed)."""
+    rng = np.random.default_rng(1)
+    x, y = np.meshgrid(np.arange(120) * 0.1, np.arange(120) * 0.1)
+    pts = np.stack([x.ravel(), y.ravel(), np.round(0.3 * np.sin(x.ravel()) * np.cos(0.7 * y.ravel()), 2)], 1)
+    cloud = curv.PointCloud(pts[rng.permutation(len(pts))])
+    for method in ("qs", "mru"):
+        whole = curv.estimate(cloud, method, orient=(5, 5, 50))
+        assert_same(estimate_tiled(cloud, method, orient=(5, 5, 50), tile_size=2500), whole, rounding=True)
