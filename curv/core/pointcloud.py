@@ -83,12 +83,19 @@ class PointCloud(PointSet):
     normals : (n, 3) array_like, optional
         Per-point normals as given (rows of zero length or NaN are allowed: such points have no
         usable normal). None when the input has none.
+    grid_frame : (origin (3,), cell), optional
+        Lay the grids over these points from this lower corner (at most their least coordinates),
+        the neighbour grid with this cell edge: the grid of a larger cloud these points are a part
+        or a reordering of (its twin in grid order, a tile), so that the searches visit the same
+        cells in the same order and break ties in distance alike. Default: the points' own.
 
     The arrays are read-only copies: a point cloud is immutable, like :class:`curv.Mesh`.
     """
 
-    def __init__(self, points, normals=None):
+    def __init__(self, points, normals=None, *, grid_frame=None):
         self._vertices = as_positions(points)
+        self.grid_frame = None if grid_frame is None else (np.asarray(grid_frame[0], np.float64).reshape(3),
+                                                            float(grid_frame[1]))
         if normals is None:
             self._normals = None
         else:
@@ -111,6 +118,9 @@ class PointCloud(PointSet):
     def grid(self):
         """The uniform grid over the points (:func:`curv.core.knn.build_grid`), made once: it answers the
         nearest-neighbour queries and every ball support of an estimate."""
+        if self.grid_frame is not None:
+            origin, cell = self.grid_frame
+            return build_grid(self._vertices, GRAPH_NEIGHBOURS, cell=cell, origin=origin)
         return build_grid(self._vertices, GRAPH_NEIGHBOURS)
 
     def ball_grid(self, radii: np.ndarray):
@@ -128,7 +138,8 @@ class PointCloud(PointSet):
         if step not in cache:
             if len(cache) >= 4:
                 cache.pop(next(iter(cache)))
-            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0))
+            origin = None if self.grid_frame is None else self.grid_frame[0]
+            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0), origin=origin)
         return cache[step]
 
     @cached_property

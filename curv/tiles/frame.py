@@ -8,7 +8,7 @@ that grid too, and breaks ties in distance by its scan order. A tile that laid i
 its own points would order them differently and, where two neighbours lie at exactly the same
 distance (common on scans quantised to a millimetre or a centimetre), keep another one: another
 spacing, another border test, another result. So a tile is built **in the whole cloud's grid
-order** and searches **the whole cloud's cells** (:class:`FramedCloud`): its points are the whole
+order** and searches **the whole cloud's cells** (:func:`framed_cloud`): its points are the whole
 twin's restricted to the tile, its neighbour search scans the same cells in the same order, and
 every point whose reach lies inside the tile (:mod:`curv.tiles.reach`) gets the whole call's
 neighbours, ties included.
@@ -32,13 +32,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.knn import GRAPH_NEIGHBOURS, build_grid, cell_sample_step, sample_cell_size
+from ..core.knn import GRAPH_NEIGHBOURS, cell_sample_step, sample_cell_size
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
-from ..geometry.neighbourhood import cached_with_mesh
 
-__all__ = ["GridFrame", "frame_of", "frame_from_sample", "grid_order", "FramedCloud", "TileMesh", "framed_cloud",
-           "tile_mesh"]
+__all__ = ["GridFrame", "frame_of", "frame_from_sample", "grid_order", "TileMesh", "framed_cloud", "tile_mesh"]
 
 
 @dataclass(frozen=True)
@@ -86,46 +84,17 @@ def grid_order(points: np.ndarray, ids: np.ndarray, frame: GridFrame) -> np.ndar
     return np.lexsort((np.asarray(ids), cells3[:, 2], cells3[:, 1], cells3[:, 0]))
 
 
-class FramedCloud(PointCloud):
-    """A part of a larger point cloud, in the larger cloud's grid order, searched in its grid.
-
-    Estimated as it is (it is its own twin in grid order: the whole call's twin restricted to
-    these points); its neighbour search lays the whole cloud's cells; its ball grids share the
-    whole cloud's lower corner (module notes).
-    """
-
-    def __init__(self, points, normals, frame: GridFrame):
-        super().__init__(points, normals)
-        self.frame = frame
-        # already the whole twin's order: an estimate runs on it as it is (curv.point_normals.grid_ordered)
-        cached_with_mesh(self, "grid order", lambda: None)
-
-    @property
-    def grid(self):
-        cached = self.__dict__.get("_framed_grid")
-        if cached is None:
-            cached = build_grid(self._vertices, GRAPH_NEIGHBOURS, cell=self.frame.cell, origin=self.frame.lower)
-            self.__dict__["_framed_grid"] = cached
-        return cached
-
-    def ball_grid(self, radii: np.ndarray):
-        r = float(np.median(radii))
-        if not (np.isfinite(r) and r > 0):
-            return self.grid
-        step = round(4.0 * np.log2(1.25 * r))
-        cache = self.__dict__.setdefault("_ball_grids", {})
-        if step not in cache:
-            if len(cache) >= 4:
-                cache.pop(next(iter(cache)))
-            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0), origin=self.frame.lower)
-        return cache[step]
-
-
 def framed_cloud(points: np.ndarray, normals, ids: np.ndarray, frame: GridFrame):
-    """A :class:`FramedCloud` of these rows of a larger cloud and the order it holds them in:
-    ``(cloud, order)``, cloud row i being ``ids[order[i]]``."""
+    """These rows of a larger cloud as a :class:`curv.PointCloud` in the larger cloud's grid order,
+    searching its grid (:attr:`curv.PointCloud.grid_frame`), estimated as it is (it is the whole
+    call's twin restricted to these points), and the order it holds them in: ``(cloud, order)``,
+    cloud row i being ``ids[order[i]]``."""
+    from ..point_normals.grid_order import mark_ordered
+
     order = grid_order(points, ids, frame)
-    cloud = FramedCloud(points[order], None if normals is None else normals[order], frame)
+    cloud = PointCloud(points[order], None if normals is None else normals[order],
+                       grid_frame=(frame.lower, frame.cell))
+    mark_ordered(cloud)
     return cloud, order
 
 
