@@ -84,7 +84,8 @@ class Job:
         kw = self.keywords
         return support_reach(shape, self.method, self.range, radius=kw.get("radius"), knn=kw.get("knn"),
                              normals=kw.get("normals"), fit_range=kw.get("fit_range", 2),
-                             standard_errors=kw.get("standard_errors", True), centres=centres)
+                             orient=kw.get("orient", "up"), standard_errors=kw.get("standard_errors", True),
+                             centres=centres)
 
 
 @dataclass
@@ -228,7 +229,13 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         if not info.get("estimate_info"):
             info["estimate_info"] = {k: v for k, v in res.info.items() if isinstance(v, (str, int, float, bool))}
         if overlap and info["passes"] == 1:
+            from .reach import normal_reach
+
             halo_rows = np.setdiff1d(np.arange(shape.n_vertices), centres, assume_unique=True)
+            # only the halo points whose normal this tile decided as the whole call does vote
+            decided = normal_reach(shape, fit_range=job.keywords.get("fit_range", 2),
+                                   orient=job.keywords.get("orient", "up"))[halo_rows]
+            halo_rows = halo_rows[decided <= region.room(shape.vertices[halo_rows])]
             halo_ids = piece.ids[order[halo_rows]]
             sort = np.argsort(halo_ids)
             info["overlap"] = (halo_ids[sort], np.asarray(res.normals)[halo_rows[sort]])

@@ -24,6 +24,8 @@ The rule per input:
   ``own(q)`` = the largest of ``calm(q)``, the border test's ball (:data:`~curv.point_normals.BORDER_RANGE`),
   the normals' fit ball (``fit_range``) and the line check's balls at
   :data:`~curv.point_normals.NORMAL_RANGE`: everything q's normal and flags read;
+  with an orientation by rule (up, the spanning trees), which checks a normal against its G
+  nearest's, ``own(q)`` also takes ``|j - q| + own(j)`` over them;
   ``reach(p)`` = the largest of ``own(p)``, the support radius and, for the estimators that read
   their neighbours' normals (``an``, ``mru``: the neighbours' normals and the line check over
   usable neighbours), ``|q - p| + own(q)`` over the support.
@@ -55,7 +57,7 @@ from ..estimators import get_spec
 from ..estimators._local_fit import slice_bounds
 from ..geometry.neighbourhood import new_queues
 
-__all__ = ["ball_max", "point_reach", "mesh_reach", "support_reach"]
+__all__ = ["ball_max", "point_reach", "normal_reach", "mesh_reach", "support_reach"]
 
 
 @jit_parallel
@@ -150,15 +152,33 @@ def _own_reach(cloud: PointCloud, fit_range) -> np.ndarray:
     return own
 
 
-def point_reach(cloud: PointCloud, method: str, rng: Range, *, fit_range=2, centres=None) -> np.ndarray:
+def _with_neighbours(cloud: PointCloud, own: np.ndarray) -> np.ndarray:
+    """(n,) the largest of ``own[q]`` and ``|j - q| + own[j]`` over q's G nearest j: a normal whose
+    orientation is checked against its nearest points' normals reads theirs."""
+    indices, distances = cloud.nearest
+    through = np.where(indices >= 0, distances + own[np.maximum(indices, 0)], 0.0)
+    return np.maximum(own, through.max(axis=1) if through.shape[1] else own)
+
+
+def normal_reach(cloud: PointCloud, *, fit_range=2, orient="up") -> np.ndarray:
+    """(n,) how far what decides each point's normal and flags reads (module notes, ``own``; with an
+    orientation by rule, its nearest points' too): a normal whose reach is within its room is the
+    whole call's."""
+    own = _own_reach(cloud, fit_range)
+    return _with_neighbours(cloud, own) if isinstance(orient, str) else own
+
+
+def point_reach(cloud: PointCloud, method: str, rng: Range, *, fit_range=2, orient="up", centres=None) -> np.ndarray:
     """(c,) reach of an estimate of ``method`` at range ``rng`` at each centre of a point cloud
     (module notes), in the cloud's units; every point without ``centres``.
 
     ``fit_range`` is the range of the estimated normals; the file's normals read nothing, but the
     border test and line checks still run, so it enters either way (a wider bound, never a narrower).
+    An orientation by rule (``"up"``, and the spanning trees) checks each normal against its nearest
+    points' normals: their reach enters too; a viewpoint decides each normal alone.
     """
     spec = get_spec(method)
-    own = _own_reach(cloud, fit_range)
+    own = normal_reach(cloud, fit_range=fit_range, orient=orient)
     radii = ball_radii(cloud, rng, uses_normals=spec.uses_normals)
     centres = np.arange(cloud.n_points, dtype=np.int64) if centres is None else np.asarray(centres, np.int64)
     if spec.uses_normals:
@@ -210,13 +230,13 @@ def mesh_reach(mesh: Mesh, method: str, rng: Range | None, *, fitted_normals: bo
 
 
 def support_reach(shape, method: str, range=None, *, radius=None, knn=None, normals=None, fit_range=2,
-                  standard_errors: bool = True, centres=None) -> np.ndarray:
+                  orient="up", standard_errors: bool = True, centres=None) -> np.ndarray:
     """How far an estimate ``curv.estimate(shape, method, range, ...)`` at each point reads (module notes).
 
     Parameters
     ----------
     shape : Mesh or PointCloud
-    method, range, radius, knn, normals, fit_range, standard_errors
+    method, range, radius, knn, normals, fit_range, orient, standard_errors
         As in :func:`curv.estimate`.
     centres : (c,) int, optional
         Only these points; default every point.
@@ -229,7 +249,7 @@ def support_reach(shape, method: str, range=None, *, radius=None, knn=None, norm
     spec = get_spec(method)
     rng = resolve(spec, range, radius, knn)
     if isinstance(shape, PointCloud):
-        return point_reach(shape, method, rng, fit_range=fit_range, centres=centres)
+        return point_reach(shape, method, rng, fit_range=fit_range, orient=orient, centres=centres)
     fitted = isinstance(normals, str) and normals == "fit"
     return mesh_reach(shape, method, rng if spec.has_support else None, fitted_normals=fitted, fit_range=fit_range,
                       pooled=bool(standard_errors and spec.skips_errors), centres=centres)
