@@ -199,3 +199,31 @@ def test_a_quantised_scan_with_ties_everywhere_keeps_the_whole_calls_neighbours(
     for method in ("qs", "mru"):
         whole = curv.estimate(cloud, method, orient=(5, 5, 50))
         assert_same(estimate_tiled(cloud, method, orient=(5, 5, 50), tile_size=2500), whole, rounding=True)
+
+
+def test_tiles_hold_about_the_asked_count_and_every_point_once():
+    from curv.tiles.memory import plan_for
+
+    rng = np.random.default_rng(0)
+    pts = np.column_stack([rng.uniform(0, 100, 50000), rng.uniform(0, 40, 50000), rng.normal(0, 0.5, 50000)])
+    plan = plan_for(pts, 6000)
+    tile_of = plan.tile_of(pts)
+    counts = np.bincount(tile_of, minlength=len(plan.tiles))
+    assert counts.sum() == pts.shape[0] and counts.max() <= 6000 and counts.min() > 2000
+    for t in plan.tiles:  # each tile's box holds its points
+        mine = pts[tile_of == t.index]
+        assert np.all(mine >= np.array(t.lo) - 1e-9) and np.all(mine <= np.array(t.hi) + 1e-9)
+
+
+def test_a_memory_budget_is_read_and_shared_by_the_workers():
+    from curv.tiles.budget import DRIVER_BYTES, parse_memory, plan_budget
+
+    assert parse_memory("4GB") == 4_000_000_000 and parse_memory("1.5 GiB") == int(1.5 * 2**30)
+    assert parse_memory("500mb") == 500_000_000 and parse_memory(123456) == 123456
+    with pytest.raises(ValueError, match="4GB"):
+        parse_memory("four gigabytes")
+    budget = plan_budget(4 * 2**30, "qs", points=True, workers=2)
+    assert budget.workers == 2 and budget.worker_bytes * 2 + DRIVER_BYTES <= 4 * 2**30
+    assert 500_000 < budget.tile_size < 3_000_000
+    with pytest.raises(ValueError, match="no room"):
+        plan_budget(700 * 2**20, "qs", points=True)

@@ -48,16 +48,24 @@ def run_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: f
             "reasons": np.bincount(rows.columns["reason"], minlength=256)}
 
 
-def first_halo(source: FileInput, job: Job, frame, bounds) -> float:
-    """The first halo width of every tile: twice the 99th percentile of the reach of the points of
-    the tile that holds the most (read on its own, without a halo: their reach is then a little
-    over the truth at its edges, which only widens the halo). A tile that needs more redoes those
-    points (:mod:`curv.tiles.engine`): this only sets how often."""
+def first_halo(source: FileInput, job: Job, frame, bounds, *, window: int = 200_000) -> float:
+    """The first halo width of every tile: twice the 99th percentile of the reach of the points of a
+    window of about ``window`` points at the centre of the tile that holds the most (read on its own,
+    without a halo: their reach is then a little over the truth at its edges, which only widens the
+    halo). A tile that needs more redoes those points (:mod:`curv.tiles.engine`): this only sets how
+    often. The window keeps the driver's memory small whatever the tiles' size."""
     from .engine import _shape_of
     from .plan import Region
 
     tile = max(source.tiles, key=lambda t: t.count)
-    piece = source.fetch(Region.around(tile.lo, tile.hi, 0.0, bounds))
+    lo, hi = np.asarray(tile.lo), np.asarray(tile.hi)
+    if tile.count > window:
+        centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        shrink = np.sqrt(window / tile.count)  # a surface: the count goes with the area
+        flat = half <= 0.05 * half.max()  # a terrain's thin side keeps its whole height
+        half = np.where(flat, half, half * shrink)
+        lo, hi = centre - half, centre + half
+    piece = source.fetch(Region.around(lo, hi, 0.0, bounds))
     if piece.ids.size < 2 or (source.is_mesh and (piece.faces is None or piece.faces.size == 0)):
         return 0.0
     shape, _ = _shape_of(piece, frame, points=not source.is_mesh)
