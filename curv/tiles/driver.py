@@ -82,12 +82,18 @@ class Runner:
             return f"a local cluster of {self.workers} worker processes"
         return f"the cluster at {self.client.scheduler.address}"
 
-    def iter_run(self, function: Callable, tasks: Sequence[tuple], *, keys: Sequence[str]) -> Generator:
-        """Run ``function(*args)`` for each of ``tasks``; yields each result as it finishes (in any
-        order). ``keys`` name the tasks on a cluster (unique per run and tile)."""
+    def iter_run(self, function: Callable, tasks: Sequence[tuple], *, keys: Sequence[str],
+                 steps: Callable | None = None) -> Generator:
+        """Run ``function(*args)`` for each of ``tasks``; yields ``(result, None)`` as each finishes (in
+        any order) and, in this process, ``(None, fraction)`` of the running task between (when
+        ``steps``, the generator form of ``function``, is given: a stop takes effect there). ``keys``
+        name the tasks on a cluster (unique per run and tile)."""
         if self.client is None:
             for args in tasks:
-                yield self._retrying(function, args)
+                if steps is None:
+                    yield self._retrying(function, args), None
+                else:
+                    yield (yield from self._stepping(steps, function, args)), None
             return
         from distributed import as_completed
 
@@ -96,13 +102,33 @@ class Runner:
         try:
             for future in as_completed(futures):
                 try:
-                    yield future.result()
+                    result = future.result()
                 except Exception as exc:  # noqa: BLE001 - one line naming the tile
                     raise TileFailed(f"{future.key}: {_one_line(exc)}") from None
+                yield result, None
         finally:
             pending = [f for f in futures if not f.done()]
             if pending:
                 self.client.cancel(pending)
+
+    @staticmethod
+    def _stepping(steps, function, args):
+        """``steps(*args)`` to its end, yielding ``(None, fraction)``; a failure is retried once
+        through ``function`` as :meth:`_retrying` does (the steps of a failed try are not repeated)."""
+        from ..core.errors import CurvError
+
+        gen = steps(*args)
+        try:
+            while True:
+                try:
+                    step = next(gen)
+                except StopIteration as stop:
+                    return stop.value
+                yield None, float(step)
+        except (CurvError, OSError):
+            raise
+        except Exception:  # noqa: BLE001 - run again, as a cluster would
+            return Runner._retrying(function, args)
 
     @staticmethod
     def _retrying(function, args):

@@ -21,6 +21,7 @@ read whole and tiled in memory (:func:`curv.tiles.estimate_tiled`).
 from __future__ import annotations
 
 import time
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Generator
@@ -39,7 +40,7 @@ from .orient import Overlap, disagreeing, root_choice, spans_tiles, tile_signs
 from .prepare import FileInput, Prepared, iter_prepare
 from .scratch import OVERLAP_DTYPE, Scratch, read_rows, rows_to_columns
 from .sources import open_source
-from .tasks import first_halo, run_file_tile
+from .tasks import first_halo, iter_file_tile, run_file_tile
 
 __all__ = ["estimate_file", "iter_estimate_file", "FileRun", "OUTPUT_SUFFIXES", "default_scratch"]
 
@@ -251,7 +252,8 @@ def iter_estimate_file(input, output, method: str = "mru", range=None, *, tile_s
                 scheduler=scheduler, client=client) as runner:
         where = runner.where
         tasks = [(t, reader, job, prepared.frame, bounds, halo, overlap) for t in todo]
-        keys = [f"curv-tile-{abs(hash(str(identity))) % 10**8}-{t}" for t in todo]
+        run_id = uuid.uuid4().hex[:8]
+        keys = [f"curv-tile-{run_id}-{t}" for t in todo]
         waiting = set(todo)
         earlier = [t.index for t in plan.tiles if t.index not in waiting]  # finished by an earlier run of this call
         finished_points = sum(plan.tiles[t].count for t in earlier)
@@ -260,8 +262,14 @@ def iter_estimate_file(input, output, method: str = "mru", range=None, *, tile_s
         todo_points = sum(plan.tiles[t].count for t in todo)
         done_points = 0
         count = done_before
+        rate, left = 0.0, float("nan")
         yield Progress(0.1, f"tiles {count}/{n_tiles}")
-        for result in runner.iter_run(run_file_tile, tasks, keys=keys):
+        for result, partial in runner.iter_run(run_file_tile, tasks, keys=keys, steps=iter_file_tile):
+            if result is None:  # a tile's progress in this process
+                running = plan.tiles[todo[count - done_before]].count * partial
+                yield Progress(0.1 + 0.75 * (finished_points + done_points + running) / max(prepared.n, 1),
+                               f"tiles {count}/{n_tiles}, {_rate(rate)} points/s, {_duration(left)} left")
+                continue
             count += 1
             done_points += plan.tiles[result["tile"]].count
             read += result.get("read", 0)

@@ -16,7 +16,7 @@ from .engine import Job, iter_run_tile
 from .prepare import FileInput
 from .scratch import OVERLAP_DTYPE, Scratch, columns_to_rows, write_array
 
-__all__ = ["run_file_tile", "first_halo"]
+__all__ = ["run_file_tile", "iter_file_tile", "first_halo"]
 
 
 def run_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: float, overlap: bool) -> dict:
@@ -24,6 +24,12 @@ def run_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: f
     ``tile``, ``points`` (core), ``read`` (region points over every pass), ``redone``, ``passes``,
     ``seconds``, ``halo``, ``info`` (the estimate's own info entries), ``cached`` (already finished),
     ``reasons`` (its core points per reason code, a (256,) count)."""
+    return run_to_end(iter_file_tile(tile, source, job, frame, bounds, halo, overlap))
+
+
+def iter_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: float, overlap: bool):
+    """:func:`run_file_tile` step by step: yields the tile's fraction done (where a run in this process
+    may stop), returns the same summary."""
     scratch = Scratch(source.folder)
     if scratch.finished(tile):  # a task run twice (a worker lost after it saved its rows)
         from .scratch import read_rows
@@ -32,8 +38,8 @@ def run_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: f
         return {"tile": tile, "cached": True, "points": int(reasons.sum()), "reasons": reasons}
     core = scratch.read_points(tile, source.dtype)["id"]
     box = (source.tiles[tile].lo, source.tiles[tile].hi)
-    rows = run_to_end(iter_run_tile(np.ascontiguousarray(core), box, bounds, source.fetch, job, frame, halo=halo,
-                                    points=not source.is_mesh, overlap=overlap))
+    rows = yield from iter_run_tile(np.ascontiguousarray(core), box, bounds, source.fetch, job, frame, halo=halo,
+                                    points=not source.is_mesh, overlap=overlap)
     if overlap:
         ids, normals = rows.info.pop("overlap", (np.empty(0, np.int64), np.empty((0, 3))))
         seen = np.empty(ids.size, OVERLAP_DTYPE)
