@@ -256,3 +256,38 @@ def test_two_workers_started_by_hand_give_the_plain_runs_output(tmp_path, small_
     estimate_file(small_las, tmp_path / "plain.laz", "qs", orient=SCANNER, tile_size=3000, workers=1)
     las_dims_equal(tmp_path / "plain.laz", tmp_path / "cluster.laz")
     shutil.rmtree(default_scratch(tmp_path / "cluster.laz"), ignore_errors=True)
+
+
+def test_a_preview_says_what_it_shows_and_a_region_reads_full_resolution(tmp_path, small_las):
+    """The viewer's preview of a large file and its region at full resolution (curv.tiles.preview,
+    curv.tiles.regions): the region's values are the whole file's."""
+    from curv.core.jit import run_to_end
+    from curv.tiles.preview import read_preview
+    from curv.tiles.regions import FileRegions
+
+    preview = read_preview(small_las, 3000)
+    n = curv.load(small_las).n_points
+    stride = -(-n // 3000)
+    assert preview.stride == stride and preview.words == f"{preview.shown:,} of {n:,} points shown (every {stride}th)"
+    regions = FileRegions(small_las, scratch=tmp_path / "regions")
+    centre = preview.shape.points[len(preview.shape.points) // 2]
+    around = run_to_end(regions.iter_around(centre, 3.0, [("qs", 2, {"orient": SCANNER})]))
+    assert around.ball.size > 20 and around.shape.n_points > around.ball.size  # the ball and its halo
+    part = curv.estimate(around.shape, "qs", orient=SCANNER, vertices=around.ball)
+    whole = curv.estimate(curv.load(small_las), "qs", orient=SCANNER)
+    rows = around.ids[around.ball]
+    np.testing.assert_allclose(part.k1[around.ball], whole.k1[rows], rtol=1e-9, atol=1e-12)
+    assert np.array_equal(part.reason[around.ball], whole.reason[rows])
+    regions.close()
+    assert not (tmp_path / "regions").exists()
+
+
+def test_a_preview_of_a_mesh_clusters_its_vertices(tmp_path):
+    from curv.tiles.preview import read_preview
+
+    mesh = torus_grid(120, 50)[0]
+    _write_ply(tmp_path / "in.ply", mesh.vertices, mesh.face_indices.reshape(-1, 3))
+    preview = read_preview(tmp_path / "in.ply", 1500)
+    assert isinstance(preview.shape, curv.Mesh) and 800 < preview.shown <= 1.25 * 1500
+    assert preview.words.endswith("vertices shown (clustered)") and "of 6,000" in preview.words
+    assert preview.shape.report().components == 1  # still one closed torus

@@ -16,7 +16,14 @@ from __future__ import annotations
 import os
 import re
 
-__all__ = ["parse_memory", "Budget", "plan_budget", "DRIVER_BYTES", "MIN_TILE", "HALO_SHARE", "needs_tiles"]
+from ..core.errors import CurvError
+
+__all__ = ["parse_memory", "Budget", "BudgetError", "plan_budget", "DRIVER_BYTES", "MIN_TILE", "HALO_SHARE",
+           "needs_tiles"]
+
+
+class BudgetError(CurvError, ValueError):
+    """A memory budget that is not a size, or too small for one worker (one line)."""
 
 DRIVER_BYTES = 600 * 2**20
 """The driver process: interpreter and libraries, a chunk of points in each pass, the tiles' read
@@ -34,17 +41,17 @@ _UNITS = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb
 
 
 def parse_memory(text) -> int:
-    """Bytes from ``4GB``, ``4 GiB``, ``500MB``, ``2.5g`` or a plain number of bytes; ``ValueError``
-    in one line otherwise."""
+    """Bytes from ``4GB``, ``4 GiB``, ``500MB``, ``2.5g`` or a plain number of bytes; :class:`BudgetError`
+    (a ValueError) in one line otherwise."""
     if isinstance(text, (int, float)) and not isinstance(text, bool):
         value = float(text)
     else:
         match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*([a-zA-Z]*)\s*", str(text))
         if not match or match.group(2).lower() not in _UNITS:
-            raise ValueError(f"memory must be a size such as 4GB, 500MB or 2.5GiB; got {text!r}")
+            raise BudgetError(f"memory must be a size such as 4GB, 500MB or 2.5GiB; got {text!r}")
         value = float(match.group(1)) * _UNITS[match.group(2).lower()]
     if not value > 0:
-        raise ValueError(f"memory must be a positive size; got {text!r}")
+        raise BudgetError(f"memory must be a positive size; got {text!r}")
     return int(value)
 
 
@@ -91,8 +98,8 @@ def plan_budget(total: int, method: str, *, points: bool, faces_per_vertex: floa
 
     ``workers`` defaults to the usable cores, fewer when the budget cannot give each
     :data:`MIN_TILE` points; ``tile_size``, when given, is kept (the caller forces it) and the workers
-    are then as many as fit. Raises ``ValueError`` when not even one worker of :data:`MIN_TILE` points
-    (or of ``tile_size``) fits.
+    are then as many as fit. Raises :class:`BudgetError` when not even one worker of :data:`MIN_TILE`
+    points (or of ``tile_size``) fits.
     """
     from ..memory import format_bytes
 
@@ -105,7 +112,7 @@ def plan_budget(total: int, method: str, *, points: bool, faces_per_vertex: floa
         fits = _tile_points(share, method, points=points, faces_per_vertex=faces_per_vertex)
         if fits >= need:
             return Budget(total, w, tile_size or fits, int(share))
-    raise ValueError(f"a memory budget of {format_bytes(total)} leaves no room for one worker estimating "
+    raise BudgetError(f"a memory budget of {format_bytes(total)} leaves no room for one worker estimating "
                      f"{need:,} points with {method} (give more --memory, or a smaller --tile-size)")
 
 

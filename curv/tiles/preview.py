@@ -115,11 +115,11 @@ def _clustered(source, max_vertices: int) -> Mesh:
     for _, pts, _ in source.chunks():
         hist.add(pts)
     occupied = int((hist.counts > 0).sum())
-    # a surface: cells of edge c hold ~ c^2; scale the counting grid's cell to the wanted count, and
-    # once more by what that gave (the counting grid's cells are few and coarse)
+    # a surface: cells of edge c hold ~ c^2; scale the counting grid's cell to the wanted count, then
+    # by what each try gave (the counting grid's cells may be few and coarse)
     cell = hist.cell * max(1.0, np.sqrt(occupied / max(max_vertices, 1)))
     cluster = np.empty(source.n, np.int64)
-    for _ in range(2):
+    for _ in range(8):
         dims = np.maximum(np.ceil((scan.hi - scan.lo) / cell).astype(np.int64), 1)
         for start, pts, _ in source.chunks():
             c = np.clip(np.floor((pts - scan.lo) / cell).astype(np.int64), 0, dims - 1)
