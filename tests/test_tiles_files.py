@@ -291,3 +291,16 @@ def test_a_preview_of_a_mesh_clusters_its_vertices(tmp_path):
     assert isinstance(preview.shape, curv.Mesh) and 800 < preview.shown <= 1.25 * 1500
     assert preview.words.endswith("vertices shown (clustered)") and "of 6,000" in preview.words
     assert preview.shape.report().components == 1  # still one closed torus
+
+
+def test_the_command_tiles_by_itself_what_would_not_fit_in_its_budget():
+    from argparse import Namespace
+
+    from curv.tiles.command import wants_tiles
+
+    args = Namespace(tile_size=None, scheduler=None, memory="2GB", memory_check=True, method="qs")
+    assert wants_tiles(args, (5_000_000, 0), points=True)        # about 5 GB whole
+    assert not wants_tiles(args, (100_000, 0), points=True)      # 0.3 GB whole
+    assert not wants_tiles(args, None, points=True)              # a header that does not say: read whole
+    assert wants_tiles(Namespace(**{**vars(args), "tile_size": 5000}), (100, 0), points=True)  # asked
+    assert not wants_tiles(Namespace(**{**vars(args), "memory": None, "memory_check": False}), (10**9, 0), points=True)
