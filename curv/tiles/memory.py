@@ -131,7 +131,8 @@ def iter_estimate_tiled(shape, method: str = "mru", range=None, *, tile_size: in
                     break
                 yield Progress((i + float(step)) / len(tasks), getattr(step, "message", ""))
     else:
-        futures = [client.submit(_run_tile_task, core, box, plan.bounds, source, job, frame, halo, is_points,
+        shared = client.scatter(source, broadcast=True)  # the input travels to each worker once, not per tile
+        futures = [client.submit(_run_tile_task, core, box, plan.bounds, shared, job, frame, halo, is_points,
                                  overlap, pure=False) for core, box in tasks]
         from distributed import as_completed
 
@@ -239,7 +240,7 @@ def estimate_tiled(shape, method: str = "mru", range=None, *, tile_size: int = 1
         (:func:`halo_for`). Any width gives the same result: a narrower one only makes the engine
         redo more points.
     client : distributed.Client, optional
-        Run the tiles on this Dask cluster (the input travels to the workers with each task).
+        Run the tiles on this Dask cluster (the input is sent to each worker once).
     """
     return run_to_end(iter_estimate_tiled(shape, method, range, tile_size=tile_size, halo=halo, client=client,
                                           **keywords))
