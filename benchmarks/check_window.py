@@ -33,6 +33,7 @@ def main(argv=None) -> int:
     parser.add_argument("-r", "--range", type=float, default=2)
     parser.add_argument("--points", type=int, default=1_000_000)
     parser.add_argument("--centre", type=float, nargs=2)
+    parser.add_argument("--orient-normals", nargs="+", help="as the tiled run's (default: the library's)")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
     with laspy.open(args.input) as reader:
@@ -53,9 +54,13 @@ def main(argv=None) -> int:
             start += len(chunk)
     ids, pts = np.concatenate(ids), np.concatenate(pts)
     cloud = curv.PointCloud(pts)
-    res = curv.estimate(cloud, args.method, args.range)
+    orient = {}
+    if args.orient_normals:
+        words = args.orient_normals
+        orient = {"orient": words[0] if len(words) == 1 else tuple(float(w) for w in words)}
+    res = curv.estimate(cloud, args.method, args.range, **orient)
     region = Region(box_lo, box_hi, np.zeros(3, bool), np.zeros(3, bool))
-    interior = support_reach(cloud, args.method, args.range) <= region.room(pts)
+    interior = support_reach(cloud, args.method, args.range, **orient) <= region.room(pts)
     # the tiled output's rows of the window's interior
     want = ids[interior]
     got = {name: [] for name in ("k1", "k2", "mean", "gaussian", "valid", "reason")}
