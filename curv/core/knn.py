@@ -23,7 +23,8 @@ import numpy as np
 from .errors import MeshError
 from .jit import jit, jit_parallel, launch, prange
 
-__all__ = ["build_grid", "sample_cell_size", "cell_sample_step", "nearest_neighbours", "grid_ball", "grid_gather", "symmetric_graph", "GRAPH_NEIGHBOURS"]
+__all__ = ["build_grid", "sample_cell_size", "cell_sample_step", "nearest_neighbours", "grid_ball", "grid_gather",
+           "symmetric_graph", "GRAPH_NEIGHBOURS"]
 
 GRAPH_NEIGHBOURS = 10
 """Neighbours per point of a point cloud's neighbour graph (made symmetric: about 13 edges a
