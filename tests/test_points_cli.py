@@ -145,7 +145,7 @@ def test_las_input_end_to_end(tmp_path, capsys):
     (["--normals", "max"], "--normals max weights face normals"),
     (["--knn", "2"], "knn must be a whole number of neighbours >= 3"),
     (["--knn", "20", "-r", "2"], "give one of range=, radius= or knn="),
-    (["--orient-normals", "sideways"], "--orient-normals takes up, outward or a viewpoint"),
+    (["--orient-normals", "sideways"], "--orient-normals takes up, top, outward or a viewpoint"),
     (["-m", "auto"], "advises on meshes only"),
     (["-o", "out.stl"], "cannot write .stl"),
 ])

@@ -64,10 +64,10 @@ def _named_normals(path: Path, names, kind: str) -> tuple[str, str, str] | None:
     return None
 
 
-def _cloud(path: Path, points: np.ndarray, normals: np.ndarray | None) -> PointCloud:
+def _cloud(path: Path, points: np.ndarray, normals: np.ndarray | None, *, georeferenced: bool = False) -> PointCloud:
     """The :class:`PointCloud`; its own checks (no points, a NaN or infinite row) name the file."""
     try:
-        return PointCloud(points, normals)
+        return PointCloud(points, normals, georeferenced=georeferenced)
     except MeshError as exc:
         raise LoadError(f"{path}: {exc}") from None
 
@@ -318,7 +318,8 @@ def _read_las(path: Path) -> PointCloud:
         points[:, i] = las[axis]  # scaled and offset coordinates
     normal_names = _named_normals(path, list(las.point_format.extra_dimension_names), "LAS extra bytes")
     normals = np.column_stack([np.asarray(las[c], dtype=np.float64) for c in normal_names]) if normal_names else None
-    return _cloud(path, points, normals)
+    # LAS holds aerial and terrestrial scans in a map's coordinates, z up: their normals are turned up
+    return _cloud(path, points, normals, georeferenced=True)
 
 
 _READERS = {".ply": _read_ply, ".xyz": _read_text, ".txt": _read_text, ".csv": _read_text,

@@ -26,7 +26,8 @@ def grid_ordered(cloud: PointCloud):
         normals = None if cloud.normals is None else cloud.normals[order]
         # the twin searches the cloud's own cells: the same neighbours, ties in distance broken alike,
         # and a part of the cloud in the same order searches them too (curv.tiles)
-        twin = PointCloud(cloud.points[order], normals, grid_frame=(origin[:3], origin[3]))
+        twin = PointCloud(cloud.points[order], normals, georeferenced=cloud.georeferenced,
+                          grid_frame=(origin[:3], origin[3]))
         mark_ordered(twin)
         cloud.same_points_as(twin, order)
         return twin, order
