@@ -304,3 +304,40 @@ def test_the_command_tiles_by_itself_what_would_not_fit_in_its_budget():
     assert not wants_tiles(args, None, points=True)              # a header that does not say: read whole
     assert wants_tiles(Namespace(**{**vars(args), "tile_size": 5000}), (100, 0), points=True)  # asked
     assert not wants_tiles(Namespace(**{**vars(args), "memory": None, "memory_check": False}), (10**9, 0), points=True)
+
+
+@pytest.mark.parametrize("name", ["vegetation_1_3.las", "plane.laz"])
+def test_a_real_scan_turned_up_by_default_equals_the_whole_call(tmp_path, name):
+    """LAS/LAZ clouds are georeferenced: normals turned up at every point, which a tile decides as the
+    whole call (plane.laz: coordinates on a 1 cm grid, a third of the points coincident)."""
+    from curv.formats.laswrite import save_las
+
+    source = laspy_sample(name)
+    whole = curv.estimate(curv.load(source), "qs")
+    assert whole.info["orientation"] == "up"
+    save_las(tmp_path / "whole.laz", source, whole)
+    run = estimate_file(source, tmp_path / "tiled.laz", "qs", tile_size=4000, workers=1)
+    assert run.tiles >= 2
+    las_dims_equal(tmp_path / "whole.laz", tmp_path / "tiled.laz", float_rtol=1e-6)
+
+
+def test_a_tile_measuring_another_coordinate_step_runs_again_with_the_whole_clouds():
+    """Half a scan on a 1 cm grid, half on a 1 mm grid: a tile of the coarse half measures 1 cm, the
+    whole cloud 1 mm; the support floor (10 steps) lies between them and the radii, so those tiles
+    run again with the whole cloud's step and equal the whole call."""
+    from curv.tiles import estimate_tiled
+
+    rng = np.random.default_rng(3)
+    n = 12000
+    xy = rng.uniform(0, [4.0, 1.0], size=(n, 2))
+    z = 0.05 * np.sin(3 * xy[:, 0]) * np.cos(2 * xy[:, 1])
+    pts = np.column_stack([xy, z])
+    coarse = pts[:, 0] < 2.0
+    pts[coarse] = np.round(pts[coarse], 2)
+    pts[~coarse] = np.round(pts[~coarse], 3)
+    cloud = curv.PointCloud(pts, georeferenced=True)
+    whole = curv.estimate(cloud, "qs")
+    assert whole.info["coordinate_step"] == pytest.approx(0.001)
+    tiled = estimate_tiled(cloud, "qs", tile_size=3000)
+    assert np.array_equal(tiled.reason, whole.reason)
+    np.testing.assert_allclose(tiled.k1, whole.k1, rtol=1e-9, atol=1e-12)

@@ -92,15 +92,21 @@ class PointCloud(PointSet):
         the neighbour grid with this cell edge: the grid of a larger cloud these points are a part
         or a reordering of (its twin in grid order, a tile), so that the searches visit the same
         cells in the same order and break ties in distance alike. Default: the points' own.
+    coordinate_step : float, optional
+        The step of the grid the coordinates are stored on (:attr:`coordinate_step`), when it is
+        known for a larger cloud these points are a part of (a tile): the same resolution, the same
+        quantisation checks. Default: measured on these points.
 
     The arrays are read-only copies: a point cloud is immutable, like :class:`curv.Mesh`.
     """
 
-    def __init__(self, points, normals=None, *, georeferenced: bool = False, grid_frame=None):
+    def __init__(self, points, normals=None, *, georeferenced: bool = False, grid_frame=None, coordinate_step=None):
         self._vertices = as_positions(points)
         self._georeferenced = bool(georeferenced)
         self.grid_frame = None if grid_frame is None else (np.asarray(grid_frame[0], np.float64).reshape(3),
                                                             float(grid_frame[1]))
+        if coordinate_step is not None:
+            self.__dict__["coordinate_step"] = float(coordinate_step)  # the cached value, given
         if normals is None:
             self._normals = None
         else:

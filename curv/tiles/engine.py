@@ -28,7 +28,8 @@ from .frame import GridFrame, framed_cloud, tile_mesh
 from .plan import Region
 from .reach import support_reach
 
-__all__ = ["Job", "Piece", "TileRows", "iter_run_tile", "ROW_FIELDS", "empty_rows"]
+__all__ = ["Job", "Piece", "TileRows", "iter_run_tile", "shape_of", "step_redo", "whole_step", "ROW_FIELDS",
+           "empty_rows"]
 
 ROW_FIELDS = ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se")
 """The per-point columns of a result a tile hands back (as :class:`curv.Curvature` names them)."""
@@ -74,6 +75,17 @@ class Job:
             keywords.pop(name, None)
         return cls(method, range, dict(keywords))
 
+    def for_input(self, *, points: bool, georeferenced: bool = False) -> "Job":
+        """This job with a point cloud's default orientation made explicit
+        (:func:`curv.point_normals.default_orientation` of the whole input: ``"up"`` for a
+        georeferenced scan, ``"top"`` otherwise), so that every tile orients as the whole call."""
+        if not points or self.keywords.get("orient") is not None:
+            return self
+        from ..point_normals import default_orientation
+
+        stand_in = PointCloud(np.zeros((1, 3)), georeferenced=georeferenced)
+        return Job(self.method, self.range, {**self.keywords, "orient": default_orientation(stand_in)})
+
     @property
     def call(self) -> dict:
         """The keywords of :func:`curv.iter_estimate` (the method and range included)."""
@@ -84,7 +96,7 @@ class Job:
         kw = self.keywords
         return support_reach(shape, self.method, self.range, radius=kw.get("radius"), knn=kw.get("knn"),
                              normals=kw.get("normals"), fit_range=kw.get("fit_range", 2),
-                             orient=kw.get("orient", "up"), standard_errors=kw.get("standard_errors", True),
+                             orient=kw.get("orient"), standard_errors=kw.get("standard_errors", True),
                              centres=centres)
 
 
@@ -141,11 +153,27 @@ def empty_rows() -> dict:
             "k1_se": np.empty(0), "k2_se": np.empty(0)}
 
 
-def _shape_of(piece: Piece, frame: GridFrame | None, *, points: bool):
-    """The tile's shape in the whole call's order, and that order (shape row i = piece row order[i])."""
+def shape_of(piece: Piece, frame: GridFrame | None, *, points: bool, georeferenced: bool = False,
+             step: float | None = None):
+    """The tile's shape in the whole call's order, and that order (shape row i = piece row order[i]);
+    a cloud's ``georeferenced`` and coordinate ``step`` are the whole input's (None: measured)."""
     if points:
-        return framed_cloud(piece.points, piece.normals, piece.ids, frame)
+        return framed_cloud(piece.points, piece.normals, piece.ids, frame, georeferenced=georeferenced, step=step)
     return tile_mesh(piece.points, piece.faces, piece.ids, frame)
+
+
+def _steps(shape, job: Job, kept_rows: np.ndarray) -> tuple:
+    """``(used, certified, least radius)`` of a cloud's pass: the coordinate step the estimate used,
+    the step measured over the kept points' nearest (their neighbours are the whole call's, so the
+    smallest over every tile is the whole cloud's :attr:`curv.PointCloud.coordinate_step`), and the
+    narrowest radius the quantisation checks compare with the support floor."""
+    from ..core.knn import neighbour_steps
+    from .reach import floored_radii
+
+    nearest = np.full_like(shape.nearest[0], -1)
+    nearest[kept_rows] = shape.nearest[0][kept_rows]
+    certified = float(neighbour_steps(shape.points, nearest).min()) if kept_rows.size else np.inf
+    return float(shape.coordinate_step), certified, float(np.min(floored_radii(shape, job), initial=np.inf))
 
 
 def _estimate(shape, job: Job, centres) -> Generator[float, None, object]:
@@ -166,7 +194,8 @@ def _faceless(piece: Piece, rows: np.ndarray) -> dict:
 
 
 def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch, job: Job, frame: GridFrame | None,
-                  *, halo: float, points: bool, overlap: bool = False) -> Generator[float, None, TileRows]:
+                  *, halo: float, points: bool, overlap: bool = False, georeferenced: bool = False,
+                  step: float | None = None) -> Generator[float, None, TileRows]:
     """Estimate one tile (module notes): yields the fraction done, returns its :class:`TileRows`.
 
     Parameters
@@ -190,6 +219,9 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
     overlap : bool
         Also hand back the normals of the first pass's halo points (``info["overlap"]``: ids and
         normals), for the orientation across tiles (:mod:`curv.tiles.orient`).
+    georeferenced, step : bool, float
+        A cloud's: the whole input's flag, and the whole cloud's coordinate step when known (None:
+        each pass measures its own and reports it in ``info["steps"]``, :func:`step_redo`).
     """
     t0 = time.perf_counter()
     pending = np.asarray(core_ids, np.int64)
@@ -212,7 +244,7 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
             ids_out.append(pending)
             parts.append(_faceless(piece, pending))
             break
-        shape, order = _shape_of(piece, frame, points=points)
+        shape, order = shape_of(piece, frame, points=points, georeferenced=georeferenced, step=step)
         rank = np.empty(order.size, np.int64)
         rank[order] = np.arange(order.size)
         centres = rank[at]  # the pending points' rows of the shape
@@ -221,11 +253,11 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         gen = _estimate(shape, job, None if whole else np.sort(centres))
         while True:
             try:
-                step = next(gen)
+                progress = next(gen)
             except StopIteration as stop:
                 res = stop.value
                 break
-            yield Progress(done_before + (1.0 - done_before) * 0.9 * float(step), getattr(step, "message", ""))
+            yield Progress(done_before + (1.0 - done_before) * 0.9 * float(progress), getattr(progress, "message", ""))
         if not info.get("estimate_info"):
             info["estimate_info"] = {k: v for k, v in res.info.items() if isinstance(v, (str, int, float, bool))}
         if overlap and info["passes"] == 1:
@@ -234,7 +266,7 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
             halo_rows = np.setdiff1d(np.arange(shape.n_vertices), centres, assume_unique=True)
             # only the halo points whose normal this tile decided as the whole call does vote
             decided = normal_reach(shape, fit_range=job.keywords.get("fit_range", 2),
-                                   orient=job.keywords.get("orient", "up"))[halo_rows]
+                                   orient=job.keywords.get("orient"))[halo_rows]
             halo_rows = halo_rows[decided <= region.room(shape.vertices[halo_rows])]
             halo_ids = piece.ids[order[halo_rows]]
             sort = np.argsort(halo_ids)
@@ -243,6 +275,8 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         room = region.room(shape.vertices[centres])
         kept = reach <= room
         rows = centres[kept]
+        if points:
+            info.setdefault("steps", []).append(_steps(shape, job, rows))
         ids_out.append(pending[kept])
         parts.append({name: np.asarray(getattr(res, name))[rows] for name in ("k1", "k2", "d1", "d2", "normals",
                                                                              "valid", "reason", "k1_se", "k2_se")})
@@ -264,3 +298,23 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
     info["seconds"] = time.perf_counter() - t0
     yield Progress(1.0)
     return TileRows(ids[sort], columns, info)
+
+
+def whole_step(infos) -> float | None:
+    """The whole cloud's coordinate step from its tiles' infos (the smallest certified step of any
+    pass), or None for a mesh."""
+    certified = [c for info in infos for _, c, _ in info.get("steps", ())]
+    return min(certified) if certified else None
+
+
+def step_redo(info: dict, step: float) -> bool:
+    """Whether a tile must run again with the whole cloud's coordinate ``step``: some pass used
+    another step and a radius the quantisation checks read lies between the two support floors
+    (only then can a decision differ; on coordinates of full precision both floors are far below
+    every radius)."""
+    from ..point_normals import MIN_SUPPORT_STEPS
+
+    for used, _, least in info.get("steps", ()):
+        if used != step and MIN_SUPPORT_STEPS * max(used, step) > least:
+            return True
+    return False

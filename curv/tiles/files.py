@@ -34,13 +34,13 @@ from ..core.result import Curvature
 from ..core.validity import Reason, describe_reasons
 from .budget import Budget, parse_memory, plan_budget
 from .driver import Runner
-from .engine import Job
+from .engine import Job, step_redo, whole_step
 from .merge import Rows
 from .orient import Overlap, disagreeing, root_choice, spans_tiles, tile_signs
 from .prepare import FileInput, Prepared, iter_prepare
 from .scratch import OVERLAP_DTYPE, Scratch, read_rows, rows_to_columns
 from .sources import open_source
-from .tasks import first_halo, iter_file_tile, run_file_tile
+from .tasks import finished_summary, first_halo, iter_file_tile, run_file_tile
 
 __all__ = ["estimate_file", "iter_estimate_file", "FileRun", "OUTPUT_SUFFIXES", "default_scratch"]
 
@@ -195,7 +195,7 @@ def _orientation(scratch: Scratch, prepared: Prepared, orient: str):
                 row, sign = root_choice(rec["xyz"], normals, orient, centroid)
                 if row is None:
                     continue
-                key = rec["xyz"][row, 2] if orient == "up" else float(np.linalg.norm(rec["xyz"][row] - centroid))
+                key = rec["xyz"][row, 2] if orient == "top" else float(np.linalg.norm(rec["xyz"][row] - centroid))
                 if best is None or key > best[0]:
                     best = (key, int(t), sign)
             out.append((best[1], best[2]) if best else (int(group[0]), 1))
@@ -216,6 +216,9 @@ def iter_estimate_file(input, output, method: str = "mru", range=None, *, tile_s
     input_path, output = Path(input), Path(output)
     job = Job.checked(method, range, **keywords)
     source = open_source(input_path)
+    georeferenced = input_path.suffix.lower() in (".las", ".laz")  # as the LAS reader says (curv.PointCloud)
+    if source is not None:
+        job = job.for_input(points=not source.is_mesh, georeferenced=georeferenced)
     check_output(input_path, output, streamed=source is not None)
     total = parse_memory(memory) if memory is not None else _available()
     if source is None:
@@ -244,47 +247,31 @@ def iter_estimate_file(input, output, method: str = "mru", range=None, *, tile_s
     n_tiles = len(plan.tiles)
     todo = [t.index for t in plan.tiles if not folder.finished(t.index)]
     done_before = n_tiles - len(todo)
+    summaries = {t.index: finished_summary(folder, t.index) for t in plan.tiles if t.index not in set(todo)}
     t1 = time.perf_counter()
-    read = redone = 0
-    info = {}
-    reasons = np.zeros(256, np.int64)
     with Runner(workers=1 if elsewhere else min(budget.workers, max(1, len(todo))), worker_bytes=budget.worker_bytes,
                 scheduler=scheduler, client=client) as runner:
         where = runner.where
-        tasks = [(t, reader, job, prepared.frame, bounds, halo, overlap) for t in todo]
-        run_id = uuid.uuid4().hex[:8]
-        keys = [f"curv-tile-{run_id}-{t}" for t in todo]
-        waiting = set(todo)
-        earlier = [t.index for t in plan.tiles if t.index not in waiting]  # finished by an earlier run of this call
-        finished_points = sum(plan.tiles[t].count for t in earlier)
-        for t in earlier:
-            reasons += np.bincount(read_rows(folder.rows_path(t))["reason"], minlength=256)
-        todo_points = sum(plan.tiles[t].count for t in todo)
-        done_points = 0
-        count = done_before
-        rate, left = 0.0, float("nan")
-        yield Progress(0.1, f"tiles {count}/{n_tiles}")
-        for result, partial in runner.iter_run(run_file_tile, tasks, keys=keys, steps=iter_file_tile):
-            if result is None:  # a tile's progress in this process
-                running = plan.tiles[todo[count - done_before]].count * partial
-                yield Progress(0.1 + 0.75 * (finished_points + done_points + running) / max(prepared.n, 1),
-                               f"tiles {count}/{n_tiles}, {_rate(rate)} points/s, {_duration(left)} left")
-                continue
-            count += 1
-            done_points += plan.tiles[result["tile"]].count
-            read += result.get("read", 0)
-            redone += result.get("redone", 0)
-            info = info or result.get("info", {})
-            reasons[:len(result["reasons"])] += result["reasons"]
-            elapsed = time.perf_counter() - t1
-            rate = done_points / elapsed if elapsed > 0 else 0.0
-            left = (todo_points - done_points) / rate if rate > 0 else float("nan")
-            yield Progress(0.1 + 0.75 * (finished_points + done_points) / max(prepared.n, 1),
-                           f"tiles {count}/{n_tiles}, {_rate(rate)} points/s, {_duration(left)} left")
+        common = (reader, job, prepared.frame, bounds, halo, overlap, georeferenced)
+        yield from _run_tiles(runner, todo, common, None, plan, prepared.n, summaries, t1, 0.1, 0.8 if points else 0.85)
+        if points:
+            # the whole cloud's coordinate step is known once every tile has run: a tile that used
+            # another one where it matters runs again with it (curv.tiles.engine.step_redo)
+            step = whole_step(summaries.values())
+            again = [] if step is None else [t.index for t in plan.tiles if step_redo(summaries[t.index], step)]
+            for t in again:
+                folder.forget(t)
+            yield from _run_tiles(runner, again, common, step, plan, prepared.n, summaries, t1, 0.8, 0.85)
+    read = sum(r.get("read", 0) for r in summaries.values())
+    redone = sum(r.get("redone", 0) for r in summaries.values())
+    info = next((r["info"] for r in summaries.values() if r.get("info")), {})
+    reasons = np.zeros(256, np.int64)
+    for r in summaries.values():
+        reasons[:len(r["reasons"])] += r["reasons"]
     t_tiles = time.perf_counter() - t1
     signs = bad = None
     if overlap:
-        signs, bad, was = _orientation(folder, prepared, job.keywords.get("orient", "up"))
+        signs, bad, was = _orientation(folder, prepared, job.keywords.get("orient"))
         np.subtract.at(reasons, was, 1)
         reasons[Reason.ORIENTATION] += bad.size
     t2 = time.perf_counter()
@@ -316,6 +303,34 @@ def iter_estimate_file(input, output, method: str = "mru", range=None, *, tile_s
     return FileRun(input_path, output, prepared.n, source.is_mesh, n_tiles, done_before, where, budget, named,
                    {"plan": t_plan, "tiles": t_tiles, "write": t_write, "total": time.perf_counter() - t0},
                    read=read, redone=redone, label=label)
+
+
+def _run_tiles(runner, todo, common, step, plan, n, summaries, t1, lo, hi):
+    """Run the tiles ``todo`` through ``runner`` with the coordinate ``step`` (None: each measures its
+    own), their summaries into ``summaries``; progress (tiles done, points a second, time left) on
+    ``lo``..``hi`` of the whole run."""
+    if not todo:
+        return
+    n_tiles = len(plan.tiles)
+    tasks = [(t, *common, step) for t in todo]
+    run_id = uuid.uuid4().hex[:8]
+    keys = [f"curv-tile-{run_id}-{t}" for t in todo]
+    todo_points = sum(plan.tiles[t].count for t in todo)
+    done_points, count = 0, 0
+    rate, left = 0.0, float("nan")
+    finished_before = n_tiles - len(todo)
+    yield Progress(lo, f"tiles {finished_before}/{n_tiles}")
+    for result, partial in runner.iter_run(run_file_tile, tasks, keys=keys, steps=iter_file_tile):
+        running = 0.0 if result is not None else plan.tiles[todo[count]].count * partial  # this process's tile
+        if result is not None:
+            count += 1
+            done_points += plan.tiles[result["tile"]].count
+            summaries[result["tile"]] = result
+            elapsed = time.perf_counter() - t1
+            rate = done_points / elapsed if elapsed > 0 else 0.0
+            left = (todo_points - done_points) / rate if rate > 0 else float("nan")
+        yield Progress(lo + (hi - lo) * (done_points + running) / max(todo_points, 1),
+                       f"tiles {finished_before + count}/{n_tiles}, {_rate(rate)} points/s, {_duration(left)} left")
 
 
 def _phase(gen, lo: float, hi: float, message: str | None = None):

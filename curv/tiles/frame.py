@@ -84,16 +84,18 @@ def grid_order(points: np.ndarray, ids: np.ndarray, frame: GridFrame) -> np.ndar
     return np.lexsort((np.asarray(ids), cells3[:, 2], cells3[:, 1], cells3[:, 0]))
 
 
-def framed_cloud(points: np.ndarray, normals, ids: np.ndarray, frame: GridFrame):
+def framed_cloud(points: np.ndarray, normals, ids: np.ndarray, frame: GridFrame, *, georeferenced: bool = False,
+                 step: float | None = None):
     """These rows of a larger cloud as a :class:`curv.PointCloud` in the larger cloud's grid order,
     searching its grid (:attr:`curv.PointCloud.grid_frame`), estimated as it is (it is the whole
     call's twin restricted to these points), and the order it holds them in: ``(cloud, order)``,
-    cloud row i being ``ids[order[i]]``."""
+    cloud row i being ``ids[order[i]]``. ``georeferenced`` and ``step`` (the coordinates' step) are
+    the larger cloud's (None: the step measured on these points)."""
     from ..point_normals.grid_order import mark_ordered
 
     order = grid_order(points, ids, frame)
-    cloud = PointCloud(points[order], None if normals is None else normals[order],
-                       grid_frame=(frame.lower, frame.cell))
+    cloud = PointCloud(points[order], None if normals is None else normals[order], georeferenced=georeferenced,
+                       grid_frame=(frame.lower, frame.cell), coordinate_step=step)
     mark_ordered(cloud)
     return cloud, order
 

@@ -19,7 +19,7 @@ from ..core.jit import Progress, run_to_end
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.result import Curvature
-from .engine import ROW_FIELDS, Job, Piece, TileRows, iter_run_tile
+from .engine import ROW_FIELDS, Job, Piece, TileRows, iter_run_tile, step_redo, whole_step
 from .orient import Overlap, disagreeing, root_choice, spans_tiles, tile_signs, turned, undecided
 from .frame import GridFrame, frame_of
 from .plan import Histogram, Region, TilePlan, plan_tiles
@@ -76,10 +76,10 @@ def halo_for(shape, job: Job, sample: int = 20000) -> float:
         near = np.argpartition(np.linalg.norm(points - centre, axis=1), sample)[:sample]
         window = InMemoryInput(shape).fetch(Region.around(points[near].min(axis=0), points[near].max(axis=0), 0.0,
                                                           (points.min(axis=0), points.max(axis=0))))
-        from .engine import _shape_of
+        from .engine import shape_of
 
         frame = frame_of(points) if isinstance(shape, PointCloud) else None
-        part, _ = _shape_of(window, frame, points=isinstance(shape, PointCloud))
+        part, _ = shape_of(window, frame, points=isinstance(shape, PointCloud))
         reach = job.reach(part, None)
     finite = reach[np.isfinite(reach)]
     return 2.0 * float(np.percentile(finite, 99)) if finite.size else 0.0
@@ -110,43 +110,56 @@ def iter_estimate_tiled(shape, method: str = "mru", range=None, *, tile_size: in
     plan = plan_for(points, tile_size)
     tile_of = plan.tile_of(points)
     is_points = source.is_points
+    georeferenced = bool(getattr(shape, "georeferenced", False))
+    job = job.for_input(points=is_points, georeferenced=georeferenced)
     frame = frame_of(points) if is_points else _mesh_frame(shape)
     if halo is None:
         halo = halo_for(shape, job)
     n = points.shape[0]
-    out = _Assembly(n)
+    out = _Assembly(n, len(plan.tiles))
     t0 = time.perf_counter()
     yield Progress(0.0)
-    tasks = [(np.flatnonzero(tile_of == t.index), (t.lo, t.hi)) for t in plan.tiles]
+    tasks = [(t.index, np.flatnonzero(tile_of == t.index), (t.lo, t.hi)) for t in plan.tiles]
     overlap = is_points and spans_tiles(job, has_normals=source.normals is not None)
-    if client is None:
-        for i, (core, box) in enumerate(tasks):
-            gen = iter_run_tile(core, box, plan.bounds, source.fetch, job, frame, halo=halo, points=is_points,
-                                overlap=overlap)
-            while True:
-                try:
-                    step = next(gen)
-                except StopIteration as stop:
-                    out.add(stop.value)
-                    break
-                yield Progress((i + float(step)) / len(tasks), getattr(step, "message", ""))
-    else:
-        shared = client.scatter(source, broadcast=True)  # the input travels to each worker once, not per tile
-        futures = [client.submit(_run_tile_task, core, box, plan.bounds, shared, job, frame, halo, is_points,
-                                 overlap, pure=False) for core, box in tasks]
-        from distributed import as_completed
-
-        for done, future in enumerate(as_completed(futures), 1):
-            out.add(future.result())
-            yield Progress(done / len(tasks))
+    settings = dict(halo=halo, points=is_points, overlap=overlap, georeferenced=georeferenced)
+    yield from _run_tiles(tasks, plan, source, job, frame, settings, client, out, None, 0.0, 0.95 if is_points else 1.0)
+    if is_points:
+        # the whole cloud's coordinate step is known once every tile has run: a tile that used
+        # another one where it matters runs again with it (curv.tiles.engine.step_redo)
+        step = whole_step(out.infos)
+        again = [] if step is None else [task for task in tasks if step_redo(out.infos[task[0]], step)]
+        if again:
+            yield from _run_tiles(again, plan, source, job, frame, settings, client, out, step, 0.95, 1.0)
     if overlap:
-        out.orient(tile_of, points, len(plan.tiles), job.keywords.get("orient", "up"))
+        out.orient(tile_of, points, len(plan.tiles), job.keywords.get("orient"))
     return out.result(job, shape, time.perf_counter() - t0, len(plan.tiles))
 
 
-def _run_tile_task(core, box, bounds, source, job, frame, halo, is_points, overlap) -> TileRows:
-    return run_to_end(iter_run_tile(core, box, bounds, source.fetch, job, frame, halo=halo, points=is_points,
-                                    overlap=overlap))
+def _run_tiles(tasks, plan, source, job, frame, settings, client, out, step, lo, hi):
+    """Run ``tasks`` (index, core, box), here or on ``client``, into ``out``; progress on ``lo``..``hi``."""
+    if client is None:
+        for i, (index, core, box) in enumerate(tasks):
+            gen = iter_run_tile(core, box, plan.bounds, source.fetch, job, frame, step=step, **settings)
+            while True:
+                try:
+                    progress = next(gen)
+                except StopIteration as stop:
+                    out.add(index, stop.value)
+                    break
+                yield Progress(lo + (hi - lo) * (i + float(progress)) / len(tasks), getattr(progress, "message", ""))
+        return
+    shared = client.scatter(source, broadcast=True)  # the input travels to each worker once, not per tile
+    futures = {client.submit(_run_tile_task, core, box, plan.bounds, shared, job, frame, step, settings, pure=False): index
+               for index, core, box in tasks}
+    from distributed import as_completed
+
+    for done, future in enumerate(as_completed(list(futures)), 1):
+        out.add(futures[future], future.result())
+        yield Progress(lo + (hi - lo) * done / len(tasks))
+
+
+def _run_tile_task(core, box, bounds, source, job, frame, step, settings) -> TileRows:
+    return run_to_end(iter_run_tile(core, box, bounds, source.fetch, job, frame, step=step, **settings))
 
 
 def _mesh_frame(mesh: Mesh) -> GridFrame | None:
@@ -157,7 +170,7 @@ def _mesh_frame(mesh: Mesh) -> GridFrame | None:
 class _Assembly:
     """The whole input's result columns, filled tile by tile."""
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, n_tiles: int):
         self.n = n
         self.k1, self.k2 = np.full(n, np.nan), np.full(n, np.nan)
         self.d1, self.d2, self.normals = (np.full((n, 3), np.nan) for _ in range(3))
@@ -165,13 +178,14 @@ class _Assembly:
         self.reason = np.zeros(n, np.uint8)
         self.k1_se, self.k2_se = np.full(n, np.nan), np.full(n, np.nan)
         self.filled = np.zeros(n, bool)
-        self.infos = []
+        self.infos = [{} for _ in range(n_tiles)]
 
-    def add(self, rows: TileRows) -> None:
+    def add(self, index: int, rows: TileRows) -> None:
+        """Tile ``index``'s rows (again, for a tile run a second time)."""
         for name, values in rows.columns.items():
             getattr(self, name)[rows.ids] = values
         self.filled[rows.ids] = True
-        self.infos.append(rows.info)
+        self.infos[index] = rows.info
 
     def columns(self, rows) -> dict:
         return {name: getattr(self, name)[rows] for name in ROW_FIELDS}

@@ -2,13 +2,14 @@
 
 The rules per input kind (docs/LARGE_SCANS.md):
 
-* **Scans seen from a scanner**: normals turned **towards the scanner** (a viewpoint) are decided
-  at each point from its own normal (:mod:`curv.point_normals`), so a tile decides them as the
-  whole call does: nothing to reconcile.
-* **Closed objects** (``orient="outward"``) and, in this version of the library, aerial scans
-  turned **up** (``orient="up"``) are oriented by propagation along a minimum spanning tree of the
-  neighbour graph (Hoppe et al. 1992), from one root per connected part (its point farthest from
-  its centroid turned away from it; its highest point turned up): a global walk. Each tile propagates over its own region; the tiles are then made to agree
+* **Aerial and terrestrial scans**: normals turned **up** (``orient="up"``, the default for a
+  georeferenced cloud: a LAS/LAZ file) or **towards the scanner** (a viewpoint) are decided at each
+  point from its own normal and its nearest points' (:mod:`curv.point_normals`), so a tile decides
+  them as the whole call does: nothing to reconcile.
+* **Objects** (``orient="top"``, the default for other clouds, and ``"outward"`` for closed ones)
+  are oriented by propagation along a minimum spanning tree of the neighbour graph (Hoppe et al.
+  1992), from one root per connected part (its highest point turned up; its point farthest from
+  its centroid turned away from it): a global walk. Each tile propagates over its own region; the tiles are then made to agree
   (:func:`tile_signs`): two tiles share the points of their overlaps (one's core is the other's
   halo), each pair's normals there vote whether the two tiles agree, a spanning tree of the tiles
   (strongest votes first) carries one sign to every tile from a root tile, and the tiles whose
@@ -35,9 +36,10 @@ AGREE = 0.5
 """Normals of one point from two tiles agree or disagree when |cos| between them is at least this."""
 
 
-TREE_ORIENTATIONS = ("up", "outward")
+TREE_ORIENTATIONS = ("top", "outward")
 """The ``orient=`` choices :func:`curv.point_normals.orient_normals` propagates along a spanning tree
-(from each part's highest point turned up, or its farthest from the part's centroid turned away)."""
+(from each part's highest point turned up, or its farthest from the part's centroid turned away);
+``"up"`` and a viewpoint decide each point alone."""
 
 
 def spans_tiles(job, has_normals: bool = False) -> bool:
@@ -45,7 +47,7 @@ def spans_tiles(job, has_normals: bool = False) -> bool:
     (:data:`TREE_ORIENTATIONS`): then the tiles must be made to agree (module notes). A point cloud
     with normals of its own (``has_normals``) keeps them unless ``normals=`` asks otherwise."""
     kw = job.keywords
-    orient = kw.get("orient", "up")
+    orient = kw.get("orient")
     estimated = kw.get("normals") in ("fit", "pca") or (kw.get("normals") is None and not has_normals)
     return isinstance(orient, str) and orient in TREE_ORIENTATIONS and estimated
 
@@ -58,7 +60,7 @@ def root_choice(points: np.ndarray, normals: np.ndarray, orient: str, centroid: 
     ok = np.flatnonzero(np.isfinite(normals).all(axis=1))
     if ok.size == 0:
         return None, 1
-    if orient == "up":
+    if orient == "top":
         row = ok[int(np.argmax(points[ok, 2]))]
         return int(row), 1 if normals[row, 2] >= 0 else -1
     away = points[ok] - centroid

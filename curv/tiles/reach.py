@@ -22,7 +22,8 @@ The rule per input:
   ``calm(q)`` = the largest ``|j - q| + knn(j)`` over q and its G nearest (the border test's unit
   reads the neighbours' spacings, :func:`curv.point_normals.border_radii`);
   ``own(q)`` = the largest of ``calm(q)``, the border test's ball (:data:`~curv.point_normals.BORDER_RANGE`),
-  the normals' fit ball (``fit_range``) and the line check's balls at
+  the normals' fit ball (``fit_range``, at least :func:`curv.point_normals.support_floor`) and
+  the line check's balls at
   :data:`~curv.point_normals.NORMAL_RANGE`: everything q's normal and flags read;
   with an orientation by rule (up, the spanning trees), which checks a normal against its G
   nearest's, ``own(q)`` also takes ``|j - q| + own(j)`` over them;
@@ -57,7 +58,7 @@ from ..estimators import get_spec
 from ..estimators._local_fit import slice_bounds
 from ..geometry.neighbourhood import new_queues
 
-__all__ = ["ball_max", "point_reach", "normal_reach", "mesh_reach", "support_reach"]
+__all__ = ["ball_max", "point_reach", "normal_reach", "floored_radii", "mesh_reach", "support_reach"]
 
 
 @jit_parallel
@@ -141,10 +142,12 @@ def _normal_ranges(fit_range) -> list:
 
 def _own_reach(cloud: PointCloud, fit_range) -> np.ndarray:
     """(n,) what a point's own normal, border test and line checks read (module notes, ``own``)."""
-    from ..point_normals import border_radii
+    from ..point_normals import border_radii, support_floor
 
     knn = _knn_reach(cloud)
     own = _calm_reach(cloud, knn)
+    # on coordinates stored on a coarse grid the normals are fitted over at least this radius
+    np.maximum(own, support_floor(cloud), out=own)
     # border_radii is BORDER_RANGE times the calm spacing; the plain R3 ball is below it
     np.maximum(own, border_radii(cloud), out=own)
     for rng, uses_normals in _normal_ranges(fit_range):
@@ -166,6 +169,17 @@ def normal_reach(cloud: PointCloud, *, fit_range=2, orient="up") -> np.ndarray:
     whole call's."""
     own = _own_reach(cloud, fit_range)
     return _with_neighbours(cloud, own) if isinstance(orient, str) else own
+
+
+def floored_radii(cloud: PointCloud, job) -> np.ndarray:
+    """(n,) the narrower of the two radii the quantisation checks compare with
+    :func:`curv.point_normals.support_floor` at each point: the normals' fit and the estimate's
+    support (a :class:`curv.tiles.engine.Job`)."""
+    spec = get_spec(job.method)
+    kw = job.keywords
+    fit = ball_radii(cloud, resolve(get_spec("jet"), kw.get("fit_range", 2)), uses_normals=False)
+    rng = resolve(spec, job.range, kw.get("radius"), kw.get("knn"))
+    return np.minimum(fit, ball_radii(cloud, rng, uses_normals=spec.uses_normals))
 
 
 def point_reach(cloud: PointCloud, method: str, rng: Range, *, fit_range=2, orient="up", centres=None) -> np.ndarray:
@@ -230,7 +244,7 @@ def mesh_reach(mesh: Mesh, method: str, rng: Range | None, *, fitted_normals: bo
 
 
 def support_reach(shape, method: str, range=None, *, radius=None, knn=None, normals=None, fit_range=2,
-                  orient="up", standard_errors: bool = True, centres=None) -> np.ndarray:
+                  orient=None, standard_errors: bool = True, centres=None) -> np.ndarray:
     """How far an estimate ``curv.estimate(shape, method, range, ...)`` at each point reads (module notes).
 
     Parameters
@@ -249,6 +263,10 @@ def support_reach(shape, method: str, range=None, *, radius=None, knn=None, norm
     spec = get_spec(method)
     rng = resolve(spec, range, radius, knn)
     if isinstance(shape, PointCloud):
+        if orient is None:
+            from ..point_normals import default_orientation
+
+            orient = default_orientation(shape)
         return point_reach(shape, method, rng, fit_range=fit_range, orient=orient, centres=centres)
     fitted = isinstance(normals, str) and normals == "fit"
     return mesh_reach(shape, method, rng if spec.has_support else None, fitted_normals=fitted, fit_range=fit_range,

@@ -21,7 +21,7 @@ from typing import Generator
 import numpy as np
 
 from ..core.jit import Progress
-from .engine import Job, _shape_of
+from .engine import Job, shape_of
 from .plan import Region
 from .prepare import FileInput, iter_prepare
 from .scratch import Scratch
@@ -100,18 +100,20 @@ class FileRegions:
         (:class:`curv.tiles.engine.Job`, or ``(method, range, keywords)``) read there (module notes)."""
         if self._input is None:
             yield from self.iter_prepare()
-        jobs = [j if isinstance(j, Job) else Job.checked(j[0], j[1], **dict(j[2])) for j in jobs]
+        points = not self._prepared.is_mesh
+        georeferenced = self.path.suffix.lower() in (".las", ".laz")  # as the LAS reader says (curv.PointCloud)
+        jobs = [(j if isinstance(j, Job) else Job.checked(j[0], j[1], **dict(j[2])))
+                .for_input(points=points, georeferenced=georeferenced) for j in jobs]
         centre = np.asarray(centre, np.float64).reshape(3)
         radius = float(radius)
         bounds = self._prepared.plan.bounds
-        points = not self._prepared.is_mesh
         lo, hi = centre - radius, centre + radius
         h = radius
         while True:
             yield Progress(0.5, "reading the region")
             region = Region.around(lo, hi, h, bounds)
             piece = self._input.fetch(region)
-            shape, order = _shape_of(piece, self._prepared.frame, points=points)
+            shape, order = shape_of(piece, self._prepared.frame, points=points, georeferenced=georeferenced)
             inside = np.linalg.norm(shape.vertices - centre, axis=1) <= radius
             if not piece.ids.size or (not points and (piece.faces is None or not piece.faces.size)):
                 return Around(shape, np.flatnonzero(inside), piece.ids[order], h)

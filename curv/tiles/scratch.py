@@ -10,6 +10,7 @@ complete)::
     points/NNNNNN.bin        each tile's core points: records (id, x, y, z[, nx, ny, nz]), ids ascending
     faces/NNNNNN.bin         a mesh's faces with a vertex in the tile: (face id, v0, v1, v2)
     rows/NNNNNN.npy          a finished tile: its core points' results (:data:`ROW_DTYPE`)
+    rows/NNNNNN.json         its coordinate steps and points per reason (written just before)
     overlap/NNNNNN.npy       a finished tile's halo normals (the orientation across tiles)
 
 A tile is finished when its ``rows`` file exists; an interrupted run resumes from the others.
@@ -191,6 +192,24 @@ class Scratch:
 
     def overlap_path(self, tile: int) -> Path:
         return self.folder / "overlap" / f"{tile:06d}.npy"
+
+    def info_path(self, tile: int) -> Path:
+        return self.folder / "rows" / f"{tile:06d}.json"
+
+    def write_info(self, tile: int, info: dict) -> None:
+        """A finished tile's facts (its coordinate steps, its points per reason), written whole."""
+        path = self.info_path(tile)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(info))
+        os.replace(tmp, path)
+
+    def read_info(self, tile: int) -> dict:
+        return json.loads(self.info_path(tile).read_text())
+
+    def forget(self, tile: int) -> None:
+        """Make a finished tile unfinished (to run it again): its rows file first."""
+        for path in (self.rows_path(tile), self.overlap_path(tile), self.info_path(tile)):
+            path.unlink(missing_ok=True)
 
     def finished(self, tile: int) -> bool:
         return self.rows_path(tile).is_file()

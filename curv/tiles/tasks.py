@@ -16,42 +16,50 @@ from .engine import Job, iter_run_tile
 from .prepare import FileInput
 from .scratch import OVERLAP_DTYPE, Scratch, columns_to_rows, write_array
 
-__all__ = ["run_file_tile", "iter_file_tile", "first_halo"]
+__all__ = ["run_file_tile", "iter_file_tile", "finished_summary", "first_halo"]
 
 
-def run_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: float, overlap: bool) -> dict:
+def run_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: float, overlap: bool,
+                  georeferenced: bool = False, step: float | None = None) -> dict:
     """Estimate tile ``tile`` and save its rows (module notes); returns what the run reports about it:
     ``tile``, ``points`` (core), ``read`` (region points over every pass), ``redone``, ``passes``,
     ``seconds``, ``halo``, ``info`` (the estimate's own info entries), ``cached`` (already finished),
     ``reasons`` (its core points per reason code, a (256,) count)."""
-    return run_to_end(iter_file_tile(tile, source, job, frame, bounds, halo, overlap))
+    return run_to_end(iter_file_tile(tile, source, job, frame, bounds, halo, overlap, georeferenced, step))
 
 
-def iter_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: float, overlap: bool):
+def iter_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: float, overlap: bool,
+                   georeferenced: bool = False, step: float | None = None):
     """:func:`run_file_tile` step by step: yields the tile's fraction done (where a run in this process
     may stop), returns the same summary."""
     scratch = Scratch(source.folder)
     if scratch.finished(tile):  # a task run twice (a worker lost after it saved its rows)
-        from .scratch import read_rows
-
-        reasons = np.bincount(read_rows(scratch.rows_path(tile))["reason"], minlength=256)
-        return {"tile": tile, "cached": True, "points": int(reasons.sum()), "reasons": reasons}
+        return finished_summary(scratch, tile)
     core = scratch.read_points(tile, source.dtype)["id"]
     box = (source.tiles[tile].lo, source.tiles[tile].hi)
     rows = yield from iter_run_tile(np.ascontiguousarray(core), box, bounds, source.fetch, job, frame, halo=halo,
-                                    points=not source.is_mesh, overlap=overlap)
+                                    points=not source.is_mesh, overlap=overlap, georeferenced=georeferenced,
+                                    step=step)
     if overlap:
         ids, normals = rows.info.pop("overlap", (np.empty(0, np.int64), np.empty((0, 3))))
         seen = np.empty(ids.size, OVERLAP_DTYPE)
         seen["id"], seen["normal"] = ids, normals
         write_array(scratch.overlap_path(tile), seen)
+    info = rows.info
+    reasons = np.bincount(rows.columns["reason"], minlength=256)
+    scratch.write_info(tile, {"steps": info.get("steps", []), "reasons": reasons.tolist()})
     # the rows last: their file marks the tile finished
     write_array(scratch.rows_path(tile), columns_to_rows(rows.ids, rows.columns))
-    info = rows.info
     return {"tile": tile, "cached": False, "points": int(rows.ids.size), "read": info["points"],
             "redone": info["redone"], "passes": info["passes"], "seconds": info["seconds"], "halo": info["halo"],
-            "info": info.get("estimate_info", {}),
-            "reasons": np.bincount(rows.columns["reason"], minlength=256)}
+            "info": info.get("estimate_info", {}), "reasons": reasons, "steps": info.get("steps", [])}
+
+
+def finished_summary(scratch: Scratch, tile: int) -> dict:
+    """What :func:`run_file_tile` returns for a tile an earlier run (or try) finished."""
+    saved = scratch.read_info(tile)
+    return {"tile": tile, "cached": True, "points": int(sum(saved["reasons"])),
+            "reasons": np.asarray(saved["reasons"], np.int64), "steps": [tuple(s) for s in saved["steps"]]}
 
 
 def first_halo(source: FileInput, job: Job, frame, bounds, *, window: int = 200_000) -> float:
@@ -60,7 +68,7 @@ def first_halo(source: FileInput, job: Job, frame, bounds, *, window: int = 200_
     without a halo: their reach is then a little over the truth at its edges, which only widens the
     halo). A tile that needs more redoes those points (:mod:`curv.tiles.engine`): this only sets how
     often. The window keeps the driver's memory small whatever the tiles' size."""
-    from .engine import _shape_of
+    from .engine import shape_of
     from .plan import Region
 
     tile = max(source.tiles, key=lambda t: t.count)
@@ -74,7 +82,7 @@ def first_halo(source: FileInput, job: Job, frame, bounds, *, window: int = 200_
     piece = source.fetch(Region.around(lo, hi, 0.0, bounds))
     if piece.ids.size < 2 or (source.is_mesh and (piece.faces is None or piece.faces.size == 0)):
         return 0.0
-    shape, _ = _shape_of(piece, frame, points=not source.is_mesh)
+    shape, _ = shape_of(piece, frame, points=not source.is_mesh)
     reach = job.reach(shape, None)
     finite = reach[np.isfinite(reach)]
     return 2.0 * float(np.percentile(finite, 99)) if finite.size else 0.0
