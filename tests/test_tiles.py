@@ -227,3 +227,11 @@ def test_a_memory_budget_is_read_and_shared_by_the_workers():
     assert 500_000 < budget.tile_size < 3_000_000
     with pytest.raises(ValueError, match="no room"):
         plan_budget(700 * 2**20, "qs", points=True)
+
+
+def test_a_cloud_oriented_from_its_top_by_default_agrees_with_the_whole_call(torus_cloud):
+    """A cloud that is not a georeferenced scan propagates its normals from each part's top
+    (``orient="top"``): each tile along its own tree, then whole tiles turned to agree."""
+    whole = curv.estimate(torus_cloud, "mru")
+    assert whole.info["orientation"] == "top"
+    assert_same(estimate_tiled(torus_cloud, "mru", tile_size=1200), whole, rounding=True, signless_directions=True)
