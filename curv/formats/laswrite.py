@@ -162,6 +162,9 @@ def _open_input(path: Path):
     except ImportError:
         raise LoadError(f"{path}: LAS/LAZ needs laspy ({_LAS_HINT})") from None
     check_readable(path)
+    from .lasheader import check_las_header
+
+    check_las_header(path)  # the header's promises against the file, before laspy reads it
     try:
         return laspy.open(path)
     except Exception as exc:  # noqa: BLE001 - laspy's and lazrs's errors become one line

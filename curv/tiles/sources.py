@@ -156,7 +156,10 @@ class LasSource(Source):
     def __init__(self, path: Path):
         import laspy
 
+        from ..formats.lasheader import check_las_header
+
         self.path = path
+        check_las_header(path)  # the header's promises against the file, before laspy reads it
         try:
             with laspy.open(path) as reader:
                 header = reader.header
