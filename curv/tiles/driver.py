@@ -22,10 +22,17 @@ import os
 import time
 from typing import Callable, Generator, Sequence
 
-__all__ = ["Runner", "RETRIES", "TileFailed"]
+__all__ = ["Runner", "RETRIES", "TileFailed", "QUIET_CLUSTER"]
 
 RETRIES = 2
 """Times a failed tile is run again (besides the restarts of a killed worker, which Dask counts)."""
+
+
+QUIET_CLUSTER = {"distributed.admin.tick.interval": "1s", "distributed.worker.memory.monitor-interval": "1s",
+                 "distributed.admin.system-monitor.interval": "2s"}
+"""Dask settings of a local cluster: its event loops' health tick and its memory and system monitors
+polled once a second instead of every 20-500 ms (measured: an idle cluster of two workers used 3.0 CPU
+seconds in 30 s with Dask's defaults, 1.8 with these)."""
 
 
 class TileFailed(RuntimeError):
@@ -67,9 +74,14 @@ class Runner:
                 env = {"CURV_THREADS": "1", "NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
                 if os.environ.get("NUMBA_CACHE_DIR"):
                     env["NUMBA_CACHE_DIR"] = os.environ["NUMBA_CACHE_DIR"]
-                self._cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                             memory_limit=worker_bytes or "auto", dashboard_address=None,
-                                             silence_logs=logging.ERROR, env=env)
+                import dask
+
+                # a tile runs for seconds to minutes: Dask's 20 ms ticks and 0.1 s memory polls only
+                # cost CPU (10 % of a core for an idle cluster of two; 6 % with these)
+                with dask.config.set(QUIET_CLUSTER):
+                    self._cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                                 memory_limit=worker_bytes or "auto", dashboard_address=None,
+                                                 silence_logs=logging.ERROR, env=env)
                 self._own_client = Client(self._cluster)
             self.client = self._own_client
 
