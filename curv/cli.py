@@ -120,16 +120,22 @@ def _estimate(args, progress: PhaseProgress) -> int:
         check_mesh_options(args)
         args.normals = args.normals or "max"
     _check_colours(args)
+    from .tiles import command as tiled
+
     if args.output:
         try:
-            check_output_suffix(args.output)
+            if not tiled.las_output(args.output):  # a LAS/LAZ output keeps the input's records
+                check_output_suffix(args.output)
         except ValueError as exc:
             raise CurvOutputError(str(exc)) from None
+        tiled.check_las_output(args)
         _check_output(args.output)
     counts = peek_counts(args.input)  # a PLY header, mesh or points
     if counts is None and points:
         n_points = peek_points(args.input)
         counts = None if n_points is None else (n_points, 0)
+    if tiled.wants_tiles(args, counts, points=points):  # asked, or too large for memory whole
+        return tiled.run(args, points=points)
     if counts is not None:  # refuse before reading a file that will not fit
         _check_memory(args, *counts, spec.name, rng, points=points)
     progress.label = f"{spec.name} {rng.label}"
@@ -183,8 +189,15 @@ def _estimate(args, progress: PhaseProgress) -> int:
         progress.phase("write")
         t2 = time.perf_counter()
         try:
-            save_result(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
-                        clim=tuple(args.clim) if args.clim else None)
+            if tiled.las_output(args.output):
+                from .formats.laswrite import save_las
+
+                save_las(args.output, args.input, res, groups=tuple(args.las_extra))
+            else:
+                save_result(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
+                            clim=tuple(args.clim) if args.clim else None)
+        except CurvError:
+            raise
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
         t_write = time.perf_counter() - t2
@@ -376,7 +389,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "every vertex")
     p_est.add_argument("--knn", type=int, metavar="K", help="point clouds, instead of --range: the K nearest points")
     p_est.add_argument("--output", "-o", help="write the result: " + "; ".join(
-        f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items()))
+        f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items())
+        + "; .las/.laz (a LAS/LAZ input) its records with the curvature as extra bytes")
     p_est.add_argument("--quantity", default="mean", choices=list(QUANTITIES),
                        help="what the output colours show; default mean (" + "; ".join(describe_quantities()) + ")")
     p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
@@ -421,6 +435,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="no progress (else a bar per phase on a terminal, a line every few seconds elsewhere)")
     p_est.add_argument("--no-memory-check", dest="memory_check", action="store_false",
                        help="estimate even when the predicted peak memory exceeds the available memory")
+    from .tiles.command import add_arguments as add_tile_arguments
+
+    add_tile_arguments(p_est)
     p_est.set_defaults(func=_cmd_estimate)
 
     p_adv = sub.add_parser("advise", help="which estimator and range for this mesh (from the study)")
