@@ -250,3 +250,21 @@ def test_stable_rank_is_the_stable_argsort():
     for w in (rng.random(3000), np.round(rng.random(5000), 2) + 1e-9, np.full(7, 1e-9), np.zeros(0),
               1.0 - np.abs(rng.uniform(-1, 1, 20000)) + 1e-9, np.array([2.0 ** -40, 0.0, 1.5, 2.0 ** -40, 0.0])):
         assert np.array_equal(_stable_rank(w), np.argsort(w, kind="stable"))
+
+
+@pytest.mark.parametrize("name,cloud", list(_gap_clouds()), ids=[c[0] for c in _gap_clouds()])
+def test_screened_gap_reads_the_same_above_its_screen(name, cloud):
+    """Below the screen the pass keeps only an upper bound of the gap (the occupied bins), itself
+    below the screen: every test against a threshold at or above the screen reads the same."""
+    from curv.core.jit import run_to_end
+    from curv.point_normals.normals import EXACT_GAP
+    from curv.point_normals.one_pass import _one_pass
+
+    radii = ball_radii(cloud, Range(k=3), uses_normals=False)
+    exact = run_to_end(_one_pass(cloud, radii)).gap_a
+    screened = run_to_end(_one_pass(cloud, radii, screens=(EXACT_GAP, 0.0))).gap_a
+    above = exact >= EXACT_GAP
+    np.testing.assert_array_equal(screened[above], exact[above])
+    assert (screened[~above] < EXACT_GAP).all() and (screened[~above] >= exact[~above] - 1e-12).all()
+    # the bound is a bound, not the gap: most points below the screen read more than their gap
+    assert (~above).sum() > 100 and (screened[~above] > exact[~above] + 1e-6).mean() > 0.5

@@ -23,8 +23,8 @@ import numpy as np
 from .errors import MeshError
 from .jit import jit, jit_parallel, launch, prange
 
-__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "grid_gather", "symmetric_graph", "neighbour_steps",
-           "GRAPH_NEIGHBOURS"]
+__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "grid_gather", "cell_of", "ring_of", "cell_block", "block_gather",
+           "symmetric_graph", "neighbour_steps", "GRAPH_NEIGHBOURS"]
 
 GRAPH_NEIGHBOURS = 10
 """Neighbours per point of a point cloud's neighbour graph (made symmetric: about 13 edges a
@@ -125,27 +125,65 @@ def _margin(i, ring, cx, cy, cz, dims, lo, h, xs, ys, zs):
     return m
 
 
+@jit
+def _scan_runs(i, runs, m, xs, ys, zs, out_d, out_i, k):
+    """:func:`_scan_block` over the runs of a block (:func:`cell_block`): the same candidates in the
+    same order, the k-th distance kept in a local."""
+    px, py, pz = xs[i], ys[i], zs[i]
+    worst = out_d[i, k - 1]
+    for r in range(m):
+        for j in range(runs[r, 0], runs[r, 1]):
+            if j == i:
+                continue
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 >= worst:
+                continue
+            s = k - 1
+            while s > 0 and out_d[i, s - 1] > d2:
+                out_d[i, s] = out_d[i, s - 1]
+                out_i[i, s] = out_i[i, s - 1]
+                s -= 1
+            out_d[i, s] = d2
+            out_i[i, s] = j
+            worst = out_d[i, k - 1]
+
+
 @jit_parallel
-def _knn_kernel(cell_keys, cell_start, dims, lo, h, xs, ys, zs, k, out_d, out_i):
+def _knn_kernel(cells, coords, k, out_d, out_i):
+    """The k nearest of every sorted point: the cells in slices, one per thread; the first ring
+    of cells around each cell looked up once for its points (:func:`cell_block`), wider blocks
+    point by point where the k-th nearest may lie beyond it (sparse places, outliers)."""
+    cell_keys, cell_start, dims, _ = cells
+    origin, xs, ys, zs = coords
     n_cells = cell_keys.size
     nx, ny, nz = dims[0], dims[1], dims[2]
-    for c in prange(n_cells):
-        key = cell_keys[c]
-        cz = key % nz
-        cy = (key // nz) % ny
-        cx = key // (nz * ny)
-        for i in range(cell_start[c], cell_start[c + 1]):
-            ring = 1
-            while True:
+    h = origin[3]
+    parts = max(1, min(n_cells, 256))
+    for t in prange(parts):
+        runs = np.empty((64, 2), np.int64)
+        for c in range(t * n_cells // parts, (t + 1) * n_cells // parts):
+            key = cell_keys[c]
+            cz = key % nz
+            cy = (key // nz) % ny
+            cx = key // (nz * ny)
+            m, runs = cell_block(c, 1, cells, runs)
+            for i in range(cell_start[c], cell_start[c + 1]):
                 for j in range(k):
                     out_d[i, j] = np.inf
                     out_i[i, j] = -1
-                _scan_block(i, ring, cx, cy, cz, dims, cell_keys, cell_start, xs, ys, zs, out_d, out_i, k)
-                margin = _margin(i, ring, cx, cy, cz, dims, lo, h, xs, ys, zs)
-                # final when the k-th is inside the block's sphere, or the block holds everything
-                if out_d[i, k - 1] <= margin * margin or margin == math.inf:
-                    break
-                ring += 1
+                _scan_runs(i, runs, m, xs, ys, zs, out_d, out_i, k)
+                ring = 1
+                while True:
+                    margin = _margin(i, ring, cx, cy, cz, dims, origin, h, xs, ys, zs)
+                    # final when the k-th is inside the block's sphere, or the block holds everything
+                    if out_d[i, k - 1] <= margin * margin or margin == math.inf:
+                        break
+                    ring += 1
+                    for j in range(k):
+                        out_d[i, j] = np.inf
+                        out_i[i, j] = -1
+                    _scan_block(i, ring, cx, cy, cz, dims, cell_keys, cell_start, xs, ys, zs, out_d, out_i, k)
 
 
 def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
@@ -215,12 +253,12 @@ def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarra
     """
     if k < 1:
         raise ValueError(f"k must be >= 1, got {k}")
-    (cell_keys, cell_start, dims, order), (origin, xs, ys, zs) = grid or build_grid(points, k)
+    cells, coords = grid or build_grid(points, k)
+    order = cells[3]
     n = order.size
     out_d = np.empty((n, k))
     out_i = np.empty((n, k), np.int64)
-    launch(_knn_kernel, cell_keys, cell_start, dims, origin[:3].copy(), float(origin[3]), xs, ys, zs, int(k),
-           out_d, out_i)
+    launch(_knn_kernel, cells, coords, int(k), out_d, out_i)
     # back to the caller's order: rows by original point, entries as original indices
     indices = np.empty_like(out_i)
     indices[order] = np.where(out_i >= 0, order[np.maximum(out_i, 0)], -1)
@@ -229,6 +267,24 @@ def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarra
     np.sqrt(out_d, out=out_d)
     distances[order] = out_d
     return indices, distances
+
+
+@jit
+def ring_of(radius2, dims, origin):
+    """The rings of cells around a point's cell that hold its ball of squared radius ``radius2``."""
+    widest = max(dims[0], max(dims[1], dims[2]))
+    reach = math.sqrt(radius2) / origin[3]
+    # an infinite or huge ball (fewer points than knn=K asks for) covers the whole grid
+    return widest if not reach < widest else int(math.ceil(reach))
+
+
+@jit
+def _block_around(cx, cy, cz, ring, dims):
+    """The block of grid cells ``(x0, x1, y0, y1, z0, z1)`` (inclusive) within ``ring`` rings of cell
+    (cx, cy, cz)."""
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    return (max(cx - ring, 0), min(cx + ring, nx - 1), max(cy - ring, 0), min(cy + ring, ny - 1),
+            max(cz - ring, 0), min(cz + ring, nz - 1))
 
 
 @jit
@@ -241,12 +297,7 @@ def _ball_cells(px, py, pz, radius2, dims, origin):
     cx = min(max(int(math.floor((px - origin[0]) / h)), 0), nx - 1)
     cy = min(max(int(math.floor((py - origin[1]) / h)), 0), ny - 1)
     cz = min(max(int(math.floor((pz - origin[2]) / h)), 0), nz - 1)
-    widest = max(nx, max(ny, nz))
-    reach = math.sqrt(radius2) / h
-    # an infinite or huge ball (fewer points than knn=K asks for) covers the whole grid
-    ring = widest if not reach < widest else int(math.ceil(reach))
-    return (max(cx - ring, 0), min(cx + ring, nx - 1), max(cy - ring, 0), min(cy + ring, ny - 1),
-            max(cz - ring, 0), min(cz + ring, nz - 1))
+    return _block_around(cx, cy, cz, ring_of(radius2, dims, origin), dims)
 
 
 @jit
@@ -337,6 +388,86 @@ def grid_gather(i, radius2, cells, coords, queue, dist2):
     """
     xs, ys, zs = coords[1], coords[2], coords[3]
     return _ball_scan(xs[i], ys[i], zs[i], i, radius2, cells, coords, None, queue, dist2)
+
+
+@jit
+def cell_of(i, cell_start):
+    """The occupied cell that holds sorted position ``i`` (``cell_start[c] <= i < cell_start[c + 1]``)."""
+    lo, hi = 0, cell_start.size - 1
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if cell_start[mid] <= i:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@jit
+def cell_block(c, ring, cells, runs):
+    """The sorted positions of the cells within ``ring`` rings of occupied cell ``c`` (the block that
+    holds the ball of a point of cell c whose radius needs that many, :func:`ring_of`), as runs:
+    ``runs[r, 0] <= j < runs[r, 1]`` for ``r < m``, one run per column in :func:`grid_gather`'s scan
+    order (empty columns left out).
+
+    Every point of cell c finds its ball among these (:func:`block_gather`), so a kernel that walks
+    the points cell by cell looks the columns up once per cell instead of once per point.
+
+    Parameters
+    ----------
+    runs : (k, 2) int64
+        Scratch; grown when the block has more columns.
+
+    Returns
+    -------
+    m : int
+    runs : (k', 2) int64
+        The scratch (a new array when it grew).
+    """
+    cell_keys, cell_start, dims, _ = cells
+    ny, nz = dims[1], dims[2]
+    key = cell_keys[c]
+    cz = key % nz
+    cy = (key // nz) % ny
+    cx = key // (nz * ny)
+    x0, x1, y0, y1, z0, z1 = _block_around(cx, cy, cz, ring, dims)
+    columns = (x1 - x0 + 1) * (y1 - y0 + 1)
+    if runs.shape[0] < columns:
+        runs = np.empty((columns, 2), np.int64)
+    m = 0
+    for ix in range(x0, x1 + 1):
+        for iy in range(y0, y1 + 1):
+            base = (ix * ny + iy) * nz
+            a = cell_start[_first_at_least(cell_keys, base + z0)]
+            b = cell_start[_first_at_least(cell_keys, base + z1 + 1)]
+            if b > a:
+                runs[m, 0] = a
+                runs[m, 1] = b
+                m += 1
+    return m, runs
+
+
+@jit
+def block_gather(i, radius2, runs, m, coords, queue, dist2):
+    """:func:`grid_gather` from a block of :func:`cell_block` (of the cell of sorted point ``i``, at
+    least as many rings as this radius needs): the same ball in the same order.
+
+    ``queue`` and ``dist2`` need one slot more than the grid has points (each candidate is written
+    before it is tested: no branch per candidate). Returns ``count`` (``queue[1:count]`` the ball).
+    """
+    xs, ys, zs = coords[1], coords[2], coords[3]
+    px, py, pz = xs[i], ys[i], zs[i]
+    queue[0] = i
+    dist2[0] = 0.0
+    count = 1
+    for r in range(m):
+        for j in range(runs[r, 0], runs[r, 1]):
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            queue[count] = j
+            dist2[count] = d2
+            count += (d2 <= radius2) & (j != i)
+    return count
 
 
 @jit

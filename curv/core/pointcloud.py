@@ -157,6 +157,24 @@ class PointCloud(PointSet):
             arr.setflags(write=False)
         return indices, distances
 
+    def sorted_grid(self):
+        """:attr:`grid` as the grid of this cloud's twin in that grid's order (twin row i is this
+        cloud's row ``grid[0][3][i]``): the same cells, keys and coordinates, the order the identity.
+        Building the twin's grid anew would sort again and size its cells from another subsample."""
+        (cell_keys, cell_start, dims, order), coords = self.grid
+        identity = np.arange(order.size, dtype=np.int64)
+        identity.setflags(write=False)
+        return (cell_keys, cell_start, dims, identity), coords
+
+    def adopt_grid(self, grid) -> None:
+        """Take ``grid`` as :attr:`grid`: a grid of these same points in this order, made elsewhere
+        (:meth:`sorted_grid` of the cloud this one is the grid-ordered twin of)."""
+        cells, coords = grid
+        if cells[3].size != self.n_points or not all(np.array_equal(coords[1 + a], self._vertices[:, a])
+                                                      for a in range(3)):
+            raise ValueError("a grid of other points")
+        self.__dict__["grid"] = grid
+
     def same_points_as(self, twin: "PointCloud", order: np.ndarray) -> None:
         """Read this cloud's distances to its nearest points from ``twin``, the same points in another
         order (twin row i is this cloud's row ``order[i]``, an (n,) int array): the distances are the

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from ..core.knn import GRAPH_NEIGHBOURS, build_grid
+import numpy as np
+
 from ..core.pointcloud import PointCloud
 from ..geometry.neighbourhood import cached_with_mesh
 
@@ -21,9 +22,12 @@ def grid_ordered(cloud: PointCloud):
         estimate of the cloud.
     """
     def build():
-        order = build_grid(cloud.points, GRAPH_NEIGHBOURS)[0][3]
+        grid = cloud.sorted_grid()
+        order = cloud.grid[0][3]
         normals = None if cloud.normals is None else cloud.normals[order]
-        twin = PointCloud(cloud.points[order], normals, georeferenced=cloud.georeferenced)
+        # the sorted coordinates are the twin's points: one gather, and its grid is this one
+        twin = PointCloud(np.column_stack(grid[1][1:]), normals, georeferenced=cloud.georeferenced)
+        twin.adopt_grid(grid)
         cached_with_mesh(twin, "grid order", lambda: None)
         cloud.same_points_as(twin, order)
         return twin, order
