@@ -23,7 +23,8 @@ import numpy as np
 from .errors import MeshError
 from .jit import jit, jit_parallel, launch, prange
 
-__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "grid_gather", "cell_of", "ring_of", "cell_block", "block_gather",
+__all__ = ["build_grid", "sample_cell_size", "cell_sample_step", "nearest_neighbours", "grid_ball", "grid_gather",
+           "in_sorted_order", "cell_of", "ring_of", "cell_block", "block_gather",
            "symmetric_graph", "neighbour_steps", "GRAPH_NEIGHBOURS"]
 
 GRAPH_NEIGHBOURS = 10
@@ -43,10 +44,21 @@ def _cell_size(points: np.ndarray, k: int) -> float:
     """A grid cell edge giving about ``_POINTS_PER_CELL * k`` points per occupied cell on a surface."""
     n = points.shape[0]
     extent = float(np.ptp(points, axis=0).max())
+    return sample_cell_size(points[::cell_sample_step(n)], n, extent, k)
+
+
+def cell_sample_step(n: int) -> int:
+    """Every how many points :func:`build_grid` samples to choose its cell size (in the points' order)."""
+    return max(1, n // _SUBSAMPLE)
+
+
+def sample_cell_size(sample: np.ndarray, n: int, extent: float, k: int) -> float:
+    """The cell edge :func:`build_grid` chooses for ``n`` points spanning ``extent`` (the largest
+    side of their bounding box), from ``sample``, every :func:`cell_sample_step`-th of them in their
+    order: a caller that sees the points a chunk at a time (a file too large for memory) gets the
+    grid an in-memory call would build."""
     if not extent > 0:
         return 1.0
-    step = max(1, n // _SUBSAMPLE)
-    sample = points[::step]
     fraction = sample.shape[0] / n
     target = max(2.0, _POINTS_PER_CELL * k)
     # a surface: occupied cells ~ area / h^2, so points a cell ~ h^2
@@ -186,7 +198,7 @@ def _knn_kernel(cells, coords, k, out_d, out_i):
                     _scan_block(i, ring, cx, cy, cz, dims, cell_keys, cell_start, xs, ys, zs, out_d, out_i, k)
 
 
-def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
+def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None, origin: np.ndarray | None = None):
     """The uniform grid of :func:`nearest_neighbours` and of point-cloud ball supports.
 
     Parameters
@@ -197,6 +209,9 @@ def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
     cell : float, optional
         The cell edge instead (ball queries: about the balls' radius, so that a ball spans one
         ring of cells around its centre's cell).
+    origin : (3,) float64, optional
+        The grid's lower corner instead of the points' least coordinates (at most those): a part
+        of a larger cloud searched in the larger cloud's cells (:mod:`curv.tiles`).
 
     Returns
     -------
@@ -211,7 +226,7 @@ def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
     points = np.ascontiguousarray(points, dtype=np.float64)
     n = points.shape[0]
     h = _cell_size(points, k) if cell is None else float(cell)
-    lo = points.min(axis=0)
+    lo = points.min(axis=0) if origin is None else np.asarray(origin, dtype=np.float64).reshape(3)
     cells3 = np.floor((points - lo) / h).astype(np.int64)
     dims = cells3.max(axis=0) + 1
     if float(dims[0]) * float(dims[1]) * float(dims[2]) > 2.0 ** 62:
@@ -230,6 +245,17 @@ def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
     for arr in arrays:
         arr.setflags(write=False)
     return arrays[:4], arrays[4:]
+
+
+def in_sorted_order(grid):
+    """``grid`` (:func:`build_grid`) as the grid of its points taken in its sorted order (row i of
+    those points is row ``grid[0][3][i]`` of the grid's): the same cells, keys and coordinates, the
+    order the identity. What :func:`build_grid` would return for those points with this grid's
+    origin and cell, without sorting again."""
+    (cell_keys, cell_start, dims, order), coords = grid
+    identity = np.arange(order.size, dtype=np.int64)
+    identity.setflags(write=False)
+    return (cell_keys, cell_start, dims, identity), coords
 
 
 def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarray, np.ndarray]:

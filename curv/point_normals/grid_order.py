@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.knn import GRAPH_NEIGHBOURS, build_grid, in_sorted_order
 from ..core.pointcloud import PointCloud
 from ..geometry.neighbourhood import cached_with_mesh
 
-__all__ = ["grid_ordered"]
+__all__ = ["grid_ordered", "mark_ordered"]
 
 
 def grid_ordered(cloud: PointCloud):
@@ -22,14 +23,23 @@ def grid_ordered(cloud: PointCloud):
         estimate of the cloud.
     """
     def build():
-        grid = cloud.sorted_grid()
-        order = cloud.grid[0][3]
+        grid = cloud.grid if cloud.grid_frame is not None else build_grid(cloud.points, GRAPH_NEIGHBOURS)
+        order, origin = grid[0][3], grid[1][0]
         normals = None if cloud.normals is None else cloud.normals[order]
-        # the sorted coordinates are the twin's points: one gather, and its grid is this one
-        twin = PointCloud(np.column_stack(grid[1][1:]), normals, georeferenced=cloud.georeferenced)
-        twin.adopt_grid(grid)
-        cached_with_mesh(twin, "grid order", lambda: None)
+        # the twin searches the cloud's own cells: the same neighbours, ties in distance broken alike,
+        # and a part of the cloud in the same order searches them too (curv.tiles). Its points are
+        # the grid's sorted coordinates and its grid is this one in its order: no second sort.
+        twin = PointCloud(np.column_stack(grid[1][1:]), normals, georeferenced=cloud.georeferenced,
+                          grid_frame=(origin[:3], origin[3]))
+        twin.adopt_grid(in_sorted_order(grid))
+        mark_ordered(twin)
         cloud.same_points_as(twin, order)
         return twin, order
 
     return cached_with_mesh(cloud, "grid order", build)
+
+
+def mark_ordered(cloud: PointCloud) -> None:
+    """Say that ``cloud`` is already in its grid's order (a twin, or a part of one laid in the whole
+    cloud's grid: :attr:`curv.PointCloud.grid_frame`): an estimate runs on it as it is."""
+    cached_with_mesh(cloud, "grid order", lambda: None)
