@@ -89,38 +89,105 @@ def _first_at_least(keys, value):
 
 
 @jit
-def _scan_block(i, ring, cx, cy, cz, dims, cell_keys, cell_start, xs, ys, zs, out_d, out_i, k):
-    """Scan the (2 ring + 1)^3 cells around cell (cx, cy, cz) for the k nearest of sorted point i.
+def _block_span(x0, x1, y0, y1, z0, z1, dims, cell_keys):
+    """The occupied cells ``c0 <= c < c1`` between the block's first and last cell key, and whether
+    to walk them (``sparse``) instead of the block's columns: when the block has more columns than
+    that many cells (a few points far from the rest make the grid mostly empty), so that a search
+    never costs more than the points and occupied cells, however many empty cells it spans."""
+    ny, nz = dims[1], dims[2]
+    c0 = _first_at_least(cell_keys, (x0 * ny + y0) * nz + z0)
+    c1 = _first_at_least(cell_keys, (x1 * ny + y1) * nz + z1 + 1)
+    return c0, c1, (x1 - x0 + 1) * (y1 - y0 + 1) > c1 - c0
 
-    Row i of ``out_d`` (squared distances) and ``out_i`` (sorted indices) is kept ascending. Rows
-    are indexed, not sliced: a view made per point inside a parallel loop costs an atomic
-    reference count each time.
+
+@jit
+def _in_block(key, x0, x1, y0, y1, z0, z1, dims):
+    """Whether the cell of ``key`` lies in the block ``x0 .. x1, y0 .. y1, z0 .. z1`` (inclusive)."""
+    ny, nz = dims[1], dims[2]
+    iz = key % nz
+    iy = (key // nz) % ny
+    ix = key // (nz * ny)
+    return x0 <= ix <= x1 and y0 <= iy <= y1 and z0 <= iz <= z1
+
+
+@jit
+def _next_run(block, dims, cells, walk):
+    """The next run of sorted positions of ``block`` (``(x0, x1, y0, y1, z0, z1)``, inclusive): one
+    column's occupied cells, or when the walk is sparse one occupied cell in the block, in
+    ascending key order either way (the same points in the same order).
+
+    ``walk``: ``(next, end, sparse)`` from :func:`_start_walk`, the column (or occupied cell) to
+    look at next. Returns ``(a, b, walk)``: the run ``a <= j < b`` (``a == -1`` at the end) and the
+    walk moved on.
     """
-    nx, ny, nz = dims[0], dims[1], dims[2]
+    cell_keys, cell_start = cells[0], cells[1]
+    ny, nz = dims[1], dims[2]
+    x0, x1, y0, y1, z0, z1 = block
+    at, end, sparse = walk
+    if sparse:
+        while at < end:
+            c = at
+            at += 1
+            if _in_block(cell_keys[c], x0, x1, y0, y1, z0, z1, dims):
+                return cell_start[c], cell_start[c + 1], (at, end, sparse)
+        return -1, -1, (at, end, sparse)
+    columns = y1 - y0 + 1
+    while at < end:
+        ix = x0 + at // columns
+        iy = y0 + at % columns
+        at += 1
+        base = (ix * ny + iy) * nz
+        a = cell_start[_first_at_least(cell_keys, base + z0)]
+        b = cell_start[_first_at_least(cell_keys, base + z1 + 1)]
+        if b > a:
+            return a, b, (at, end, sparse)
+    return -1, -1, (at, end, sparse)
+
+
+@jit
+def _start_walk(block, dims, cell_keys):
+    """The walk of :func:`_next_run` over ``block``: its columns, or its occupied cells when sparse."""
+    x0, x1, y0, y1, z0, z1 = block
+    c0, c1, sparse = _block_span(x0, x1, y0, y1, z0, z1, dims, cell_keys)
+    if sparse:
+        return c0, c1, True
+    return 0, (x1 - x0 + 1) * (y1 - y0 + 1), False
+
+
+@jit
+def _scan_block(i, ring, cx, cy, cz, cells, coords, out, k):
+    """Scan the cells within ``ring`` rings of cell (cx, cy, cz) for the k nearest of sorted point i.
+
+    ``out``: ``(out_d, out_i)``, whose row i (squared distances, sorted indices) is kept
+    ascending. Rows are indexed, not sliced: a view made per point inside a parallel loop costs an
+    atomic reference count each time. The block's runs come from :func:`_next_run`.
+    """
+    out_d, out_i = out
+    dims = cells[2]
+    xs, ys, zs = coords[1], coords[2], coords[3]
     px, py, pz = xs[i], ys[i], zs[i]
-    z0 = max(cz - ring, 0)
-    z1 = min(cz + ring, nz - 1)
-    for ix in range(max(cx - ring, 0), min(cx + ring, nx - 1) + 1):
-        for iy in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
-            base = (ix * ny + iy) * nz
-            a = _first_at_least(cell_keys, base + z0)
-            b = _first_at_least(cell_keys, base + z1 + 1)
-            for j in range(cell_start[a], cell_start[b]):
-                if j == i:
-                    continue
-                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
-                d2 = dx * dx + dy * dy + dz * dz
-                if d2 >= out_d[i, k - 1]:
-                    continue
-                # insertion into the ascending row, written out here: a helper call per
-                # candidate costs reference counting on its array arguments (several times slower)
-                m = k - 1
-                while m > 0 and out_d[i, m - 1] > d2:
-                    out_d[i, m] = out_d[i, m - 1]
-                    out_i[i, m] = out_i[i, m - 1]
-                    m -= 1
-                out_d[i, m] = d2
-                out_i[i, m] = j
+    block = _block_around(cx, cy, cz, ring, dims)
+    walk = _start_walk(block, dims, cells[0])
+    while True:
+        a, b, walk = _next_run(block, dims, cells, walk)
+        if a < 0:
+            break
+        for j in range(a, b):
+            if j == i:
+                continue
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 >= out_d[i, k - 1]:
+                continue
+            # insertion into the ascending row, written out here: a helper call per
+            # candidate costs reference counting on its array arguments (several times slower)
+            m = k - 1
+            while m > 0 and out_d[i, m - 1] > d2:
+                out_d[i, m] = out_d[i, m - 1]
+                out_i[i, m] = out_i[i, m - 1]
+                m -= 1
+            out_d[i, m] = d2
+            out_i[i, m] = j
 
 
 @jit
@@ -161,6 +228,20 @@ def _scan_runs(i, runs, m, xs, ys, zs, out_d, out_i, k):
             worst = out_d[i, k - 1]
 
 
+@jit
+def _wider_ring(ring, kth2, h, widest):
+    """The next block of a kNN search whose block of ``ring`` rings did not settle it: wide enough
+    for the k-th candidate's distance (its squared ``kth2``; every ring adds ``h`` to the margin),
+    or twice as wide while fewer than k were found, so that a point far from the rest takes a few
+    blocks, not one per ring of empty cells (:func:`_block_span` bounds each block's cost)."""
+    if math.isfinite(kth2):
+        need = math.sqrt(kth2) / h + 1.0
+        if need < widest:
+            return max(ring + 1, int(math.ceil(need)))
+        return widest
+    return min(2 * ring, widest)
+
+
 @jit_parallel
 def _knn_kernel(cells, coords, k, out_d, out_i):
     """The k nearest of every sorted point: the cells in slices, one per thread; the first ring
@@ -171,6 +252,7 @@ def _knn_kernel(cells, coords, k, out_d, out_i):
     n_cells = cell_keys.size
     nx, ny, nz = dims[0], dims[1], dims[2]
     h = origin[3]
+    widest = max(nx, max(ny, nz))
     parts = max(1, min(n_cells, 256))
     for t in prange(parts):
         runs = np.empty((64, 2), np.int64)
@@ -191,11 +273,11 @@ def _knn_kernel(cells, coords, k, out_d, out_i):
                     # final when the k-th is inside the block's sphere, or the block holds everything
                     if out_d[i, k - 1] <= margin * margin or margin == math.inf:
                         break
-                    ring += 1
+                    ring = _wider_ring(ring, out_d[i, k - 1], h, widest)
                     for j in range(k):
                         out_d[i, j] = np.inf
                         out_i[i, j] = -1
-                    _scan_block(i, ring, cx, cy, cz, dims, cell_keys, cell_start, xs, ys, zs, out_d, out_i, k)
+                    _scan_block(i, ring, cx, cy, cz, cells, coords, (out_d, out_i), k)
 
 
 def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None, origin: np.ndarray | None = None):
@@ -337,27 +419,26 @@ def _ball_scan(px, py, pz, centre, radius2, cells, coords, names, queue, dist2):
     """
     cell_keys, cell_start, dims, order = cells
     origin, xs, ys, zs = coords
-    ny, nz = dims[1], dims[2]
-    x0, x1, y0, y1, z0, z1 = _ball_cells(px, py, pz, radius2, dims, origin)
+    block = _ball_cells(px, py, pz, radius2, dims, origin)
     queue[0] = centre
     if dist2 is not None:
         dist2[0] = 0.0
     count = 1
-    for ix in range(x0, x1 + 1):
-        for iy in range(y0, y1 + 1):
-            base = (ix * ny + iy) * nz
-            a = _first_at_least(cell_keys, base + z0)
-            b = _first_at_least(cell_keys, base + z1 + 1)
-            for j in range(cell_start[a], cell_start[b]):
-                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
-                d2 = dx * dx + dy * dy + dz * dz
-                if d2 <= radius2:
-                    q = j if names is None else names[j]
-                    if q != centre:
-                        queue[count] = q
-                        if dist2 is not None:
-                            dist2[count] = d2
-                        count += 1
+    walk = _start_walk(block, dims, cell_keys)
+    while True:
+        a, b, walk = _next_run(block, dims, cells, walk)
+        if a < 0:
+            break
+        for j in range(a, b):
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 <= radius2:
+                q = j if names is None else names[j]
+                if q != centre:
+                    queue[count] = q
+                    if dist2 is not None:
+                        dist2[count] = d2
+                    count += 1
     return count
 
 
@@ -456,20 +537,20 @@ def cell_block(c, ring, cells, runs):
     cz = key % nz
     cy = (key // nz) % ny
     cx = key // (nz * ny)
-    x0, x1, y0, y1, z0, z1 = _block_around(cx, cy, cz, ring, dims)
-    columns = (x1 - x0 + 1) * (y1 - y0 + 1)
-    if runs.shape[0] < columns:
-        runs = np.empty((columns, 2), np.int64)
+    block = _block_around(cx, cy, cz, ring, dims)
+    walk = _start_walk(block, dims, cell_keys)
+    # at most one run per column, or per occupied cell when the walk is sparse
+    most = walk[1] - walk[0]
+    if runs.shape[0] < most:
+        runs = np.empty((most, 2), np.int64)
     m = 0
-    for ix in range(x0, x1 + 1):
-        for iy in range(y0, y1 + 1):
-            base = (ix * ny + iy) * nz
-            a = cell_start[_first_at_least(cell_keys, base + z0)]
-            b = cell_start[_first_at_least(cell_keys, base + z1 + 1)]
-            if b > a:
-                runs[m, 0] = a
-                runs[m, 1] = b
-                m += 1
+    while True:
+        a, b, walk = _next_run(block, dims, cells, walk)
+        if a < 0:
+            break
+        runs[m, 0] = a
+        runs[m, 1] = b
+        m += 1
     return m, runs
 
 
