@@ -4,7 +4,10 @@ The points are sorted by grid cell (cells keyed ``(ix * ny + iy) * nz + iz``), s
 ``iz - 1 .. iz + 1`` of one ``(ix, iy)`` column are one contiguous run of points: a point's 27
 surrounding cells are 9 runs, found once per cell by binary search over the sorted cell keys.
 A point's k nearest are final once the k-th is closer than the nearest face of the searched
-block of cells; otherwise the block grows by a ring of cells (sparse places, outliers).
+block of cells; otherwise the block grows to the k-th candidate's distance, or doubles while
+fewer than k were found (sparse places, outliers). A block with more columns than occupied cells
+between its first and last key (a point far from the rest: a grid of mostly empty cells) walks
+those cells instead of its columns, in the same order: a search never costs more than the points.
 
 The cell size aims at a few points per occupied cell for a sample of a surface (a 2-D set in 3-D),
 measured on a subsample; it only affects speed, never the answer. The same grid answers ball
