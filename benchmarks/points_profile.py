@@ -32,7 +32,7 @@ def sphere_points(n: int) -> np.ndarray:
 def main() -> None:
     import curv
     from curv import point_normals as pn
-    from curv.point_normals.normals import _default_spreads, _radii
+    from curv.point_normals.normals import EXACT_GAP, ONE_SIDED_GAP, _default_spreads, _radii
     from curv.point_normals.one_pass import _one_pass
     from curv.core.jit import run_to_end
 
@@ -58,7 +58,8 @@ def main() -> None:
     border = phase("border radii", lambda: pn.border_radii(cloud))
     r2, spreads = _radii(cloud, 2), _default_spreads(cloud)
     found = phase("one pass (frames, jet, line checks)",
-                  lambda: run_to_end(_one_pass(cloud, border, r2, jet=True, spreads=spreads)))
+                  lambda: run_to_end(_one_pass(cloud, border, r2, jet=True, spreads=spreads,
+                                               screens=(EXACT_GAP, ONE_SIDED_GAP))))
     if orient != "up":
         phase("neighbour graph", lambda: cloud.adjacency)
     phase(f"orientation ({orient})", lambda: pn.orient_normals(cloud, found.normal_a, orient=orient))

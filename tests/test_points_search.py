@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -250,3 +255,51 @@ def test_stable_rank_is_the_stable_argsort():
     for w in (rng.random(3000), np.round(rng.random(5000), 2) + 1e-9, np.full(7, 1e-9), np.zeros(0),
               1.0 - np.abs(rng.uniform(-1, 1, 20000)) + 1e-9, np.array([2.0 ** -40, 0.0, 1.5, 2.0 ** -40, 0.0])):
         assert np.array_equal(_stable_rank(w), np.argsort(w, kind="stable"))
+
+
+@pytest.mark.parametrize("name,cloud", list(_gap_clouds()), ids=[c[0] for c in _gap_clouds()])
+def test_screened_gap_reads_the_same_above_its_screen(name, cloud):
+    """Below the screen the pass keeps only an upper bound of the gap (the occupied bins), itself
+    below the screen: every test against a threshold at or above the screen reads the same."""
+    from curv.core.jit import run_to_end
+    from curv.point_normals.normals import EXACT_GAP
+    from curv.point_normals.one_pass import _one_pass
+
+    radii = ball_radii(cloud, Range(k=3), uses_normals=False)
+    exact = run_to_end(_one_pass(cloud, radii)).gap_a
+    screened = run_to_end(_one_pass(cloud, radii, screens=(EXACT_GAP, 0.0))).gap_a
+    above = exact >= EXACT_GAP
+    np.testing.assert_array_equal(screened[above], exact[above])
+    assert (screened[~above] < EXACT_GAP).all() and (screened[~above] >= exact[~above] - 1e-12).all()
+    # the bound is a bound, not the gap: most points below the screen read more than their gap
+    assert (~above).sum() > 100 and (screened[~above] > exact[~above] + 1e-6).mean() > 0.5
+
+
+_FAR_POINT = """
+import faulthandler, sys
+import numpy as np
+import curv
+from curv.core.knn import nearest_neighbours
+
+rng = np.random.default_rng(0)
+pts = rng.normal(size=(200, 3))
+curv.estimate(curv.PointCloud(pts.copy()), "qs", 2)  # compiles (a fresh cache): not timed
+faulthandler.dump_traceback_later(float(sys.argv[1]), exit=True)
+pts[-1] = (2.0 ** 31, 0.0, 0.0)
+idx, dist = nearest_neighbours(pts, 10)
+result = curv.estimate(curv.PointCloud(pts), "qs", 2)
+print(int(idx[-1, 0] >= 0), int(result.valid[:-1].sum()))
+"""
+
+
+def test_one_far_point_costs_its_points_not_the_empty_cells(tmp_path):
+    """A point 2^31 away from 199 others spans ~10^7 empty cells of the grid: a kNN that grows its
+    block a ring at a time, or a ball search that visits every column of the block, took 100-390 s
+    here. The search walks the occupied cells instead when they are fewer than the block's columns."""
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.run([sys.executable, "-c", _FAR_POINT, "60"], capture_output=True, text=True, timeout=900,
+                          env=env, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    found, valid = map(int, proc.stdout.split())
+    assert found == 1 and valid > 150

@@ -4,7 +4,10 @@ The points are sorted by grid cell (cells keyed ``(ix * ny + iy) * nz + iz``), s
 ``iz - 1 .. iz + 1`` of one ``(ix, iy)`` column are one contiguous run of points: a point's 27
 surrounding cells are 9 runs, found once per cell by binary search over the sorted cell keys.
 A point's k nearest are final once the k-th is closer than the nearest face of the searched
-block of cells; otherwise the block grows by a ring of cells (sparse places, outliers).
+block of cells; otherwise the block grows to the k-th candidate's distance, or doubles while
+fewer than k were found (sparse places, outliers). A block with more columns than occupied cells
+between its first and last key (a point far from the rest: a grid of mostly empty cells) walks
+those cells instead of its columns, in the same order: a search never costs more than the points.
 
 The cell size aims at a few points per occupied cell for a sample of a surface (a 2-D set in 3-D),
 measured on a subsample; it only affects speed, never the answer. The same grid answers ball
@@ -24,6 +27,7 @@ from .errors import MeshError
 from .jit import jit, jit_parallel, launch, prange
 
 __all__ = ["build_grid", "sample_cell_size", "cell_sample_step", "nearest_neighbours", "grid_ball", "grid_gather",
+           "in_sorted_order", "cell_of", "ring_of", "cell_block", "block_gather",
            "symmetric_graph", "neighbour_steps", "GRAPH_NEIGHBOURS"]
 
 GRAPH_NEIGHBOURS = 10
@@ -88,38 +92,105 @@ def _first_at_least(keys, value):
 
 
 @jit
-def _scan_block(i, ring, cx, cy, cz, dims, cell_keys, cell_start, xs, ys, zs, out_d, out_i, k):
-    """Scan the (2 ring + 1)^3 cells around cell (cx, cy, cz) for the k nearest of sorted point i.
+def _block_span(x0, x1, y0, y1, z0, z1, dims, cell_keys):
+    """The occupied cells ``c0 <= c < c1`` between the block's first and last cell key, and whether
+    to walk them (``sparse``) instead of the block's columns: when the block has more columns than
+    that many cells (a few points far from the rest make the grid mostly empty), so that a search
+    never costs more than the points and occupied cells, however many empty cells it spans."""
+    ny, nz = dims[1], dims[2]
+    c0 = _first_at_least(cell_keys, (x0 * ny + y0) * nz + z0)
+    c1 = _first_at_least(cell_keys, (x1 * ny + y1) * nz + z1 + 1)
+    return c0, c1, (x1 - x0 + 1) * (y1 - y0 + 1) > c1 - c0
 
-    Row i of ``out_d`` (squared distances) and ``out_i`` (sorted indices) is kept ascending. Rows
-    are indexed, not sliced: a view made per point inside a parallel loop costs an atomic
-    reference count each time.
+
+@jit
+def _in_block(key, x0, x1, y0, y1, z0, z1, dims):
+    """Whether the cell of ``key`` lies in the block ``x0 .. x1, y0 .. y1, z0 .. z1`` (inclusive)."""
+    ny, nz = dims[1], dims[2]
+    iz = key % nz
+    iy = (key // nz) % ny
+    ix = key // (nz * ny)
+    return x0 <= ix <= x1 and y0 <= iy <= y1 and z0 <= iz <= z1
+
+
+@jit
+def _next_run(block, dims, cells, walk):
+    """The next run of sorted positions of ``block`` (``(x0, x1, y0, y1, z0, z1)``, inclusive): one
+    column's occupied cells, or when the walk is sparse one occupied cell in the block, in
+    ascending key order either way (the same points in the same order).
+
+    ``walk``: ``(next, end, sparse)`` from :func:`_start_walk`, the column (or occupied cell) to
+    look at next. Returns ``(a, b, walk)``: the run ``a <= j < b`` (``a == -1`` at the end) and the
+    walk moved on.
     """
-    nx, ny, nz = dims[0], dims[1], dims[2]
+    cell_keys, cell_start = cells[0], cells[1]
+    ny, nz = dims[1], dims[2]
+    x0, x1, y0, y1, z0, z1 = block
+    at, end, sparse = walk
+    if sparse:
+        while at < end:
+            c = at
+            at += 1
+            if _in_block(cell_keys[c], x0, x1, y0, y1, z0, z1, dims):
+                return cell_start[c], cell_start[c + 1], (at, end, sparse)
+        return -1, -1, (at, end, sparse)
+    columns = y1 - y0 + 1
+    while at < end:
+        ix = x0 + at // columns
+        iy = y0 + at % columns
+        at += 1
+        base = (ix * ny + iy) * nz
+        a = cell_start[_first_at_least(cell_keys, base + z0)]
+        b = cell_start[_first_at_least(cell_keys, base + z1 + 1)]
+        if b > a:
+            return a, b, (at, end, sparse)
+    return -1, -1, (at, end, sparse)
+
+
+@jit
+def _start_walk(block, dims, cell_keys):
+    """The walk of :func:`_next_run` over ``block``: its columns, or its occupied cells when sparse."""
+    x0, x1, y0, y1, z0, z1 = block
+    c0, c1, sparse = _block_span(x0, x1, y0, y1, z0, z1, dims, cell_keys)
+    if sparse:
+        return c0, c1, True
+    return 0, (x1 - x0 + 1) * (y1 - y0 + 1), False
+
+
+@jit
+def _scan_block(i, ring, cx, cy, cz, cells, coords, out, k):
+    """Scan the cells within ``ring`` rings of cell (cx, cy, cz) for the k nearest of sorted point i.
+
+    ``out``: ``(out_d, out_i)``, whose row i (squared distances, sorted indices) is kept
+    ascending. Rows are indexed, not sliced: a view made per point inside a parallel loop costs an
+    atomic reference count each time. The block's runs come from :func:`_next_run`.
+    """
+    out_d, out_i = out
+    dims = cells[2]
+    xs, ys, zs = coords[1], coords[2], coords[3]
     px, py, pz = xs[i], ys[i], zs[i]
-    z0 = max(cz - ring, 0)
-    z1 = min(cz + ring, nz - 1)
-    for ix in range(max(cx - ring, 0), min(cx + ring, nx - 1) + 1):
-        for iy in range(max(cy - ring, 0), min(cy + ring, ny - 1) + 1):
-            base = (ix * ny + iy) * nz
-            a = _first_at_least(cell_keys, base + z0)
-            b = _first_at_least(cell_keys, base + z1 + 1)
-            for j in range(cell_start[a], cell_start[b]):
-                if j == i:
-                    continue
-                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
-                d2 = dx * dx + dy * dy + dz * dz
-                if d2 >= out_d[i, k - 1]:
-                    continue
-                # insertion into the ascending row, written out here: a helper call per
-                # candidate costs reference counting on its array arguments (several times slower)
-                m = k - 1
-                while m > 0 and out_d[i, m - 1] > d2:
-                    out_d[i, m] = out_d[i, m - 1]
-                    out_i[i, m] = out_i[i, m - 1]
-                    m -= 1
-                out_d[i, m] = d2
-                out_i[i, m] = j
+    block = _block_around(cx, cy, cz, ring, dims)
+    walk = _start_walk(block, dims, cells[0])
+    while True:
+        a, b, walk = _next_run(block, dims, cells, walk)
+        if a < 0:
+            break
+        for j in range(a, b):
+            if j == i:
+                continue
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 >= out_d[i, k - 1]:
+                continue
+            # insertion into the ascending row, written out here: a helper call per
+            # candidate costs reference counting on its array arguments (several times slower)
+            m = k - 1
+            while m > 0 and out_d[i, m - 1] > d2:
+                out_d[i, m] = out_d[i, m - 1]
+                out_i[i, m] = out_i[i, m - 1]
+                m -= 1
+            out_d[i, m] = d2
+            out_i[i, m] = j
 
 
 @jit
@@ -136,27 +207,80 @@ def _margin(i, ring, cx, cy, cz, dims, lo, h, xs, ys, zs):
     return m
 
 
+@jit
+def _scan_runs(i, runs, m, xs, ys, zs, out_d, out_i, k):
+    """:func:`_scan_block` over the runs of a block (:func:`cell_block`): the same candidates in the
+    same order, the k-th distance kept in a local."""
+    px, py, pz = xs[i], ys[i], zs[i]
+    worst = out_d[i, k - 1]
+    for r in range(m):
+        for j in range(runs[r, 0], runs[r, 1]):
+            if j == i:
+                continue
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 >= worst:
+                continue
+            s = k - 1
+            while s > 0 and out_d[i, s - 1] > d2:
+                out_d[i, s] = out_d[i, s - 1]
+                out_i[i, s] = out_i[i, s - 1]
+                s -= 1
+            out_d[i, s] = d2
+            out_i[i, s] = j
+            worst = out_d[i, k - 1]
+
+
+@jit
+def _wider_ring(ring, kth2, h, widest):
+    """The next block of a kNN search whose block of ``ring`` rings did not settle it: wide enough
+    for the k-th candidate's distance (its squared ``kth2``; every ring adds ``h`` to the margin),
+    or twice as wide while fewer than k were found, so that a point far from the rest takes a few
+    blocks, not one per ring of empty cells (:func:`_block_span` bounds each block's cost)."""
+    if math.isfinite(kth2):
+        need = math.sqrt(kth2) / h + 1.0
+        if need < widest:
+            return max(ring + 1, int(math.ceil(need)))
+        return widest
+    return min(2 * ring, widest)
+
+
 @jit_parallel
-def _knn_kernel(cell_keys, cell_start, dims, lo, h, xs, ys, zs, k, out_d, out_i):
+def _knn_kernel(cells, coords, k, out_d, out_i):
+    """The k nearest of every sorted point: the cells in slices, one per thread; the first ring
+    of cells around each cell looked up once for its points (:func:`cell_block`), wider blocks
+    point by point where the k-th nearest may lie beyond it (sparse places, outliers)."""
+    cell_keys, cell_start, dims, _ = cells
+    origin, xs, ys, zs = coords
     n_cells = cell_keys.size
     nx, ny, nz = dims[0], dims[1], dims[2]
-    for c in prange(n_cells):
-        key = cell_keys[c]
-        cz = key % nz
-        cy = (key // nz) % ny
-        cx = key // (nz * ny)
-        for i in range(cell_start[c], cell_start[c + 1]):
-            ring = 1
-            while True:
+    h = origin[3]
+    widest = max(nx, max(ny, nz))
+    parts = max(1, min(n_cells, 256))
+    for t in prange(parts):
+        runs = np.empty((64, 2), np.int64)
+        for c in range(t * n_cells // parts, (t + 1) * n_cells // parts):
+            key = cell_keys[c]
+            cz = key % nz
+            cy = (key // nz) % ny
+            cx = key // (nz * ny)
+            m, runs = cell_block(c, 1, cells, runs)
+            for i in range(cell_start[c], cell_start[c + 1]):
                 for j in range(k):
                     out_d[i, j] = np.inf
                     out_i[i, j] = -1
-                _scan_block(i, ring, cx, cy, cz, dims, cell_keys, cell_start, xs, ys, zs, out_d, out_i, k)
-                margin = _margin(i, ring, cx, cy, cz, dims, lo, h, xs, ys, zs)
-                # final when the k-th is inside the block's sphere, or the block holds everything
-                if out_d[i, k - 1] <= margin * margin or margin == math.inf:
-                    break
-                ring += 1
+                _scan_runs(i, runs, m, xs, ys, zs, out_d, out_i, k)
+                ring = 1
+                while True:
+                    margin = _margin(i, ring, cx, cy, cz, dims, origin, h, xs, ys, zs)
+                    # final when the k-th is inside the block's sphere, or the block holds everything
+                    if out_d[i, k - 1] <= margin * margin or margin == math.inf:
+                        break
+                    ring = _wider_ring(ring, out_d[i, k - 1], h, widest)
+                    for j in range(k):
+                        out_d[i, j] = np.inf
+                        out_i[i, j] = -1
+                    _scan_block(i, ring, cx, cy, cz, cells, coords, (out_d, out_i), k)
 
 
 def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None, origin: np.ndarray | None = None):
@@ -208,6 +332,17 @@ def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None, or
     return arrays[:4], arrays[4:]
 
 
+def in_sorted_order(grid):
+    """``grid`` (:func:`build_grid`) as the grid of its points taken in its sorted order (row i of
+    those points is row ``grid[0][3][i]`` of the grid's): the same cells, keys and coordinates, the
+    order the identity. What :func:`build_grid` would return for those points with this grid's
+    origin and cell, without sorting again."""
+    (cell_keys, cell_start, dims, order), coords = grid
+    identity = np.arange(order.size, dtype=np.int64)
+    identity.setflags(write=False)
+    return (cell_keys, cell_start, dims, identity), coords
+
+
 def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarray, np.ndarray]:
     """The k nearest other points of every point (a uniform-grid search).
 
@@ -229,12 +364,12 @@ def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarra
     """
     if k < 1:
         raise ValueError(f"k must be >= 1, got {k}")
-    (cell_keys, cell_start, dims, order), (origin, xs, ys, zs) = grid or build_grid(points, k)
+    cells, coords = grid or build_grid(points, k)
+    order = cells[3]
     n = order.size
     out_d = np.empty((n, k))
     out_i = np.empty((n, k), np.int64)
-    launch(_knn_kernel, cell_keys, cell_start, dims, origin[:3].copy(), float(origin[3]), xs, ys, zs, int(k),
-           out_d, out_i)
+    launch(_knn_kernel, cells, coords, int(k), out_d, out_i)
     # back to the caller's order: rows by original point, entries as original indices
     indices = np.empty_like(out_i)
     indices[order] = np.where(out_i >= 0, order[np.maximum(out_i, 0)], -1)
@@ -243,6 +378,24 @@ def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarra
     np.sqrt(out_d, out=out_d)
     distances[order] = out_d
     return indices, distances
+
+
+@jit
+def ring_of(radius2, dims, origin):
+    """The rings of cells around a point's cell that hold its ball of squared radius ``radius2``."""
+    widest = max(dims[0], max(dims[1], dims[2]))
+    reach = math.sqrt(radius2) / origin[3]
+    # an infinite or huge ball (fewer points than knn=K asks for) covers the whole grid
+    return widest if not reach < widest else int(math.ceil(reach))
+
+
+@jit
+def _block_around(cx, cy, cz, ring, dims):
+    """The block of grid cells ``(x0, x1, y0, y1, z0, z1)`` (inclusive) within ``ring`` rings of cell
+    (cx, cy, cz)."""
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    return (max(cx - ring, 0), min(cx + ring, nx - 1), max(cy - ring, 0), min(cy + ring, ny - 1),
+            max(cz - ring, 0), min(cz + ring, nz - 1))
 
 
 @jit
@@ -255,12 +408,7 @@ def _ball_cells(px, py, pz, radius2, dims, origin):
     cx = min(max(int(math.floor((px - origin[0]) / h)), 0), nx - 1)
     cy = min(max(int(math.floor((py - origin[1]) / h)), 0), ny - 1)
     cz = min(max(int(math.floor((pz - origin[2]) / h)), 0), nz - 1)
-    widest = max(nx, max(ny, nz))
-    reach = math.sqrt(radius2) / h
-    # an infinite or huge ball (fewer points than knn=K asks for) covers the whole grid
-    ring = widest if not reach < widest else int(math.ceil(reach))
-    return (max(cx - ring, 0), min(cx + ring, nx - 1), max(cy - ring, 0), min(cy + ring, ny - 1),
-            max(cz - ring, 0), min(cz + ring, nz - 1))
+    return _block_around(cx, cy, cz, ring_of(radius2, dims, origin), dims)
 
 
 @jit
@@ -274,27 +422,26 @@ def _ball_scan(px, py, pz, centre, radius2, cells, coords, names, queue, dist2):
     """
     cell_keys, cell_start, dims, order = cells
     origin, xs, ys, zs = coords
-    ny, nz = dims[1], dims[2]
-    x0, x1, y0, y1, z0, z1 = _ball_cells(px, py, pz, radius2, dims, origin)
+    block = _ball_cells(px, py, pz, radius2, dims, origin)
     queue[0] = centre
     if dist2 is not None:
         dist2[0] = 0.0
     count = 1
-    for ix in range(x0, x1 + 1):
-        for iy in range(y0, y1 + 1):
-            base = (ix * ny + iy) * nz
-            a = _first_at_least(cell_keys, base + z0)
-            b = _first_at_least(cell_keys, base + z1 + 1)
-            for j in range(cell_start[a], cell_start[b]):
-                dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
-                d2 = dx * dx + dy * dy + dz * dz
-                if d2 <= radius2:
-                    q = j if names is None else names[j]
-                    if q != centre:
-                        queue[count] = q
-                        if dist2 is not None:
-                            dist2[count] = d2
-                        count += 1
+    walk = _start_walk(block, dims, cell_keys)
+    while True:
+        a, b, walk = _next_run(block, dims, cells, walk)
+        if a < 0:
+            break
+        for j in range(a, b):
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 <= radius2:
+                q = j if names is None else names[j]
+                if q != centre:
+                    queue[count] = q
+                    if dist2 is not None:
+                        dist2[count] = d2
+                    count += 1
     return count
 
 
@@ -351,6 +498,86 @@ def grid_gather(i, radius2, cells, coords, queue, dist2):
     """
     xs, ys, zs = coords[1], coords[2], coords[3]
     return _ball_scan(xs[i], ys[i], zs[i], i, radius2, cells, coords, None, queue, dist2)
+
+
+@jit
+def cell_of(i, cell_start):
+    """The occupied cell that holds sorted position ``i`` (``cell_start[c] <= i < cell_start[c + 1]``)."""
+    lo, hi = 0, cell_start.size - 1
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if cell_start[mid] <= i:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@jit
+def cell_block(c, ring, cells, runs):
+    """The sorted positions of the cells within ``ring`` rings of occupied cell ``c`` (the block that
+    holds the ball of a point of cell c whose radius needs that many, :func:`ring_of`), as runs:
+    ``runs[r, 0] <= j < runs[r, 1]`` for ``r < m``, one run per column in :func:`grid_gather`'s scan
+    order (empty columns left out).
+
+    Every point of cell c finds its ball among these (:func:`block_gather`), so a kernel that walks
+    the points cell by cell looks the columns up once per cell instead of once per point.
+
+    Parameters
+    ----------
+    runs : (k, 2) int64
+        Scratch; grown when the block has more columns.
+
+    Returns
+    -------
+    m : int
+    runs : (k', 2) int64
+        The scratch (a new array when it grew).
+    """
+    cell_keys, cell_start, dims, _ = cells
+    ny, nz = dims[1], dims[2]
+    key = cell_keys[c]
+    cz = key % nz
+    cy = (key // nz) % ny
+    cx = key // (nz * ny)
+    block = _block_around(cx, cy, cz, ring, dims)
+    walk = _start_walk(block, dims, cell_keys)
+    # at most one run per column, or per occupied cell when the walk is sparse
+    most = walk[1] - walk[0]
+    if runs.shape[0] < most:
+        runs = np.empty((most, 2), np.int64)
+    m = 0
+    while True:
+        a, b, walk = _next_run(block, dims, cells, walk)
+        if a < 0:
+            break
+        runs[m, 0] = a
+        runs[m, 1] = b
+        m += 1
+    return m, runs
+
+
+@jit
+def block_gather(i, radius2, runs, m, coords, queue, dist2):
+    """:func:`grid_gather` from a block of :func:`cell_block` (of the cell of sorted point ``i``, at
+    least as many rings as this radius needs): the same ball in the same order.
+
+    ``queue`` and ``dist2`` need one slot more than the grid has points (each candidate is written
+    before it is tested: no branch per candidate). Returns ``count`` (``queue[1:count]`` the ball).
+    """
+    xs, ys, zs = coords[1], coords[2], coords[3]
+    px, py, pz = xs[i], ys[i], zs[i]
+    queue[0] = i
+    dist2[0] = 0.0
+    count = 1
+    for r in range(m):
+        for j in range(runs[r, 0], runs[r, 1]):
+            dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz
+            d2 = dx * dx + dy * dy + dz * dz
+            queue[count] = j
+            dist2[count] = d2
+            count += (d2 <= radius2) & (j != i)
+    return count
 
 
 @jit

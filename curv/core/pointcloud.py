@@ -174,6 +174,16 @@ class PointCloud(PointSet):
             arr.setflags(write=False)
         return indices, distances
 
+    def adopt_grid(self, grid) -> None:
+        """Take ``grid`` as :attr:`grid`: a grid of these same points in this order, made elsewhere
+        (:func:`curv.core.knn.in_sorted_order` of the grid of the cloud this one is the grid-ordered
+        twin of: the grid this cloud would build in its :attr:`grid_frame`, without sorting again)."""
+        cells, coords = grid
+        if cells[3].size != self.n_points or not all(np.array_equal(coords[1 + a], self._vertices[:, a])
+                                                      for a in range(3)):
+            raise ValueError("a grid of other points")
+        self.__dict__["grid"] = grid
+
     def same_points_as(self, twin: "PointCloud", order: np.ndarray) -> None:
         """Read this cloud's distances to its nearest points from ``twin``, the same points in another
         order (twin row i is this cloud's row ``order[i]``, an (n,) int array): the distances are the

@@ -74,6 +74,21 @@ def _within(queue, dist2, count, radius2, out):
 
 
 @jit
+def gap_scratch():
+    """Per-thread scratch of :func:`_widest_gap`: ``(bins (6, GAP_BINS), occupied (GAP_BINS,) int64,
+    edges (GAP_BINS + 1,))``, ``edges[b]`` the angle (radians, in [-pi, pi]) where bin b begins."""
+    edges = np.empty(GAP_BINS + 1)
+    for b in range(GAP_BINS + 1):
+        # the inverse of _pseudo_angle: within a quadrant, key f gives the angle atan2(f, 1 - f)
+        key = -2.0 + 4.0 * b / GAP_BINS
+        whole = math.floor(abs(key))
+        f = abs(key) - whole
+        angle = whole * 0.5 * math.pi + math.atan2(f, 1.0 - f)
+        edges[b] = angle if key >= 0.0 else -angle
+    return np.empty((6, GAP_BINS)), np.empty(GAP_BINS, np.int64), edges
+
+
+@jit
 def _pseudo_angle(u, v):
     """A value that increases with ``atan2(v, u)`` over (-pi, pi] (signed zeros as atan2 reads them),
     in [-2, 2] (one unit a quadrant), without a trigonometric call: its rate is between 1/2 and 1
@@ -88,22 +103,24 @@ def _pseudo_angle(u, v):
 
 
 @jit
-def _widest_gap(i, queue, count, x, y, z, vecs, bins, occupied):
-    """Widest angle between consecutive offsets ``q - i`` projected on the plane of ``vecs``'s
-    last two eigenvectors (2 pi with fewer than two); ``bins``: (6, GAP_BINS) and ``occupied``:
-    (GAP_BINS,) int64 scratch.
+def _gap_bin(u, v):
+    """The bin (0 .. GAP_BINS - 1) of the offset (u, v) and its pseudo-angle."""
+    key = _pseudo_angle(u, v)
+    return min(max(int((key + 2.0) * (GAP_BINS / 4.0)), 0), GAP_BINS - 1), key
 
-    The offsets fall in :data:`GAP_BINS` bins of their pseudo-angle (:func:`_pseudo_angle`); each
-    bin keeps its least and greatest (a bit mask says which bins hold any: no bin is cleared
-    before). Between consecutive occupied bins the step of the pseudo-angle bounds the angle
-    within a factor 2, so only the steps within a factor 2 of the largest are measured with
-    ``atan2`` (as the difference of the two ends' angles).
-    """
+
+GAP_MARGIN = 1e-9
+"""Radians added to :func:`_gap_bound` for the rounding of a pseudo-angle at a bin's edge."""
+
+
+@jit
+def _gap_bound(i, queue, count, x, y, z, vecs, edges):
+    """An upper bound of :func:`_widest_gap` from the occupied bins alone (one bit each, nothing
+    else kept): between consecutive occupied bins a and b the gap is at most the angle from a's
+    start to b's end. Returns ``(bound, used)``, ``used`` the offsets with a tangent part."""
     e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
     e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
     px, py, pz = x[i], y[i], z[i]
-    # rows: least key, its u, v; greatest key, its u, v
-    scale = GAP_BINS / 4.0
     mask = np.uint64(0)
     one = np.uint64(1)
     used = 0
@@ -113,8 +130,58 @@ def _widest_gap(i, queue, count, x, y, z, vecs, bins, occupied):
         u = dx * e1x + dy * e1y + dz * e1z
         v = dx * e2x + dy * e2y + dz * e2z
         if u * u + v * v > 0.0:
-            key = _pseudo_angle(u, v)
-            b = min(max(int((key + 2.0) * scale), 0), GAP_BINS - 1)
+            b, _ = _gap_bin(u, v)
+            mask |= one << np.uint64(b)
+            used += 1
+    if used < 2:
+        return 2.0 * math.pi, used
+    first = last = -1
+    bound = 0.0
+    for b in range(GAP_BINS):
+        if (mask >> np.uint64(b)) & one:
+            if last >= 0:
+                bound = max(bound, edges[b + 1] - edges[last])
+            else:
+                first = b
+            last = b
+    bound = max(bound, edges[first + 1] + 2.0 * math.pi - edges[last])
+    return bound + GAP_MARGIN, used
+
+
+@jit
+def _widest_gap(i, queue, count, x, y, z, vecs, scratch, screen):
+    """Widest angle between consecutive offsets ``q - i`` projected on the plane of ``vecs``'s
+    last two eigenvectors (2 pi with fewer than two); ``scratch``: :func:`gap_scratch`.
+
+    Exact wherever it is at least ``screen`` (radians); below, an upper bound that is itself below
+    ``screen`` (:func:`_gap_bound`, which costs a third of the exact measure): a test of the gap
+    against a threshold of at least ``screen`` reads the same as with the exact gap everywhere.
+
+    The exact measure: the offsets fall in :data:`GAP_BINS` bins of their pseudo-angle
+    (:func:`_pseudo_angle`); each bin keeps its least and greatest (a bit mask says which bins hold
+    any: no bin is cleared before). Between consecutive occupied bins the step of the pseudo-angle
+    bounds the angle within a factor 2, so only the steps within a factor 2 of the largest are
+    measured with ``atan2`` (as the difference of the two ends' angles).
+    """
+    bins, occupied, edges = scratch
+    if screen > 0.0:
+        bound, used = _gap_bound(i, queue, count, x, y, z, vecs, edges)
+        if used < 2 or bound < screen:
+            return bound
+    e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
+    e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
+    px, py, pz = x[i], y[i], z[i]
+    # rows: least key, its u, v; greatest key, its u, v
+    mask = np.uint64(0)
+    one = np.uint64(1)
+    used = 0
+    for j in range(1, count):
+        q = queue[j]
+        dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
+        u = dx * e1x + dy * e1y + dz * e1z
+        v = dx * e2x + dy * e2y + dz * e2z
+        if u * u + v * v > 0.0:
+            b, key = _gap_bin(u, v)
             bit = one << np.uint64(b)
             if mask & bit:
                 if key < bins[0, b]:
@@ -153,14 +220,15 @@ def _widest_gap(i, queue, count, x, y, z, vecs, bins, occupied):
 
 
 @jit
-def _frame(i, sub, count, x, y, z, cov, vecs, bins, occupied):
-    """PCA normal (``vecs[:3, 0]``) and widest gap of the support ``sub[:count]``; the gap, or -1
-    when the support is too small (fewer than 3 points) for a plane."""
+def _frame(i, sub, count, x, y, z, cov, vecs, scratch, screen):
+    """PCA normal (``vecs[:3, 0]``) and widest gap of the support ``sub[:count]`` (exact from
+    ``screen`` on, :func:`_widest_gap`); the gap, or -1 when the support is too small (fewer than 3
+    points) for a plane."""
     if count < 3:
         return -1.0
     offset_moments(i, sub, count, x, y, z, True, cov)
     sym3_eigen(cov, vecs)
-    return _widest_gap(i, sub, count, x, y, z, vecs, bins, occupied)
+    return _widest_gap(i, sub, count, x, y, z, vecs, scratch, screen)
 
 
 @jit

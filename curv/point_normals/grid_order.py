@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from ..core.knn import GRAPH_NEIGHBOURS, build_grid
+import numpy as np
+
+from ..core.knn import GRAPH_NEIGHBOURS, build_grid, in_sorted_order
 from ..core.pointcloud import PointCloud
 from ..geometry.neighbourhood import cached_with_mesh
 
@@ -21,13 +23,15 @@ def grid_ordered(cloud: PointCloud):
         estimate of the cloud.
     """
     def build():
-        (_, _, _, order), (origin, *_) = cloud.grid if cloud.grid_frame is not None else build_grid(
-            cloud.points, GRAPH_NEIGHBOURS)
+        grid = cloud.grid if cloud.grid_frame is not None else build_grid(cloud.points, GRAPH_NEIGHBOURS)
+        order, origin = grid[0][3], grid[1][0]
         normals = None if cloud.normals is None else cloud.normals[order]
         # the twin searches the cloud's own cells: the same neighbours, ties in distance broken alike,
-        # and a part of the cloud in the same order searches them too (curv.tiles)
-        twin = PointCloud(cloud.points[order], normals, georeferenced=cloud.georeferenced,
+        # and a part of the cloud in the same order searches them too (curv.tiles). Its points are
+        # the grid's sorted coordinates and its grid is this one in its order: no second sort.
+        twin = PointCloud(np.column_stack(grid[1][1:]), normals, georeferenced=cloud.georeferenced,
                           grid_frame=(origin[:3], origin[3]))
+        twin.adopt_grid(in_sorted_order(grid))
         mark_ordered(twin)
         cloud.same_points_as(twin, order)
         return twin, order

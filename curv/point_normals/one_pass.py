@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.jit import iter_chunks, jit_parallel, launch, prange, threads
-from ..core.knn import grid_gather
+from ..core.knn import block_gather, cell_block, cell_of, ring_of
 from ..core.pointcloud import PointCloud
 from ..core.validity import OK
 from ..estimators._local_fit import slice_bounds
@@ -20,23 +20,32 @@ from ..estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
 from ..estimators.jet import _scratch as jet_scratch
 from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                                       new_queues, new_scratch)
-from .frames import GAP_BINS, _frame, _spread, _widest_gap, _within
+from .frames import _frame, _spread, _widest_gap, _within, gap_scratch
 
 __all__ = ["local_frames", "support_spread"]
 
 
 @jit_parallel
-def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, dists, subs,
-                 normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread):
+def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out):
     """One walk over the points in grid order (module notes, "One pass"): each point's ball at
     ``outer2``, and from it the supports at the radii of ``radii2``'s rows (nested in the ball).
 
-    ``radii2`` (4, n) squared radii, original order: row 0 the frame A (PCA normal into
-    ``normal_a``, sorted order, gap and count), row 1 the frame B (PCA normal, gap; and the jet
-    normal fitted over it, oriented by frame A's normal, when ``wanted[2]``), rows 2 and 3 two
-    spreads. ``wanted[r]`` (5,) says which parts run (0: A, 1: B, 2: jet, 3, 4: spreads).
+    ``grid``: the ball grid ``(cells, coords)``; ``radii``: ``(outer2 (n,), radii2 (4, n), screens
+    (2,))``, squared radii in the original order: row 0 the frame A (PCA normal into ``normal_a``,
+    sorted order, gap exact from ``screens[0]`` on, and count), row 1 the frame B (PCA normal, gap
+    exact from ``screens[1]`` on; and the jet normal fitted over it, oriented by frame A's normal,
+    when ``wanted[2]``), rows 2 and 3 two spreads. ``wanted`` (5,) says which parts run (0: A, 1: B,
+    2: jet, 3, 4: spreads). ``scratch``: ``(queues, dists, subs)``, a row per thread, one slot more
+    than the points; ``out``: ``(normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread)``.
+
+    The points are walked cell by cell: the columns of a cell's block are looked up once for all
+    its points (:func:`curv.core.knn.cell_block`), each point's ball read from them.
     """
-    order = cells[3]
+    cells, coords = grid
+    outer2, radii2, screens = radii
+    queues, dists, subs = scratch
+    normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread = out
+    order, cell_start = cells[3], cells[1]
     x, y, z = coords[1], coords[2], coords[3]
     parts = queues.shape[0]
     for t in prange(parts):
@@ -45,18 +54,29 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
         sub = subs[t]
         cov = np.empty((3, 3))
         vecs = np.empty((4, 3))
-        bins = np.empty((6, GAP_BINS))
-        occupied = np.empty(GAP_BINS, np.int64)
+        gaps = gap_scratch()
+        runs = np.empty((64, 2), np.int64)
         m, vec, cov_jet, frame, evec = jet_scratch()
         keep_b = normal_b.shape[0] > 1
         start, stop = slice_bounds(lo, hi, t, parts)
+        c = cell_of(start, cell_start) if start < stop else 0
+        cell_end = start
+        n_runs = 0
         for i in range(start, stop):
+            if i >= cell_end:
+                while cell_start[c + 1] <= i:
+                    c += 1
+                cell_end = cell_start[c + 1]
+                widest = 0.0
+                for j in range(cell_start[c], cell_end):
+                    widest = max(widest, outer2[order[j]])
+                n_runs, runs = cell_block(c, ring_of(widest, cells[2], coords[0]), cells, runs)
             p = order[i]
-            count = grid_gather(i, outer2[p], cells, coords, queue, dist2)
+            count = block_gather(i, outer2[p], runs, n_runs, coords, queue, dist2)
             if wanted[0]:
-                c = _within(queue, dist2, count, radii2[0, p], sub)
-                count_a[p] = c - 1
-                g = _frame(i, sub, c, x, y, z, cov, vecs, bins, occupied)
+                c_a = _within(queue, dist2, count, radii2[0, p], sub)
+                count_a[p] = c_a - 1
+                g = _frame(i, sub, c_a, x, y, z, cov, vecs, gaps, screens[0])
                 if g < 0.0:
                     normal_a[i, 0] = normal_a[i, 1] = normal_a[i, 2] = math.nan
                     gap_a[p] = 2.0 * math.pi
@@ -64,21 +84,21 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
                     normal_a[i, 0], normal_a[i, 1], normal_a[i, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
                     gap_a[p] = g
             if wanted[1]:
-                c = _within(queue, dist2, count, radii2[1, p], sub)
+                c_b = _within(queue, dist2, count, radii2[1, p], sub)
                 g = -2.0
                 if wanted[2]:
                     evec[3, 0] = math.nan
-                    code, _, _ = fit_jet(i, c, sub, x, y, z, normal_a, degree, m, vec, cov_jet, frame, evec)
+                    code, _, _ = fit_jet(i, c_b, sub, x, y, z, normal_a, degree, m, vec, cov_jet, frame, evec)
                     reason[p] = code
                     if code == OK:
                         jet_normal(vec, frame, fitted, p)
                     else:
                         fitted[p, 0] = fitted[p, 1] = fitted[p, 2] = math.nan
-                    if c >= 3 and math.isfinite(evec[3, 0]):
+                    if c_b >= 3 and math.isfinite(evec[3, 0]):
                         # the fit's own PCA of this support (its frame): the plane of the gap
-                        g = _widest_gap(i, sub, c, x, y, z, evec, bins, occupied)
+                        g = _widest_gap(i, sub, c_b, x, y, z, evec, gaps, screens[1])
                 if g == -2.0 or keep_b:
-                    g = _frame(i, sub, c, x, y, z, cov, vecs, bins, occupied)
+                    g = _frame(i, sub, c_b, x, y, z, cov, vecs, gaps, screens[1])
                     if keep_b:
                         if g < 0.0:
                             normal_b[p, 0] = normal_b[p, 1] = normal_b[p, 2] = math.nan
@@ -87,8 +107,8 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
                 gap_b[p] = 2.0 * math.pi if g < 0.0 else g
             for r in range(2):
                 if wanted[3 + r]:
-                    c = _within(queue, dist2, count, radii2[2 + r, p], sub)
-                    spread[r, p] = _spread(i, sub, c, x, y, z, cov, vecs)
+                    c_s = _within(queue, dist2, count, radii2[2 + r, p], sub)
+                    spread[r, p] = _spread(i, sub, c_s, x, y, z, cov, vecs)
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,7 +125,7 @@ class _Pass:
 
 
 def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = False, normals_b: bool = False,
-              spreads=(), chunk: int | None = None):
+              spreads=(), screens=(0.0, 0.0), chunk: int | None = None):
     """Frames, jet normals and spreads of every point from one ball search per point (a generator).
 
     Parameters
@@ -118,6 +138,9 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
         Keep frame B's normals (else only its gaps).
     spreads : sequence of (n,) float64
         Up to two radii of :func:`support_spread`.
+    screens : (float, float)
+        The two frames' gaps are exact from these angles on (radians; below, an upper bound below
+        them, :func:`.frames._widest_gap`); 0 measures every gap exactly.
 
     Returns
     -------
@@ -137,8 +160,8 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     cells, coords = cloud.ball_grid(outer)
     outer2 = radii2.max(axis=0)
     parts = max(1, min(threads(), n))
-    queues = new_queues(n, parts)
-    dists = np.empty((parts, n))
+    queues = new_queues(n + 1, parts)
+    dists = np.empty((parts, n + 1))
     subs = new_queues(n, parts)
     normal_a = np.empty((n, 3)) if wanted[0] else np.empty((1, 3))
     gap_a = np.empty(n) if wanted[0] else np.empty(1)
@@ -150,8 +173,8 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     spread = np.empty((2, n if len(spreads) else 1))
 
     def run(lo: int, hi: int) -> None:
-        launch(_pass_kernel, lo, hi, cells, coords, outer2, radii2, wanted, DEFAULT_DEGREE, queues, dists, subs,
-               normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread)
+        launch(_pass_kernel, lo, hi, (cells, coords), (outer2, radii2, np.array(screens, np.float64)), wanted,
+               DEFAULT_DEGREE, (queues, dists, subs), (normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread))
 
     yield from iter_chunks(n, run, chunk=chunk)
     del queues, dists, subs, radii2, outer2
