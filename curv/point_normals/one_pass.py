@@ -11,13 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit_parallel, launch, prange, threads
+from ..core.jit import iter_chunks, jit_parallel, launch, prange, slice_bounds, threads
 from ..core.knn import grid_gather
 from ..core.pointcloud import PointCloud
 from ..core.validity import OK
-from ..estimators._local_fit import slice_bounds
-from ..estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
-from ..estimators.jet import _scratch as jet_scratch
+from ..estimators._jet_fit import fit_jet, jet_normal, jet_scratch
+from ..estimators.jet import DEFAULT_DEGREE
 from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                                       new_queues, new_scratch)
 from .frames import GAP_BINS, _frame, _spread, _widest_gap, _within
@@ -68,7 +67,7 @@ def _pass_kernel(lo, hi, cells, coords, outer2, radii2, wanted, degree, queues, 
                 g = -2.0
                 if wanted[2]:
                     evec[3, 0] = math.nan
-                    code, _, _ = fit_jet(i, c, sub, x, y, z, normal_a, degree, m, vec, cov_jet, frame, evec)
+                    code, _, _ = fit_jet(i, c, sub, (x, y, z, normal_a), degree, (m, vec, cov_jet, frame, evec))
                     reason[p] = code
                     if code == OK:
                         jet_normal(vec, frame, fitted, p)
