@@ -52,7 +52,7 @@ def iter_estimate(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = False,
     **options,
 ) -> Generator[float, None, Curvature]:
@@ -207,7 +207,7 @@ def _iter_estimates(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = False,
     **options,
 ) -> Generator[float, None, dict]:
@@ -367,10 +367,13 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
         full run's at these vertices.
     knn : int, optional
         Point clouds only, instead of ``range``: each point's support is its ``knn`` nearest points.
-    orient : {"up", "outward"} or (3,) array_like
-        Point clouds whose normals are estimated: turn each connected part up (+z at its highest
-        point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
-        viewpoint (a scanner's position).
+    orient : {"up", "top", "outward"} or (3,) array_like, optional
+        Point clouds whose normals are estimated: every normal up (nz >= 0 point by point, as
+        PDAL does; a normal within 3 degrees of horizontal is ``Reason.ORIENTATION``), each
+        connected part turned up at its highest point or outward and propagated (Hoppe et al.
+        1992), or every normal towards this viewpoint (a scanner's position). Default
+        (:func:`curv.point_normals.default_orientation`): ``"up"`` for a georeferenced cloud
+        (LAS/LAZ), ``"top"`` for any other; ``info["orientation"]`` says which ran.
     standard_errors : bool
         True: also the standard errors ``k1_se`` and ``k2_se`` of the least-squares fits (``nc``,
         ``qs``, ``an``, ``mru``, ``jet``: the estimators whose spec says ``skips_errors``, which take

@@ -403,9 +403,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="vertex normals: Max, area or angle weighted face normals, or a local jet fit "
                             "(R2); default max (the paper's protocol). Point clouds: the file's normals, "
                             "else fit (jet fits, R2); pca: local plane fits")
-    p_est.add_argument("--orient-normals", nargs="+", metavar="up|outward|X Y Z",
-                       help="point clouds whose normals are estimated: turn them up (+z, default), outward, "
-                            "or towards a viewpoint X Y Z (a scanner's position)")
+    p_est.add_argument("--orient-normals", nargs="+", metavar="up|top|outward|X Y Z",
+                       help="point clouds whose normals are estimated: up (nz >= 0 at every point; default for "
+                            "LAS/LAZ), top (propagated from each part's top turned up; default otherwise), "
+                            "outward (closed objects), or towards a viewpoint X Y Z (a scanner's position)")
     p_est.add_argument("--fit-range", help="range k of the fitted normals (with --normals fit); "
                        "default 2")
     p_est.add_argument("--degree", type=int, choices=[2, 3, 4], help="jet degree (estimator jet); default 2")

@@ -29,16 +29,19 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
     """The :class:`Curvature` of one range from the estimator's raw result: the validity rules,
     the settling pass, smoothing of the values, a region's full-length rows (a generator, as the
     support checks of a point cloud are)."""
-    for mask_of in flags.support_marks:
-        # checks of the supports themselves (points: a support along a curve), on the estimated rows
-        mask, code = yield from mask_of(radii, centres, usable)
-        flags = flags.marked(mask, code)
-    if fused:
-        used_normals = raw.normals
-
     def at(flags: np.ndarray) -> np.ndarray:
         """The rows of a per-vertex array that this call estimates."""
         return flags if centres is None else flags[centres]
+
+    found = {}
+    for mask_of in flags.support_marks:
+        # checks of the supports themselves (points: a support along a curve, or a few steps of the
+        # coordinates' grid wide), on the estimated rows; the info counts each check's points
+        mask, code, name = yield from mask_of(radii, centres, usable)
+        flags = flags.marked(mask, code)
+        found[name] = int(at(mask).sum())
+    if fused:
+        used_normals = raw.normals
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
     computed = standard_errors and raw.k1_se is not None and smooth is Smoothing.NONE
@@ -84,7 +87,7 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
               "feature_edges": 0 if feats is None else feats.count,
-              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info,
+              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info, **found,
               **({"standard_errors": True} if computed else {})},
     )
     return result if twin is None else rows_back(result, twin[1])

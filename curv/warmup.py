@@ -108,10 +108,12 @@ def _estimator_step(name: str) -> None:
 
 
 def _cloud_step() -> None:
-    """A point cloud's spacing, normals, orientation and border test, with the default estimator."""
+    """A point cloud's spacing, normals, orientation (propagated, and up as for a scan) and border
+    test, with the default estimator."""
     import curv
 
     curv.estimate(_cloud(), "mru", 2)
+    curv.estimate(_cloud(), "mru", 2, orient="up")
 
 
 def _advice_step() -> None:

@@ -41,9 +41,9 @@ from .source_panel import SourcePanel
 
 __all__ = ["MainWindow", "MESH_FILTER", "DEFAULT_SOURCE"]
 
-MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf *.xyz *.txt *.csv *.pcd *.las *.laz);;"
+MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf *.xyz *.txt *.csv *.pcd *.pts *.las *.laz);;"
                "Meshes (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf);;"
-               "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.las *.laz);;All files (*)")
+               "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.pts *.las *.laz);;All files (*)")
 DEFAULT_SOURCE = SurfaceSource(name="saddle", n_vertices=3169)
 ADVISE_TIP = ("Measure this mesh's noise, irregularity and density and rank the estimators and ranges by the "
               "error the paper's study predicts; Apply in the Advice panel uses one (Ctrl+Shift+A)")

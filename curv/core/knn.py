@@ -23,7 +23,8 @@ import numpy as np
 from .errors import MeshError
 from .jit import jit, jit_parallel, launch, prange
 
-__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "grid_gather", "symmetric_graph", "GRAPH_NEIGHBOURS"]
+__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "grid_gather", "symmetric_graph", "neighbour_steps",
+           "GRAPH_NEIGHBOURS"]
 
 GRAPH_NEIGHBOURS = 10
 """Neighbours per point of a point cloud's neighbour graph (made symmetric: about 13 edges a
@@ -412,3 +413,36 @@ def symmetric_graph(indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     new = np.empty(new_ptr[-1], np.int64)
     launch(_graph_compact, indptr, out, new_ptr, new)
     return new_ptr, new
+
+
+@jit_parallel
+def _steps_kernel(points, indices, parts, out):
+    n, k = indices.shape
+    for t in prange(parts):
+        lo, hi = t * n // parts, (t + 1) * n // parts
+        for a in range(3):
+            out[t, a] = np.inf
+        for p in range(lo, hi):
+            for j in range(k):
+                q = indices[p, j]
+                if q >= 0:
+                    for a in range(3):
+                        d = abs(points[q, a] - points[p, a])
+                        if 0.0 < d < out[t, a]:
+                            out[t, a] = d
+
+
+def neighbour_steps(points: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """(3,) float64: per axis, the smallest non-zero coordinate difference between a point and one of
+    its nearest (``indices`` (n, k), -1 entries skipped); 0 where every difference is 0.
+
+    On coordinates stored on a grid (a LAS file's scale, rounding) no two points differ by less than
+    the grid's step, and near neighbours differ by one step somewhere, so this is the step; on
+    coordinates of full precision it is tiny (n k differences of spread values)."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    indices = np.ascontiguousarray(indices, dtype=np.int64)
+    parts = max(1, min(64, indices.shape[0]))
+    out = np.empty((parts, 3))
+    launch(_steps_kernel, points, indices, parts, out)
+    least = out.min(axis=0)
+    return np.where(np.isfinite(least), least, 0.0)

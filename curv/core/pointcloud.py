@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import MeshError
-from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, symmetric_graph
+from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, neighbour_steps, symmetric_graph
 
 __all__ = ["PointCloud", "PointSet", "as_positions"]
 
@@ -83,12 +83,17 @@ class PointCloud(PointSet):
     normals : (n, 3) array_like, optional
         Per-point normals as given (rows of zero length or NaN are allowed: such points have no
         usable normal). None when the input has none.
+    georeferenced : bool
+        The points are a scan in a map's coordinates with z up (aerial or terrestrial LiDAR; the
+        LAS/LAZ reader says so): estimated normals are then turned up at every point by default
+        (:func:`curv.point_normals.default_orientation`).
 
     The arrays are read-only copies: a point cloud is immutable, like :class:`curv.Mesh`.
     """
 
-    def __init__(self, points, normals=None):
+    def __init__(self, points, normals=None, *, georeferenced: bool = False):
         self._vertices = as_positions(points)
+        self._georeferenced = bool(georeferenced)
         if normals is None:
             self._normals = None
         else:
@@ -106,6 +111,11 @@ class PointCloud(PointSet):
     def normals(self) -> np.ndarray | None:
         """(n, 3) float64 normals given with the points (read-only), or None."""
         return self._normals
+
+    @property
+    def georeferenced(self) -> bool:
+        """Whether the points are a scan in a map's coordinates with z up (see the class notes)."""
+        return self._georeferenced
 
     @cached_property
     def grid(self):
@@ -178,6 +188,25 @@ class PointCloud(PointSet):
         return cache[k]
 
     @cached_property
+    def coordinate_step(self) -> float:
+        """The resolution the coordinates are stored with: the step of their grid, 0.0 for floats of
+        full precision.
+
+        Per axis, the smallest non-zero coordinate difference between a point and its nearest
+        points (:func:`curv.core.knn.neighbour_steps`); the step is the finest of the three (an
+        axis that never varies is exact: 0.0, and rounding along the others only moves points
+        within the surface). E.g. 0.01 for a LAS file whose points lie on a
+        1 cm grid, about 1e-6 of the spacing for full-precision floats. An axis whose step is
+        coarser than that is a sampling lattice (a raster's x and y, with the heights measured
+        exactly there), not a rounding of the positions. A support only a few steps wide sees the
+        grid's stairs rather than the surface (:mod:`curv.point_normals`, the quantisation check).
+        """
+        twin = self.__dict__.get("_twin")
+        if twin is not None:
+            return twin[0].coordinate_step
+        return float(neighbour_steps(self._vertices, self.nearest[0]).min())
+
+    @cached_property
     def adjacency(self) -> sp.csr_matrix:
         """(n, n) int8 CSR neighbour graph: p and q are joined if either is among the other's
         :data:`~curv.core.knn.GRAPH_NEIGHBOURS` nearest (symmetric, sorted indices).
@@ -230,4 +259,5 @@ class PointCloud(PointSet):
 
     def __repr__(self) -> str:
         with_normals = "with normals" if self._normals is not None else "without normals"
-        return f"PointCloud({self.n_points} points, {with_normals})"
+        where = ", georeferenced" if self._georeferenced else ""
+        return f"PointCloud({self.n_points} points, {with_normals}{where})"

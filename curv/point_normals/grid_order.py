@@ -23,7 +23,7 @@ def grid_ordered(cloud: PointCloud):
     def build():
         order = build_grid(cloud.points, GRAPH_NEIGHBOURS)[0][3]
         normals = None if cloud.normals is None else cloud.normals[order]
-        twin = PointCloud(cloud.points[order], normals)
+        twin = PointCloud(cloud.points[order], normals, georeferenced=cloud.georeferenced)
         cached_with_mesh(twin, "grid order", lambda: None)
         cloud.same_points_as(twin, order)
         return twin, order
