@@ -3,7 +3,8 @@
 :func:`finish` applies the input's flags (:class:`curv.estimate_setup.Flags`) in the precedence
 :mod:`curv.core.validity` owns, settles each row (:func:`settle`: non-finite values SINGULAR,
 k1 >= k2, right-handed directions), smooths the values when asked, NaN-fills the invalid rows and
-scatters a region's rows into full-length arrays.
+scatters a region's rows into full-length arrays. :func:`radius_note` says when a ``radius=`` left
+most rows without an estimate.
 """
 
 from __future__ import annotations
@@ -15,13 +16,22 @@ import numpy as np
 
 from .core.filled import filled
 from .core.jit import jit_parallel, launch, prange
+from .core.pointcloud import PointCloud
+from .core.ranges import unit_lengths
 from .core.result import Curvature
-from .core.validity import OK, PRECEDENCE, SINGULAR, Reason, mark_ok_rows
+from .core.validity import OK, PRECEDENCE, SINGULAR, TOO_FEW, Reason, mark_ok_rows
 from .estimate_setup import Smoothing
 from .geometry.smoothing import smooth_values
 from .locality import rows_back
 
-__all__ = ["finish", "settle"]
+__all__ = ["finish", "settle", "radius_note", "SHORT_SHARE"]
+
+SHORT_SHARE = 0.5
+"""A ``radius=`` estimate is said to fail when more than this share of its rows have too few
+neighbours in the ball or a singular fit (:func:`radius_note`)."""
+
+_SPACING_SAMPLE = 100_000
+"""The median spacing of :func:`radius_note` is taken over at most about this many evenly spread vertices."""
 
 
 def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
@@ -91,6 +101,49 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
               **({"standard_errors": True} if computed else {})},
     )
     return result if twin is None else rows_back(result, twin[1])
+
+
+def radius_note(mesh, radius: float, reason: np.ndarray, centres: np.ndarray | None = None) -> str | None:
+    """What to tell a caller whose ``radius=`` is below the input's median spacing, or left more than
+    :data:`SHORT_SHARE` of the estimated rows with too few neighbours or a singular fit; None otherwise.
+
+    Parameters
+    ----------
+    mesh : Mesh or PointCloud
+        The input; its spacing is :func:`curv.core.ranges.unit_lengths` (the longest 1-ring edge,
+        a point's distance to its 6th nearest), the median of an even sample.
+    radius : float
+        The ball radius the call was given.
+    reason : (n,) uint8
+        The result's reason codes.
+    centres : (c,) int64, optional
+        The rows estimated (a region); default all.
+
+    Returns
+    -------
+    str or None
+        One sentence naming the radius, the median spacing, the share without an estimate and a
+        radius or range to try.
+    """
+    unit = unit_lengths(mesh)
+    sample = unit[:: max(1, unit.size // _SPACING_SAMPLE)]
+    sample = sample[np.isfinite(sample) & (sample > 0)]
+    if not sample.size:
+        return None
+    spacing = float(np.median(sample))
+    rows = np.asarray(reason) if centres is None else np.asarray(reason)[centres]
+    short = float(np.isin(rows, (TOO_FEW, SINGULAR)).mean()) if rows.size else 0.0
+    if radius >= spacing and short <= SHORT_SHARE:
+        return None
+    points = isinstance(mesh, PointCloud)
+    items = "points" if points else "vertices"
+    unit_words = "the distance to the 6th nearest point" if points else "the longest 1-ring edge"
+    if radius < spacing:
+        head = f"radius={radius:g} is below the median spacing {spacing:.4g} ({unit_words})"
+    else:
+        head = f"radius={radius:g} is only {radius / spacing:.2g} times the median spacing {spacing:.4g} ({unit_words})"
+    return (f"{head}: {100 * short:.0f} % of the {items} have too few neighbours or a singular fit (NaN); "
+            f"try radius={2 * spacing:.3g} (2 spacings) or range=2")
 
 
 def _standard_errors(raw, at, rows: int) -> tuple[np.ndarray, np.ndarray]:

@@ -50,7 +50,9 @@ def check_point_options(args, spec) -> None:
         raise CurvError(why_not)
     given = [flag for name, flag in MESH_ONLY.items() if getattr(args, name, None) not in (None, False)]
     if given:
-        raise CurvError(f"{args.input} is a point cloud; {', '.join(given)} need(s) a mesh's faces")
+        flags = given[0] if len(given) == 1 else f"{', '.join(given[:-1])} and {given[-1]}"
+        verb = "needs" if len(given) == 1 else "need"
+        raise CurvError(f"{args.input} is a point cloud; {flags} {verb} a mesh's faces")
     if args.normals in _MESH_NORMALS:
         raise CurvError(f"--normals {args.normals} weights face normals; on a point cloud use fit (jet) or pca "
                         f"(default: the file's normals, else jet fits)")

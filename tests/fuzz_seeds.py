@@ -217,7 +217,37 @@ def _las_seeds() -> list[Seed]:
         data = buffer.getvalue()
         end, fields = _las_fields(data)
         seeds.append(Seed(name, suffix.lstrip(".").upper(), suffix, data, end, fields=fields, text_header=False))
-    return seeds
+    return seeds + _curvlab_las_seeds(seeds)
+
+
+def _curvlab_las_seeds(las_seeds: list[Seed]) -> list[Seed]:
+    """What curvlab's LAS/LAZ writer makes of the 1.2 and 1.4 seeds: their records with the curvature
+    as extra bytes (:mod:`curv.formats.laswrite`), read back as any LAS file is."""
+    import tempfile
+
+    from curv.formats.laswrite import GROUPS, write_las
+
+    def values(start, stop):
+        m = stop - start
+        i = np.arange(start, stop, dtype=np.float64)
+        return {"k1": i, "k2": -i, "d1": np.tile([1.0, 0, 0], (m, 1)), "d2": np.tile([0, 1.0, 0], (m, 1)),
+                "normals": np.tile([0, 0, 1.0], (m, 1)), "valid": np.ones(m, bool), "reason": np.zeros(m, np.uint8),
+                "k1_se": i, "k2_se": i}
+
+    out = []
+    with tempfile.TemporaryDirectory() as folder:
+        for seed in las_seeds:
+            if seed.name not in ("LAS 1.2", "LAZ 1.4 normals"):
+                continue
+            source = Path(folder) / f"in{seed.suffix}"
+            source.write_bytes(seed.data)
+            written = Path(folder) / f"out{seed.suffix}"
+            write_las(written, source, values, groups=GROUPS)
+            data = written.read_bytes()
+            end, fields = _las_fields(data)
+            out.append(Seed(f"{seed.name} written by curvlab", seed.format, seed.suffix, data, end, fields=fields,
+                            text_header=False))
+    return out
 
 
 def real_las_seeds(folder) -> list[Seed]:

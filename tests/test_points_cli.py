@@ -139,9 +139,9 @@ def test_las_input_end_to_end(tmp_path, capsys):
 @pytest.mark.parametrize("flags, words", [
     (["-m", "meyer"], "does not run on point clouds; use one of:"),
     (["-m", "csm"], "does not run on point clouds"),
-    (["--merge-vertices"], "--merge-vertices need(s) a mesh's faces"),
-    (["--features", "30"], "--features need(s) a mesh's faces"),
-    (["--smooth", "mesh"], "--smooth need(s) a mesh's faces"),
+    (["--merge-vertices"], "--merge-vertices needs a mesh's faces"),
+    (["--features", "30"], "--features needs a mesh's faces"),
+    (["--smooth", "mesh"], "--smooth needs a mesh's faces"),
     (["--normals", "max"], "--normals max weights face normals"),
     (["--knn", "2"], "knn must be a whole number of neighbours >= 3"),
     (["--knn", "20", "-r", "2"], "give one of range=, radius= or knn="),

@@ -32,6 +32,7 @@ from .feature_controls import FeatureControl
 from .geometry import direction_glyphs, edge_lines, glyph_subsample, prepare_geometry
 from .help import about_text, guide_text
 from .inspect_panel import InspectPanel
+from .large_panel import attach_large_panel
 from .mesh_panel import MeshPanel
 from .pane_grid import PaneGrid
 from .readout import Readout
@@ -171,6 +172,7 @@ class MainWindow(QMainWindow):
         self._set_busy(False)
         self._build_menus()
         self._connect()
+        self.large_panel = attach_large_panel(self)
         self._restore_settings()
 
     # -- set-up ---------------------------------------------------------------------------------

@@ -87,13 +87,26 @@ class PointCloud(PointSet):
         The points are a scan in a map's coordinates with z up (aerial or terrestrial LiDAR; the
         LAS/LAZ reader says so): estimated normals are then turned up at every point by default
         (:func:`curv.point_normals.default_orientation`).
+    grid_frame : (origin (3,), cell), optional
+        Lay the grids over these points from this lower corner (at most their least coordinates),
+        the neighbour grid with this cell edge: the grid of a larger cloud these points are a part
+        or a reordering of (its twin in grid order, a tile), so that the searches visit the same
+        cells in the same order and break ties in distance alike. Default: the points' own.
+    coordinate_step : float, optional
+        The step of the grid the coordinates are stored on (:attr:`coordinate_step`), when it is
+        known for a larger cloud these points are a part of (a tile): the same resolution, the same
+        quantisation checks. Default: measured on these points.
 
     The arrays are read-only copies: a point cloud is immutable, like :class:`curv.Mesh`.
     """
 
-    def __init__(self, points, normals=None, *, georeferenced: bool = False):
+    def __init__(self, points, normals=None, *, georeferenced: bool = False, grid_frame=None, coordinate_step=None):
         self._vertices = as_positions(points)
         self._georeferenced = bool(georeferenced)
+        self.grid_frame = None if grid_frame is None else (np.asarray(grid_frame[0], np.float64).reshape(3),
+                                                            float(grid_frame[1]))
+        if coordinate_step is not None:
+            self.__dict__["coordinate_step"] = float(coordinate_step)  # the cached value, given
         if normals is None:
             self._normals = None
         else:
@@ -121,6 +134,9 @@ class PointCloud(PointSet):
     def grid(self):
         """The uniform grid over the points (:func:`curv.core.knn.build_grid`), made once: it answers the
         nearest-neighbour queries and every ball support of an estimate."""
+        if self.grid_frame is not None:
+            origin, cell = self.grid_frame
+            return build_grid(self._vertices, GRAPH_NEIGHBOURS, cell=cell, origin=origin)
         return build_grid(self._vertices, GRAPH_NEIGHBOURS)
 
     def ball_grid(self, radii: np.ndarray):
@@ -138,7 +154,8 @@ class PointCloud(PointSet):
         if step not in cache:
             if len(cache) >= 4:
                 cache.pop(next(iter(cache)))
-            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0))
+            origin = None if self.grid_frame is None else self.grid_frame[0]
+            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0), origin=origin)
         return cache[step]
 
     @cached_property

@@ -312,7 +312,8 @@ def fit_spec(**fields) -> EstimatorSpec:
     clouds, no closed ring needed, :data:`~curv.estimators._principal.MIN_PAIRS` neighbours at least,
     the kernels above, standard errors when asked, several ranges in one call)."""
     shared = dict(triangles_only=False, closed_ring=False, takes_points=True, min_neighbours=MIN_PAIRS,
-                  kernels=KERNELS, extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True, takes_levels=True)
+                  kernels=KERNELS, extra_bytes_per_unit=SE_PARTS_BYTES, skips_errors=True, pools_errors=True,
+                  takes_levels=True)
     return EstimatorSpec(**{**shared, **fields})
 
 

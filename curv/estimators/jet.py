@@ -330,5 +330,5 @@ register(fit_spec(
     reference="Cazals & Pouget 2003, Estimating differential quantities using polynomial fitting of osculating jets",
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
-    extra_bytes_per_unit=0.0, kernels=KERNELS[:2],
+    extra_bytes_per_unit=0.0, kernels=KERNELS[:2], pools_errors=False,
 ))

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import EstimatorError
-from ..core.jit import jit_parallel, launch, prange, run_to_end, slice_bounds
+from ..core.jit import announce, jit_parallel, launch, prange, run_to_end, slice_bounds
 from ..core.pointcloud import PointCloud
 from ..core.ranges import TIE_TOLERANCE, ball_radii, point_spacing, resolve
 from ..estimators import get_spec
@@ -216,6 +216,7 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     pca, gap = _frames(cloud)
     if method == "pca" and (rng.label != resolve(get_spec("jet"), BORDER_RANGE).label or widened.any()):
         pca = found.normal_b
+    announce("orientation")  # a phase of the estimate's progress (curv.core.jit.iter_watched)
     orient = default_orientation(cloud) if orient is None else orient
     one_sided = np.zeros(cloud.n_points, bool)
     if isinstance(orient, str) and orient == "up":
