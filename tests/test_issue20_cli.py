@@ -86,6 +86,25 @@ def test_standard_errors_flag_keeps_the_curvatures_and_adds_the_errors(sphere_fi
     np.testing.assert_array_equal(skipped["k2"], kept["k2"])
 
 
+def test_las_errors_group_needs_the_standard_errors(tmp_path, capsys):
+    """``--las-extra errors`` without ``--standard-errors`` would write NaN fields: a one-line refusal."""
+    laspy = pytest.importorskip("laspy")
+    cloud = curv.surfaces.sample_points("sphere", 400, rng=1).cloud
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales, header.offsets = np.full(3, 1e-4), np.zeros(3)
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = cloud.points.T
+    src, out = tmp_path / "in.las", tmp_path / "out.las"
+    las.write(str(src))
+    code = main(["estimate", str(src), "-m", "jet", "-o", str(out), "--las-extra", "errors", "-q"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--standard-errors" in err and len(err.splitlines()) == 1
+    assert not out.exists()
+    assert main(["estimate", str(src), "-m", "jet", "-o", str(out), "--las-extra", "errors", "--standard-errors",
+                 "-q"]) == 0
+    assert np.isfinite(laspy.read(str(out))["k1_se"]).any()
+
+
 def test_noise_model_flag_is_the_librarys_option(tmp_path):
     noisy = curv.surfaces.make_surface("sphere", n_vertices=642, noise=0.05, seed=3).mesh
     path, out = tmp_path / "noisy.ply", tmp_path / "mru.ply"
