@@ -139,18 +139,18 @@ def sphere_points(n: int) -> np.ndarray:
     return p / np.linalg.norm(p, axis=1, keepdims=True)
 
 
-def _points_child(kind: str, name: str, k: float, n: int) -> dict:
+def _points_child(kind: str, name: str, k: float, n: int, standard_errors: bool = False) -> dict:
     """A point-cloud measurement in the subprocess: see the module notes (``--points``)."""
     pts = sphere_points(n)
     extra = {}
     if kind == "curv":
         import curv
 
-        curv.estimate(curv.PointCloud(sphere_points(500)), name, k)  # kernels from the cache
+        curv.estimate(curv.PointCloud(sphere_points(500)), name, k, standard_errors=standard_errors)  # from the cache
         gc.collect()
         with PeakRSS() as mem:
             t0, c0 = time.perf_counter(), time.process_time()
-            res = curv.estimate(curv.PointCloud(pts), name, k)
+            res = curv.estimate(curv.PointCloud(pts), name, k, standard_errors=standard_errors)
             seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
         extra["valid"] = float(res.valid.mean())
         extra["mean_H"] = float(np.median(res.mean[res.valid]))
@@ -197,7 +197,7 @@ def run_points(args) -> None:
         print(f"{'variant':<16} {'seconds':>8} {'cpu s':>7} {'peak MB':>8} {'valid':>6} {'median H':>9}"
               f"  vs cKDTree+pgeof (wall, cpu)")
         for m, k in variants:
-            r = run_one("curv", m, float(k), n, "points", args.repeat)
+            r = run_one("curv", m, float(k), n, "points", args.repeat, args.standard_errors)
             label = f"{m} R{float(k):g}"
             if "error" in r:
                 print(f"{label:<16} error: {r['error']}")
@@ -216,10 +216,10 @@ def _tiny(kind_mesh: str):
     return MESHES["sphere"](200)
 
 
-def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
+def _child(kind: str, name: str, k: float, n: int, mesh_kind: str, standard_errors: bool = False) -> dict:
     """Runs in the subprocess: build the arrays, warm up on a tiny mesh, take the baseline, time one call."""
     if mesh_kind == "points":
-        return _points_child(kind, name, k, n)
+        return _points_child(kind, name, k, n, standard_errors)
     mesh_kind, _, order = mesh_kind.partition(":")
     v, f = MESHES[mesh_kind](n)
     if order == "shuffled":
@@ -230,7 +230,8 @@ def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
 
         tv, tf_ = _tiny(mesh_kind)
         t0 = time.perf_counter()
-        curv.estimate(curv.Mesh(tv, tf_), name, k)  # kernels from the cache (or compiled)
+        # kernels from the cache (or compiled)
+        curv.estimate(curv.Mesh(tv, tf_), name, k, standard_errors=standard_errors)
         extra["warmup_seconds"] = time.perf_counter() - t0
         conn_mesh = curv.Mesh(v, f)
         t0 = time.perf_counter()
@@ -242,7 +243,7 @@ def _child(kind: str, name: str, k: float, n: int, mesh_kind: str) -> dict:
         gc.collect()
         with PeakRSS() as mem:
             t0, c0 = time.perf_counter(), time.process_time()
-            res = curv.estimate(curv.Mesh(v, f), name, k)
+            res = curv.estimate(curv.Mesh(v, f), name, k, standard_errors=standard_errors)
             seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
         extra["valid"] = float(res.valid.mean())
     elif kind == "trueform":
@@ -313,9 +314,10 @@ def compile_times(variants) -> None:
         print(f"{name:<10} {imp:8.2f} {comp:10.2f} {cold:13.2f}", flush=True)
 
 
-def run_one(kind: str, name: str, k: float, n: int, mesh_kind: str, repeat: int = 1) -> dict:
+def run_one(kind: str, name: str, k: float, n: int, mesh_kind: str, repeat: int = 1,
+            standard_errors: bool = False) -> dict:
     """Best of ``repeat`` fresh subprocesses: the fastest time, and the largest peak memory seen."""
-    cmd = [sys.executable, __file__, "--child", kind, name, str(k), str(n), mesh_kind]
+    cmd = [sys.executable, __file__, "--child", kind, name, str(k), str(n), mesh_kind, str(int(standard_errors))]
     runs = []
     for _ in range(repeat):
         out = subprocess.run(cmd, capture_output=True, text=True)
@@ -342,11 +344,13 @@ def main(argv=None) -> int:
                              "machines vary by tens of percent from run to run)")
     parser.add_argument("--points", action="store_true",
                         help="point clouds: uniform random points of the unit sphere (see above)")
-    parser.add_argument("--child", nargs=5, help=argparse.SUPPRESS)
+    parser.add_argument("--standard-errors", action="store_true",
+                        help="time curv's calls with standard_errors=True (default: the default call, without)")
+    parser.add_argument("--child", nargs=6, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
-        kind, name, k, n, mesh_kind = args.child
-        print(json.dumps(_child(kind, name, float(k), int(n), mesh_kind)))
+        kind, name, k, n, mesh_kind, se = args.child
+        print(json.dumps(_child(kind, name, float(k), int(n), mesh_kind, se == "1")))
         return 0
 
     if args.points:
@@ -374,7 +378,7 @@ def main(argv=None) -> int:
         print(f"{'variant':<14} {'seconds':>8} {'cpu s':>7} {'conn s':>7} {'peak MB':>8} {'valid':>6}  vs tf k=2"
               f"  vs tf k=4  vs VTK  (cpu: tf k=2, tf k=4)")
         for m, k in variants:
-            r = run_one("curv", m, k, n, mesh_kind, args.repeat)
+            r = run_one("curv", m, k, n, mesh_kind, args.repeat, args.standard_errors)
             label = f"{m} R{k:g}"
             if "error" in r:
                 print(f"{label:<14} error: {r['error']}")

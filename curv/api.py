@@ -25,7 +25,7 @@ from .estimate_finish import finish, radius_note, settle
 from .estimate_setup import (Smoothing, cached_feature_set, check_vertices, mesh_normals_label, mesh_setup, point_setup,
                              without_rows)
 from .estimators import SHARED_PASSES, default_estimator, get_spec, refusal
-from .estimators._pooling import pool_members
+from .uncertainty.pooling import pool_members
 from .geometry.neighbourhood import latest_with_mesh
 from .geometry.normals import NormalWeighting
 from .locality import cloud_twin, locality_ordered, rank, rows_of
@@ -53,7 +53,7 @@ def iter_estimate(
     vertices=None,
     knn: int | None = None,
     orient=None,
-    standard_errors: bool = True,
+    standard_errors: bool = False,
     **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
@@ -97,11 +97,11 @@ def estimate_ranges(mesh: Mesh, method: str | None = None, ranges=(1, 2, 3, 4), 
     the narrower one's plus the vertices it adds, and only the faces crossing each sphere are
     clipped per range; their sums are added in another order than a call with one range, so the
     values agree to a few units in the last place (and a value at a threshold, e.g. a tiny negative
-    discriminant, may land on the other side). So do the fits ``nc``, ``qs``, ``an`` and ``mru`` with
-    ``standard_errors=False`` on a mesh: one walk, and each range's normal equations are the
-    narrower range's plus the rows of the vertices it adds
-    (:func:`curv.estimators._local_fit.run_fit_levels`); with standard errors, or on a point cloud,
-    they run each range on its own. The ``jet`` walks once on a mesh and fits each range anew (its
+    discriminant, may land on the other side). So do the fits ``nc``, ``qs``, ``an`` and ``mru``
+    without standard errors (the default) on a mesh: one walk, and each range's normal equations are
+    the narrower range's plus the rows of the vertices it adds
+    (:func:`curv.estimators._fit_driver.run_fit_levels`); with ``standard_errors=True``, or on a point
+    cloud, they run each range on its own. The ``jet`` walks once on a mesh and fits each range anew (its
     frame follows the support): to rounding too, its standard errors included.
 
     Parameters
@@ -216,7 +216,7 @@ def _iter_estimates(
     vertices=None,
     knn: int | None = None,
     orient=None,
-    standard_errors: bool = True,
+    standard_errors: bool = False,
     **options,
 ) -> Generator[float, None, dict]:
     """:func:`iter_estimate` of each of ``methods`` at each of ``ranges``: returns ``{method: [Curvature
@@ -281,7 +281,7 @@ def _iter_estimates(
                                                                smooth_iterations, smooth_strength, fit_range, feats)
             normals_label = mesh_normals_label(given, normal_weighting, fit_range)
         # a region's fits also run at its neighbours, whose residuals its standard errors pool
-        fitted = (pool_members(work_mesh, centres) if spec.skips_errors and standard_errors and centres is not None
+        fitted = (pool_members(work_mesh, centres) if spec.pools_errors and standard_errors and centres is not None
                   and not isinstance(work_mesh, PointCloud) else centres)
         radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support
                     else None for rng in rngs]
@@ -425,12 +425,13 @@ def estimate(mesh: Mesh, method: str | None = None, range=None, **keywords) -> C
         (:func:`curv.point_normals.default_orientation`): ``"up"`` for a georeferenced cloud
         (LAS/LAZ), ``"top"`` for any other; ``info["orientation"]`` says which ran.
     standard_errors : bool
-        False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
-        and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,
-        ``an``, ``mru``: the estimators whose spec says ``skips_errors``, which take the keyword)
-        neither fit a region's neighbours nor run the pooling pass nor add up the standard
-        errors' sums. k1, k2, the directions, ``valid`` and
-        ``reason`` are the same either way. Default True.
+        True: also the standard errors ``k1_se`` and ``k2_se`` of the least-squares fits (``nc``,
+        ``qs``, ``an``, ``mru``, ``jet``: the estimators whose spec says ``skips_errors``, which take
+        the keyword; docs/UNCERTAINTY.md), and ``info["standard_errors"]`` is True. False (the
+        default): ``k1_se`` and ``k2_se`` are NaN everywhere and the call pays nothing for them: the
+        fits neither fit a region's neighbours nor run the pooling pass nor add up the standard
+        errors' sums (their kernels are compiled without them). k1, k2, the directions, ``valid``
+        and ``reason`` are the same either way.
     **options
         Estimator-specific options (``curv.ESTIMATORS[method].options``), e.g. ``degree=4`` for
         ``jet``.

@@ -54,7 +54,8 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
         used_normals = raw.normals
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
-    k1_se, k2_se = _standard_errors(raw if standard_errors else None, at, smooth, k1.shape[0])
+    computed = standard_errors and raw.k1_se is not None and smooth is Smoothing.NONE
+    k1_se, k2_se = _standard_errors(raw if computed else None, at, k1.shape[0])
     # root causes, whatever the estimator saw (no face or no other point at all; a normal whose
     # orientation was left undecided): later codes win
     for mask, code in flags.forced:
@@ -80,7 +81,7 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
         k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)
         d1, d2 = np.where(swap[:, None], d2, d1), np.where(swap[:, None], -d1, d2)
     valid = reason == Reason.OK
-    for arr in (k1, k2, k1_se, k2_se):
+    for arr in (k1, k2, k1_se, k2_se) if computed else (k1, k2):
         arr[~valid] = np.nan
     d1[~valid] = np.nan
     d2[~valid] = np.nan
@@ -96,7 +97,8 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
               "feature_edges": 0 if feats is None else feats.count,
-              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info, **found},
+              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info, **found,
+              **({"standard_errors": True} if computed else {})},
     )
     return result if twin is None else rows_back(result, twin[1])
 
@@ -144,13 +146,14 @@ def radius_note(mesh, radius: float, reason: np.ndarray, centres: np.ndarray | N
             f"try radius={2 * spacing:.3g} (2 spacings) or range=2")
 
 
-def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray, np.ndarray]:
-    """This call's rows of the fit's standard errors (copies), NaN for an estimator without a fit
-    (or a call without standard errors, ``raw`` None) and for the smoothing variants: smoothing
-    correlates the noise of neighbouring vertices (before the fit with ``mesh``, after it with
-    ``values``), which the residual model assumes independent."""
-    if raw is None or raw.k1_se is None or smooth is not Smoothing.NONE:
-        return np.full(rows, np.nan), np.full(rows, np.nan)
+def _standard_errors(raw, at, rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """This call's rows of the fit's standard errors (copies); NaN, at the cost of the rows later
+    written (:func:`curv.core.filled.filled`), when none were computed (``raw`` None: not asked, an
+    estimator without a fit, or a smoothing variant: smoothing correlates the noise of neighbouring
+    vertices, before the fit with ``mesh``, after it with ``values``, which the residual model
+    assumes independent)."""
+    if raw is None:
+        return filled(rows, np.nan), filled(rows, np.nan)
     return at(raw.k1_se).copy(), at(raw.k2_se).copy()
 
 

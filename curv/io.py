@@ -261,8 +261,12 @@ def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False,
     return mesh
 
 
-_FLOAT_PROPS = EXPORTED + STANDARD_ERRORS
 _DIR_PROPS = tuple(f"d{i}{c}" for i in (1, 2) for c in "xyz")
+
+
+def _float_props(curvature: Curvature) -> tuple[str, ...]:
+    """The float fields an export writes: the standard errors only when they were computed."""
+    return EXPORTED + (STANDARD_ERRORS if curvature.has_standard_errors else ())
 
 
 _WRITE_BLOCK = 1 << 18
@@ -333,7 +337,7 @@ def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: s
     -------
     Path
         The written file, with the permissions a plain ``open(path, "w")`` would give. Properties: x, y, z, red, green, blue, alpha (uchar), k1, k2, mean,
-        gaussian, k1_se, k2_se, d1x..d1z, d2x..d2z (float), valid and reason (uchar; a second header comment
+        gaussian, k1_se, k2_se (when computed), d1x..d1z, d2x..d2z (float), valid and reason (uchar; a second header comment
         names the :class:`curv.Reason` codes), ``shown`` (the coloured values, when the colours
         come from ``quantity``), plus ``extra``; faces as ``vertex_indices`` lists.
     """
@@ -357,11 +361,11 @@ def save_ply(path, mesh: Mesh | PointCloud, curvature: Curvature, *, quantity: s
         raise ValueError(f"colors must have shape ({n}, 4), got {colors.shape}")
     extra = dict(extra or {})
     fields = [(c, "f8") for c in "xyz"] + [(c, "u1") for c in ("red", "green", "blue", "alpha")]
-    fields += [(c, "f4") for c in _FLOAT_PROPS + _DIR_PROPS] + [("valid", "u1"), ("reason", "u1")]
+    fields += [(c, "f4") for c in _float_props(curvature) + _DIR_PROPS] + [("valid", "u1"), ("reason", "u1")]
     fields += [(name, "f4") for name in extra]
     columns = {c: mesh.vertices[:, i] for i, c in enumerate("xyz")}
     columns.update({c: colors[:, i] for i, c in enumerate(("red", "green", "blue", "alpha"))})
-    columns.update({name: getattr(curvature, name) for name in _FLOAT_PROPS})
+    columns.update({name: getattr(curvature, name) for name in _float_props(curvature)})
     for i, c in enumerate("xyz"):
         columns[f"d1{c}"] = curvature.d1[:, i]
         columns[f"d2{c}"] = curvature.d2[:, i]
@@ -466,7 +470,7 @@ def save_vtu(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors: np.
     Returns
     -------
     Path
-        Point data: ``k1``, ``k2``, ``mean``, ``gaussian``, ``k1_se``, ``k2_se`` (n,), ``d1``, ``d2`` (n, 3),
+        Point data: ``k1``, ``k2``, ``mean``, ``gaussian``, ``k1_se``, ``k2_se`` (when computed) (n,), ``d1``, ``d2`` (n, 3),
         ``valid`` and ``reason`` (n,) uint8, ``extra``, ``rgba``; a point cloud also ``normals`` (n, 3),
         the ones the estimate used; field data ``reason_OK``, ``reason_BORDER``, ... hold each
         :class:`curv.Reason` code; written atomically like :func:`save_ply`.
@@ -495,7 +499,7 @@ def _vtk_document(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors
     n = mesh.n_vertices
     if curvature.k1.shape[0] != n:
         raise MeshError(f"curvature has {curvature.k1.shape[0]} values but the mesh has {n} vertices")
-    data = {name: np.asarray(getattr(curvature, name), np.float64) for name in _FLOAT_PROPS}
+    data = {name: np.asarray(getattr(curvature, name), np.float64) for name in _float_props(curvature)}
     data.update(d1=np.asarray(curvature.d1, np.float64), d2=np.asarray(curvature.d2, np.float64),
                 valid=curvature.valid.astype(np.uint8), reason=np.asarray(curvature.reason, np.uint8))
     data.update({k: np.asarray(v, np.float64) for k, v in (extra or {}).items()})

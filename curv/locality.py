@@ -69,5 +69,6 @@ def rows_back(res: Curvature, order: np.ndarray) -> Curvature:
         out[order] = a
         return out
 
-    return replace(res, **{f: back(getattr(res, f)) for f in
-                           ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se")})
+    fields = ("k1", "k2", "d1", "d2", "normals", "valid", "reason") + (
+        ("k1_se", "k2_se") if res.has_standard_errors else ())  # else NaN everywhere, in any order
+    return replace(res, **{f: back(getattr(res, f)) for f in fields})

@@ -91,6 +91,8 @@ def _estimator_step(name: str) -> None:
         curv.estimate(mesh, name, k)
         if spec.uses_normals:
             curv.estimate(mesh, name, k, normals="fit")
+    if spec.skips_errors:  # the fits' kernels with their standard errors (the viewer asks for them)
+        curv.estimate(_mesh(), name, k, standard_errors=True)
     curv.estimate(_creased_mesh(), name, k, features=30.0)
     if name in polygon_estimators():
         curv.estimate(_quad_mesh(), name, k)
@@ -101,6 +103,8 @@ def _estimator_step(name: str) -> None:
         curv.estimate_table(_mesh(), partners, spec.ranges, standard_errors=False)
     if spec.takes_points:
         curv.estimate(_cloud(), name, k)
+        if spec.skips_errors:
+            curv.estimate(_cloud(), name, k, standard_errors=True)
 
 
 def _cloud_step() -> None:

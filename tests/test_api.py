@@ -147,10 +147,10 @@ def test_a_scattered_numbering_runs_in_grid_order_with_the_same_result(monkeypat
     mesh = torus_grid(40, 16)[0]  # no umbilic: the directions are defined
     shuffled, perm = _shuffled(mesh)
     assert not shuffled.scattered_order()  # below the size where the order matters
-    ref = curv.estimate(mesh, method, k)
+    ref = curv.estimate(mesh, method, k, standard_errors=True)
     monkeypatch.setattr(curv.core.mesh, "SCATTERED_SPAN", 40)
     assert shuffled.scattered_order()
-    res = curv.estimate(shuffled, method, k)
+    res = curv.estimate(shuffled, method, k, standard_errors=True)
     assert locality_ordered(shuffled, None, None) is not None
     assert np.array_equal(res.valid, ref.valid[perm]) and np.array_equal(res.reason, ref.reason[perm])
     for field in ("k1", "k2", "normals", "k1_se", "k2_se"):

@@ -71,3 +71,48 @@ def test_parallel_kernels_are_declared_and_launched_through_the_jit_owner():
               if re.search(rf"(?<![\w.]){name}\(", line) and not line.lstrip().startswith("def ")
               and f"launch({name}" not in line]
     assert not direct, "parallel kernels called without launch:\n" + "\n".join(direct)
+
+
+def _shape():
+    """benchmarks/code_shape.py, the one counter of the code's shape."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("code_shape", ROOT / "benchmarks" / "code_shape.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+WIDE_LEFT = {
+    "curv/estimators/_clipped_sums.py", "curv/estimators/_ball_clipping.py", "curv/estimators/csm.py",
+    "curv/estimators/meyer.py", "curv/estimators/rusinkiewicz.py", "curv/geometry/neighbourhood.py",
+    "curv/core/connectivity.py", "curv/core/knn.py", "curv/point_normals/one_pass.py",
+}
+"""Modules whose numba functions may still take more than 10 positional parameters (the ring and
+clipping estimators, the connectivity, the searches and the point normals: work under way). Take a
+module out when it is done; the fits and the uncertainty are out."""
+
+LONG_LEFT = {
+    "curv/advice/table.py", "curv/advice/advisor.py", "curv/core/connectivity.py", "curv/core/mesh.py",
+    "curv/estimators/_ball_clipping.py", "curv/estimators/_clipped_sums.py", "curv/io.py", "curv/study/claims.py",
+    "app/views/main_window.py",
+}
+"""Modules that may still run over 500 lines (work under way); take one out when it is split."""
+
+
+def test_numba_functions_take_at_most_ten_positional_parameters():
+    """Arrays travel as a few bundles (tuples, namedtuples), not as long argument lists."""
+    shape = _shape()
+    wide = {f"{path}:{name} ({n})" for path, name, n in shape.numba_functions(ROOT / "curv")
+            if n > shape.MAX_PARAMETERS and path not in WIDE_LEFT}
+    assert not wide, sorted(wide)
+    fits = [f for f in shape.numba_functions(ROOT / "curv") if f[0].startswith(("curv/estimators/_fit_driver",
+                                                                               "curv/uncertainty/"))]
+    assert len(fits) > 20  # the counter sees the fits' kernels and helpers
+
+
+def test_modules_stay_short():
+    shape = _shape()
+    lines = {**shape.module_lines(ROOT / "curv"), **shape.module_lines(ROOT / "app")}
+    long = {f"{path} ({n})" for path, n in lines.items() if n > shape.MAX_LINES and path not in LONG_LEFT}
+    assert not long, sorted(long)

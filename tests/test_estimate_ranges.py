@@ -49,10 +49,11 @@ def _compare(one, many_res, shared: bool):
 def test_ranges_equal_one_call_each(mesh_name, method, region):
     mesh = MESHES[mesh_name]()
     idx = np.arange(3, mesh.n_vertices, 5) if region else None
-    many = estimate_ranges(mesh, method, RANGES, vertices=idx)
+    many = estimate_ranges(mesh, method, RANGES, vertices=idx, standard_errors=True)
     assert len(many) == len(RANGES)
     for r, res in zip(RANGES, many):
-        _compare(curv.estimate(mesh, method, r, vertices=idx), res, shared=method in ("csm", "icc"))
+        _compare(curv.estimate(mesh, method, r, vertices=idx, standard_errors=True), res,
+                 shared=method in ("csm", "icc"))
     if mesh_name == "open patch" and method != "qs":
         # the wide balls reach the border where the narrow ones do not (BORDER for the clipping
         # estimators): the levels differ
@@ -64,9 +65,9 @@ def test_ranges_equal_one_call_each(mesh_name, method, region):
 def test_ranges_at_creases_and_in_chunks(method):
     """Supports that stop at creases walk face by face, with a stamp of their own per range."""
     mesh = box(4)
-    many = estimate_ranges(mesh, method, (1, 2, 3), features=30, block_size=7)
+    many = estimate_ranges(mesh, method, (1, 2, 3), features=30, block_size=7, standard_errors=True)
     for r, res in zip((1, 2, 3), many):
-        _compare(curv.estimate(mesh, method, r, features=30), res, shared=True)
+        _compare(curv.estimate(mesh, method, r, features=30, standard_errors=True), res, shared=True)
 
 
 def test_one_range_is_estimate():

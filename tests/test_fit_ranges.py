@@ -122,9 +122,9 @@ def test_fit_ranges_sphere_value():
 def test_jet_ranges_standard_errors(weights):
     """The jet's standard errors come from each level's own fit: to rounding, as its values."""
     mesh = _noisy_torus()
-    many = estimate_ranges(mesh, "jet", (2, 4, 1), weights=weights)
+    many = estimate_ranges(mesh, "jet", (2, 4, 1), weights=weights, standard_errors=True)
     for r, res in zip((2, 4, 1), many):
-        one = curv.estimate(mesh, "jet", r, weights=weights)
+        one = curv.estimate(mesh, "jet", r, weights=weights, standard_errors=True)
         assert np.array_equal(one.reason, res.reason)
         assert np.allclose(one.k1_se, res.k1_se, rtol=1e-9, equal_nan=True)
         assert np.allclose(one.k2_se, res.k2_se, rtol=1e-9, equal_nan=True)

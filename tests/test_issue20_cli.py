@@ -70,27 +70,52 @@ def test_jet_width_flag_is_the_librarys_option(tmp_path, capsys):
     assert "has no option 'width'" in capsys.readouterr().err
 
 
-def test_no_standard_errors_flag_keeps_the_curvatures_and_drops_the_errors(sphere_file, tmp_path):
-    out, ref = tmp_path / "no_se.ply", tmp_path / "se.ply"
-    assert main(["estimate", str(sphere_file), "-m", "an", "-r", "3", "--no-standard-errors", "-o", str(out), "-q"]) == 0
-    assert main(["estimate", str(sphere_file), "-m", "an", "-r", "3", "-o", str(ref), "-q"]) == 0
+def test_standard_errors_flag_keeps_the_curvatures_and_adds_the_errors(sphere_file, tmp_path):
+    """The standard errors are opt-in: ``--standard-errors`` writes them, the default (and the
+    ``--no-standard-errors`` of before) leaves the two fields out; the curvatures are the same."""
+    out, off, ref = tmp_path / "default.ply", tmp_path / "no_se.ply", tmp_path / "se.ply"
+    assert main(["estimate", str(sphere_file), "-m", "an", "-r", "3", "-o", str(out), "-q"]) == 0
+    assert main(["estimate", str(sphere_file), "-m", "an", "-r", "3", "--no-standard-errors", "-o", str(off), "-q"]) == 0
+    assert main(["estimate", str(sphere_file), "-m", "an", "-r", "3", "--standard-errors", "-o", str(ref), "-q"]) == 0
     skipped, kept = plyfile.PlyData.read(str(out))["vertex"], plyfile.PlyData.read(str(ref))["vertex"]
-    assert np.isnan(skipped["k1_se"]).all() and np.isnan(skipped["k2_se"]).all()
+    for name in ("k1_se", "k2_se"):
+        assert name not in skipped.data.dtype.names
+        assert name not in plyfile.PlyData.read(str(off))["vertex"].data.dtype.names
     assert np.isfinite(kept["k1_se"]).any()
     np.testing.assert_array_equal(skipped["k1"], kept["k1"])
     np.testing.assert_array_equal(skipped["k2"], kept["k2"])
+
+
+def test_las_errors_group_needs_the_standard_errors(tmp_path, capsys):
+    """``--las-extra errors`` without ``--standard-errors`` would write NaN fields: a one-line refusal."""
+    laspy = pytest.importorskip("laspy")
+    cloud = curv.surfaces.sample_points("sphere", 400, rng=1).cloud
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales, header.offsets = np.full(3, 1e-4), np.zeros(3)
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = cloud.points.T
+    src, out = tmp_path / "in.las", tmp_path / "out.las"
+    las.write(str(src))
+    code = main(["estimate", str(src), "-m", "jet", "-o", str(out), "--las-extra", "errors", "-q"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--standard-errors" in err and len(err.splitlines()) == 1
+    assert not out.exists()
+    assert main(["estimate", str(src), "-m", "jet", "-o", str(out), "--las-extra", "errors", "--standard-errors",
+                 "-q"]) == 0
+    assert np.isfinite(laspy.read(str(out))["k1_se"]).any()
 
 
 def test_noise_model_flag_is_the_librarys_option(tmp_path):
     noisy = curv.surfaces.make_surface("sphere", n_vertices=642, noise=0.05, seed=3).mesh
     path, out = tmp_path / "noisy.ply", tmp_path / "mru.ply"
     curv.save_ply(path, noisy, curv.estimate(noisy, "qs"))
-    assert main(["estimate", str(path), "-m", "mru", "-r", "2", "--noise-model", "normals", "-o", str(out), "-q"]) == 0
+    assert main(["estimate", str(path), "-m", "mru", "-r", "2", "--standard-errors", "--noise-model", "normals",
+                 "-o", str(out), "-q"]) == 0
     se = plyfile.PlyData.read(str(out))["vertex"]["k1_se"]
     mesh = curv.load(path)
-    modelled = curv.estimate(mesh, "mru", 2, noise_model="normals").k1_se
+    modelled = curv.estimate(mesh, "mru", 2, noise_model="normals", standard_errors=True).k1_se
     np.testing.assert_allclose(se, modelled, rtol=1e-6)
-    independent = curv.estimate(mesh, "mru", 2, noise_model="independent").k1_se
+    independent = curv.estimate(mesh, "mru", 2, noise_model="independent", standard_errors=True).k1_se
     assert not np.allclose(modelled, independent, rtol=0.05, equal_nan=True)
 
 

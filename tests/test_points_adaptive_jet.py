@@ -97,8 +97,8 @@ def test_on_a_noisy_sphere_the_walks_go_on_to_the_steadiest_fit(noisy_sphere):
     than 0.12 (2.6 when the narrowest degree-4 fits took part, ``POINTS_PER_UNKNOWN`` 2), median H
     0.9 % high where the fixed degree-4 jet is 2.7 % high."""
     cloud, spacing = noisy_sphere
-    adaptive = curv.estimate(cloud, "jet", radius=4 * spacing, degree=4, width="adaptive")
-    last = curv.estimate(cloud, "jet", radius=4 * spacing, degree=2, weights="smooth")
+    adaptive = curv.estimate(cloud, "jet", radius=4 * spacing, degree=4, width="adaptive", standard_errors=True)
+    last = curv.estimate(cloud, "jet", radius=4 * spacing, degree=2, weights="smooth", standard_errors=True)
     fixed = curv.estimate(cloud, "jet", radius=4 * spacing, degree=4)
     assert adaptive.valid.mean() > 0.99
     # the standard errors reported are those of each walk's last candidate

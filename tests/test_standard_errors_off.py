@@ -1,4 +1,4 @@
-"""``estimate(..., standard_errors=False)``: the same curvatures and reasons, no standard errors."""
+"""``estimate(..., standard_errors=False)`` (the default): the same curvatures and reasons, no standard errors."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ def noisy_torus():
 @pytest.mark.parametrize("region", [False, True], ids=["whole", "region"])
 def test_values_equal_without_standard_errors(noisy_torus, method, region):
     idx = np.sort(np.random.default_rng(2).choice(noisy_torus.n_vertices, 41, replace=False)) if region else None
-    on = curv.estimate(noisy_torus, method, vertices=idx)
+    on = curv.estimate(noisy_torus, method, vertices=idx, standard_errors=True)
     off = curv.estimate(noisy_torus, method, vertices=idx, standard_errors=False)
     for name in ("k1", "k2", "d1", "d2", "reason", "valid"):
         assert np.array_equal(getattr(on, name), getattr(off, name), equal_nan=True), name

@@ -49,7 +49,9 @@ def torus_mesh():
 
 @pytest.mark.parametrize("method", ["meyer", "csm", "nc", "qs", "an", "ru", "mru", "jet", "icc"])
 def test_every_estimator_on_a_closed_mesh_equals_the_whole_call(torus_mesh, method):
-    options = {"noise_model": "normals"} if method in ("an", "mru") else {}
+    # the fits with their standard errors (pooled over edge neighbours: the halo's extra ring)
+    options = {"standard_errors": True} if method in ("nc", "qs", "an", "mru", "jet") else {}
+    options.update({"noise_model": "normals"} if method in ("an", "mru") else {})
     whole = curv.estimate(torus_mesh, method, **options)
     tiled = estimate_tiled(torus_mesh, method, tile_size=700, **options)
     assert tiled.info["tiles"] >= 4
@@ -59,7 +61,7 @@ def test_every_estimator_on_a_closed_mesh_equals_the_whole_call(torus_mesh, meth
 @pytest.mark.parametrize("method", ["csm", "qs", "mru", "meyer"])
 def test_an_open_mesh_with_borders_equals_the_whole_call(method):
     mesh = tube(48, 30)
-    options = {"noise_model": "normals"} if method == "mru" else {}
+    options = {"noise_model": "normals", "standard_errors": True} if method == "mru" else {}
     whole = curv.estimate(mesh, method, **options)
     tiled = estimate_tiled(mesh, method, tile_size=300, **options)
     assert (whole.reason == Reason.BORDER).any()
@@ -69,14 +71,15 @@ def test_an_open_mesh_with_borders_equals_the_whole_call(method):
 @pytest.mark.parametrize("method", ["mru", "qs", "icc", "ru"])
 def test_a_creased_mesh_with_features_equals_the_whole_call(method):
     mesh = make_surface("capped_cylinder", n_vertices=3000).mesh
-    options = {"noise_model": "normals"} if method == "mru" else {}
+    options = {"noise_model": "normals", "standard_errors": True} if method == "mru" else {}
     whole = curv.estimate(mesh, method, features=30, **options)
     tiled = estimate_tiled(mesh, method, tile_size=500, features=30, **options)
     assert (whole.reason == Reason.FEATURE).any()
     assert_same(tiled, whole)
 
 
-@pytest.mark.parametrize("keywords", [{"method": "qs", "range": 3}, {"method": "mru", "normals": "fit", "noise_model": "normals"},
+@pytest.mark.parametrize("keywords", [{"method": "qs", "range": 3}, {"method": "mru", "normals": "fit", "noise_model": "normals",
+                                                                       "standard_errors": True},
                                       {"method": "qs", "radius": 0.3}, {"method": "jet", "range": 2.5, "degree": 4}])
 def test_a_tiny_halo_is_detected_and_its_points_redone(torus_mesh, keywords):
     whole = curv.estimate(torus_mesh, **keywords)

@@ -9,6 +9,8 @@ shape operator's first entry).
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -16,6 +18,9 @@ import curv
 from curv.surfaces import make_surface
 from curv.study.protocol import Task
 from curv.study.testmesh import build_test_mesh
+
+estimate = partial(curv.estimate, standard_errors=True)
+"""Every estimate here asks for the standard errors (they are opt-in)."""
 
 FITS = ("nc", "qs", "an", "mru", "jet")
 NO_FIT = ("meyer", "csm", "ru", "icc")
@@ -56,9 +61,9 @@ def _monte_carlo(method: str, k, *, sigma: float, draws: int = DRAWS, seed: int 
             noisy[centre] = normals[centre]
             normals = noisy
         if cloud:
-            res = curv.estimate(curv.PointCloud(v, normals=normals), method, k, vertices=[centre], **opts)
+            res = estimate(curv.PointCloud(v, normals=normals), method, k, vertices=[centre], **opts)
         else:
-            res = curv.estimate(curv.Mesh(v, faces), method, k, normals=normals, vertices=[centre], **opts)
+            res = estimate(curv.Mesh(v, faces), method, k, normals=normals, vertices=[centre], **opts)
         out[:, i] = res.k1[centre], res.k2[centre], res.k1_se[centre], res.k2_se[centre]
     return out
 
@@ -135,7 +140,7 @@ def test_standard_error_vanishes_on_an_exact_quadric(method, k):
     s, centre = _patch()
     up = np.zeros((s.mesh.n_vertices, 3))
     up[:, 2] = 1.0
-    res = curv.estimate(s.mesh, method, k, normals=up, vertices=[centre])
+    res = estimate(s.mesh, method, k, normals=up, vertices=[centre])
     assert res.k1[centre] == pytest.approx(s.truth.k1[centre], abs=1e-9)
     assert res.k2[centre] == pytest.approx(s.truth.k2[centre], abs=1e-9)
     assert 0.0 <= res.k1_se[centre] < 1e-6 and 0.0 <= res.k2_se[centre] < 1e-6
@@ -147,7 +152,7 @@ def test_standard_error_scales_like_one_over_length(method):
     s = make_surface("sphere", n_vertices=642, noise=0.05, seed=3)
     big = s.mesh.with_vertices(s.mesh.vertices * 10.0)
     k = 2 if method != "an" else 3
-    small_res, big_res = curv.estimate(s.mesh, method, k), curv.estimate(big, method, k)
+    small_res, big_res = estimate(s.mesh, method, k), estimate(big, method, k)
     ok = small_res.valid
     assert ok.mean() > 0.9
     assert np.isfinite(small_res.k1_se[ok]).all() and (small_res.k1_se[ok] > 0).all()
@@ -158,7 +163,7 @@ def test_standard_error_scales_like_one_over_length(method):
 @pytest.mark.parametrize("method", NO_FIT)
 def test_estimators_without_a_fit_have_no_standard_error(method):
     s = make_surface("sphere", n_vertices=642, noise=0.05, seed=3)
-    res = curv.estimate(s.mesh, method)
+    res = estimate(s.mesh, method)
     assert res.valid.any()
     assert np.isnan(res.k1_se).all() and np.isnan(res.k2_se).all()
 
@@ -167,7 +172,7 @@ def test_estimators_without_a_fit_have_no_standard_error(method):
 def test_standard_error_is_nan_exactly_where_the_estimate_is_invalid(method):
     """On a patch with a border: NaN at the invalid (border) vertices, finite and positive elsewhere."""
     s = make_surface("trigonometric", n_vertices=817, noise=0.05, seed=2)
-    res = curv.estimate(s.mesh, method, 2 if method != "an" else 3)
+    res = estimate(s.mesh, method, 2 if method != "an" else 3)
     assert (~res.valid).any()
     for se in (res.k1_se, res.k2_se):
         assert np.isnan(se[~res.valid]).all()
@@ -178,7 +183,7 @@ def test_standard_error_is_nan_when_the_fit_has_no_spare_equation():
     """A tetrahedron's vertices have 3 neighbours: qs R1 fits 3 unknowns to 3 heights (valid, no residual)."""
     v = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float)
     faces = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
-    res = curv.estimate(curv.Mesh(v, faces), "qs", 1)
+    res = estimate(curv.Mesh(v, faces), "qs", 1)
     assert res.valid.all()
     assert np.isnan(res.k1_se).all() and np.isnan(res.k2_se).all()
 
@@ -186,7 +191,7 @@ def test_standard_error_is_nan_when_the_fit_has_no_spare_equation():
 def test_smoothing_variants_have_no_standard_error():
     s = make_surface("sphere", n_vertices=642, noise=0.05, seed=3)
     for smooth in ("mesh", "values"):
-        res = curv.estimate(s.mesh, "mru", 2, smooth=smooth)
+        res = estimate(s.mesh, "mru", 2, smooth=smooth)
         assert res.valid.any() and np.isnan(res.k1_se).all() and np.isnan(res.k2_se).all()
 
 
@@ -195,9 +200,9 @@ def test_smoothing_variants_have_no_standard_error():
 def test_region_standard_errors_equal_the_full_run(method, opts):
     """The noise level pools the neighbours' residuals: a region fits its neighbours too."""
     s = make_surface("sphere", n_vertices=642, noise=0.05, seed=3)
-    full = curv.estimate(s.mesh, method, 2, **opts)
+    full = estimate(s.mesh, method, 2, **opts)
     idx = np.arange(0, 642, 7)
-    part = curv.estimate(s.mesh, method, 2, vertices=np.concatenate([idx, idx[:5]]), **opts)  # repeats too
+    part = estimate(s.mesh, method, 2, vertices=np.concatenate([idx, idx[:5]]), **opts)  # repeats too
     np.testing.assert_array_equal(part.k1_se[idx], full.k1_se[idx])
     np.testing.assert_array_equal(part.k2_se[idx], full.k2_se[idx])
     rest = np.setdiff1d(np.arange(642), idx)
@@ -212,7 +217,7 @@ def test_sampled_noise_model_scales_the_independent_one_towards_the_normals_mode
     follow the normals' model at the median vertex, and a region's come from the region's sample:
     close to the whole run's, not equal."""
     s = make_surface("trigonometric", n_vertices=3169, noise=0.05, seed=5)
-    runs = {m: curv.estimate(s.mesh, method, 2, noise_model=m) for m in ("sampled", "normals", "independent")}
+    runs = {m: estimate(s.mesh, method, 2, noise_model=m) for m in ("sampled", "normals", "independent")}
     ok = runs["normals"].valid & np.isfinite(runs["normals"].k1_se)
     for field in ("k1", "k2", "reason"):
         np.testing.assert_array_equal(getattr(runs["sampled"], field), getattr(runs["normals"], field))
@@ -222,7 +227,7 @@ def test_sampled_noise_model_scales_the_independent_one_towards_the_normals_mode
         wider = getattr(runs["sampled"], se)[ok] / getattr(runs["independent"], se)[ok]
         assert np.median(wider) > (1.1 if method == "mru" else 1.5)
     idx = np.arange(0, s.mesh.n_vertices, 5)
-    part = curv.estimate(s.mesh, method, 2, vertices=idx)
+    part = estimate(s.mesh, method, 2, vertices=idx)
     full = runs["sampled"]
     good = np.isfinite(full.k1_se[idx])
     np.testing.assert_allclose(part.k1_se[idx][good], full.k1_se[idx][good], rtol=0.05)
@@ -238,7 +243,7 @@ def test_coverage_of_two_standard_errors_on_a_noisy_study_mesh():
              ("mru", {"noise_model": "normals"})]
     for method, opts in cases:
         low, high = 0.90, 0.99
-        res = curv.estimate(tm.mesh, method, 2, **opts)
+        res = estimate(tm.mesh, method, 2, **opts)
         ok = tm.evaluated & res.valid
         for k, truth, se in ((res.k1, tm.truth.k1, res.k1_se), (res.k2, tm.truth.k2, res.k2_se)):
             share = np.mean(np.abs(k[ok] - truth[ok]) <= 2.0 * se[ok])
@@ -246,9 +251,9 @@ def test_coverage_of_two_standard_errors_on_a_noisy_study_mesh():
 
 
 @pytest.mark.parametrize("suffix", (".ply", ".vtu"))
-def test_exports_carry_the_standard_errors(tmp_path, suffix):
+def test_exports_carry_the_standard_errors_when_computed(tmp_path, suffix):
     s = make_surface("sphere", n_vertices=642, noise=0.05, seed=3)
-    res = curv.estimate(s.mesh, "qs", 2)
+    res = estimate(s.mesh, "qs", 2)
     path = curv.save_result(tmp_path / f"out{suffix}", s.mesh, res)
     if suffix == ".ply":
         from plyfile import PlyData
@@ -264,6 +269,26 @@ def test_exports_carry_the_standard_errors(tmp_path, suffix):
     np.testing.assert_allclose(got["k2_se"], res.k2_se, rtol=1e-6)
 
 
+@pytest.mark.parametrize("suffix", (".ply", ".vtu"))
+def test_exports_leave_out_standard_errors_not_computed(tmp_path, suffix):
+    """The default call computes no standard errors (they are opt-in), and its exports write no
+    ``k1_se``, ``k2_se`` fields; the estimators without a fit write none either, asked or not."""
+    s = make_surface("sphere", n_vertices=642, noise=0.05, seed=3)
+    for res in (curv.estimate(s.mesh, "qs", 2), estimate(s.mesh, "csm", 2)):
+        assert not res.has_standard_errors and np.isnan(res.k1_se).all()
+        path = curv.save_result(tmp_path / f"out{suffix}", s.mesh, res)
+        if suffix == ".ply":
+            from plyfile import PlyData
+
+            names = PlyData.read(str(path))["vertex"].data.dtype.names
+        else:
+            import meshio
+
+            names = meshio.read(path).point_data
+        assert "k1" in names and not set(curv.core.quantities.STANDARD_ERRORS) & set(names)
+    assert estimate(s.mesh, "qs", 2).has_standard_errors
+
+
 def _error_ratios(method: str, k: int, *, exact_normals: bool = False) -> np.ndarray:
     """|k - k_true| / se of k1 and k2 at the evaluated vertices of three noisy study meshes
     (trigonometric patch, 817 vertices, 100 % noise)."""
@@ -271,7 +296,7 @@ def _error_ratios(method: str, k: int, *, exact_normals: bool = False) -> np.nda
     for seed in (11, 12, 13):
         tm = build_test_mesh(Task(seed=seed, function="trigonometric", density=817, irregularity=0.0, noise=1.0,
                                   sample=0))
-        res = curv.estimate(tm.mesh, method, k, **({"normals": tm.truth.normals} if exact_normals else {}))
+        res = estimate(tm.mesh, method, k, **({"normals": tm.truth.normals} if exact_normals else {}))
         ok = tm.evaluated & res.valid
         out += [np.abs(res.k1[ok] - tm.truth.k1[ok]) / res.k1_se[ok], np.abs(res.k2[ok] - tm.truth.k2[ok]) / res.k2_se[ok]]
     return np.concatenate(out)
@@ -311,7 +336,7 @@ def test_eigen_bias_is_the_mean_lengthening_of_a_noisy_deviator():
     var / (4 rad) where they are well apart. :func:`eigen_bias` estimates it from the noisy W: its
     mean over draws is 0.6-1.1 of the mean lengthening where the gap is within the noise, and small
     against the noise (below a sixth of it, in a variance a thirty-sixth) where it is ten times the noise."""
-    from curv.estimators._local_fit import eigen_bias
+    from curv.uncertainty import eigen_bias
 
     rng = np.random.default_rng(0)
     sd = 0.3  # of each deviator component; var_deviator = 2 sd²
@@ -334,11 +359,11 @@ def test_point_clouds_keep_each_points_own_noise_level(method, k):
     whole cloud's."""
     s = make_surface("sphere", n_vertices=642, noise=0.05, seed=3)
     cloud = curv.PointCloud(s.mesh.vertices)
-    full = curv.estimate(cloud, method, k)
+    full = estimate(cloud, method, k)
     ok = full.valid
     assert ok.mean() > 0.9
     assert np.isfinite(full.k1_se[ok]).all() and (full.k1_se[ok] > 0).all()
     idx = np.arange(0, 642, 5)
-    part = curv.estimate(cloud, method, k, vertices=idx)
+    part = estimate(cloud, method, k, vertices=idx)
     np.testing.assert_array_equal(part.k1_se[idx], full.k1_se[idx])
     np.testing.assert_array_equal(part.k2_se[idx], full.k2_se[idx])

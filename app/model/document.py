@@ -108,7 +108,8 @@ class Pane:
 
     def estimate_kwargs(self) -> dict:
         """Keyword arguments for ``curv.iter_estimate``: ``range=k``, ``radius=r`` or ``knn=K``, and
-        ``features=``, ``vertices=`` when set."""
+        ``features=``, ``vertices=`` when set; ``standard_errors=True`` for the fits that give them (the
+        Uncertainty layer, the readout's ± 2σ and the exports show them)."""
         if self.knn is not None:
             kwargs = {"knn": self.knn}
         else:
@@ -117,6 +118,8 @@ class Pane:
             kwargs["features"] = self.features
         if self.region is not None:
             kwargs["vertices"] = self.region.vertices
+        if ESTIMATORS[self.method].skips_errors:
+            kwargs["standard_errors"] = True
         return {**kwargs, **dict(self.options)}
 
     def validated(self) -> "Pane":

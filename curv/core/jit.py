@@ -36,8 +36,8 @@ import numba
 from numba import njit
 
 __all__ = [
-    "jit", "jit_parallel", "jit_inlined", "prange", "threads", "launch", "iter_chunks", "run_to_end",
-    "rescaled", "thread_slices", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
+    "jit", "jit_parallel", "jit_inlined", "JIT_OPTIONS", "prange", "threads", "launch", "iter_chunks", "run_to_end",
+    "rescaled", "thread_slices", "slice_bounds", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
     "source_fingerprint", "iter_watched", "announce", "POLL_SECONDS",
 ]
 
@@ -111,13 +111,16 @@ _choose_cache_dir()
 
 # error_model="numpy": a float division by zero gives inf/NaN as in numpy (and so lands in a
 # validity check) instead of raising, which inside a parallel loop was swallowed and left rows unset
-jit = njit(cache=True, nogil=True, error_model="numpy")
+JIT_OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
+"""The options of every kernel (also of an ``@overload``'s implementations: ``jit_options=JIT_OPTIONS``)."""
+
+jit = njit(**JIT_OPTIONS)
 """Serial kernel or helper: ``@jit``."""
 
-jit_parallel = njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+jit_parallel = njit(parallel=True, **JIT_OPTIONS)
 """Parallel kernel whose outer loop is a ``prange``: ``@jit_parallel``."""
 
-jit_inlined = njit(cache=True, nogil=True, error_model="numpy", inline="always")
+jit_inlined = njit(inline="always", **JIT_OPTIONS)
 """``@jit`` inlined by numba into its callers: for a per-vertex helper a
 kernel calls with many of the mesh's arrays, which a plain call passes array by array. csm and icc
 took 25-50 % more CPU time at R4 with their crossing faces' helper as a plain call (100k-vertex
@@ -187,6 +190,13 @@ def launch(kernel: Callable, *args):
     with LAUNCH_LOCK:
         numba.set_num_threads(threads())
         return kernel(*args)
+
+
+@jit
+def slice_bounds(lo, hi, t, parts):
+    """Items ``start .. stop-1`` of slice t of ``parts`` equal slices of ``lo .. hi-1``: the items
+    a parallel kernel's ``prange`` step t works on (each slice with its own scratch)."""
+    return lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
 
 
 def thread_slices(count: int, parts: int):

@@ -70,9 +70,10 @@ class Curvature:
         Registry name of the estimator (``"exact"`` for analytic truth).
     k1_se, k2_se : (n,) float64
         Standard errors of ``k1`` and ``k2`` from the least-squares fit's residuals (``nc``, ``qs``,
-        ``an``, ``mru``, ``jet``; docs/UNCERTAINTY.md): they cover noise in the positions and
-        normals, not model bias. NaN where ``valid`` is False, where the fit has no spare
-        equations, for the estimators without a fit and for the smoothing variants.
+        ``an``, ``mru``, ``jet``, when asked: ``curv.estimate(..., standard_errors=True)``;
+        docs/UNCERTAINTY.md): they cover noise in the positions and normals, not model bias. NaN
+        where ``valid`` is False, where the fit has no spare equations, for the estimators without a
+        fit, for the smoothing variants, and everywhere when not asked (:attr:`has_standard_errors`).
     range : int, float or None
         The range k of Rk (an int when whole, e.g. 2 for R2; 2.5 for R2.5); None when a fixed
         ``radius`` was given (``info["radius"]``; ``info["range_label"]`` reads ``R2`` or ``r=0.3``).
@@ -104,6 +105,12 @@ class Curvature:
     @property
     def n(self) -> int:
         return self.k1.shape[0]
+
+    @property
+    def has_standard_errors(self) -> bool:
+        """Whether ``k1_se`` and ``k2_se`` were computed (``info["standard_errors"]``): asked for, of
+        a least-squares fit, without smoothing. The exports write them only then."""
+        return bool(self.info.get("standard_errors", False))
 
     mean = _quantity_property("mean")
     gaussian = _quantity_property("gaussian")

@@ -10,7 +10,7 @@ fundamental one names it: NONMANIFOLD > DEGENERATE > BORDER > SINGULAR, else OK
 
 How the other codes compose with it:
 
-- ``TOO_FEW_NEIGHBOURS`` is a fit's own outcome (:func:`curv.estimators._local_fit.finish_fit`,
+- ``TOO_FEW_NEIGHBOURS`` is a fit's own outcome (:func:`curv.estimators._principal.finish_fit`,
   the jet): a fit checks it before ``SINGULAR`` (a system with too few rows is not solved), and it
   stands where the precedence's SINGULAR would; the input's flags mark only the rows a fit left OK.
 - ``FEATURE`` (a crease) and the root causes an input forces (an isolated vertex DEGENERATE, an

@@ -1,6 +1,6 @@
 """Curvature estimators; importing this package registers all of them in :data:`ESTIMATORS`."""
 
-from . import meyer, csm, goldfeather, rusinkiewicz, mru  # noqa: F401  (registration side effects, paper order)
+from . import meyer, csm, nc, qs, an, rusinkiewicz, mru  # noqa: F401  (registration side effects, paper order)
 from . import jet  # noqa: F401
 from . import icc  # noqa: F401
 from . import clipping_pair  # noqa: F401  (the pass csm and icc share)

@@ -22,13 +22,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, slice_bounds, threads
 from ._ball_clipping import (DEGENERATE_BIT, LevelOutputs, add_row, add_star_rows, corner_width, crossing_faces,
                              crossing_scratch, face_in_ball_area, level_mark, may_leave, start_ball_support,
                              support_reason, touches, vertex_normal, widen_ball_support)
 from ..geometry.neighbourhood import new_queues, new_scratch
-from ._local_fit import slice_bounds, store_principal, sym3_bilinear, tangent_frame
-from ._small_linalg import sym3_eigen
+from ..core.small_linalg import sym3_bilinear, sym3_eigen
+from ._frames import tangent_frame
+from ._principal import store_principal
 
 __all__ = ["segment_in_ball", "csm_walk_sums", "csm_finish", "icc_walk_sums", "icc_finish", "add_edge_crossings",
            "add_face_crossings", "run_clipping", "CsmTerms", "IccTerms", "MEASURES", "EPS", "CLIPPING_PASS"]
@@ -275,11 +276,11 @@ def icc_finish(p, level, sums, hit, normals, from_measures, k1, k2, d1, d2, mean
         kk = gaussian[level, p] = s2 / mu0
         # W = M / mu0 in the tangent frame (U, V) of the vertex normal
         ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
-        m00, m01, m02, m11, m12, m22 = sums[3], sums[4], sums[5], sums[6], sums[7], sums[8]
-        e = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, ux, uy, uz) / mu0
-        f_ = sym3_bilinear(m00, m01, m02, m11, m12, m22, ux, uy, uz, vx, vy, vz) / mu0
-        g = sym3_bilinear(m00, m01, m02, m11, m12, m22, vx, vy, vz, vx, vy, vz) / mu0
-        store_principal(p, e, f_, g, ux, uy, uz, vx, vy, vz, k1[level], k2[level], d1[level], d2[level])
+        m = sums[3], sums[4], sums[5], sums[6], sums[7], sums[8]
+        e = sym3_bilinear(m, (ux, uy, uz), (ux, uy, uz)) / mu0
+        f_ = sym3_bilinear(m, (ux, uy, uz), (vx, vy, vz)) / mu0
+        g = sym3_bilinear(m, (vx, vy, vz), (vx, vy, vz)) / mu0
+        store_principal(p, (e, f_, g), (ux, uy, uz, vx, vy, vz), k1[level], k2[level], d1[level], d2[level])
         if from_measures:
             # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
             # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8.

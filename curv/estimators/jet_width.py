@@ -12,7 +12,7 @@ Sucic (2008; "relative ICI", RICI):
    over balls of :data:`WIDTH_FRACTIONS` of the given radius, then the degree-2 jet with smooth
    weights over the whole ball (:data:`LAST_DEGREE`, :data:`LAST_WEIGHTS`), the steadiest fit.
 2. **Intervals.** Each candidate j gives ``k_j ± GAMMA * se_j`` for k1 and for k2 (the fit's
-   standard errors, :func:`curv.estimators.jet.jet_se`). A candidate takes part at a point only
+   standard errors, :func:`curv.estimators._jet_fit.jet_errors`). A candidate takes part at a point only
    where its ball holds at least :data:`POINTS_PER_UNKNOWN` times the fit's unknowns: with fewer
    residuals the fit's own standard error is itself unreliable, and one too-narrow interval in a
    wrong place would stop the walk there.
@@ -173,21 +173,13 @@ def adaptive_choice(k1: np.ndarray, k2: np.ndarray, se1: np.ndarray, se2: np.nda
 
 
 def iter_adaptive_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None, degree: int,
-                      weights: str, centres: np.ndarray | None, features):
-    """The jet with the adaptive width, a generator (parameters as :func:`curv.estimators.jet.iter_jet`).
-
-    Yields
-    ------
-    float
-        Fraction done.
-
-    Returns
-    -------
-    Principal
-        Per point, k1 and k2 the means of the two walks (:func:`ici_walk`), the directions, k1's
-        standard error and the reason of the k1 walk's last candidate, k2's standard error of the k2
-        walk's.
-    """
+                      weights: str, centres: np.ndarray | None, features, standard_errors: bool = False):
+    """The jet with the adaptive width (parameters as :func:`curv.estimators.jet.iter_jet`): a
+    generator of the fraction done, returning the :class:`~curv.core.result.Principal` whose k1 and
+    k2 are, per point, the means of the two walks (:func:`ici_walk`), whose directions and reason
+    are the k1 walk's last candidate's, and, with ``standard_errors``, whose k1 standard error is
+    that candidate's and k2's the k2 walk's last candidate's (the candidates' own standard errors
+    are the walks' intervals, computed either way)."""
     from .jet import iter_jet, unknowns  # the jet imports this module for its option
 
     radii = np.asarray(radii, dtype=np.float64)
@@ -195,8 +187,9 @@ def iter_adaptive_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chu
     where = all_centres(mesh.n_vertices, centres)
     results, few = [], []
     for j, (fraction, deg, wts) in enumerate(fits):
+        # the candidates' standard errors are the intervals the walk reads, asked for or not
         gen = iter_jet(mesh, normals, radii * fraction, chunk=chunk, degree=deg, weights=wts, centres=centres,
-                       features=features, width="fixed")
+                       features=features, width="fixed", standard_errors=True)
         results.append((yield from rescaled(gen, j / len(fits), (j + 1) / len(fits))))
         # too few residuals for a trustworthy standard error: the candidate sits out at that point
         counts, _ = support_sizes(mesh, radii * fraction, where)
@@ -218,4 +211,6 @@ def iter_adaptive_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chu
     out.k2_se[rows] = se2[choice2[rows], rows]
     out.k1[:] = np.where(choice1 >= 0, est1, out.k1)
     out.k2[:] = np.where(choice1 >= 0, est2, out.k2)
+    if not standard_errors:
+        out.k1_se = out.k2_se = None
     return out

@@ -30,7 +30,7 @@ from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.filled import filled
 from ..core.mesh import Mesh
 from ..geometry.normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
-from ._local_fit import MIN_TANGENT_LENGTH, tangent_frame
+from ._frames import MIN_TANGENT_LENGTH, tangent_frame
 from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, ring_run, turn_by_corner
 from .registry import EstimatorSpec, register
 

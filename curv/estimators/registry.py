@@ -103,11 +103,16 @@ class EstimatorSpec:
         ascending order, and returns one result per level (:func:`curv.estimate_ranges`): ``csm``,
         ``icc`` (one walk serves every range), the fits ``nc``, ``qs``, ``an``, ``mru`` (one walk
         and one set of sums without standard errors on a mesh, else a fit per level:
-        :func:`curv.estimators._local_fit.run_fit_levels`) and ``jet`` (one walk on a mesh with the
+        :func:`curv.estimators._fit_driver.run_fit_levels`) and ``jet`` (one walk on a mesh with the
         fixed width, a fit per level).
     skips_errors : bool
-        ``function`` takes ``standard_errors=False`` and then skips their cost (the fits whose
-        standard errors pool neighbours: ``nc``, ``qs``, ``an``, ``mru``).
+        ``function`` takes ``standard_errors`` (default False) and computes the standard errors of
+        k1 and k2 only when it is True, paying nothing for them otherwise (the least-squares fits:
+        ``nc``, ``qs``, ``an``, ``mru``, ``jet``).
+    pools_errors : bool
+        Its standard errors pool the noise level over each vertex's edge neighbours
+        (:mod:`curv.uncertainty.pooling`): a region's fits also run at its neighbours, and a tile's
+        halo reaches one ring further (``nc``, ``qs``, ``an``, ``mru``; not the ``jet``).
     shared_pass : str
         A pass (:data:`SHARED_PASSES`) that runs this estimator together with the others naming it
         and shares their work (``csm`` and ``icc``: one search and one clip of the crossing faces per
@@ -133,6 +138,7 @@ class EstimatorSpec:
     takes_points: bool = False
     takes_levels: bool = False
     skips_errors: bool = False
+    pools_errors: bool = False
     min_neighbours: object = field(default=0, compare=False)
     shared_pass: str = field(default="", compare=False)
 

@@ -26,7 +26,9 @@ from ..core import connectivity
 from ..core.connectivity import next_corner, prev_corner
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
-from ._local_fit import solve_sym3, store_principal, tangent_frame
+from ..core.small_linalg import solve_sym3
+from ._frames import tangent_frame
+from ._principal import store_principal
 from ._triangle_corners import corner_triangle, ring_flag, ring_reason, ring_run
 from .registry import EstimatorSpec, register
 
@@ -127,7 +129,7 @@ def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, x, 
                 g += area * g_p
         empty = not total > 0
         safe = 1.0 if empty else total
-        store_principal(p, e / safe, f / safe, g / safe, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2)
+        store_principal(p, (e / safe, f / safe, g / safe), (ux, uy, uz, vx, vy, vz), k1, k2, d1, d2)
         singular = empty or any_opposite or not math.isfinite(k1[p]) or any_bad
         finite = math.isfinite(nax) and math.isfinite(nay) and math.isfinite(naz)
         # the neighbours' normals enter the estimate: a non-manifold neighbour spoils it too

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..core.jit import jit
-from ..estimators._small_linalg import sym3_eigen
+from ..core.small_linalg import sym3_eigen
 
 __all__ = ["offset_moments", "MIN_SPREAD", "GAP_BINS"]
 

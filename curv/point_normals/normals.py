@@ -12,11 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import EstimatorError
-from ..core.jit import announce, jit_parallel, launch, prange, run_to_end
+from ..core.jit import announce, jit_parallel, launch, prange, run_to_end, slice_bounds
 from ..core.pointcloud import PointCloud
 from ..core.ranges import TIE_TOLERANCE, ball_radii, point_spacing, resolve
 from ..estimators import get_spec
-from ..estimators._local_fit import slice_bounds
 from ..geometry.neighbourhood import cached_with_mesh, latest_with_mesh
 from .one_pass import _one_pass, _Pass
 from .orientation import default_orientation, orient_normals

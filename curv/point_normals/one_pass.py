@@ -11,13 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit_parallel, launch, prange, threads
+from ..core.jit import iter_chunks, jit_parallel, launch, prange, slice_bounds, threads
 from ..core.knn import block_gather, cell_block, cell_of, ring_of
 from ..core.pointcloud import PointCloud
 from ..core.validity import OK
-from ..estimators._local_fit import slice_bounds
-from ..estimators.jet import DEFAULT_DEGREE, fit_jet, jet_normal
-from ..estimators.jet import _scratch as jet_scratch
+from ..estimators._jet_fit import fit_jet, jet_normal, jet_scratch
+from ..estimators.jet import DEFAULT_DEGREE
 from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                                       new_queues, new_scratch)
 from .frames import _frame, _spread, _widest_gap, _within, gap_scratch
@@ -88,7 +87,7 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out):
                 g = -2.0
                 if wanted[2]:
                     evec[3, 0] = math.nan
-                    code, _, _ = fit_jet(i, c_b, sub, x, y, z, normal_a, degree, m, vec, cov_jet, frame, evec)
+                    code, _, _ = fit_jet(i, c_b, sub, (x, y, z, normal_a), degree, (m, vec, cov_jet, frame, evec))
                     reason[p] = code
                     if code == OK:
                         jet_normal(vec, frame, fitted, p)

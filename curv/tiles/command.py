@@ -64,12 +64,16 @@ def wants_tiles(args, counts, *, points: bool) -> bool:
 
 
 def check_las_output(args) -> None:
-    """A LAS/LAZ output keeps the input's records: refuse it for another input (one line)."""
+    """A LAS/LAZ output keeps the input's records: refuse it for another input (one line); its
+    ``errors`` group needs the standard errors computed (``--standard-errors``, opt-in)."""
     from pathlib import Path
 
     if las_output(args.output) and Path(args.input).suffix.lower() not in (".las", ".laz"):
         raise CurvError(f"{args.output}: a LAS/LAZ output keeps the input's point records; the input must be "
                         f"LAS/LAZ (write .ply, .vtu or .vtp instead)")
+    if "errors" in args.las_extra and not args.standard_errors:
+        raise CurvError("--las-extra errors writes the standard errors k1_se and k2_se: add --standard-errors "
+                        "(they are computed only when asked)")
 
 
 def _available() -> int:
@@ -188,8 +192,8 @@ def _keywords(args, points: bool) -> dict:
     for name in ("degree", "weights", "width", "noise_model"):
         if getattr(args, name, None) is not None:
             out[name] = getattr(args, name)
-    if args.no_standard_errors:
-        out["standard_errors"] = False
+    if args.standard_errors:
+        out["standard_errors"] = True
     return out
 
 

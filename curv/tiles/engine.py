@@ -96,7 +96,7 @@ class Job:
         kw = self.keywords
         return support_reach(shape, self.method, self.range, radius=kw.get("radius"), knn=kw.get("knn"),
                              normals=kw.get("normals"), fit_range=kw.get("fit_range", 2),
-                             orient=kw.get("orient"), standard_errors=kw.get("standard_errors", True),
+                             orient=kw.get("orient"), standard_errors=kw.get("standard_errors", False),
                              centres=centres)
 
 

@@ -5,7 +5,7 @@ chain of balls: its support (:func:`curv.core.ranges.ball_radii`), the normals o
 points (each from its own fit and frames, :mod:`curv.point_normals`), the spacing of every point
 involved (its nearest neighbours, :mod:`curv.core.knn`), on a mesh each vertex's 1-ring (its
 normal, its flags, its longest edge) and the noise level pooled over edge neighbours
-(:mod:`curv.estimators._pooling`). The **reach** of p is the largest ``|q - p| + r`` over every
+(:mod:`curv.uncertainty.pooling`). The **reach** of p is the largest ``|q - p| + r`` over every
 ball ``B(q, r)`` that chain reads: every point whose data can change p's result lies within it.
 
 A tile (:mod:`curv.tiles.engine`) holds every point of its region; a point's result there equals
@@ -49,13 +49,12 @@ import math
 
 import numpy as np
 
-from ..core.jit import jit_parallel, launch, prange, threads
+from ..core.jit import jit_parallel, launch, prange, slice_bounds, threads
 from ..core.knn import GRAPH_NEIGHBOURS, build_grid, grid_ball
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii, resolve
 from ..estimators import get_spec
-from ..estimators._local_fit import slice_bounds
 from ..geometry.neighbourhood import new_queues
 
 __all__ = ["ball_max", "point_reach", "normal_reach", "floored_radii", "mesh_reach", "support_reach"]
@@ -244,7 +243,7 @@ def mesh_reach(mesh: Mesh, method: str, rng: Range | None, *, fitted_normals: bo
 
 
 def support_reach(shape, method: str, range=None, *, radius=None, knn=None, normals=None, fit_range=2,
-                  orient=None, standard_errors: bool = True, centres=None) -> np.ndarray:
+                  orient=None, standard_errors: bool = False, centres=None) -> np.ndarray:
     """How far an estimate ``curv.estimate(shape, method, range, ...)`` at each point reads (module notes).
 
     Parameters
@@ -270,4 +269,4 @@ def support_reach(shape, method: str, range=None, *, radius=None, knn=None, norm
         return point_reach(shape, method, rng, fit_range=fit_range, orient=orient, centres=centres)
     fitted = isinstance(normals, str) and normals == "fit"
     return mesh_reach(shape, method, rng if spec.has_support else None, fitted_normals=fitted, fit_range=fit_range,
-                      pooled=bool(standard_errors and spec.skips_errors), centres=centres)
+                      pooled=bool(standard_errors and spec.pools_errors), centres=centres)

@@ -11,7 +11,8 @@ the surface region, not of one vertex: the standard errors of vertex p use
 (the neighbours whose fit is valid and has a spare equation), with p's own propagation
 ``var(k_i) / sigma²`` and eigen-step bias (docs/UNCERTAINTY.md). A vertex whose own fit has no
 spare equation keeps a NaN standard error. A point cloud has no edges: each point keeps its own
-fit's noise level.
+fit's noise level, and so does a vertex whose noise level is in other units than its neighbours'
+(:attr:`~curv.uncertainty.parts.Errors.alone`).
 
 An estimate over a region fits the region's neighbours as well (:func:`pool_members`), so that its
 standard errors equal the whole mesh's.
@@ -23,20 +24,13 @@ import math
 
 import numpy as np
 
-from ..core.jit import jit, jit_parallel, launch, prange
+from ..core.jit import jit_parallel, launch, prange
 from ..core.mesh import Mesh
 from ..core.validity import OK
+from .parts import Errors
+from .propagation import rad_bias
 
-__all__ = ["pool_rings", "pool_members", "pool_standard_errors", "rad_bias", "POOL_KERNEL"]
-
-
-
-@jit
-def rad_bias(rad, var_deviator):
-    """The eigen step's bias of k1 (+) and k2 (-) from the length ``rad`` of W's deviator and the
-    deviator's noise variance: ``rad - sqrt(max(rad² - var_deviator, 0))``
-    (:func:`curv.estimators._local_fit.eigen_bias`)."""
-    return rad - math.sqrt(max(rad * rad - var_deviator, 0.0))
+__all__ = ["pool_rings", "pool_members", "pool_standard_errors", "POOL_KERNEL"]
 
 
 def pool_rings(mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -60,20 +54,19 @@ def pool_members(mesh, centres: np.ndarray) -> np.ndarray:
 
 
 @jit_parallel
-def _pool_kernel(centres, ring_ptr, ring, reason, parts, k1_se, k2_se):
+def _pool_kernel(centres, ring_ptr, ring, reason, errors):
+    parts, alone, k1_se, k2_se = errors.parts, errors.alone, errors.k1_se, errors.k2_se
     for i in prange(centres.size):
         p = centres[i]
         rss, dof = parts[p, 0], parts[p, 1]
-        alone = dof < 0.0  # a noise level in other units than its neighbours': not pooled
-        if alone:
-            dof = -dof
         if not (dof > 0.0 and math.isfinite(rss)):
             k1_se[p] = math.nan
             k2_se[p] = math.nan
             continue
-        for j in range(ring_ptr[p], ring_ptr[p + 1] if not alone else ring_ptr[p]):
+        # a noise level in other units than its neighbours' is not pooled
+        for j in range(ring_ptr[p], ring_ptr[p + 1] if not alone[p] else ring_ptr[p]):
             q = ring[j]
-            if reason[q] == OK and parts[q, 1] > 0.0 and math.isfinite(parts[q, 0]):
+            if reason[q] == OK and not alone[q] and parts[q, 1] > 0.0 and math.isfinite(parts[q, 0]):
                 rss += parts[q, 0]
                 dof += parts[q, 1]
         sigma2 = max(rss, 0.0) / dof
@@ -87,7 +80,7 @@ POOL_KERNEL = _pool_kernel
 
 
 def pool_standard_errors(centres: np.ndarray, ring_ptr: np.ndarray, ring: np.ndarray, reason: np.ndarray,
-                         parts: np.ndarray, k1_se: np.ndarray, k2_se: np.ndarray) -> None:
+                         errors: Errors) -> None:
     """Turn the fits' parts into the standard errors of the ``centres``, in place.
 
     Parameters
@@ -98,14 +91,12 @@ def pool_standard_errors(centres: np.ndarray, ring_ptr: np.ndarray, ring: np.nda
         :func:`pool_rings`.
     reason : (n,) uint8
         The fits' reasons: only ``OK`` neighbours are pooled.
-    parts : (n, 4) float64
-        ``(RSS, spare equations, var_deviator / sigma², rad)`` per vertex
-        (:func:`curv.estimators._local_fit.store_parts`); spare equations below 0 (their negative): a
-        noise level in other units than the neighbours' (an's and mru's independent equations, or
-        their fallback where the normals' model does not hold), taken alone. ``noise_model="sampled"``
-        makes them positive, every vertex then in the same units
-        (:func:`curv.estimators._local_fit.sampled_scales`).
-    k1_se, k2_se : (n,) float64
-        In: ``var(k_i) / sigma²``; out, at the centres: the standard errors.
+    errors : Errors
+        The fits' parts (:class:`~curv.uncertainty.parts.Errors`): in ``k1_se``, ``k2_se``
+        ``var(k_i) / sigma²``; out, at the centres, the standard errors. A vertex marked ``alone``
+        (a noise level in other units than its neighbours': an's and mru's independent equations,
+        or their fallback where the normals' model does not hold) is taken alone and never pooled
+        into a neighbour's; ``noise_model="sampled"`` clears the marks, every vertex then in the
+        same units (:func:`curv.uncertainty.noise_models.sampled_scales`).
     """
-    launch(_pool_kernel, np.ascontiguousarray(centres, dtype=np.int64), ring_ptr, ring, reason, parts, k1_se, k2_se)
+    launch(_pool_kernel, np.ascontiguousarray(centres, dtype=np.int64), ring_ptr, ring, reason, errors)
