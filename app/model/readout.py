@@ -77,7 +77,7 @@ def readout_rows(doc: Document, index: int, *, stacked: bool = False) -> list[tu
     diff = doc.view_count > len(doc.panes)
     a, b = (cols[0], cols[1]) if diff else (None, None)
     truth = doc.truth
-    values = [doc.values(i) for i in range(doc.view_count)]
+    values = [doc.value_at(i, index) for i in range(doc.view_count)]
 
     def scalar_row(label, get):
         row = [fmt(get(r)) if r is not None else "…" for r in cols]
@@ -107,7 +107,7 @@ def readout_rows(doc: Document, index: int, *, stacked: bool = False) -> list[tu
     status = [_reason(r, index) if r is not None else "…" for r in cols]
     status += [""] * diff + (["exact"] if truth is not None else [])
     rows.append(("status", status))
-    shown = [fmt(v[index]) if v is not None else "…" for v in values]
+    shown = [fmt(v) if v is not None else "…" for v in values]
     shown += [""] if truth is not None else []
     rows.append(("shown", shown))
     if truth is not None:

@@ -3,6 +3,8 @@ truth and error (rows from :mod:`app.model.readout`)."""
 
 from __future__ import annotations
 
+from html import escape
+
 from PySide6.QtWidgets import QTextBrowser, QTextEdit
 
 from app.model import Document, pane_letter, readout_columns, readout_rows
@@ -12,7 +14,17 @@ from app.model.readout import fmt_vec
 COMPACT_AFTER = 2
 """With more columns than this the headers are pane letters and vectors stack their components."""
 
+NOWRAP = "white-space: nowrap"
+
 __all__ = ["Readout"]
+
+
+def _cell(value: str, compact: bool) -> str:
+    """A readout value as a table cell: its lines as given, the ``± 2σ`` on a line of its own when
+    ``compact``."""
+    if compact:
+        value = value.replace(" ± ", "\n± ")
+    return "<br>".join(escape(line) for line in value.split("\n"))
 
 
 class Readout(QTextBrowser):
@@ -22,7 +34,8 @@ class Readout(QTextBrowser):
         super().__init__(parent)
         self.doc = doc
         self.setMinimumHeight(150)
-        # text lines wrap; the table's cells are numbers without spaces and narrow columns (see COMPACT_AFTER)
+        # text lines wrap; a table cell never wraps inside a value (a table wider than the dock scrolls
+        # sideways): with many columns a value's uncertainty goes on a line of its own (see COMPACT_AFTER)
         self.setLineWrapMode(QTextEdit.LineWrapMode.WidgetWidth)
         self.document().setDocumentMargin(2)
         doc.picked_changed.connect(lambda i: self.refresh())
@@ -47,7 +60,7 @@ class Readout(QTextBrowser):
         html.append(f"<table cellspacing={2 if compact else 4}><tr><th></th>")
         html += [f"<th>{h}</th>" for h in readout_columns(doc, short=compact)] + ["</tr>"]
         for label, vals in readout_rows(doc, i, stacked=compact):
-            html.append(f"<tr><td><b>{label}</b></td>"
-                        + "".join(f"<td>{v.replace(chr(10), '<br>')}</td>" for v in vals) + "</tr>")
+            html.append(f"<tr><td style='{NOWRAP}'><b>{label}</b></td>"
+                        + "".join(f"<td style='{NOWRAP}'>{_cell(v, compact)}</td>" for v in vals) + "</tr>")
         html.append("</table>")
         self.setHtml("".join(html))
