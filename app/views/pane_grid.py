@@ -186,10 +186,8 @@ class PaneGrid(QWidget):
         self._syncing = True
         try:
             for vp in self.viewports:
-                # a frame a paint drew meanwhile (a deferred render) already shows the scene
-                if vp.plotter.ren_win is not skip and not vp.plotter.frame_is_current():
-                    vp.plotter.renderer.ResetCameraClippingRange()
-                    vp.render()
+                if vp.plotter.ren_win is not skip:
+                    vp.render_if_stale()
         finally:
             self._syncing = False
             self._synced_mtime = self.viewports[0].plotter.renderer.GetActiveCamera().GetMTime()

@@ -55,8 +55,13 @@ class Readout(QTextBrowser):
         p = doc.mesh.vertices[i]
         compact = len(readout_columns(doc)) > COMPACT_AFTER  # narrow columns: no sideways scrolling
         html = [f"<b>{item_word(doc.mesh)} {i}</b> at {fmt_vec(p)}"]
-        if compact:
-            html.append("<br>" + " · ".join(f"<b>{pane_letter(j)}:</b> {pane.title}" for j, pane in enumerate(doc.panes)))
+        if compact:  # the panes' names once above the table (a region shared by all of them once too)
+            regions = {pane.region for pane in doc.panes}
+            shared = next(iter(regions)) if len(regions) == 1 else None
+            html.append("<br>" + " · ".join(f"<b>{pane_letter(j)}:</b> {escape((pane.whole if shared else pane).title)}"
+                                            for j, pane in enumerate(doc.panes)))
+            if shared is not None:
+                html.append(f"<br>all in the {escape(shared.title)}")
         html.append(f"<table cellspacing={2 if compact else 4}><tr><th></th>")
         html += [f"<th>{h}</th>" for h in readout_columns(doc, short=compact)] + ["</tr>"]
         for label, vals in readout_rows(doc, i, stacked=compact):

@@ -346,6 +346,14 @@ class Viewport(QFrame):
         self._centre_bar()
         self.plotter.render()
 
+    def render_if_stale(self) -> None:
+        """Render unless the last frame still shows the scene (a paint may have drawn it since a
+        render was asked for: a frame of a large input is not drawn twice)."""
+        self._centre_bar()  # the pane's size may have changed: the bar's strip follows it
+        if not self.plotter.frame_is_current():
+            self.plotter.renderer.ResetCameraClippingRange()
+            self.plotter.render()
+
     def _centre_bar(self) -> None:
         """Size the colour bar's strip under the mesh and centre the bar in it (its width is capped in
         pixels, so its left edge depends on the pane)."""
