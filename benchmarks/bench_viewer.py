@@ -69,6 +69,48 @@ class Heartbeat:
         self.last = now
 
 
+class StallSampler:
+    """A thread that, while the heartbeat is late by more than ``late_s``, samples where the GUI thread
+    is (its innermost frames of the project and of VTK/pyvista calls), so that a stall names its code."""
+
+    def __init__(self, beat: Heartbeat, *, late_s: float = 0.3, every_s: float = 0.05):
+        import collections
+        import threading
+
+        self.beat, self.late_s, self.every_s = beat, late_s, every_s
+        self.samples = collections.Counter()
+        self._main = threading.main_thread().ident
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def start(self):
+        self._thread.start()
+
+    def stop(self):
+        self._stop.set()
+
+    def _run(self):
+        import traceback
+
+        while not self._stop.wait(self.every_s):
+            if time.perf_counter() - self.beat.last < self.late_s:
+                continue
+            frame = sys._current_frames().get(self._main)
+            if frame is None:
+                continue
+            stack = [f for f in traceback.extract_stack(frame) if "/app/" in f.filename or "pyvista" in f.filename]
+            if stack:
+                self.samples[" < ".join(f"{Path(f.filename).name}:{f.lineno} {f.name}" for f in reversed(stack[-3:]))] += 1
+
+    def report(self, top=8):
+        total = sum(self.samples.values())
+        if not total:
+            return
+        print(f"\nwhere the GUI thread was while the heartbeat was late ({total} samples of {self.every_s:g} s):")
+        for where, count in self.samples.most_common(top):
+            print(f"  {count:5d}  {where}")
+
+
 def wait(app, cond, timeout=600.0):
     end = time.perf_counter() + timeout
     while not cond():
@@ -213,7 +255,7 @@ def terrain_ply(n: int, folder: Path) -> Path:
     return path
 
 
-def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool):
+def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bool = False):
     """Time every GUI-thread handler on a big cloud (module notes, ``--handlers``)."""
     from PySide6.QtCore import QPoint, QSettings, QThreadPool, Qt
     from PySide6.QtTest import QTest
@@ -232,6 +274,9 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool):
     win.show()
     beat = Heartbeat()
     beat.timer.start()
+    sampler = StallSampler(beat) if trace else None
+    if sampler is not None:
+        sampler.start()
     doc, ctl = win.doc, win.controller
     pool = QThreadPool.globalInstance()
 
@@ -317,8 +362,17 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool):
         act("cancel", lambda: QTest.mouseClick(win.cancel_button, Qt.MouseButton.LeftButton))
         kept_cancel = doc.result(0) is not None and doc.result(0) is res if running else None
         wait(app, lambda: pool.activeThreadCount() == 0)
+        # one frame of the scene as it is, for scale: no handler draws more than this, none draws it twice
+        settle()
+        vp.plotter.renderer.GetActiveCamera().Modified()
+        t = time.perf_counter()
+        win.grid.render_all()
+        row.append(("one frame (VTK draw)", None, 1000 * (time.perf_counter() - t)))
         rows.append((n, row, kept_recompute, kept_cancel, total))
     win.close()
+    if sampler is not None:
+        sampler.stop()
+        sampler.report()
     if not keep:
         for n in sizes:
             (folder / f"curvlab-bench-terrain-{n}.ply").unlink(missing_ok=True)
@@ -344,6 +398,7 @@ def main(argv=None):
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--handlers", action="store_true", help="time every GUI-thread handler on a big cloud")
     p.add_argument("--keep", action="store_true", help="--handlers: keep the temporary PLY for the next run")
+    p.add_argument("--trace-stalls", action="store_true", help="--handlers: say where the GUI thread was while late")
     args = p.parse_args(argv)
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY") and shutil.which("xvfb-run") \
             and not os.environ.get("CURVLAB_BENCH_CHILD"):
@@ -351,7 +406,8 @@ def main(argv=None):
         cmd = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", sys.executable, *sys.argv]
         os.execvp(cmd[0], cmd)
     if args.handlers:
-        run_handlers(args.sizes, args.method, args.range, cancel_after=args.cancel_after, keep=args.keep)
+        run_handlers(args.sizes, args.method, args.range, cancel_after=args.cancel_after, keep=args.keep,
+                     trace=args.trace_stalls)
     elif args.cancel:
         run_cancel(args.sizes, args.method, args.range, after=args.cancel_after, repeats=args.repeats)
     else:

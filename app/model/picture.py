@@ -64,8 +64,12 @@ class Scene:
 
     @property
     def key(self) -> tuple:
-        """Equal for scenes that draw the same colours (results compared by identity)."""
-        return (self.n, tuple(map(id, self.results)), self.regions, id(self.truth), self.state, self.difference,
+        """Equal for scenes that draw the same colours (results compared by identity; of the display
+        state only what the colours depend on: an overlay or the point size needs no new colours)."""
+        st = self.state
+        colours = (st.quantity, st.layer, st.diverging_cmap, st.sequential_cmap, st.limit_mode, st.percentiles,
+                   st.manual, st.shared_scale)
+        return (self.n, tuple(map(id, self.results)), self.regions, id(self.truth), colours, self.difference,
                 self.active)
 
 

@@ -119,8 +119,7 @@ class Drawing(QObject):
                 else:
                     self._show_picture(paint(scene), key)
                     return
-            if self._picture is None:  # nothing coloured yet: the decorations and headers still follow
-                self.decorate()
+            self.update_titles()  # the colours and decorations follow with the picture
             return
         self.decorate()
 

@@ -103,6 +103,29 @@ class _Interactor(QtInteractor):
         return (self._frame_size is not None and self._frame_size == tuple(self.ren_win.GetSize())
                 and self._scene_time() < self._stamp.GetMTime())
 
+    # A click that does not drag moves no camera, but VTK's interactor style renders a full frame when
+    # the button comes up (the end of a rotation): at 5M points most of a second of the GUI thread for
+    # nothing. Renders are off from the press until the mouse moves with the button down.
+    def mousePressEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        self._interactor_renders(False)
+        super().mousePressEvent(event)
+
+    def mouseMoveEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        if event.buttons() != Qt.MouseButton.NoButton:
+            self._interactor_renders(True)
+        super().mouseMoveEvent(event)
+
+    def mouseReleaseEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        try:
+            super().mouseReleaseEvent(event)
+        finally:
+            self._interactor_renders(True)
+
+    def _interactor_renders(self, on: bool) -> None:
+        setter = getattr(self._Iren, "SetEnableRender", None)  # a closed widget holds a stand-in
+        if setter is not None:
+            setter(bool(on))
+
     def paintGL(self) -> None:  # noqa: N802 (Qt API)
         if self._in_paint or not self.frame_is_current():
             super().paintGL()

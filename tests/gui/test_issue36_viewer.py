@@ -120,6 +120,34 @@ def test_a_pick_on_a_big_cloud_is_found_in_a_worker_and_the_readout_reads_one_ve
     assert f"point {doc.picked}" in window.readout.toPlainText()
 
 
+def test_a_click_that_does_not_drag_draws_no_frame_and_a_drag_still_turns_the_camera(qtbot, window, ui):
+    from PySide6.QtCore import QEvent, QPointF
+    from PySide6.QtGui import QMouseEvent
+
+    ui.open_surface("sphere", n_vertices=642)
+    plotter = window.grid.viewports[0].plotter
+    qtbot.wait(300)  # the frames asked for so far are drawn
+    frames = plotter.frames
+    corner = QPoint(3, 3)  # the background: nothing to pick
+    QTest.mouseClick(plotter, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, corner)
+    qtbot.wait(100)
+    assert plotter.frames == frames and window.doc.picked is None
+    camera = plotter.renderer.GetActiveCamera()
+    before = np.array(camera.GetPosition())
+    left, none = Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier
+
+    def send(kind, x, y, button, buttons):
+        pos = QPointF(x, y)
+        QApplication.sendEvent(plotter, QMouseEvent(kind, pos, plotter.mapToGlobal(pos), button, buttons, none))
+
+    send(QEvent.Type.MouseButtonPress, 100, 100, left, left)
+    for x in range(104, 180, 4):
+        send(QEvent.Type.MouseMove, x, 100, Qt.MouseButton.NoButton, left)
+    send(QEvent.Type.MouseButtonRelease, 180, 100, left, Qt.MouseButton.NoButton)
+    qtbot.wait(100)
+    assert plotter.frames > frames and not np.allclose(camera.GetPosition(), before)
+
+
 # -- item 7: layouts at 1366x768 with four panes and A - B ------------------------------------------
 @pytest.fixture
 def compare_four(qtbot, window, ui):
