@@ -281,8 +281,10 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bo
     pool = QThreadPool.globalInstance()
 
     def settle(cond=lambda: True, extra=0.5):
-        """Run the loop until ``cond`` holds and nothing has run for ``extra`` seconds; the longest stall."""
-        wait(app, lambda: cond() and not ctl.busy)
+        """Run the loop until ``cond`` holds, no job runs and the window has drawn what it was asked to
+        (then ``extra`` seconds more); the longest stall."""
+        drawing = getattr(win, "drawing", None)  # the window's drawing state (none in older trees)
+        wait(app, lambda: cond() and not ctl.busy and (drawing is None or not drawing.pending))
         end = time.perf_counter() + extra
         while time.perf_counter() < end:
             app.processEvents()

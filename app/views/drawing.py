@@ -160,15 +160,16 @@ class Drawing(QObject):
                             borders=self.lines("borders") if state.show_borders else None,
                             features=self.feature_lines(i) if state.show_borders else None)
         self.show_marker()
+        self.grid.request_render()
         self.update_titles()
 
     def show_marker(self) -> None:
-        """The picked vertex's marker in every viewport, and a render."""
+        """The picked vertex's marker in every viewport, and a render if the scene changed (a large
+        input's marker is drawn by Qt over the pane: no frame)."""
         doc = self.doc
         point = None if doc.picked is None or doc.mesh is None else doc.mesh.vertices[doc.picked]
-        for vp in self.grid.viewports:
-            vp.set_marker(point)
-        self.grid.request_render()
+        if any([vp.set_marker(point) for vp in self.grid.viewports]):
+            self.grid.request_render()
 
     def _glyphs(self, vp, res):
         doc, state = self.doc, self.doc.display.state

@@ -316,6 +316,7 @@ class MainWindow(QMainWindow):
             self.grid.set_point_size(self.doc.display.state.point_size)
             if names == {"point_size"}:
                 self.drawing.show_marker()  # the marker stays wider than the points
+                self.grid.request_render()
                 return
         self.redraw()
 

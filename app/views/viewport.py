@@ -20,6 +20,7 @@ from vtkmodules.vtkRenderingCore import vtkCellPicker, vtkRenderer
 from app.model.colors import contrasting_colours
 from app.model.inputs import DEFAULT_POINT_SIZE
 
+from .marker import MarkerOverlay
 from .colour_bar import BAR_FRACTION, BAR_STRIP_PX, BAR_WIDTH_PX, scalar_bar
 from .pane_header import PaneHeader
 from .picking import PointPick, clip_coordinates, drawn_point_at
@@ -32,6 +33,9 @@ _GREY = np.array([200, 200, 200, 255], dtype=np.uint8)
 
 ASYNC_PICK_POINTS = 500_000
 """Clouds from this many points find a clicked point in a worker (a pass over every point)."""
+OVERLAY_MARKER_POINTS = 500_000
+"""Inputs from this many points mark the picked vertex with a circle Qt draws over the pane: under
+software GL a frame of 5M points takes seconds, and moving the marker in the scene needs one."""
 MSAA_SAMPLES = 4
 """Multisamples per pixel for meshes of at most :data:`MSAA_MAX_CELLS` cells."""
 MSAA_MAX_CELLS = 400_000
@@ -71,6 +75,8 @@ class _Interactor(QtInteractor):
         super().__init__(*args, **kwargs)
         self.frames = 0
         """Frames VTK rendered in this widget (for tests and benchmarks)."""
+        self.frame_done = None
+        """Called after every frame (the view places what Qt draws over it)."""
         self._stamp = vtkObject()  # Modified() at the end of each frame: its MTime is the frame's time
         self._frame_size = None
         # listed with pyvistaqt's own observers: removed when the widget closes (VTK pins the method)
@@ -80,6 +86,8 @@ class _Interactor(QtInteractor):
         self.frames += 1
         self._stamp.Modified()
         self._frame_size = tuple(self.ren_win.GetSize())
+        if self.frame_done is not None:
+            self.frame_done()
 
     def _scene_time(self) -> int:
         stamp = 0
@@ -175,7 +183,10 @@ class Viewport(QFrame):
         self._overlay_actors: dict = {}
         self.field_title = ""
         self._marker_actor = None
+        self._marker_point = None
         self._marker_colour = (255, 208, 0)
+        self.marker_overlay = MarkerOverlay(self.plotter)
+        self.plotter.frame_done = self._place_overlay
         self.glyph_colours = ((20, 20, 20), (31, 95, 191))
         self._lut = vtkLookupTable()
         self._bar = scalar_bar(self._lut)
@@ -347,16 +358,40 @@ class Viewport(QFrame):
                 pv.PolyData(np.asarray(self.poly.points)), color=(0.1, 0.1, 0.1), point_size=3,
                 render_points_as_spheres=False, render=False, reset_camera=False, pickable=False, lighting=False)
 
-    def set_marker(self, point: np.ndarray | None) -> None:
-        """Mark the picked vertex with a small sphere (None hides it)."""
-        if self._marker_actor is not None:
+    def set_marker(self, point: np.ndarray | None) -> bool:
+        """Mark the picked vertex (None: no mark); True when the 3D scene changed (a render is due).
+
+        A small sphere in the scene; on an input of :data:`OVERLAY_MARKER_POINTS` points or more a
+        circle Qt draws over the pane instead (placed again after every frame), so that a pick costs
+        no frame of the whole input.
+        """
+        changed = self._marker_actor is not None
+        if changed:
             self.plotter.remove_actor(self._marker_actor, render=False)
             self._marker_actor = None
-        if point is not None:  # a fixed size in pixels: visible at any zoom, in a colour the map lacks
-            marker = pv.PolyData(np.asarray(point, float).reshape(1, 3))
-            self._marker_actor = self.plotter.add_mesh(
-                marker, color=tuple(c / 255 for c in self._marker_colour), point_size=max(16, (self.point_size or 0) + 8),
-                render_points_as_spheres=True, render=False, reset_camera=False, pickable=False, lighting=False)
+        self._marker_point = None if point is None else np.asarray(point, float).reshape(3)
+        diameter = max(16, (self.point_size or 0) + 8)  # a fixed size in pixels: visible at any zoom
+        if point is None or self.poly is None or self.poly.n_points < OVERLAY_MARKER_POINTS:
+            self.marker_overlay.place(None, None, diameter=diameter, colour=self._marker_colour)
+        if point is None:
+            return changed
+        if self.poly is not None and self.poly.n_points >= OVERLAY_MARKER_POINTS:
+            self._place_overlay()
+            return changed
+        marker = pv.PolyData(self._marker_point.reshape(1, 3))  # in a colour the map lacks
+        self._marker_actor = self.plotter.add_mesh(
+            marker, color=tuple(c / 255 for c in self._marker_colour), point_size=diameter,
+            render_points_as_spheres=True, render=False, reset_camera=False, pickable=False, lighting=False)
+        return True
+
+    def _place_overlay(self) -> None:
+        """Put the Qt-drawn marker where the camera shows the picked vertex now."""
+        point = self._marker_point
+        if point is None or self.poly is None or self.poly.n_points < OVERLAY_MARKER_POINTS:
+            return
+        in_front = (self.camera_matrix() @ np.append(point, 1.0))[3] > 0
+        x, y = self.display_position(point) if in_front else (None, None)
+        self.marker_overlay.place(x, y, diameter=max(16, (self.point_size or 0) + 8), colour=self._marker_colour)
 
     def set_active(self, active: bool, *, difference: bool = False) -> None:
         """Frame in the pane's colour, thick when it is the active pane (the Inspect group matches)."""

@@ -120,6 +120,30 @@ def test_a_pick_on_a_big_cloud_is_found_in_a_worker_and_the_readout_reads_one_ve
     assert f"point {doc.picked}" in window.readout.toPlainText()
 
 
+def test_a_pick_on_a_big_input_moves_a_marker_drawn_by_qt_and_renders_no_frame(qtbot, window, ui, monkeypatch):
+    import app.views.viewport as viewport
+
+    ui.open_surface("sphere", n_vertices=3000, sampling="uniform")
+    monkeypatch.setattr(viewport, "OVERLAY_MARKER_POINTS", 1)  # every input counts as big
+    vp, doc = window.grid.viewports[0], window.doc
+    qtbot.wait(300)
+    frames = vp.plotter.frames
+    target = int(np.argmax(doc.mesh.vertices[:, 2]))
+    doc.set_picked(target)
+    qtbot.wait(300)
+    assert vp.plotter.frames == frames  # the marker moved without a frame of the input
+    overlay = vp.marker_overlay
+    assert overlay.isVisible() and vp._marker_actor is None
+    x, y = vp.display_position(doc.mesh.vertices[target])
+    assert abs(overlay.centre.x() - x) < 1 and abs(overlay.centre.y() - y) < 1
+    vp.plotter.renderer.GetActiveCamera().Azimuth(40)  # the camera turns: the marker follows the vertex
+    window.grid.render_all()
+    x, y = vp.display_position(doc.mesh.vertices[target])
+    assert abs(overlay.centre.x() - x) < 1 and abs(overlay.centre.y() - y) < 1
+    doc.set_picked(None)
+    assert not overlay.isVisible()
+
+
 def test_a_click_that_does_not_drag_draws_no_frame_and_a_drag_still_turns_the_camera(qtbot, window, ui):
     from PySide6.QtCore import QEvent, QPointF
     from PySide6.QtGui import QMouseEvent
