@@ -79,7 +79,7 @@ class Drawing(QObject):
         """A new input: its geometry in every viewport, grey until its colours come."""
         self.geometry = geometry
         self.grid.set_point_size(self.doc.display.state.point_size)
-        self.grid.set_geometry(geometry.base, points=geometry.points_only, grey=geometry.grey)
+        self.grid.set_geometry(geometry.base, points=geometry.points_only, grey=geometry.grey, bounds=geometry.bounds)
         self._painted = self._wanted = None
         self._picture = None
         self._lines = {}

@@ -73,6 +73,15 @@ class Geometry:
         return grey_colours(self.base.n_points)
 
     @cached_property
+    def bounds(self) -> tuple:
+        """``(xmin, xmax, ymin, ymax, zmin, zmax)`` of the points, as VTK orders them (what the camera frames)."""
+        points = np.asarray(self.base.points)
+        if points.shape[0] == 0:
+            return (0.0, 1.0, 0.0, 1.0, 0.0, 1.0)
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        return tuple(float(v) for pair in zip(lo, hi) for v in pair)
+
+    @cached_property
     def georeferenced(self) -> bool:
         """Whether a point cloud looks like a scan in map coordinates
         (:func:`app.model.camera.is_georeferenced`; False for a mesh): it is first seen from above."""
@@ -115,6 +124,7 @@ def prepare_geometry(mesh) -> Geometry:
     else:
         geometry = Geometry(mesh, mesh_polydata(mesh, prepare(mesh)))
     geometry.grey  # noqa: B018 (here too)
+    geometry.bounds  # noqa: B018
     geometry.georeferenced  # noqa: B018
     return geometry
 

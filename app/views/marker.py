@@ -42,3 +42,4 @@ class MarkerOverlay(QWidget):
         p.setBrush(self.colour)
         r = 0.5 * self.diameter
         p.drawEllipse(QRectF(self.centre.x() - r, self.centre.y() - r, 2 * r, 2 * r))
+        p.end()

@@ -44,6 +44,7 @@ class PaneGrid(QWidget):
         self._syncing = False
         self._synced_mtime = 0
         self._grey = None
+        self._bounds = None
         self.view, self.up = View.ISOMETRIC, UpAxis.Z
         """The standard view the cameras were last set to, and its up axis."""
         self._render_timer = QTimer(self, singleShot=True, interval=0)
@@ -105,10 +106,12 @@ class PaneGrid(QWidget):
         if self._base is not None:
             QTimer.singleShot(0, lambda: self.reset_camera(render=True))
 
-    def set_geometry(self, base: pv.PolyData, *, points: bool = False, grey=None) -> None:
+    def set_geometry(self, base: pv.PolyData, *, points: bool = False, grey=None, bounds=None) -> None:
         """Show a new mesh (or point cloud, drawn as points) in every viewport and frame it (drawn
-        from the viewports' next colours on); ``grey``: its all-grey colours, shared by the viewports."""
+        from the viewports' next colours on); ``grey``: its all-grey colours, shared by the viewports;
+        ``bounds``: its bounds if known (VTK's are a pass over the points)."""
         self._base, self._points, self._grey = base, bool(points), grey
+        self._bounds = bounds
         for vp in self.viewports:
             vp.set_geometry(base, points=self._points, point_size=self._point_size, grey=grey)
         self.reset_camera(render=False)
@@ -133,7 +136,9 @@ class PaneGrid(QWidget):
         # the renderer's own reset: pyvista's Plotter.reset_camera renders even with render=False
         # (a whole extra frame: 1.7 s on a 1M mesh under Xvfb)
         # the mesh's own bounds: its actor is hidden until its first colours
-        first.renderer.reset_camera(render=False, bounds=None if self._base is None else self._base.bounds)
+        if self._base is not None and self._bounds is None:
+            self._bounds = self._base.bounds
+        first.renderer.reset_camera(render=False, bounds=self._bounds)
         # VTK fits the first pane (its aspect included); a linked camera must also fit a narrower pane
         aspects = [vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports]
         narrow = min(aspects) / max(min(aspects[0], 1.0), 1e-3) if self.linked else 1.0

@@ -27,6 +27,9 @@ class _Title(QLabel):
 
     def set_forms(self, full: str, short: str) -> None:
         self._forms = (full, short)
+        # never wider than its full text: the header centres what it shows, the rest beside it
+        self.setMaximumWidth(self.fontMetrics().horizontalAdvance(full) + 2 + self.contentsMargins().left()
+                             + self.contentsMargins().right())
         self._fit()
 
     def resizeEvent(self, event) -> None:  # noqa: N802 (Qt API)
@@ -55,8 +58,10 @@ class PaneHeader(QFrame):
         lay = QHBoxLayout(self)
         lay.setContentsMargins(2, 1, 2, 1)
         lay.setSpacing(0)
-        lay.addWidget(self.title, 1)
+        lay.addStretch(1)
+        lay.addWidget(self.title, 100)  # it takes the room first (to its full text's width), eliding below it
         lay.addWidget(self.rest, 0)
+        lay.addStretch(1)
 
     def show_parts(self, text: str, *, detail: str = "", field: str = "", legend: str = "", status: str = "") -> None:
         """``text`` (``A: mru R2 ...``) with ``detail`` (the estimator's long name) where it fits, then the

@@ -226,13 +226,18 @@ class Viewport(QFrame):
         self._grey = grey_colours(base.n_points) if grey is None else grey
         self._use_colours(self._grey)
         self.points_only = bool(points)
-        style = dict(style="points", point_size=point_size, render_points_as_spheres=True) if points else {}
-        self._mesh_actor = self.plotter.add_mesh(
-            self.poly, scalars="rgba", rgb=True, show_scalar_bar=False, reset_camera=False,
-            render=False, name="mesh", pickable=True, **style)
+        # the mapper and actor built here, not by pyvista's add_mesh, which scans the colours (a
+        # pass over every vertex, 0.1 s at 5M points) for a range that direct colours never use
+        mapper = pv.DataSetMapper(self.poly)
+        mapper.SetScalarModeToUsePointFieldData()
+        mapper.SelectColorArray("rgba")
+        mapper.SetColorModeToDirectScalars()
+        mapper.ScalarVisibilityOn()
+        style = dict(style="points", point_size=point_size, render_points_as_spheres=True) if points else \
+            dict(interpolation="gouraud")
+        self._mesh_actor = pv.Actor(mapper=mapper, prop=pv.Property(self.plotter.theme, **style))
         self._mesh_actor.SetVisibility(False)
-        if not points:
-            self._mesh_actor.prop.interpolation = "gouraud"
+        self.plotter.add_actor(self._mesh_actor, reset_camera=False, name="mesh", pickable=True, render=False)
         large = base.n_cells > MSAA_MAX_CELLS
         self.plotter.ren_win.SetMultiSamples(0 if large else MSAA_SAMPLES)
         self.plotter.renderer.SetUseFXAA(large)
