@@ -1,32 +1,34 @@
-"""The one entry point: ``curv.estimate(mesh, method, range)`` and its generator form."""
+"""The one entry point: ``curv.estimate(mesh, method, range)`` and its generator form.
+
+The public API; the set-up of an estimate is :mod:`curv.estimate_setup`, its validity policy and
+finish :mod:`curv.estimate_finish`, the twins in grid order :mod:`curv.locality`.
+"""
 
 from __future__ import annotations
 
 import builtins
-import enum
 import inspect
-import math
 import time
-from dataclasses import dataclass, replace
 from typing import Generator
 
 import numpy as np
 
-from .core.errors import EstimatorError, MeshError
-from .estimators import DEFAULT_ESTIMATOR, SHARED_PASSES, get_spec, refusal
-from .estimators._pooling import pool_members
-from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, jit_parallel, launch, prange, run_to_end
-from .convert import as_mesh
+from .convert import as_input
+from .core.errors import EstimatorError, MeshError, RadiusWarning, warn
+from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, iter_watched, rescaled, run_to_end
 from .core.mesh import Mesh
 from .core.pointcloud import PointCloud
 from .core.ranges import ball_radii, parse_range, resolve
-from .core.features import check_angle, feature_set
-from .core.filled import filled
-from .geometry.neighbourhood import cached_with_mesh, latest_with_mesh
-from .geometry.normals import NormalWeighting, cached_max_normals, normalize_rows, unusable_normal_vertices, vertex_normals
 from .core.result import Curvature
-from .geometry.smoothing import smooth_positions, smooth_values
-from .core.validity import Reason
+from .core.validity import mark_ok_rows
+from .estimate_finish import finish, radius_note, settle
+from .estimate_setup import (Smoothing, cached_feature_set, check_vertices, mesh_normals_label, mesh_setup, point_setup,
+                             without_rows)
+from .estimators import SHARED_PASSES, default_estimator, get_spec, refusal
+from .estimators._pooling import pool_members
+from .geometry.neighbourhood import latest_with_mesh
+from .geometry.normals import NormalWeighting
+from .locality import cloud_twin, locality_ordered, rank, rows_of
 
 __all__ = ["estimate", "iter_estimate", "estimate_ranges", "iter_estimate_ranges", "estimate_table",
            "iter_estimate_table", "Smoothing", "parse_range"]
@@ -34,35 +36,9 @@ __all__ = ["estimate", "iter_estimate", "estimate_ranges", "iter_estimate_ranges
 builtins_range = builtins.range  # the keyword ``range`` shadows it in the functions below
 
 
-class Smoothing(str, enum.Enum):
-    """The paper's smoothing variants (§5.3, Fig. 10), applied around an estimate."""
-
-    NONE = "none"
-    MESH = "mesh"
-    """Cotan-smooth the vertex positions, then estimate (R2SM in the paper)."""
-    VALUES = "values"
-    """Estimate, then cotan-smooth k1 and k2 over valid neighbours (R2SV)."""
-
-
-def _asks_for_fit(normals) -> bool:
-    """``normals="fit"``; any other string is an error naming the choices."""
-    if not isinstance(normals, str):
-        return False
-    if normals != "fit":
-        raise EstimatorError(f"normals must be an (n, 3) array or 'fit', got {normals!r}")
-    return True
-
-
-def _check_normals(normals, n: int) -> np.ndarray:
-    arr = np.asarray(normals, dtype=np.float64)
-    if arr.shape != (n, 3):
-        raise MeshError(f"normals must have shape ({n}, 3), got {arr.shape}")
-    return normalize_rows(arr)
-
-
 def iter_estimate(
     mesh: Mesh,
-    method: str = DEFAULT_ESTIMATOR,
+    method: str | None = None,
     range=None,
     *,
     radius: float | None = None,
@@ -76,14 +52,19 @@ def iter_estimate(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
 
     Every ``yield`` is a point where a caller may stop (cancel); the yielded values are
-    :class:`curv.core.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
+    :class:`curv.core.jit.Progress` floats, whose ``message`` says when kernels are being compiled
+    and whose ``phase`` names the part of the work the fraction belongs to: ``"setup"`` (the
+    input's connectivity, normals and flags; ``"normals"`` when they are fitted, then
+    ``"orientation"`` on a point cloud), ``"estimate"`` (the estimator's kernels) and ``"checks"``
+    (the supports' checks and the validity pass). The set-up reports through
+    :func:`curv.core.jit.iter_watched`, so it is measured and a cancel reaches it too.
     Parameters as in :func:`estimate`.
     """
     results = yield from _iter_estimates(
@@ -91,18 +72,20 @@ def iter_estimate(
         smooth_iterations=smooth_iterations, smooth_strength=smooth_strength, fit_range=fit_range,
         block_size=block_size, features=features, vertices=vertices, knn=knn, orient=orient,
         standard_errors=standard_errors, **options)
-    return results[method][0]
+    return next(iter(results.values()))[0]
 
 
-def iter_estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords
+def iter_estimate_ranges(mesh: Mesh, method: str | None = None, ranges=(1, 2, 3, 4), **keywords
                          ) -> Generator[float, None, list]:
     """:func:`estimate_ranges` step by step: yields the fraction done, returns the list of
     :class:`Curvature` (as :func:`iter_estimate` does for one range)."""
+    mesh = as_input(mesh)
+    method = default_estimator(mesh) if method is None else method
     results = yield from iter_estimate_table(mesh, (method,), ranges, **keywords)
     return results[method]
 
 
-def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords) -> list:
+def estimate_ranges(mesh: Mesh, method: str | None = None, ranges=(1, 2, 3, 4), **keywords) -> list:
     """Estimate at several ranges of one estimator on the same mesh: one :class:`Curvature` per range.
 
     The result for each range equals ``estimate(mesh, method, range, **keywords)``: bit for bit for
@@ -151,6 +134,7 @@ def iter_estimate_table(mesh: Mesh, methods, ranges=(1, 2, 3, 4), **keywords) ->
     """:func:`estimate_table` step by step: yields the fraction done, returns the dict of lists of
     :class:`Curvature`."""
     methods = (methods,) if isinstance(methods, str) else tuple(methods)
+    mesh = as_input(mesh)
     if not methods or len(set(methods)) != len(methods):
         raise EstimatorError(f"methods must name each estimator once; got {list(methods)}")
     wanted = {m: _range_tuple(ranges[m] if isinstance(ranges, dict) else ranges) for m in methods}
@@ -217,7 +201,7 @@ def _split_options(specs, options: dict) -> dict:
 
 def _iter_estimates(
     mesh: Mesh,
-    methods: tuple = (DEFAULT_ESTIMATOR,),
+    methods: tuple = (None,),
     ranges=(None,),
     *,
     radius: float | None = None,
@@ -231,7 +215,7 @@ def _iter_estimates(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, dict]:
@@ -243,7 +227,10 @@ def _iter_estimates(
     ``nc``, ``qs``, ``an``, ``mru``, ``jet``) runs the ranges of a mesh in one call, in ascending order; the
     others (and a point cloud's) run once per range. Several ``methods`` must name one shared pass
     (:attr:`~curv.estimators.EstimatorSpec.shared_pass`), which runs them and their ranges in one call.
+    ``None`` in ``methods`` is the input's default estimator (:func:`curv.estimators.default_estimator`).
     """
+    mesh = as_input(mesh)
+    methods = tuple(default_estimator(mesh) if m is None else m for m in methods)
     specs = [get_spec(m) for m in methods]
     spec = specs[0]  # the estimators of one pass take the same normals, ranges and supports
     if len(specs) > 1 and not (spec.shared_pass and all(s.shared_pass == spec.shared_pass for s in specs)):
@@ -253,52 +240,66 @@ def _iter_estimates(
         for r in ranges:
             resolve(other, r, radius, knn)
     options_of = _split_options(specs, options)
-    mesh = mesh if isinstance(mesh, PointCloud) else as_mesh(mesh)
     for s in specs:
         why_not = refusal(s, mesh)
         if why_not is not None:
             raise MeshError(why_not)
     smooth = Smoothing(smooth or Smoothing.NONE)
-    centres = _check_vertices(vertices, mesh.n_vertices)
-    twin = _grid_ordered(mesh) if isinstance(mesh, PointCloud) else _locality_ordered(mesh, centres, features)
-    if twin is not None:
-        # a point cloud runs in its grid's order (curv.point_normals, notes 6), and so does a whole mesh
-        # numbered too scattered for the caches (_locality_ordered); the rows go back at the end
-        mesh, rows = twin
-        normals = _rows_of(normals, rows)
-        centres = None if centres is None else _rank(rows)[centres]
+    centres = check_vertices(vertices, mesh.n_vertices)
     if centres is not None and smooth is Smoothing.VALUES:
         raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
     if isinstance(mesh, PointCloud) and (features is not None or smooth is not Smoothing.NONE):
         raise EstimatorError("features= and smooth= need a mesh's edges and faces; a point cloud takes neither")
-    feats = None if features is None else _feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
     kernels = tuple(k for s in specs for k in s.kernels)
-    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, _settle)) else "")
-    t0 = time.perf_counter()
-    if isinstance(mesh, PointCloud):
-        work_mesh = mesh
-        used_normals, flags, normals_label = _point_setup(mesh, normals, orient=orient, fit_range=fit_range)
-        fused = False
-    else:
-        work_mesh, used_normals, flags, fused = _mesh_setup(mesh, spec, normals, normal_weighting, smooth,
-                                                            smooth_iterations, smooth_strength, fit_range, feats)
-        normals_label = _normals_label(normals, normal_weighting, fit_range)
-    # a region's fits also run at its neighbours, whose residuals its standard errors pool
+    fits_normals = (isinstance(mesh, PointCloud) and normals is None and mesh.normals is None) or (
+        isinstance(normals, str))
+    first_phase = "normals" if fits_normals else "setup"
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, settle, mark_ok_rows)) else "", first_phase)
+    called_with = mesh, centres
+
+    def prepare():
+        """What every range and estimator shares, on iter_watched's thread: the twin in grid order,
+        the creases, the normals and flags, the support radii (a large cloud's normals take longer
+        than its estimate)."""
+        mesh, centres, given = called_with[0], called_with[1], normals
+        twin = cloud_twin(mesh) if isinstance(mesh, PointCloud) else locality_ordered(mesh, centres, features)
+        if twin is not None:
+            # a point cloud runs in its grid's order (curv.point_normals, notes 6), and so does a whole mesh
+            # numbered too scattered for the caches (locality_ordered); the rows go back at the end
+            mesh, rows = twin
+            given = rows_of(given, rows)
+            centres = None if centres is None else rank(rows)[centres]
+        feats = None if features is None else cached_feature_set(mesh, features)
+        t0 = time.perf_counter()
+        if isinstance(mesh, PointCloud):
+            work_mesh = mesh
+            used_normals, flags, normals_label = point_setup(mesh, given, orient=orient, fit_range=fit_range)
+            fused = False
+        else:
+            work_mesh, used_normals, flags, fused = mesh_setup(mesh, spec, given, normal_weighting, smooth,
+                                                               smooth_iterations, smooth_strength, fit_range, feats)
+            normals_label = mesh_normals_label(given, normal_weighting, fit_range)
+        # a region's fits also run at its neighbours, whose residuals its standard errors pool
+        fitted = (pool_members(work_mesh, centres) if spec.skips_errors and standard_errors and centres is not None
+                  and not isinstance(work_mesh, PointCloud) else centres)
+        radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support
+                    else None for rng in rngs]
+        return (mesh, twin, centres, feats, t0, work_mesh, used_normals, flags, normals_label, fused, fitted,
+                radii_of)
+
+    (mesh, twin, centres, feats, t0, work_mesh, used_normals, flags, normals_label, fused, fitted,
+     radii_of) = yield from iter_watched(prepare, phase=first_phase)
     skips = spec.skips_errors
-    fitted = (pool_members(work_mesh, centres) if skips and standard_errors and centres is not None
-              and not isinstance(work_mesh, PointCloud) else centres)
     kernel_options = {s.name: {**options_of[s.name], "standard_errors": bool(standard_errors)} if skips
                       else options_of[s.name] for s in specs}
-    radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
-                for rng in rngs]
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
     if on_crease and used_normals is not None:
         # a crease vertex's normal blends both sides: no neighbour-normal term may use it (icc takes
         # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
-                                          lambda: _without(used_normals, feats.vertices))
+                                          lambda: without_rows(used_normals, feats.vertices))
     shared = len(rngs) > 1 and spec.takes_levels and not isinstance(work_mesh, PointCloud) and all(
         rng.radius is None and rng.knn is None for rng in rngs)
     if len(specs) > 1 or shared:
@@ -307,11 +308,13 @@ def _iter_estimates(
         stacked = np.stack([radii_of[i] for i in ascending])
         common = dict(chunk=block_size, centres=centres, features=feats if on_crease else None)
         if len(specs) > 1:
-            by_method = yield from SHARED_PASSES[spec.shared_pass](
-                work_mesh, kernel_normals, stacked, tuple(methods), options=kernel_options, **common)
+            by_method = yield from rescaled(SHARED_PASSES[spec.shared_pass](
+                work_mesh, kernel_normals, stacked, tuple(methods), options=kernel_options, **common),
+                0.0, 1.0, phase="estimate")
         else:
-            by_method = {spec.name: (yield from spec.function(work_mesh, kernel_normals, stacked, **common,
-                                                              **kernel_options[spec.name]))}
+            by_method = {spec.name: (yield from rescaled(spec.function(
+                work_mesh, kernel_normals, stacked, **common, **kernel_options[spec.name]),
+                0.0, 1.0, phase="estimate"))}
         raws_of = {}
         for name, levels in by_method.items():
             raws_of[name] = [None] * len(rngs)
@@ -319,401 +322,72 @@ def _iter_estimates(
                 raws_of[name][i] = level
     else:
         raws = []
-        for radii in radii_of:
+        for i, radii in enumerate(radii_of):
             order = centres
             if centres is None and isinstance(work_mesh, PointCloud) and radii is not None:
                 # a whole cloud in its grid's cell order: neighbouring points are estimated one after
                 # another and share what is in the cache (a random-order cloud's kernel ran about 3x
                 # slower); every point writes its own rows, so the result is the same
                 order = work_mesh.ball_grid(radii)[0][3]
-            raws.append((yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
-                                                  features=feats if on_crease else None,
-                                                  **kernel_options[spec.name])))
+            raws.append((yield from rescaled(
+                spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
+                              features=feats if on_crease else None, **kernel_options[spec.name]),
+                i / len(radii_of), (i + 1) / len(radii_of), phase="estimate")))
         raws_of = {spec.name: raws}
     # the neighbours an estimator that reads their normals can use (a NaN normal is left out)
     usable = (np.isfinite(kernel_normals).all(axis=1)
               if spec.uses_normals and kernel_normals is not None else None)
     results = {}
+    parts = len(specs) * len(rngs)
     for s in specs:
         results[s.name] = []
         for rng, radii, raw in zip(rngs, radii_of, raws_of[s.name]):
-            results[s.name].append((yield from _finish(
+            part = sum(map(len, results.values()))
+            results[s.name].append((yield from rescaled(finish(
                 mesh, s, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
-                smooth_iterations, smooth_strength, standard_errors, normals_label, options_of[s.name], twin, t0)))
-    yield 1.0
+                smooth_iterations, smooth_strength, standard_errors, normals_label, options_of[s.name], twin, t0),
+                part / parts, (part + 1) / parts, phase="checks")))
+    if radius is not None:  # one range of one estimator (estimate_ranges and estimate_table take no radius)
+        # the spacing of the twin (a cloud's is measured there already) has the same median
+        _warn_of_radius(mesh, radius, results[spec.name][0], called_with[1])
+    yield Progress(1.0, "", "checks")
     return results
 
 
-def _finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
-            smooth_iterations, smooth_strength, standard_errors, normals_label, options, twin, t0):
-    """The :class:`Curvature` of one range from the estimator's raw result: the validity rules,
-    the settling pass, smoothing of the values, a region's full-length rows (a generator, as the
-    support checks of a point cloud are)."""
-    for mask_of in flags.support_marks:
-        # checks of the supports themselves (points: a support along a curve), on the estimated rows
-        mask, code = yield from mask_of(radii, centres, usable)
-        flags = flags.marked(mask, code)
-    if fused:
-        used_normals = raw.normals
-
-    def at(flags: np.ndarray) -> np.ndarray:
-        """The rows of a per-vertex array that this call estimates."""
-        return flags if centres is None else flags[centres]
-
-    k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
-    k1_se, k2_se = _standard_errors(raw if standard_errors else None, at, smooth, k1.shape[0])
-    # root causes, whatever the estimator saw (no face or no other point at all; a normal whose
-    # orientation was left undecided): later codes win
-    for mask, code in flags.forced:
-        reason[at(mask)] = code
-    isolated = at(flags.isolated)
-    if on_crease:
-        # the smooth curvature is undefined on a crease; a large value there is the error to avoid
-        reason[at(feats.vertices) & ~isolated] = Reason.FEATURE
-    # in the order of precedence: the first that applies to a vertex names it
-    for mask, code in flags.marks:
-        reason[(reason == Reason.OK) & at(mask)] = code
-    # non-finite values are SINGULAR; k1 >= k2 (the estimators order them already: the rare rows they
-    # did not are repaired in place, the arrays are this call's own); (d1, d2, N) right-handed so
-    # results are reproducible. One parallel pass over the rows.
-    launch(_settle, k1, k2, d1, d2, k1_se, k2_se, used_normals, _NO_ROWS if centres is None else centres, reason)
-    if smooth is Smoothing.VALUES:
-        ok = reason == Reason.OK
-        k1, k2 = smooth_values(mesh, np.stack([k1, k2], axis=1), ok,
-                               iterations=smooth_iterations, strength=smooth_strength).T
-        swap = k2 > k1
-        k1, k2 = np.where(swap, k2, k1), np.where(swap, k1, k2)
-        d1, d2 = np.where(swap[:, None], d2, d1), np.where(swap[:, None], -d1, d2)
-    valid = reason == Reason.OK
-    for arr in (k1, k2, k1_se, k2_se):
-        arr[~valid] = np.nan
-    d1[~valid] = np.nan
-    d2[~valid] = np.nan
-    if centres is not None:
-        k1, k2, d1, d2, reason, valid = _full_length(mesh.n_vertices, centres, k1, k2, d1, d2, reason, valid)
-        k1_se, k2_se = (_scatter(mesh.n_vertices, centres, se) for se in (k1_se, k2_se))
-    result = Curvature(
-        k1=k1, k2=k2, d1=d1, d2=d2, normals=used_normals, valid=valid, reason=reason.astype(np.uint8, copy=False),
-        method=spec.name, range=rng.value, k1_se=k1_se, k2_se=k2_se,
-        info={"seconds": time.perf_counter() - t0, "smooth": smooth.value, "range_label": rng.label,
-              "normals": normals_label, **options,
-              "radius": rng.radius,
-              "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
-              "features": None if feats is None else feats.label,
-              "feature_edges": 0 if feats is None else feats.count,
-              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info},
-    )
-    return result if twin is None else _rows_back(result, twin[1])
+def _warn_of_radius(mesh, radius: float, result: Curvature, centres) -> None:
+    """A :class:`~curv.core.errors.RadiusWarning` when ``radius=`` is below the input's spacing or leaves
+    most rows without an estimate (:func:`curv.estimate_finish.radius_note`); the note goes into the
+    result's ``info["warnings"]`` too, for the command line's summary and the viewer's status."""
+    note = radius_note(mesh, radius, result.reason, centres)
+    if note is not None:
+        result.info["warnings"] = (*result.info.get("warnings", ()), note)
+        warn(note, RadiusWarning)
 
 
-@dataclass(frozen=True)
-class _Flags:
-    """What the input says about its vertices, for the validity rules of :func:`iter_estimate`.
-
-    ``isolated`` (n,) bool: no face or no other point; ``forced``: ``(mask, Reason)`` pairs set
-    whatever the estimator found (later pairs win); ``marks``: pairs applied in order to the
-    vertices still OK; ``info``: extra entries of the result's info.
-    """
-
-    isolated: np.ndarray
-    marks: tuple
-    info: dict
-    forced: tuple = ()
-    support_marks: tuple = ()
-    """Generators ``(radii, centres, usable) -> (mask, Reason)`` run after the estimate; ``usable``
-    (n,) bool marks the points whose normals the estimator reads (None: it reads none)."""
-
-    def marked(self, mask: np.ndarray, code) -> "_Flags":
-        """These flags with one more ``(mask, code)`` mark, applied last."""
-        return _Flags(isolated=self.isolated, marks=self.marks + ((mask, code),), info=self.info,
-                      forced=self.forced)
-
-
-def _mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_iterations, smooth_strength,
-                fit_range, feats):
-    """The working mesh, its normals (None when the estimator computes them), flags, and whether fused."""
-    work_mesh = mesh
-    if smooth is Smoothing.MESH:
-        work_mesh = smooth_positions(mesh, iterations=smooth_iterations, strength=smooth_strength)
-        if normals is not None and not _asks_for_fit(normals):
-            raise EstimatorError("normals cannot be given with smooth='mesh': they are recomputed on the smoothed mesh")
-    # an estimator that visits every corner anyway computes the default normals on the way
-    fused = normals is None and spec.computes_normals and NormalWeighting(normal_weighting) is NormalWeighting.MAX
-    if spec.has_support or not fused:
-        # it will read the neighbours or the normals: the one walk over the corners gives the flags too
-        mesh.corner_pass
-    # Where the faces around a vertex are not one consistently oriented fan, its normal averages
-    # unrelated sheets; neighbours must not use it (the vertex itself is marked invalid below).
-    meaningless = unusable_normal_vertices(mesh)
-    if fused:
-        used_normals = None
-    else:
-        if normals is None:
-            used_normals = _default_normals(work_mesh, normal_weighting, smoothed=work_mesh is not mesh)
-        elif _asks_for_fit(normals):
-            from .fitted_normals import fitted_normals
-
-            used_normals = fitted_normals(work_mesh, range=fit_range, features=feats)
-        else:
-            used_normals = _check_normals(normals, mesh.n_vertices)
-        if meaningless.any():
-            used_normals = used_normals.copy()
-            used_normals[meaningless] = np.nan
-    flags = _Flags(isolated=mesh.isolated_vertices, info={"points": False},
-                   forced=((mesh.isolated_vertices, Reason.DEGENERATE),), marks=(
-        # no surface to fit where the faces around a vertex are not one fan (bow tie, fin)
-        (mesh.nonmanifold_vertices, Reason.NONMANIFOLD),
-        # faces of opposite orientation meet here: the vertex normal is meaningless
-        (meaningless, Reason.DEGENERATE),
-        # on a border the normal and every fit see one side only: the values there are not
-        # estimates of the surface's curvature, whatever the estimator
-        (mesh.border_vertices, Reason.BORDER),
-    ))
-    return work_mesh, used_normals, flags, fused
-
-
-def _point_setup(cloud: PointCloud, normals, *, orient, fit_range):
-    """A point cloud's normals (given, the cloud's own, or estimated and oriented) and flags.
-
-    ``normals``: None (the cloud's if it has them, else jet fits), ``"fit"`` (jet), ``"pca"``, or
-    an (n, 3) array.
-    """
-    from .point_normals import border_points, point_normals
-
-    n = cloud.n_points
-    ambiguous = one_sided = np.zeros(n, bool)
-    if normals is None and cloud.normals is not None:
-        used, label = normalize_rows(np.asarray(cloud.normals)), "file"
-    elif normals is None or (isinstance(normals, str) and normals in ("pca", "fit")):
-        method = "pca" if isinstance(normals, str) and normals == "pca" else "jet"
-        est = point_normals(cloud, method=method, range=fit_range, orient=orient)
-        used, ambiguous, one_sided, label = est.normals, est.ambiguous, est.one_sided, f"{method} {est.label}"
-    elif isinstance(normals, str):
-        raise EstimatorError(f"normals on a point cloud must be an (n, 3) array, 'pca' or 'fit'; got {normals!r}")
-    else:
-        used, label = _check_normals(normals, n), "given"
-    border = border_points(cloud)
-    coincident = cloud.coincident_points
-    flags = _Flags(isolated=cloud.isolated_vertices,
-                   # a normal fitted across an empty side is not trusted
-                   forced=((cloud.isolated_vertices, Reason.DEGENERATE), (one_sided, Reason.SINGULAR),
-                           (ambiguous, Reason.ORIENTATION)), marks=(
-        # a repeat of an earlier point: that one stands for it
-        (coincident, Reason.DEGENERATE),
-        # on the rim of an open scan the fits see one side only, as on a mesh border
-        (border, Reason.BORDER),
-    ), info={"points": True, "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
-             "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum())},
-                   support_marks=(_line_supports(cloud),))
-    return used, flags, label
-
-
-def _line_supports(cloud: PointCloud):
-    """A support check: points whose support lies along a line or a curve (of the neighbours whose
-    normals the estimator can use, when it reads them) are SINGULAR
-    (:data:`curv.point_normals.MIN_SPREAD`)."""
-    from .point_normals import MIN_SPREAD, support_spread
-
-    def check(radii, centres, usable=None):
-        spread = yield from support_spread(cloud, radii, centres, usable=usable)
-        return ~(spread >= MIN_SPREAD), Reason.SINGULAR
-
-    return check
-
-
-def _grid_ordered(mesh):
-    """A point cloud's twin in grid order and that order (:func:`curv.point_normals.grid_ordered`);
-    None for a mesh or a twin."""
-    if not isinstance(mesh, PointCloud):
-        return None
-    from .point_normals import grid_ordered
-
-    return grid_ordered(mesh)
-
-
-def _locality_ordered(mesh: Mesh, centres, features):
-    """A whole-mesh estimate of a mesh numbered too scattered for the caches
-    (:meth:`curv.Mesh.scattered_order`) runs on its twin in grid order (the point clouds' order,
-    :func:`curv.core.knn.build_grid`): ``(twin, order)``, kept with the mesh; None otherwise (a
-    region costs what the region costs, and a caller's feature mask is in the mesh's own numbering).
-    """
-    if centres is not None or (features is not None and np.ndim(features) != 0) or not mesh.scattered_order():
-        return None
-
-    def build():
-        from .core.knn import build_grid
-
-        order = np.ascontiguousarray(build_grid(mesh.vertices)[0][3], dtype=np.int64)
-        order.setflags(write=False)
-        return mesh.renumbered(order), order
-
-    return cached_with_mesh(mesh, "locality order", build)
-
-
-def _rank(order: np.ndarray) -> np.ndarray:
-    """(n,) int64: the position of each row in ``order`` (its inverse)."""
-    rank = np.empty_like(order)
-    rank[order] = np.arange(order.size)
-    return rank
-
-
-def _rows_of(normals, order: np.ndarray):
-    """Given (n, 3) normals in ``order``; anything else as it is (its checks say the same)."""
-    if normals is None or isinstance(normals, str) or np.shape(normals) != (order.size, 3):
-        return normals
-    return np.asarray(normals)[order]
-
-
-def _rows_back(res: Curvature, order: np.ndarray) -> Curvature:
-    """A result computed on rows in ``order``, in the cloud's own order."""
-    def back(a):
-        out = np.empty_like(a)
-        out[order] = a
-        return out
-
-    return replace(res, **{f: back(getattr(res, f)) for f in
-                           ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se")})
-
-
-def _check_vertices(vertices, n: int) -> np.ndarray | None:
-    """``vertices=`` as an (c,) int64 index array, or None for all; a one-line error when invalid."""
-    if vertices is None:
-        return None
-    arr = np.asarray(vertices)
-    if arr.dtype == bool:
-        raise EstimatorError("vertices must be an array of vertex indices, not a mask (use np.flatnonzero(mask))")
-    if arr.ndim != 1 or (arr.size and not np.issubdtype(arr.dtype, np.integer)):
-        raise EstimatorError(f"vertices must be a 1-D array of vertex indices; got shape {arr.shape}, {arr.dtype}")
-    arr = np.ascontiguousarray(arr, dtype=np.int64)
-    if arr.size and (arr.min() < 0 or arr.max() >= n):
-        bad = int(arr[(arr < 0) | (arr >= n)][0])
-        raise EstimatorError(f"vertex index {bad} is out of range for a mesh of {n} vertices")
-    return arr
-
-
-def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray, np.ndarray]:
-    """This call's rows of the fit's standard errors (copies), NaN for an estimator without a fit
-    (or a call without standard errors, ``raw`` None) and for the smoothing variants: smoothing
-    correlates the noise of neighbouring vertices (before the fit with ``mesh``, after it with
-    ``values``), which the residual model assumes independent."""
-    if raw is None or raw.k1_se is None or smooth is not Smoothing.NONE:
-        return np.full(rows, np.nan), np.full(rows, np.nan)
-    return at(raw.k1_se).copy(), at(raw.k2_se).copy()
-
-
-def _scatter(n: int, centres: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """(n,) NaN with ``values`` at ``centres``, at the cost of the centres (:func:`curv.core.filled.filled`)."""
-    out = filled(n, np.nan)
-    out[centres] = values
-    return out
-
-
-def _full_length(n: int, centres: np.ndarray, k1, k2, d1, d2, reason, valid):
-    """Scatter a region's rows into full-length outputs: NaN and ``NOT_COMPUTED`` elsewhere.
-
-    At the cost of the region's rows, not of n (:func:`curv.core.filled.filled`).
-    """
-    out_k1, out_k2 = filled(n, np.nan), filled(n, np.nan)
-    out_d1, out_d2 = filled((n, 3), np.nan), filled((n, 3), np.nan)
-    out_reason = filled(n, Reason.NOT_COMPUTED, np.uint8)
-    out_valid = np.zeros(n, bool)
-    out_k1[centres], out_k2[centres], out_d1[centres], out_d2[centres] = k1, k2, d1, d2
-    out_reason[centres], out_valid[centres] = reason, valid
-    return out_k1, out_k2, out_d1, out_d2, out_reason, out_valid
-
-
-def _feature_set(mesh: Mesh, features):
-    """:func:`curv.core.features.feature_set`; the latest angle's is kept with the mesh, so that estimates
-    over small regions at one angle do no whole-mesh work to find the creases again."""
-    if isinstance(features, (bool, np.bool_)) or np.ndim(features) != 0:
-        return feature_set(mesh, features)  # a caller's mask (or a one-line error)
-    angle = check_angle(features)
-    return latest_with_mesh(mesh, "feature set", (angle,), lambda: feature_set(mesh, angle))
-
-
-def _without(normals: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """A read-only copy of ``normals`` (n, 3) with NaN rows at ``vertices`` (n,) bool, in the same layout."""
-    out = normals.copy(order="K")
-    out[vertices] = np.nan
-    out.setflags(write=False)
-    return out
-
-
-def _default_normals(mesh: Mesh, weighting, *, smoothed: bool) -> np.ndarray:
-    """The mesh's vertex normals; Max's weights on the mesh itself are cached with it (read-only),
-    so that an estimate over a small region does not recompute them."""
-    if smoothed or NormalWeighting(weighting) is not NormalWeighting.MAX:
-        return vertex_normals(mesh, weighting=weighting)
-    return cached_max_normals(mesh)
-
-
-def _normals_label(normals, weighting, fit_range) -> str:
-    """How the normals were made, for the result's info: ``max``, ``fit R2`` or ``given``."""
-    if normals is None:
-        return NormalWeighting(weighting).value
-    if isinstance(normals, str):
-        from .core.ranges import range_label
-
-        return f"fit {range_label(parse_range(fit_range))}"
-    return "given"
-
-
-_NO_ROWS = np.empty(0, np.int64)
-
-_OK, _SINGULAR = np.uint8(Reason.OK), np.uint8(Reason.SINGULAR)
-
-
-@jit_parallel
-def _settle(k1, k2, d1, d2, k1_se, k2_se, normals, rows, reason):
-    """In place, per row i of this call's outputs: ``reason`` SINGULAR where it is OK but k1 or k2 is not
-    finite; k1 >= k2 (k1, k2, d1, d2 and the standard errors swapped where k2 > k1); d2 negated where
-    ``(d1 x d2) . N < 0`` (N the row's normal, NaN: left as it is).
-
-    Parameters
-    ----------
-    k1, k2, k1_se, k2_se : (c,) float64
-    d1, d2 : (c, 3) float64
-    normals : (n, 3) float64
-        Row i's normal is ``normals[rows[i]]``, or ``normals[i]`` when ``rows`` is empty.
-    rows : (c,) or (0,) int64
-    reason : (c,) uint8
-    """
-    for i in prange(k1.size):
-        if reason[i] == _OK and not (math.isfinite(k1[i]) and math.isfinite(k2[i])):
-            reason[i] = _SINGULAR
-        if k2[i] > k1[i]:
-            k1[i], k2[i] = k2[i], k1[i]
-            k1_se[i], k2_se[i] = k2_se[i], k1_se[i]
-            for j in range(3):
-                d1[i, j], d2[i, j] = d2[i, j], d1[i, j]
-        p = np.int64(i)
-        if rows.size:
-            p = np.int64(rows[i])
-        a0, a1, a2 = d1[i, 0], d1[i, 1], d1[i, 2]
-        b0, b1, b2 = d2[i, 0], d2[i, 1], d2[i, 2]
-        c0, c1, c2 = normals[p, 0], normals[p, 1], normals[p, 2]
-        if (a1 * b2 - a2 * b1) * c0 + (a2 * b0 - a0 * b2) * c1 + (a0 * b1 - a1 * b0) * c2 < 0:
-            d2[i, 0], d2[i, 1], d2[i, 2] = -b0, -b1, -b2
-
-
-def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords) -> Curvature:
+def estimate(mesh: Mesh, method: str | None = None, range=None, **keywords) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
 
     Parameters
     ----------
-    mesh : Mesh, PointCloud, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
-        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`. On a
-        :class:`curv.PointCloud` the estimators with ``takes_points`` run (``nc``, ``qs``, ``an``,
-        ``mru``, ``jet``); the range unit is each point's spacing (:mod:`curv.core.ranges`), points on
-        the rim of an open scan are ``BORDER``, repeats of a point ``DEGENERATE``.
-    method : str
-        Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
+    mesh : Mesh, PointCloud, trimesh.Trimesh or PointCloud, pyvista.PolyData, meshio.Mesh or (n, 3) array
+        Other libraries' meshes and point clouds are converted by :func:`curv.convert.as_input`
+        (without faces: a point cloud). On a point cloud the estimators with ``takes_points`` run
+        (``nc``, ``qs``, ``an``, ``mru``, ``jet``); the range unit is each point's spacing
+        (:mod:`curv.core.ranges`), points on the rim of an open scan are ``BORDER``, repeats of a
+        point ``DEGENERATE``.
+    method : str, optional
+        Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru``, ``jet``, ``icc``
+        (see ``curv.ESTIMATORS``). Default the registry's for the input's kind
+        (:data:`curv.estimators.DEFAULT_ESTIMATORS`): ``mru`` on a mesh, ``qs`` on a point cloud.
     range : int, float or str, optional
         k of the range Rk: ``2``, ``2.5`` or ``"R2"`` (:mod:`curv.core.ranges`); any real k at least the
         estimator's smallest named range for the estimators with a support, the one named range
         for ``meyer`` (R1) and ``ru`` (R2). Default R2 where the estimator has it, else its range.
     radius : float, optional
-        Instead of ``range``: the same ball radius in mesh units at every vertex.
+        Instead of ``range``: the same ball radius in mesh units at every vertex. A radius below the
+        input's median spacing, or one that leaves more than half of the vertices with too few
+        neighbours or a singular fit, gives a :class:`curv.RadiusWarning` (once per call; its text
+        is in ``info["warnings"]`` too).
     normals : (n, 3) array_like or "fit", optional
         Vertex normals to use (normalised here); ``"fit"``: each normal from a local jet fit at
         range ``fit_range`` (:func:`curv.fitted_normals.fitted_normals`); default Max-weighted
@@ -743,10 +417,13 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
         full run's at these vertices.
     knn : int, optional
         Point clouds only, instead of ``range``: each point's support is its ``knn`` nearest points.
-    orient : {"up", "outward"} or (3,) array_like
-        Point clouds whose normals are estimated: turn each connected part up (+z at its highest
-        point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
-        viewpoint (a scanner's position).
+    orient : {"up", "top", "outward"} or (3,) array_like, optional
+        Point clouds whose normals are estimated: every normal up (nz >= 0 point by point, as
+        PDAL does; a normal within 3 degrees of horizontal is ``Reason.ORIENTATION``), each
+        connected part turned up at its highest point or outward and propagated (Hoppe et al.
+        1992), or every normal towards this viewpoint (a scanner's position). Default
+        (:func:`curv.point_normals.default_orientation`): ``"up"`` for a georeferenced cloud
+        (LAS/LAZ), ``"top"`` for any other; ``info["orientation"]`` says which ran.
     standard_errors : bool
         False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
         and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,

@@ -3,6 +3,7 @@ import pytest
 
 import curv
 from curv.core.validity import Reason
+from curv.locality import locality_ordered
 from tests.meshes import icosphere, torus_grid, tube
 
 
@@ -109,8 +110,10 @@ def test_value_smoothing_averages_neighbours_only_over_valid_vertices():
 
 
 def test_not_a_mesh_is_rejected():
-    with pytest.raises(curv.MeshError, match="expected a curv.Mesh"):
-        curv.estimate(np.zeros((3, 3)), "nc", 1)
+    with pytest.raises(curv.MeshError, match="expected a curv.Mesh or curv.PointCloud"):
+        curv.estimate(object(), "nc", 1)
+    with pytest.raises(curv.MeshError, match=r"must have shape \(n, 3\)"):
+        curv.estimate(np.zeros((3, 2)), "nc", 1)  # an (n, 3) array is a point cloud (curv.convert.as_input)
 
 
 def test_fitted_normals_option(sphere):
@@ -148,7 +151,7 @@ def test_a_scattered_numbering_runs_in_grid_order_with_the_same_result(monkeypat
     monkeypatch.setattr(curv.core.mesh, "SCATTERED_SPAN", 40)
     assert shuffled.scattered_order()
     res = curv.estimate(shuffled, method, k)
-    assert curv.api._locality_ordered(shuffled, None, None) is not None
+    assert locality_ordered(shuffled, None, None) is not None
     assert np.array_equal(res.valid, ref.valid[perm]) and np.array_equal(res.reason, ref.reason[perm])
     for field in ("k1", "k2", "normals", "k1_se", "k2_se"):
         got, want = getattr(res, field), getattr(ref, field)[perm]

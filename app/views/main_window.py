@@ -31,6 +31,7 @@ from .feature_controls import FeatureControl
 from .geometry import prepare_geometry
 from .help import about_text, guide_text
 from .inspect_panel import InspectPanel
+from .large_panel import attach_large_panel
 from .menus import ADVISE_POINTS_TIP, ADVISE_TIP, WindowShortcuts, build_menus
 from .mesh_panel import MeshPanel
 from .pane_grid import PaneGrid
@@ -42,9 +43,9 @@ from .window_size import fit_to_screen, screen_room
 
 __all__ = ["MainWindow", "MESH_FILTER", "DEFAULT_SOURCE", "GLYPH_PIXELS", "GREY_FRAME_DELAY_MS"]
 
-MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf *.xyz *.txt *.csv *.pcd *.las *.laz);;"
+MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf *.xyz *.txt *.csv *.pcd *.pts *.las *.laz);;"
                "Meshes (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf);;"
-               "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.las *.laz);;All files (*)")
+               "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.pts *.las *.laz);;All files (*)")
 DEFAULT_SOURCE = SurfaceSource(name="saddle", n_vertices=3169)
 MAX_RECENT = 8
 
@@ -159,6 +160,7 @@ class MainWindow(QMainWindow):
         self._shortcuts = WindowShortcuts(self)
         QApplication.instance().installEventFilter(self._shortcuts)
         self._connect()
+        self.large_panel = attach_large_panel(self)
         self._restore_settings()
 
     def _connect(self) -> None:
