@@ -32,7 +32,9 @@ through Recompute and Cancel::
 The cloud is synthetic (a wavy terrain with its exact normals, so that the estimate fits no normals),
 written once to a temporary vertex-only PLY and opened as a file. For each handler it reports
 ``call ms``, the time the GUI thread spent in the call that the user's action made (what runs
-before the event loop gets control back), and ``stall ms``, the longest gap of a 10 ms heartbeat
+before the event loop gets control back), ``CPU ms``, the GUI thread's own CPU time in that call
+(what the call costs on an idle machine: on a loaded one the wall time also counts the turns other
+processes take), and ``stall ms``, the longest gap of a 10 ms heartbeat
 from the action until its effect is on screen (frames included: under software GL a frame of 5M
 points takes most of a second, which no handler can shorten).
 """
@@ -255,8 +257,9 @@ def terrain_ply(n: int, folder: Path) -> Path:
     return path
 
 
-def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bool = False):
-    """Time every GUI-thread handler on a big cloud (module notes, ``--handlers``)."""
+def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bool = False, preview: bool = False):
+    """Time every GUI-thread handler on a big cloud (module notes, ``--handlers``; ``preview``: open the
+    file as the viewer does, a decimated preview above its limit, instead of drawing it whole)."""
     from PySide6.QtCore import QPoint, QSettings, QThreadPool, Qt
     from PySide6.QtTest import QTest
     from PySide6.QtWidgets import QApplication
@@ -265,6 +268,13 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bo
     from app.views.main_window import MainWindow
 
     app = QApplication.instance() or QApplication([])
+    if not preview:
+        try:  # the file drawn whole, as an in-memory cloud or a file below the preview limit is
+            from app.model import large
+
+            large.PREVIEW_LIMIT = max(large.PREVIEW_LIMIT, *sizes)
+        except ImportError:  # a tree without previews draws every file whole
+            pass
     folder = Path(os.environ.get("TMPDIR", "/tmp"))
     tmp = folder / "curvlab-bench-handlers.ini"
     tmp.unlink(missing_ok=True)
@@ -298,11 +308,11 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bo
         original = getattr(obj, name)
 
         def wrapper(*args, **kwargs):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             try:
                 return original(*args, **kwargs)
             finally:
-                timed.setdefault(label, []).append(time.perf_counter() - t0)
+                timed.setdefault(label, []).append((time.perf_counter() - t0, time.thread_time() - c0))
 
         setattr(obj, name, wrapper)
 
@@ -318,24 +328,29 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bo
         beat.reset()
         t0 = time.perf_counter()
         win.open_path(path)
-        stall_load = settle(lambda: doc.mesh is not None and doc.mesh.n_vertices == n
+        stall_load = settle(lambda: doc.mesh is not None and Path(getattr(doc.source, "path", "")) == path
                             and doc.result(0) is not None)
+        shown = doc.mesh.n_vertices
         total = time.perf_counter() - t0
         res = doc.result(0)
-        row = [("load finished", 1000 * sum(timed.get("load finished", [0])), None),
-               ("result arrived", 1000 * sum(timed.get("result arrived", [0])), None),
-               ("load + estimate + first frame", None, 1000 * stall_load)]
+        def spent(label):
+            calls = timed.get(label, [])
+            return 1000 * sum(c[0] for c in calls), 1000 * sum(c[1] for c in calls)
+
+        row = [("load finished", *spent("load finished"), None),
+               ("result arrived", *spent("result arrived"), None),
+               ("load + estimate + first frame", None, None, 1000 * stall_load)]
         vp = win.grid.viewports[0]
         plotter = vp.plotter
 
         def act(label, action, cond=lambda: True):
             app.processEvents()
             beat.reset()
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.thread_time()
             action()
-            call = time.perf_counter() - t
+            call, cpu = time.perf_counter() - t, time.thread_time() - c
             stall = settle(cond)
-            row.append((label, 1000 * call, 1000 * max(stall, call)))
+            row.append((label, 1000 * call, 1000 * cpu, 1000 * max(stall, call)))
 
         centre = QPoint(plotter.width() // 2, plotter.height() // 2)
 
@@ -351,15 +366,15 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bo
         # Recompute, then Cancel a few seconds in: the shown result must stay through both
         app.processEvents()
         beat.reset()
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.thread_time()
         QTest.mouseClick(win.inspect.recompute, Qt.MouseButton.LeftButton)
-        call = time.perf_counter() - t
+        call, cpu = time.perf_counter() - t, time.thread_time() - c
         kept_recompute = doc.result(0) is not None
         end = time.perf_counter() + cancel_after
         while time.perf_counter() < end and ctl.busy:
             app.processEvents()
             time.sleep(0.002)
-        row.append(("recompute", 1000 * call, 1000 * beat.max_gap))
+        row.append(("recompute", 1000 * call, 1000 * cpu, 1000 * beat.max_gap))
         running = ctl.busy
         act("cancel", lambda: QTest.mouseClick(win.cancel_button, Qt.MouseButton.LeftButton))
         kept_cancel = doc.result(0) is not None and doc.result(0) is res if running else None
@@ -369,8 +384,8 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bo
         vp.plotter.renderer.GetActiveCamera().Modified()
         t = time.perf_counter()
         win.grid.render_all()
-        row.append(("one frame (VTK draw)", None, 1000 * (time.perf_counter() - t)))
-        rows.append((n, row, kept_recompute, kept_cancel, total))
+        row.append(("one frame (VTK draw)", None, None, 1000 * (time.perf_counter() - t)))
+        rows.append((n, shown, row, kept_recompute, kept_cancel, total))
     win.close()
     if sampler is not None:
         sampler.stop()
@@ -378,13 +393,13 @@ def run_handlers(sizes, method, k, *, cancel_after: float, keep: bool, trace: bo
     if not keep:
         for n in sizes:
             (folder / f"curvlab-bench-terrain-{n}.ply").unlink(missing_ok=True)
-    for n, row, kept_recompute, kept_cancel, total in rows:
-        print(f"\n{n:,} points, {method} R{k}: load to first coloured frame {total:.1f} s")
-        print(f"{'handler':<32} {'call ms':>9} {'stall ms':>9}")
-        for label, call, stall in row:
-            c = "" if call is None else f"{call:9.0f}"
-            s_ = "" if stall is None else f"{stall:9.0f}"
-            print(f"{label:<32} {c:>9} {s_:>9}")
+    for n, shown, row, kept_recompute, kept_cancel, total in rows:
+        whole = "drawn whole" if shown == n else f"a preview of {shown:,}"
+        print(f"\n{n:,} points ({whole}), {method} R{k}: load to first coloured frame {total:.1f} s "
+              f"(load average at the end {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+        print(f"{'handler':<32} {'call ms':>9} {'CPU ms':>9} {'stall ms':>9}")
+        for label, *cells in row:
+            print(f"{label:<32} " + " ".join("" .rjust(9) if v is None else f"{v:9.0f}" for v in cells))
         print(f"result shown through Recompute: {'yes' if kept_recompute else 'no'}; after Cancel: "
               + ("yes" if kept_cancel else "no" if kept_cancel is not None else "(the recompute ended first)"))
     return rows
@@ -400,6 +415,8 @@ def main(argv=None):
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--handlers", action="store_true", help="time every GUI-thread handler on a big cloud")
     p.add_argument("--keep", action="store_true", help="--handlers: keep the temporary PLY for the next run")
+    p.add_argument("--preview", action="store_true",
+                   help="--handlers: open the file as the viewer does (a preview above its limit), not whole")
     p.add_argument("--trace-stalls", action="store_true", help="--handlers: say where the GUI thread was while late")
     args = p.parse_args(argv)
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY") and shutil.which("xvfb-run") \
@@ -409,7 +426,7 @@ def main(argv=None):
         os.execvp(cmd[0], cmd)
     if args.handlers:
         run_handlers(args.sizes, args.method, args.range, cancel_after=args.cancel_after, keep=args.keep,
-                     trace=args.trace_stalls)
+                     trace=args.trace_stalls, preview=args.preview)
     elif args.cancel:
         run_cancel(args.sizes, args.method, args.range, after=args.cancel_after, repeats=args.repeats)
     else:

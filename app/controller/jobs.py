@@ -21,6 +21,7 @@ from app.model.inputs import item_word, items_word
 from app.model.picture import scene_of
 
 from .advice import advice_compile_note, advise_mesh
+from .large import WholeFileJob
 from .outputs import overlay_edges, write_export
 from .sources import mesh_report, prepare_source
 
@@ -89,6 +90,8 @@ class Controller(QObject):
         self._advise_after_load = False
         self._closed = False
         self._busy = False
+        self.whole_file = WholeFileJob(self)
+        """A large file estimated tile by tile into an output file (the Large file panel's run)."""
         # subscribed before the views: a new mesh's estimates start before the views draw it (a
         # first render of a large mesh takes seconds; the estimate runs beside it, off this thread)
         document.mesh_changed.connect(lambda change: self.request_missing())
@@ -468,6 +471,7 @@ class Controller(QObject):
         """Stop every job and wait for the threads; returns False if some did not finish in time."""
         self._closed = True
         self._stop_all()
+        self.whole_file.cancel()
         return QThreadPool.globalInstance().waitForDone(timeout_ms)
 
 

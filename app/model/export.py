@@ -13,7 +13,7 @@ from .document import Document, pane_letter
 from .picture import Scene, scene_of, view_fields
 from .scalars import relative_error
 
-__all__ = ["ExportPayload", "export_payload", "scene_payload", "export_name"]
+__all__ = ["ExportPayload", "export_payload", "scene_payload", "export_name", "output_name"]
 
 
 @dataclass(frozen=True)
@@ -86,11 +86,16 @@ def export_name(doc: Document, suffix: str) -> str:
     ``part-qs-R2-features30-region.ply``); characters a file name should not hold become ``_``."""
     source = doc.source
     stem = Path(source.path).stem if hasattr(source, "path") else getattr(source, "name", "") or "curvlab"
-    pane = doc.panes[doc.active]
+    return output_name(stem, doc.panes[doc.active], suffix)
+
+
+def output_name(stem: str, pane, suffix: str, *, region: bool = True) -> str:
+    """``<stem>-<method>-<range>[-features<angle>][-region]<suffix>`` for ``pane`` (:func:`export_name`;
+    ``region=False`` for a run that ignores the pane's region, such as a whole file's)."""
     parts = [stem, pane.method, pane.label.replace("=", "")]
     if pane.features is not None:
         parts.append(f"features{pane.features:g}")
-    if pane.region is not None:
+    if region and pane.region is not None:
         parts.append("region")
     name = "-".join(parts)
     return re.sub(r"[^A-Za-z0-9._+-]+", "_", name) + suffix

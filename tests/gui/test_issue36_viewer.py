@@ -120,6 +120,36 @@ def test_a_pick_on_a_big_cloud_is_found_in_a_worker_and_the_readout_reads_one_ve
     assert f"point {doc.picked}" in window.readout.toPlainText()
 
 
+def test_the_readout_reads_one_vertex_and_computes_no_whole_field(qtbot, window, ui, monkeypatch):
+    import curv
+
+    ui.open_surface("torus", n_vertices=2000)
+    doc = window.doc
+    doc.set_pane_count(2)
+    doc.set_difference(True)
+    ui.wait_ready()
+    whole = []
+    original = curv.Curvature.quantity
+
+    def counted(self, name):
+        whole.append(name)  # a result's quantity is every vertex's (5M values on a big cloud)
+        return original(self, name)
+
+    monkeypatch.setattr(curv.Curvature, "quantity", counted)
+    from app.model import readout_rows
+
+    v = 100
+    rows = dict(readout_rows(doc, v))
+    assert whole == []
+    res = doc.result(0)
+    monkeypatch.setattr(curv.Curvature, "quantity", original)
+    from app.model.readout import fmt
+
+    assert rows["H"][0] == fmt(res.mean[v]) and rows["K"][0] == fmt(res.gaussian[v])
+    assert rows["H"][2] == fmt(res.mean[v] - doc.result(1).mean[v])  # A - B
+    assert rows["H"][3] == fmt(doc.truth.mean[v])  # exact
+
+
 def test_a_pick_on_a_big_input_moves_a_marker_drawn_by_qt_and_renders_no_frame(qtbot, window, ui, monkeypatch):
     import app.views.viewport as viewport
 
