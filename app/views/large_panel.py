@@ -203,6 +203,9 @@ def attach_large_panel(window) -> LargePanel:
         window.tabifyDockWidget(window.docks["region"], dock)
     window.docks["large"] = dock
     panel.message.connect(lambda text, error: window.statusBar().showMessage(text, 8000))
+    # a preview says what it shows there: its dock comes to the front of its tabs when one opens
+    window.doc.mesh_changed.connect(
+        lambda change: window.show_dock("large") if isinstance(change.source, PreviewSource) else None)
     region = getattr(window, "region_panel", None)
     if region is not None:
         def around() -> bool:
