@@ -140,6 +140,7 @@ class MainWindow(QMainWindow):
         self.tabifyDockWidget(self.docks["mesh"], self.docks["compare"])
         self.tabifyDockWidget(self.docks["compare"], self.docks["advice"])
         self.tabifyDockWidget(self.docks["advice"], self.docks["region"])
+        self.docks["mesh"].raise_()  # first run: the mesh's report in front, Compare and Advice behind
 
         self.status_label = QLabel()
         self.status_label.setMinimumWidth(0)
@@ -160,7 +161,6 @@ class MainWindow(QMainWindow):
         QApplication.instance().installEventFilter(self._shortcuts)
         self._connect()
         self.large_panel = attach_large_panel(self)
-        self.docks["mesh"].raise_()  # first run: the mesh's report in front, the other tabs behind
         self._restore_settings()
 
     def _connect(self) -> None:
