@@ -61,7 +61,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="run the advisor on the mesh and show its ranking in the Advice panel")
     snap = p.add_argument_group("scripted snapshot")
     snap.add_argument("--screenshot", metavar="PNG", help="render, save the window image and exit")
-    snap.add_argument("--size", default="1400x860", help="window size WxH for the snapshot")
+    snap.add_argument("--size", help="window size WxH for the snapshot (default 1400x860); never larger than the "
+                                     "screen's available area")
     snap.add_argument("--timeout", type=float, default=300.0, help="seconds before the snapshot gives up")
     return p
 
@@ -229,9 +230,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.screenshot:
         from app.snapshot import Snapshot
 
-        w, _, h = args.size.partition("x")
-        window.requested_size = (int(w), int(h))
-        window.resize(int(w), int(h))
+        w, h = _snapshot_size(args.size, parser)
+        window.fit_to(w, h)  # no larger than the screen it opens on
+        if (window.width(), window.height()) != (w, h) and args.size:
+            print(f"curvlab: the screen holds {window.width()}x{window.height()}, not {w}x{h}", file=sys.stderr)
+        window.requested_size = (window.width(), window.height())
         snapshot = Snapshot(window, args.screenshot, timeout_s=args.timeout, wait_for_advice=args.advise)
         window.show()
         window.open_source_then(source, loaded=_matching(preloaded, source))
@@ -245,6 +248,24 @@ def main(argv: list[str] | None = None) -> int:
     if args.advise:
         window.advise()
     return app.exec()
+
+
+SNAPSHOT_SIZE = (1400, 860)
+"""The snapshot window's size unless ``--size`` says otherwise (and the screen has the room)."""
+
+
+def _snapshot_size(text, parser) -> tuple[int, int]:
+    """``--size WxH`` as integers (:data:`SNAPSHOT_SIZE` when not given)."""
+    if not text:
+        return SNAPSHOT_SIZE
+    w, _, h = text.lower().partition("x")
+    try:
+        size = int(w), int(h)
+    except ValueError:
+        size = (0, 0)
+    if min(size) <= 0:
+        parser.exit(2, f"curvlab: error: --size must be WxH in pixels, e.g. 1400x860; got {text!r}\n")
+    return size
 
 
 def _preload(args):

@@ -37,18 +37,20 @@ class Snapshot(QObject):
         self._deadline.start()
 
     def ready(self) -> bool:
-        """True when a mesh and its report are shown and every pane has its result (and the advice, if
-        waited for)."""
+        """True when a mesh and its report are shown, every pane has its result and its colours are
+        painted (and the advice is there, if waited for)."""
         doc, ctl = self.window.doc, self.window.controller
         return (doc.mesh is not None and doc.report is not None and not ctl.busy
-                and all(p.key in doc.results for p in doc.panes)
+                and all(p.key in doc.results for p in doc.panes) and not self.window.drawing.painter.busy
                 and (not self.wait_for_advice or doc.advice_current))
 
     def _poll(self) -> None:
         if self._done or not self.ready():
             return
-        self._timer.stop()
         self.window.redraw()
+        if self.window.drawing.painter.busy:  # a large input's colours: painted in a worker first
+            return
+        self._timer.stop()
         QTimer.singleShot(50, self._save)  # let the window lay out and paint (the save processes the events)
 
     def _save(self) -> None:

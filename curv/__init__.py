@@ -21,6 +21,7 @@ __version__ = "0.1.0"
 _LAZY = {
     "estimate": ("curv.api", "estimate"),
     "iter_estimate": ("curv.api", "iter_estimate"),
+    "prepare": ("curv.preparation", "prepare"),
     "estimate_ranges": ("curv.api", "estimate_ranges"),
     "estimate_table": ("curv.api", "estimate_table"),
     "ESTIMATORS": ("curv.estimators", "ESTIMATORS"),

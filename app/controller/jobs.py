@@ -10,15 +10,19 @@ from __future__ import annotations
 
 import time
 
-from curv.api import iter_estimate
+import numpy as np
+from curv import iter_estimate
 from PySide6.QtCore import QObject, QThreadPool, Signal
 from superqt.utils import create_worker
 
 from app.heap import release_free_memory
 from app.model import AdviceRecord, Document, count_text
 from app.model.inputs import item_word, items_word
+from app.model.picture import scene_of
 
 from .advice import advice_compile_note, advise_mesh
+from .large import WholeFileJob
+from .outputs import overlay_edges, write_export
 from .sources import mesh_report, prepare_source
 
 __all__ = ["Controller", "JOB_THREADS"]
@@ -77,6 +81,7 @@ class Controller(QObject):
         self._estimates: dict[tuple[str, int], object] = {}
         self._fractions: dict[tuple[str, int], float] = {}
         self._advice_job = None
+        self._side_jobs: dict = {}  # exports and overlay edges: key -> (worker, what it does)
         self._report_job = None
         self._report_due = False  # a new mesh's report, started once its first estimates are done
         self._last_message = ""
@@ -85,6 +90,8 @@ class Controller(QObject):
         self._advise_after_load = False
         self._closed = False
         self._busy = False
+        self.whole_file = WholeFileJob(self)
+        """A large file estimated tile by tile into an output file (the Large file panel's run)."""
         # subscribed before the views: a new mesh's estimates start before the views draw it (a
         # first render of a large mesh takes seconds; the estimate runs beside it, off this thread)
         document.mesh_changed.connect(lambda change: self.request_missing())
@@ -94,7 +101,7 @@ class Controller(QObject):
     def busy(self) -> bool:
         """True while a source, estimate, report or advisor job runs (or a report is due)."""
         return (self._source_job is not None or bool(self._estimates) or self._advice_job is not None
-                or self._report_job is not None or self._report_due)
+                or self._report_job is not None or self._report_due or bool(self._side_jobs))
 
     @property
     def advising_now(self) -> bool:
@@ -118,6 +125,8 @@ class Controller(QObject):
             self.progress.emit(f"Estimating {names}{advising}" + (f": {notes}" if notes else ""), frac)
         elif self._report_job is not None or self._report_due:
             self.progress.emit("Checking the mesh", -1.0)
+        elif self._side_jobs:
+            self.progress.emit("; ".join(label for _, label in self._side_jobs.values()), -1.0)
         elif self._advice_job is not None:  # the advisor reports no fraction: a busy indicator
             label = self.doc.source.label if self.doc.source is not None else "the mesh"
             note = f": {self._advice_note}" if self._advice_note else ""
@@ -210,11 +219,14 @@ class Controller(QObject):
             self.message.emit(self._last_message)
 
     def recompute(self, key) -> None:
-        """Forget the result or failure of ``key`` and compute it again."""
-        self.doc.results.pop(key, None)
+        """Compute ``key`` again; a result of it stays shown until the new one replaces it (a cancel or
+        a failure of the new one leaves it there)."""
+        if self._closed or self.doc.mesh is None or self._source_job is not None:
+            return
         self.doc.retry(key)
         self._stop(key)
-        self.request_missing()
+        self._start_estimate(key)
+        self._update_busy()
 
     def compute_in_pane(self, i: int, pane) -> None:
         """Show ``pane`` (a validated :class:`~app.model.Pane`) in pane ``i`` and compute it unless its
@@ -233,11 +245,11 @@ class Controller(QObject):
             call, args, kwargs = self._early.follow, (), {}  # started with the file's read: follow it
             self._early = None
         box = []  # the worker, for the callbacks (they must exist before it does)
-        worker = create_worker(call, *args,
+        worker = create_worker(_counted, call, *args,
                                **kwargs,
                                _start_thread=False, _connect={
             "yielded": lambda f: self._estimate_progress(box[0], key, f),
-            "returned": lambda res: self._estimate_done(box[0], gen, key, res),
+            "returned": lambda out: self._estimate_done(box[0], gen, key, *out),
             "errored": lambda exc: self._estimate_failed(box[0], gen, key, exc)})
         box.append(worker)
         self._estimates[key] = worker
@@ -253,7 +265,7 @@ class Controller(QObject):
             self._messages[key] = getattr(fraction, "message", "") or ""
             self._update_busy()
 
-    def _estimate_done(self, worker, gen, key, result) -> None:
+    def _estimate_done(self, worker, gen, key, result, n_invalid: int) -> None:
         if not self._current(worker, gen, key):
             return
         self._forget(key)
@@ -263,7 +275,7 @@ class Controller(QObject):
         # gained no time there, and its temporaries piled onto the frame's buffers (0.9 GB at 10M)
         self._start_report_when_due()
         computed = result.info.get("region", result.n)  # a region's result: the rest is NOT_COMPUTED, not invalid
-        n_bad = int((~result.valid).sum()) - (result.n - computed)
+        n_bad = n_invalid - (result.n - computed)
         secs = result.info.get("seconds")
         took = f" in {secs:.2f} s" if secs is not None else ""
         of = "" if computed == result.n else f" of {computed} computed"
@@ -276,7 +288,10 @@ class Controller(QObject):
             return
         self._forget(key)
         msg = f"{key[0]} {key[1]} failed: {_one_line(exc)}"
-        self.doc.set_failure(key, msg)
+        if key in self.doc.results:  # a recompute: the earlier result stays shown
+            msg += "; the earlier result stays"
+        else:
+            self.doc.set_failure(key, msg)
         self._start_report_when_due()
         self._update_busy()
         self.failed.emit(msg)
@@ -344,9 +359,58 @@ class Controller(QObject):
             self._advice_note = ""
             self.advising.emit(False)
 
+    # -- exports and overlays -------------------------------------------------------------------
+    def export(self, path, colours):
+        """Write the active pane to ``path`` (``.ply`` or ``.vtu``) as shown, ``colours`` its colours on
+        screen (:func:`~app.controller.outputs.write_export`); returns the path written."""
+        pane = self.doc.panes[self.doc.active]
+        return write_export(path, self.doc.mesh, scene_of(self.doc), pane, colours)
+
+    def export_later(self, path, colours) -> None:
+        """:meth:`export` in a worker (seconds for a large input); ``message`` says when the file is
+        written, ``failed`` why it is not."""
+        pane = self.doc.panes[self.doc.active]
+        name = getattr(path, "name", None) or str(path).rsplit("/", 1)[-1]
+        self._start_side(("export", str(path)), f"Writing {name}", write_export, path, self.doc.mesh,
+                         scene_of(self.doc), pane, colours, done=lambda out: self.message.emit(f"Wrote {out}"),
+                         failed=lambda exc: self.failed.emit(f"Export failed: {_one_line(exc)}"))
+
+    def request_edges(self, key) -> None:
+        """Find the overlay edges ``key`` (``"borders"`` or a feature angle) of the shown mesh in a
+        worker unless known or under way; they arrive in ``doc.edges`` (:meth:`Document.set_edges`)."""
+        doc = self.doc
+        if self._closed or doc.mesh is None or key in doc.edges or ("edges", key) in self._side_jobs:
+            return
+        serial = doc.mesh_serial
+        what = "Finding the border edges" if key == "borders" else f"Finding the feature edges at {key:g}°"
+
+        def done(edges):
+            if doc.mesh_serial == serial:
+                doc.set_edges(key, edges)
+
+        self._start_side(("edges", key), what, overlay_edges, doc.mesh, key, done=done,
+                         failed=lambda exc: self.failed.emit(f"{what} failed: {_one_line(exc)}"))
+
+    def _start_side(self, key, label, fn, *args, done, failed) -> None:
+        box = []
+
+        def finish(handler, value):
+            if self._side_jobs.get(key, (None,))[0] is box[0]:
+                del self._side_jobs[key]
+                handler(value)
+                self._update_busy()
+
+        worker = create_worker(fn, *args, _start_thread=False, _connect={
+            "returned": lambda out: finish(done, out), "errored": lambda exc: finish(failed, exc)})
+        box.append(worker)
+        self._side_jobs[key] = (worker, label)
+        worker.start()
+        self._update_busy()
+
     # -- stopping -------------------------------------------------------------------------------
     def cancel(self) -> None:
-        """Stop everything running; panes fall back to their last result.
+        """Stop everything running; panes fall back to their last result (a recompute's pane keeps the
+        result it showed).
 
         Returns at once: each worker stops at its next yield (the estimators yield every chunk of
         vertices); nothing here waits for it.
@@ -361,11 +425,13 @@ class Controller(QObject):
         self._generation += 1 if was_source else 0
         self._start_report_when_due()
         names = [f"{m} {r}" for m, r in keys]
-        self.doc.set_failures({key: f"{name} cancelled" for key, name in zip(keys, names)})
+        kept = [key for key in keys if key in self.doc.results]  # recomputes: their result stays
+        self.doc.set_failures({key: f"{name} cancelled" for key, name in zip(keys, names) if key not in kept})
         self._update_busy()
         if was_source or keys or was_advice:
-            self.message.emit("Cancelled" + (f" {', '.join(names)}" if names else "")
-                              + ("; choose it again to compute it" if names else ""))
+            again = "; choose it again to compute it" if len(kept) < len(keys) else ""
+            stays = "; the earlier result stays" if kept else ""
+            self.message.emit("Cancelled" + (f" {', '.join(names)}" if names else "") + again + stays)
 
     def _forget(self, key) -> None:
         self._estimates.pop(key, None)
@@ -394,6 +460,8 @@ class Controller(QObject):
         self._report_due = self._report_due and keep_report
         for key in list(self._estimates):
             self._stop(key)
+        for key in [k for k in self._side_jobs if k[0] == "edges"]:  # an export is not stopped midway
+            self._side_jobs.pop(key)[0].quit()
         if self._advice_job is not None:
             # curv.advise cannot stop midway: its thread finishes and its answer is dropped
             self._advice_job.quit()
@@ -403,7 +471,15 @@ class Controller(QObject):
         """Stop every job and wait for the threads; returns False if some did not finish in time."""
         self._closed = True
         self._stop_all()
+        self.whole_file.cancel()
         return QThreadPool.globalInstance().waitForDone(timeout_ms)
+
+
+def _counted(call, *args, **kwargs):
+    """Run the estimate generator ``call(*args, **kwargs)`` (yielding its progress) and return its
+    result with its count of invalid vertices, counted here in the worker (O(n): 5M points)."""
+    result = yield from call(*args, **kwargs)
+    return result, int(np.count_nonzero(~np.asarray(result.valid)))
 
 
 def _one_line(exc: Exception) -> str:

@@ -8,10 +8,9 @@ from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from curv.api import iter_estimate
+from curv import iter_estimate
+from curv import prepare as prepare_input
 from curv.io import is_point_file, load
-from curv.geometry.normals import cached_max_normals
-from curv.point_normals import grid_ordered
 from curv.surfaces import SURFACES, make_surface, sample_points
 
 from app.model.inputs import cloud_report, is_points
@@ -138,7 +137,7 @@ def preload(source, early: EarlyEstimate | None = None) -> Future:
         try:
             out = load_source(source)
             if not is_points(out[1]):
-                cached_max_normals(out[1])  # what the drawing and the default estimates shade and fit with
+                prepare_input(out[1])  # the normals the drawing and the default estimates shade and fit with
         except BaseException as exc:  # noqa: BLE001 (handed to whoever waits for the result)
             if early is not None:
                 early.cancel()
@@ -166,10 +165,8 @@ def prepare_source(source, prepare=None, loaded: Future | None = None) -> Loaded
     """
     source, mesh, truth = load_source(source) if loaded is None else loaded.result()
     report = None
+    prepare_input(mesh)  # what every estimate reads first (the cloud's facts, too: its neighbour search)
     if is_points(mesh):
-        # the cloud's facts need its neighbour search: made once, on the grid-ordered twin that its
-        # whole-cloud estimates run on, so that they find it done
-        grid_ordered(mesh)
         report = cloud_report(mesh)
     repairs = list(mesh.info.get("repairs", [])) if isinstance(getattr(mesh, "info", None), dict) else []
     return Loaded(source, mesh, truth, report, None if prepare is None else prepare(mesh), repairs)

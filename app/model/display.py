@@ -5,8 +5,9 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, fields, replace
 
+from psygnal import Signal
+
 from .colors import LimitMode
-from .events import Event
 from .inputs import DEFAULT_POINT_SIZE
 from .quantities import Quantity
 
@@ -128,12 +129,13 @@ class DisplayState:
 class Display:
     """Mutable holder of a :class:`DisplayState` with a ``changed`` event.
 
-    ``changed`` is emitted with the set of field names that changed.
+    ``changed`` (a psygnal signal) is emitted with the set of field names that changed.
     """
+
+    changed = Signal(set)
 
     def __init__(self, state: DisplayState | None = None) -> None:
         self.state = state or DisplayState()
-        self.changed = Event()
 
     def update(self, **changes) -> None:
         """Set fields by name; emits ``changed`` only if something differs."""

@@ -5,20 +5,20 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from psygnal import Signal
 from curv.core import ranges
-from curv.colors import diverges
 from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators, refusal
 from curv.core.errors import EstimatorError
 from curv.core.features import check_angle
 from curv.variants import Variant
 
 from .advice import AdviceRecord
-from .colors import LimitMode, colormap, compute_limits, map_colours
+from .colors import LimitMode, colormap, map_colours
 from .display import Display, Layer
-from .events import Event
 from .inputs import is_points
+from .picture import scene_of, view_fields, view_values
 from .region import Region, RestComposer
-from .scalars import field_values
+from .scalars import at_vertex, field_values
 
 __all__ = ["Pane", "Document", "MeshChange", "MAX_PANES", "pane_letter", "default_panes"]
 
@@ -197,7 +197,21 @@ class Document:
         :attr:`advice_current` (a new mesh makes the advice stale without this event).
     report_changed()
         The mesh's report arrived (:attr:`report`, None until then when set later).
+    edges_changed(key)
+        The edges of an overlay arrived (:attr:`edges`: ``"borders"`` or a feature angle).
+
+    The events are psygnal signals: ``connect`` holds a bound method weakly (a closed view does not
+    stay alive through the model) and ``disconnect`` drops a callback.
     """
+
+    mesh_changed = Signal(object)
+    panes_changed = Signal()
+    pane_changed = Signal(int)
+    result_changed = Signal(object)
+    picked_changed = Signal(object)
+    advice_changed = Signal(object)
+    report_changed = Signal()
+    edges_changed = Signal(object)
 
     def __init__(self, *, default_panes: tuple[Pane, ...] | None = None) -> None:
         default_panes = default_panes or (Pane.default(),)
@@ -219,13 +233,9 @@ class Document:
         self._rest = RestComposer()
         self._last_good: dict[int, Pane] = {}
         self.display = Display()
-        self.mesh_changed = Event()
-        self.panes_changed = Event()
-        self.pane_changed = Event()
-        self.result_changed = Event()
-        self.picked_changed = Event()
-        self.advice_changed = Event()
-        self.report_changed = Event()
+        self.edges: dict = {}
+        """Overlay edges of the mesh shown, (k, 2) vertex pairs by key: ``"borders"`` (one face) or a
+        feature angle in degrees (:func:`curv.feature_edges`); computed off the GUI thread on request."""
 
     # -- source ---------------------------------------------------------------------------------
     def set_mesh(self, source, mesh, truth=None, *, report=(), repairs=(), geometry=None) -> None:
@@ -239,6 +249,7 @@ class Document:
         self.report, self.repairs = None if report is None else tuple(report), tuple(repairs)
         self.results.clear()
         self.failures.clear()
+        self.edges = {}
         self._last_good.clear()
         self._rest.clear()
         self.panes = self._panes_for(mesh)
@@ -251,6 +262,11 @@ class Document:
         if changes:
             self.display.update(**changes)
         self.mesh_changed.emit(MeshChange(source, mesh, truth, self.report, self.repairs, geometry))
+
+    def set_edges(self, key, edges) -> None:
+        """Keep the overlay edges ``key`` of the mesh shown (:attr:`edges`)."""
+        self.edges[key] = edges
+        self.edges_changed.emit(key)
 
     def set_report(self, lines) -> None:
         """The report of the current mesh (``mesh.report().lines()``), computed after it was set."""
@@ -420,55 +436,33 @@ class Document:
     # -- what to draw -----------------------------------------------------------------------------
     def values(self, i: int) -> np.ndarray | None:
         """The shown field of view ``i``, or None if its result is not there yet."""
+        return view_values(scene_of(self), i)
+
+    def value_at(self, i: int, index: int) -> float | None:
+        """The shown field of view ``i`` at vertex ``index`` (constant time), or None without a result."""
         state = self.display.state
         if self.mesh is None or (state.layer.needs_truth and self.truth is None):
             return None
         if self.is_difference(i):
-            a, b = self.values(0), self.values(1)
+            a, b = self.value_at(0, index), self.value_at(1, index)
             return None if a is None or b is None else a - b
         res = self.result(i)
         if res is None and state.layer is not Layer.EXACT:
             return None
-        return field_values(res, self.truth, state)
+        return float(field_values(at_vertex(res, index), at_vertex(self.truth, index), state)[0])
 
     def signed(self, i: int) -> bool:
         return True if self.is_difference(i) else self.display.state.signed
 
-    def _cmap_for(self, i: int, clim):
-        """Diverging map when the field is signed and its limits straddle 0, else the sequential one."""
-        state = self.display.state
-        return colormap(state.diverging_cmap if diverges(clim, signed=self.signed(i)) else state.sequential_cmap)
-
     def fields(self) -> list:
-        """The shown field of every view, computing each pane's values and the limits once.
+        """The shown field of every view (:func:`app.model.picture.view_fields`).
 
         Returns
         -------
         list of (values, (lo, hi), Colormap) or None
             One entry per view (:attr:`view_count`); None where the result is not there yet.
         """
-        state = self.display.state
-        kw = dict(mode=state.limit_mode, percentiles=state.percentiles, manual=state.manual)
-        values = [self.values(i) for i in range(len(self.panes))]
-        if self.view_count > len(self.panes):
-            a, b = values[0], values[1]
-            values.append(None if a is None or b is None else a - b)
-        shared = None
-        present = [v for v in values[:len(self.panes)] if v is not None]
-        if state.shared_scale and len(self.panes) > 1 and present:
-            shared = compute_limits(np.concatenate(present), signed=state.signed, natural=state.natural, **kw)
-        out = []
-        for i, v in enumerate(values):
-            if v is None:
-                out.append(None)
-                continue
-            diff = self.is_difference(i)
-            if shared is not None and not diff:
-                clim = shared
-            else:
-                clim = compute_limits(v, signed=self.signed(i), natural=None if diff else state.natural, **kw)
-            out.append((v, clim, self._cmap_for(i, clim)))
-        return out
+        return view_fields(scene_of(self))
 
     def field(self, i: int):
         """``(values, (lo, hi), Colormap)`` of view ``i`` as :meth:`fields` gives it, or None."""

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 from curv.core.validity import Reason
 
 from .document import Document, pane_letter
-from .scalars import relative_error
+from .scalars import at_vertex, relative_error
 
 __all__ = ["readout_columns", "readout_rows", "fmt", "fmt_se", "fmt_vec", "REASON_WORDS"]
 
@@ -77,7 +75,7 @@ def readout_rows(doc: Document, index: int, *, stacked: bool = False) -> list[tu
     diff = doc.view_count > len(doc.panes)
     a, b = (cols[0], cols[1]) if diff else (None, None)
     truth = doc.truth
-    values = [doc.values(i) for i in range(doc.view_count)]
+    values = [doc.value_at(i, index) for i in range(doc.view_count)]
 
     def scalar_row(label, get):
         row = [fmt(get(r)) if r is not None else "…" for r in cols]
@@ -102,20 +100,18 @@ def readout_rows(doc: Document, index: int, *, stacked: bool = False) -> list[tu
         return (f"{name} ± 2σ" if np.isfinite(ses).any() else label, row)
 
     rows = [principal_row("k1"), principal_row("k2"),
-            scalar_row("H", lambda r: r.mean[index]), scalar_row("K", lambda r: r.gaussian[index]),
+            # H and K of the one vertex: a result's own .mean and .gaussian compute every vertex's
+            scalar_row("H", lambda r: at_vertex(r, index).quantity("mean")[0]),
+            scalar_row("K", lambda r: at_vertex(r, index).quantity("gaussian")[0]),
             vector_row("d1", lambda r: r.d1[index]), vector_row("d2", lambda r: r.d2[index])]
     status = [_reason(r, index) if r is not None else "…" for r in cols]
     status += [""] * diff + (["exact"] if truth is not None else [])
     rows.append(("status", status))
-    shown = [fmt(v[index]) if v is not None else "…" for v in values]
+    shown = [fmt(v) if v is not None else "…" for v in values]
     shown += [""] if truth is not None else []
     rows.append(("shown", shown))
     if truth is not None:
-        errs = [fmt(relative_error(_at(r, index), _at(truth, index))[0]) if r is not None else "…" for r in cols]
+        errs = [fmt(relative_error(at_vertex(r, index), at_vertex(truth, index))[0]) if r is not None else "…" for r in cols]
         rows.append(("e_rel", errs + [""] * diff + [""]))
     return rows
 
-
-def _at(res, i) -> SimpleNamespace:
-    """The principal curvatures of one vertex, shaped like a one-vertex result."""
-    return SimpleNamespace(k1=res.k1[i:i + 1], k2=res.k2[i:i + 1])

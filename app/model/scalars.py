@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+from curv.core.quantities import compute
 from curv.metrics import curvature_error
 
 from .display import DisplayState, Layer
 
-__all__ = ["field_values", "relative_error"]
+__all__ = ["field_values", "relative_error", "at_vertex", "OneVertex"]
 
 
 def relative_error(estimate, truth) -> np.ndarray:
@@ -63,3 +64,25 @@ def field_values(result, truth, state: DisplayState) -> np.ndarray:
     if layer is Layer.ERROR:
         return est - truth.quantity(name)
     return est
+
+
+class OneVertex:
+    """One vertex of a result (or of the truth) shaped like a one-vertex ``curv.Curvature``: what
+    :func:`field_values` reads (``k1``, ``k2``, their standard errors, ``quantity``), so that the
+    picked vertex's field costs nothing on a large input."""
+
+    def __init__(self, result, index: int) -> None:
+        sl = slice(int(index), int(index) + 1)
+        self.k1, self.k2 = result.k1[sl], result.k2[sl]
+        for name in ("k1_se", "k2_se"):
+            se = getattr(result, name, None)
+            setattr(self, name, None if se is None else se[sl])
+
+    def quantity(self, name: str) -> np.ndarray:
+        """As :meth:`curv.Curvature.quantity`."""
+        return compute(name, self.k1, self.k2)
+
+
+def at_vertex(result, index: int):
+    """``result`` (a ``curv.Curvature`` or None) at vertex ``index`` only (:class:`OneVertex`)."""
+    return None if result is None else OneVertex(result, index)

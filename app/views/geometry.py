@@ -5,15 +5,18 @@ from __future__ import annotations
 from functools import cached_property
 
 import numpy as np
-from curv.geometry.normals import cached_max_normals
+from curv import prepare
 from curv.core.quantities import anisotropy
 import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray
 
+from app.model.camera import is_georeferenced
 from app.model.inputs import is_points, unit_length
 
-__all__ = ["mesh_polydata", "cloud_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample", "border_lines", "edge_lines",
+from .viewport import grey_colours
+
+__all__ = ["mesh_polydata", "cloud_polydata", "prepare_geometry", "direction_glyphs", "glyph_subsample", "edge_lines",
            "Geometry"]
 
 
@@ -46,13 +49,13 @@ def mesh_polydata(mesh, normals: np.ndarray | None = None) -> pv.PolyData:
 
 
 class Geometry:
-    """What the views draw of a mesh or point cloud: its PolyData (built off the GUI thread), and on
-    first use its length unit and border lines.
+    """What the views draw of a mesh or point cloud: its PolyData and grey colours (built off the GUI
+    thread), and on first use its length unit.
 
-    The length unit (mean edge length of a mesh, median spacing of a point cloud) and the border
-    edges need a mesh's edge table, which neither an estimate nor the first picture needs (at 10M
-    vertices 2.5 GB and 15-30 s): they are computed when something asks for them (direction glyphs,
-    the border overlay, a default radius).
+    The length unit (mean edge length of a mesh, median spacing of a point cloud) needs a mesh's
+    edge table, which neither an estimate nor the first picture needs (at 10M vertices 2.5 GB and
+    15-30 s): it is computed when something asks for it (direction glyphs, a default radius). The
+    overlay edges (borders, creases) are the controller's, found in a worker.
 
     Parameters
     ----------
@@ -65,24 +68,34 @@ class Geometry:
         self.mesh, self.base = mesh, base
 
     @cached_property
+    def grey(self) -> np.ndarray:
+        """(n, 4) uint8: the colours of a pane without a result, shared by every viewport."""
+        return grey_colours(self.base.n_points)
+
+    @cached_property
+    def bounds(self) -> tuple:
+        """``(xmin, xmax, ymin, ymax, zmin, zmax)`` of the points, as VTK orders them (what the camera frames)."""
+        points = np.asarray(self.base.points)
+        if points.shape[0] == 0:
+            return (0.0, 1.0, 0.0, 1.0, 0.0, 1.0)
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        return tuple(float(v) for pair in zip(lo, hi) for v in pair)
+
+    @cached_property
+    def georeferenced(self) -> bool:
+        """Whether a point cloud looks like a scan in map coordinates
+        (:func:`app.model.camera.is_georeferenced`; False for a mesh): it is first seen from above."""
+        return self.points_only and is_georeferenced(np.asarray(self.base.points))
+
+    @cached_property
     def edge_length(self) -> float:
         """The length unit (:func:`app.model.inputs.unit_length`)."""
         return unit_length(self.mesh)
-
-    @cached_property
-    def borders(self) -> pv.PolyData:
-        """The border edges as lines (none for a point cloud: its border points are a result's ``BORDER``)."""
-        return pv.PolyData() if self.points_only else border_lines(self.mesh)
 
     @property
     def points_only(self) -> bool:
         """Whether this is a point cloud (vertex cells only)."""
         return self.base.n_cells == self.base.n_verts and self.base.n_verts > 0
-
-
-def border_lines(mesh) -> pv.PolyData:
-    """The border edges of ``mesh`` (edges with one face) as line cells."""
-    return edge_lines(mesh, np.asarray(mesh.edges)[np.asarray(mesh.border_edges, bool)])
 
 
 def edge_lines(mesh, edges: np.ndarray) -> pv.PolyData:
@@ -101,16 +114,19 @@ def cloud_polydata(cloud) -> pv.PolyData:
 def prepare_geometry(mesh) -> Geometry:
     """Render geometry of ``mesh``; safe to run in a worker thread.
 
-    A point cloud is drawn as its points. A mesh's normals are its cached default normals
-    (:func:`curv.geometry.normals.cached_max_normals`), the ones a default estimate uses too: computed once
-    for both. A point cloud's length unit is asked here (its neighbour search, which the cloud
+    A point cloud is drawn as its points. A mesh is shaded with its default normals
+    (:func:`curv.prepare`), the ones a default estimate uses too: computed once for both. A point cloud's length unit is asked here (its neighbour search, which the cloud
     keeps and its estimates reuse); a mesh's waits until something needs it (:class:`Geometry`).
     """
     if is_points(mesh):
         geometry = Geometry(mesh, cloud_polydata(mesh))
         geometry.edge_length  # noqa: B018 (computed here, off the GUI thread)
-        return geometry
-    return Geometry(mesh, mesh_polydata(mesh, cached_max_normals(mesh)))
+    else:
+        geometry = Geometry(mesh, mesh_polydata(mesh, prepare(mesh)))
+    geometry.grey  # noqa: B018 (here too)
+    geometry.bounds  # noqa: B018
+    geometry.georeferenced  # noqa: B018
+    return geometry
 
 
 def glyph_subsample(n: int, *, count: int = 2000, seed: int = 0) -> np.ndarray:

@@ -8,36 +8,12 @@ from PySide6.QtGui import QColor, QPainter, QPen
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
 from app.model.colors import format_limit
+from app.model.picture import histogram_counts
 
-__all__ = ["Histogram", "histogram_counts"]
+__all__ = ["Histogram"]
 
 _MARGIN = 8
 _LABEL_H = 16
-
-
-def histogram_counts(values: np.ndarray, clim: tuple[float, float], *, bins: int = 64):
-    """Counts of the finite ``values`` over a span covering the bulk of the data and ``clim``.
-
-    Returns
-    -------
-    counts : (bins,) int
-    edges : (bins + 1,) float
-    n_nan : int
-        Values that are NaN (invalid vertices).
-    """
-    finite = values[np.isfinite(values)]
-    n_nan = int(values.size - finite.size)
-    lo, hi = clim
-    if finite.size:
-        p_lo, p_hi = np.percentile(finite, (0.5, 99.5))
-        span = hi - lo
-        lo = min(lo - 0.1 * span, p_lo)
-        hi = max(hi + 0.1 * span, p_hi)
-    if not hi - lo > 1e-9 * max(abs(lo), abs(hi), 1e-300):  # a constant field: a small window around it
-        pad = max(abs(lo), abs(hi), 1e-12) * 1e-3
-        lo, hi = lo - pad, hi + pad
-    counts, edges = np.histogram(finite, bins=bins, range=(lo, hi))
-    return counts, edges, n_nan
 
 
 class Histogram(QWidget):
@@ -59,10 +35,15 @@ class Histogram(QWidget):
 
     def set_data(self, values: np.ndarray | None, clim, table: np.ndarray) -> None:
         """Show ``values`` binned, the limits ``clim`` and bars coloured with ``table`` (k, 3) uint8."""
-        if values is None:
+        self.set_counts(None if values is None else histogram_counts(values, clim), clim, table)
+
+    def set_counts(self, histogram, clim, table: np.ndarray) -> None:
+        """Show ``histogram`` (``(counts, edges, n_nan)`` of :func:`app.model.picture.histogram_counts`,
+        or None), the limits ``clim`` and bars coloured with ``table`` (k, 3) uint8."""
+        if histogram is None:
             self.counts, self.n_nan = np.zeros(0, int), 0
         else:
-            self.counts, self.edges, self.n_nan = histogram_counts(values, clim)
+            self.counts, self.edges, self.n_nan = histogram
         self.clim, self.table = (float(clim[0]), float(clim[1])), table
         self.update()
 

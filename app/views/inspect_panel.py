@@ -13,7 +13,7 @@ from PySide6.QtCore import QEvent, QObject, Qt, Signal
 from PySide6.QtGui import QDoubleValidator
 from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QFormLayout, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QLineEdit,
-    QPushButton, QSpinBox, QToolButton, QVBoxLayout, QWidget,
+    QPushButton, QSizePolicy, QSpinBox, QToolButton, QVBoxLayout, QWidget,
 )
 from superqt import QEnumComboBox, QLabeledDoubleRangeSlider
 from superqt.utils import qdebounced
@@ -163,8 +163,11 @@ class InspectPanel(QWidget):
         self.shared = QCheckBox("Shared colour scale across panes")
         self.histogram = Histogram()
         self.histogram.setToolTip("Drag a limit line to set manual limits")
+        # two lines of their own (what, then the count): a wrapping label in a scrolled form got one
+        # line's height and spilled over the next row; it never widens the dock either
         self.invalid = QLabel()
-        self.invalid.setWordWrap(True)
+        self.invalid.setObjectName("invalid_count")
+        self.invalid.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
         self.centre_note = QLabel()
         self.centre_note.setWordWrap(True)
         self.centre_note.setObjectName("centre_note")
@@ -445,27 +448,31 @@ class InspectPanel(QWidget):
             f"not 0 (type -x and x to centre it)." if off else "")
         self.centre_note.setVisible(off)
 
-    def show_values(self, drawn, *, table, n_invalid: int | None, n_vertices: int) -> None:
+    def show_values(self, drawn, *, table, histogram, n_invalid: int | None, n_vertices: int) -> None:
         """Show the active view's field: histogram, limit fields, invalid count.
 
         Parameters
         ----------
-        drawn : (values, clim, cmap) or None
-            The active view's entry of :meth:`Document.fields`.
+        drawn : (clim, cmap) or None
+            The active view's colour limits and map (None: nothing drawn yet).
         table : (k, 3) uint8
             Its colour table.
+        histogram : (counts, edges, n_nan) or None
+            :func:`app.model.picture.histogram_counts` of its values, computed with the picture.
         """
         if drawn is None:
-            self.histogram.set_data(None, (0.0, 1.0), table)
+            self.histogram.set_counts(None, (0.0, 1.0), table)
             self.invalid.setText("")
+            self.invalid.setToolTip("")
             self.centre_note.setVisible(False)
             return
-        values, clim, cmap = drawn
+        clim, cmap = drawn
         self.shown_limits = (float(clim[0]), float(clim[1]))
-        self.histogram.set_data(values, clim, table)
+        self.histogram.set_counts(histogram, clim, table)
         self._show_limits(clim)
         self._show_centre_note(clim, cmap.kind)
         if n_invalid is not None:
             word = "vertices" if self.doc.mesh is None else items_word(self.doc.mesh)
-            self.invalid.setText(f"Invalid {word} (magenta): {n_invalid} of {n_vertices} "
-                                 f"({100.0 * n_invalid / max(n_vertices, 1):.1f} %)")
+            count = f"{n_invalid} of {n_vertices} ({100.0 * n_invalid / max(n_vertices, 1):.1f} %)"
+            self.invalid.setText(f"Invalid {word} (magenta):\n{count}")
+            self.invalid.setToolTip(f"Invalid {word} (magenta): {count}")

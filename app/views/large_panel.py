@@ -12,8 +12,8 @@ from PySide6.QtCore import Signal
 from PySide6.QtWidgets import (QFileDialog, QFormLayout, QHBoxLayout, QLabel, QLineEdit, QProgressBar, QPushButton,
                                QWidget)
 
-from app.controller.large import WholeFileJob
 from app.model import Document
+from app.model.export import output_name
 from app.model.inputs import is_points, unit_length
 from app.model.large import FullResolutionSource, PreviewSource, pane_job, whole_file_suffixes
 from app.model.region import index_region, show_region
@@ -31,7 +31,8 @@ class LargePanel(QWidget):
     ----------
     doc : Document
     controller : app.controller.Controller
-        Opens the full-resolution piece as the document's source.
+        Opens the full-resolution piece as the document's source and runs the whole file
+        (``controller.whole_file``, an :class:`app.controller.large.WholeFileJob`).
     """
 
     message = Signal(str, bool)
@@ -39,7 +40,7 @@ class LargePanel(QWidget):
     def __init__(self, doc: Document, controller, parent=None) -> None:
         super().__init__(parent)
         self.doc, self.controller = doc, controller
-        self.job = WholeFileJob(self)
+        self.job = controller.whole_file
         self.shown = QLabel()
         self.shown.setWordWrap(True)
         self.shown.setObjectName("large_shown")
@@ -128,8 +129,7 @@ class LargePanel(QWidget):
             return
         suffixes = whole_file_suffixes(path)
         pane = self.doc.panes[self.doc.active]
-        stem = Path(path).stem
-        suggested = str(Path(path).with_name(f"{stem}-{pane.method}{suffixes[0]}"))
+        suggested = str(Path(path).with_name(output_name(Path(path).stem, pane, suffixes[0], region=False)))
         filters = ";;".join(f"{s.lstrip('.').upper()} (*{s})" for s in suffixes)
         out, _ = QFileDialog.getSaveFileName(self, "Whole file to", suggested, filters)
         if out:
@@ -206,6 +206,9 @@ def attach_large_panel(window) -> LargePanel:
         window.docks["mesh"].raise_()
     window.docks["large"] = dock
     panel.message.connect(lambda text, error: window.statusBar().showMessage(text, 8000))
+    # a preview says what it shows there: its dock comes to the front of its tabs when one opens
+    window.doc.mesh_changed.connect(
+        lambda change: window.show_dock("large") if isinstance(change.source, PreviewSource) else None)
     region = getattr(window, "region_panel", None)
     if region is not None:
         def around() -> bool:

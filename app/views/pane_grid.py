@@ -8,6 +8,7 @@ import pyvista as pv
 from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QGridLayout, QWidget
 
+from app.model.camera import UpAxis, View, view_vectors
 from app.model.inputs import DEFAULT_POINT_SIZE
 
 from .viewport import Viewport
@@ -42,6 +43,12 @@ class PaneGrid(QWidget):
         self._point_size = float(DEFAULT_POINT_SIZE)
         self._syncing = False
         self._synced_mtime = 0
+        self._grey = None
+        self._bounds = None
+        self.view, self.up = View.ISOMETRIC, UpAxis.Z
+        """The standard view the cameras were last set to, and its up axis."""
+        self._render_timer = QTimer(self, singleShot=True, interval=0)
+        self._render_timer.timeout.connect(self.render_all)
         self.set_count(1)
 
     # -- panes ----------------------------------------------------------------------------------
@@ -61,7 +68,7 @@ class PaneGrid(QWidget):
             vp.vertex_picked.connect(self.vertex_picked)
             vp.plotter.ren_win.AddObserver("EndEvent", self._after_render)
             if self._base is not None:
-                vp.set_geometry(self._base, points=self._points, point_size=self._point_size)
+                vp.set_geometry(self._base, points=self._points, point_size=self._point_size, grey=self._grey)
             self.viewports.append(vp)
         self._arrange()
         self.set_linked(self.linked)  # new viewports look through the shared camera (or a copy): the view stays
@@ -99,12 +106,14 @@ class PaneGrid(QWidget):
         if self._base is not None:
             QTimer.singleShot(0, lambda: self.reset_camera(render=True))
 
-    def set_geometry(self, base: pv.PolyData, *, points: bool = False) -> None:
+    def set_geometry(self, base: pv.PolyData, *, points: bool = False, grey=None, bounds=None) -> None:
         """Show a new mesh (or point cloud, drawn as points) in every viewport and frame it (drawn
-        from the viewports' next colours on)."""
-        self._base, self._points = base, bool(points)
+        from the viewports' next colours on); ``grey``: its all-grey colours, shared by the viewports;
+        ``bounds``: its bounds if known (VTK's are a pass over the points)."""
+        self._base, self._points, self._grey = base, bool(points), grey
+        self._bounds = bounds
         for vp in self.viewports:
-            vp.set_geometry(base, points=self._points, point_size=self._point_size)
+            vp.set_geometry(base, points=self._points, point_size=self._point_size, grey=grey)
         self.reset_camera(render=False)
         self._refit_later()  # again once Qt has laid the panes out (VTK fits their sizes then)
 
@@ -114,14 +123,22 @@ class PaneGrid(QWidget):
         for vp in self.viewports:
             vp.set_point_size(self._point_size)
 
+    def set_view(self, view: View, up: UpAxis, *, render: bool = True) -> None:
+        """Look at the mesh from the standard ``view`` with ``up`` up, framed (every pane)."""
+        self.view, self.up = View(view), UpAxis(up)
+        self.reset_camera(render=render)
+
     def reset_camera(self, *, render: bool = True) -> None:
-        """Frame the mesh from above at an angle."""
+        """Frame the mesh from the current standard view (:meth:`set_view`)."""
         first = self.viewports[0].plotter
-        first.view_vector((0.55, -1.0, 0.85), viewup=(0.0, 0.0, 1.0), render=False)
+        position, view_up = view_vectors(self.view, self.up)
+        first.view_vector(tuple(position), viewup=tuple(view_up), render=False)
         # the renderer's own reset: pyvista's Plotter.reset_camera renders even with render=False
         # (a whole extra frame: 1.7 s on a 1M mesh under Xvfb)
         # the mesh's own bounds: its actor is hidden until its first colours
-        first.renderer.reset_camera(render=False, bounds=None if self._base is None else self._base.bounds)
+        if self._base is not None and self._bounds is None:
+            self._bounds = self._base.bounds
+        first.renderer.reset_camera(render=False, bounds=self._bounds)
         # VTK fits the first pane (its aspect included); a linked camera must also fit a narrower pane
         aspects = [vp.plotter.width() / max(vp.plotter.height(), 1) for vp in self.viewports]
         narrow = min(aspects) / max(min(aspects[0], 1.0), 1e-3) if self.linked else 1.0
@@ -156,14 +173,26 @@ class PaneGrid(QWidget):
             return
         self.render_all(skip=window)
 
+    def request_render(self) -> None:
+        """Render every viewport once the event loop is free (however many ask before then): a
+        handler returns at once, and a frame of a large input (most of a second under software GL)
+        is drawn once for all the changes that asked for it."""
+        self._render_timer.start()
+
+    @property
+    def render_due(self) -> bool:
+        """True while a requested render has not been drawn yet."""
+        return self._render_timer.isActive()
+
     def render_all(self, *, skip=None) -> None:
-        """Render every viewport (except the one whose window is ``skip``)."""
+        """Render every viewport (except the one whose window is ``skip``) now."""
+        if skip is None:
+            self._render_timer.stop()
         self._syncing = True
         try:
             for vp in self.viewports:
                 if vp.plotter.ren_win is not skip:
-                    vp.plotter.renderer.ResetCameraClippingRange()
-                    vp.render()
+                    vp.render_if_stale()
         finally:
             self._syncing = False
             self._synced_mtime = self.viewports[0].plotter.renderer.GetActiveCamera().GetMTime()

@@ -4,113 +4,41 @@ direction glyphs, picked-vertex marker. Colours are updated in place, never by r
 
 from __future__ import annotations
 
-import ctypes
-import sys
-
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Qt, Signal
-from PySide6.QtGui import QTextDocument
-from PySide6.QtWidgets import QFrame, QLabel, QSizePolicy, QVBoxLayout
-from pyvistaqt import QtInteractor
-from vtkmodules.vtkCommonCore import vtkLookupTable, vtkObject
-from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
+from PySide6.QtWidgets import QFrame, QVBoxLayout
+from superqt.utils import create_worker
+from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.vtkCommonCore import VTK_UNSIGNED_CHAR, vtkLookupTable
 from vtkmodules.vtkRenderingCore import vtkCellPicker, vtkRenderer
 
-from app.model.colors import LABEL_FORMAT, contrasting_colours
+from app.model.colors import contrasting_colours
 from app.model.inputs import DEFAULT_POINT_SIZE
 
+from .colour_bar import BAR_FRACTION, BAR_STRIP_PX, BAR_WIDTH_PX, scalar_bar
+from .interactor import Interactor
+from .marker import MarkerOverlay
+from .pane_header import PaneHeader
+from .picking import PointPick, clip_coordinates, drawn_point_at
 from .style import PANE_COLOURS
 
-__all__ = ["Viewport"]
+__all__ = ["Viewport", "grey_colours"]
 
-_BAR_WIDTH_PX = 420
-_BAR_FRACTION = 0.8
-_BAR_STRIP_PX = 70
-"""Height of the colour bar's strip under the mesh, in pixels (less in very small panes)."""
 
 _GREY = np.array([200, 200, 200, 255], dtype=np.uint8)
 
+ASYNC_PICK_POINTS = 500_000
+"""Clouds from this many points find a clicked point in a worker (a pass over every point)."""
+OVERLAY_MARKER_POINTS = 500_000
+"""Inputs from this many points mark the picked vertex with a circle Qt draws over the pane: under
+software GL a frame of 5M points takes seconds, and moving the marker in the scene needs one."""
 MSAA_SAMPLES = 4
 """Multisamples per pixel for meshes of at most :data:`MSAA_MAX_CELLS` cells."""
 MSAA_MAX_CELLS = 400_000
 """Larger meshes are smoothed by FXAA (one screen-space pass) instead of multisampling: under
 software GL (Mesa's llvmpipe, Xvfb) 8-sample MSAA made a 2M-triangle frame 3-4x slower (2.5 s
 against 0.7 s) while its triangles are smaller than a pixel anyway."""
-
-
-def _pin_none(references: int = 2_000_000) -> None:
-    """Give None ``references`` references that are never released (CPython before 3.12 only).
-
-    Each VTK render and make-current through pyvistaqt 0.13 / VTK 9.7 / PySide6 6.12 drops None's
-    reference count by one more than it takes (measured: -1 per ``ren_win.Render()``, -1 per
-    ``makeCurrent()``, about -4 per frame, with a plain ``QtInteractor`` too), so after some ten
-    thousand frames None would be freed and the interpreter abort ("none_dealloc"; the whole GUI
-    test run did at exit). A list of Nones does not help: finalisation frees it first. From
-    Python 3.12 None is immortal and nothing is needed.
-    """
-    if sys.version_info < (3, 12) and sys.implementation.name == "cpython":
-        ctypes.c_ssize_t.from_address(id(None)).value += references  # ob_refcnt is None's first field
-
-
-_pin_none()
-
-
-class _Interactor(QtInteractor):
-    """A ``QtInteractor`` whose paints show VTK's last frame again when nothing drawn changed since.
-
-    pyvistaqt's widget renders the whole scene on every paint, and every render schedules a paint:
-    each ``render()`` drew the scene twice, and grabbing the window a third time (at 10M
-    triangles each frame took 10-30 s of the GUI thread under software GL). Here a paint only blits
-    the last frame while the window size and the scene's modification time (renderers, cameras,
-    lights, props and the props' data) are what they were when that frame ended.
-    """
-
-    def __init__(self, *args, **kwargs) -> None:
-        super().__init__(*args, **kwargs)
-        self.frames = 0
-        """Frames VTK rendered in this widget (for tests and benchmarks)."""
-        self._stamp = vtkObject()  # Modified() at the end of each frame: its MTime is the frame's time
-        self._frame_size = None
-        # listed with pyvistaqt's own observers: removed when the widget closes (VTK pins the method)
-        self._vtk_observers.append((self.ren_win, self.ren_win.AddObserver("EndEvent", self._frame_ended)))
-
-    def _frame_ended(self, *_):
-        self.frames += 1
-        self._stamp.Modified()
-        self._frame_size = tuple(self.ren_win.GetSize())
-
-    def _scene_time(self) -> int:
-        stamp = 0
-        renderers = self.ren_win.GetRenderers()
-        renderers.InitTraversal()
-        for _ in range(renderers.GetNumberOfItems()):
-            ren = renderers.GetNextItem()
-            stamp = max(stamp, ren.GetMTime(), ren.GetActiveCamera().GetMTime())
-            lights = ren.GetLights()
-            lights.InitTraversal()
-            for _ in range(lights.GetNumberOfItems()):
-                stamp = max(stamp, lights.GetNextItem().GetMTime())
-            props = ren.GetViewProps()
-            props.InitTraversal()
-            for _ in range(props.GetNumberOfItems()):
-                stamp = max(stamp, props.GetNextProp().GetRedrawMTime())
-        return stamp
-
-    def frame_is_current(self) -> bool:
-        """True when the last frame still shows the scene (same size, nothing modified since)."""
-        return (self._frame_size is not None and self._frame_size == tuple(self.ren_win.GetSize())
-                and self._scene_time() < self._stamp.GetMTime())
-
-    def paintGL(self) -> None:  # noqa: N802 (Qt API)
-        if self._in_paint or not self.frame_is_current():
-            super().paintGL()
-            return
-        self._in_paint = True  # pyvistaqt's paintGL then blits the last frame without rendering
-        try:
-            super().paintGL()
-        finally:
-            self._in_paint = False
 
 
 class Viewport(QFrame):
@@ -134,18 +62,15 @@ class Viewport(QFrame):
         self.setFrameShape(QFrame.Shape.Box)
         self.setLineWidth(2)
         self._title_parts = ("", "", "")
-        self.title = QLabel(self)
-        self.title.setAlignment(Qt.AlignmentFlag.AlignCenter)
-        # a long title must never widen the window: it is clipped, and complete in the tooltip
-        self.title.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
-        self.title.setMinimumWidth(0)
-        self.plotter = _Interactor(self, auto_update=False, multi_samples=MSAA_SAMPLES)
+        self.header = PaneHeader(index, self)
+        self.title, self.title_field = self.header.title, self.header.rest
+        self.plotter = Interactor(self, auto_update=False, multi_samples=MSAA_SAMPLES)
         self.plotter.setAcceptDrops(False)  # the main window handles dropped files
         self.plotter.set_background("white")
         lay = QVBoxLayout(self)
         lay.setContentsMargins(1, 1, 1, 1)
         lay.setSpacing(0)
-        lay.addWidget(self.title)
+        lay.addWidget(self.header)
         lay.addWidget(self.plotter, 1)
         self.poly: pv.PolyData | None = None
         self.colours: np.ndarray | None = None
@@ -154,10 +79,13 @@ class Viewport(QFrame):
         self._overlay_actors: dict = {}
         self.field_title = ""
         self._marker_actor = None
+        self._marker_point = None
         self._marker_colour = (255, 208, 0)
+        self.marker_overlay = MarkerOverlay(self.plotter)
+        self.plotter.frame_done = self._place_overlay
         self.glyph_colours = ((20, 20, 20), (31, 95, 191))
         self._lut = vtkLookupTable()
-        self._bar = _scalar_bar(self._lut)
+        self._bar = scalar_bar(self._lut)
         # the colour bar has its own strip under the mesh's renderer: the mesh never covers it
         self._bar_renderer = vtkRenderer()
         self._bar_renderer.SetBackground(1.0, 1.0, 1.0)
@@ -166,6 +94,9 @@ class Viewport(QFrame):
         self.plotter.ren_win.AddRenderer(self._bar_renderer)
         self._bar.SetVisibility(False)
         self._press = None
+        self._picks = 0
+        self.picking = False
+        """True while a click's point is searched for in a worker (large clouds)."""
         self._picker = vtkCellPicker()
         self._picker.SetTolerance(0.002)
         self.points_only = False
@@ -174,9 +105,10 @@ class Viewport(QFrame):
 
     # -- geometry -------------------------------------------------------------------------------
     def set_geometry(self, base: pv.PolyData, *, points: bool = False,
-                     point_size: float = DEFAULT_POINT_SIZE) -> None:
-        """Show ``base`` (shared points and cells) with a fresh colour array, all grey, from the next
-        :meth:`set_colours` on (until then it is hidden: a paint of the widget draws nothing of it).
+                     point_size: float = DEFAULT_POINT_SIZE, grey: np.ndarray | None = None) -> None:
+        """Show ``base`` (shared points and cells) all grey (``grey``, (n, 4) uint8 shared by every
+        viewport and never written, or a new array) from the next :meth:`set_colours` on (until then
+        it is hidden: a paint of the widget draws nothing of it).
 
         With ``points`` (a point cloud) every point is drawn as a shaded sphere ``point_size`` pixels
         wide (VTK's sphere impostors; they render under software GL too) and picking takes the point
@@ -187,17 +119,21 @@ class Viewport(QFrame):
             self.plotter.remove_actor(self._mesh_actor, render=False)
         self.clear_glyphs()
         self.poly = base.copy(deep=False)
-        self.colours = np.tile(_GREY, (base.n_points, 1))
-        self.poly.point_data.set_array(self.colours, "rgba")
-        self.colours = self.poly.point_data["rgba"]  # the VTK-backed array, written in place later
+        self._grey = grey_colours(base.n_points) if grey is None else grey
+        self._use_colours(self._grey)
         self.points_only = bool(points)
-        style = dict(style="points", point_size=point_size, render_points_as_spheres=True) if points else {}
-        self._mesh_actor = self.plotter.add_mesh(
-            self.poly, scalars="rgba", rgb=True, show_scalar_bar=False, reset_camera=False,
-            render=False, name="mesh", pickable=True, **style)
+        # the mapper and actor built here, not by pyvista's add_mesh, which scans the colours (a
+        # pass over every vertex, 0.1 s at 5M points) for a range that direct colours never use
+        mapper = pv.DataSetMapper(self.poly)
+        mapper.SetScalarModeToUsePointFieldData()
+        mapper.SelectColorArray("rgba")
+        mapper.SetColorModeToDirectScalars()
+        mapper.ScalarVisibilityOn()
+        style = dict(style="points", point_size=point_size, render_points_as_spheres=True) if points else \
+            dict(interpolation="gouraud")
+        self._mesh_actor = pv.Actor(mapper=mapper, prop=pv.Property(self.plotter.theme, **style))
         self._mesh_actor.SetVisibility(False)
-        if not points:
-            self._mesh_actor.prop.interpolation = "gouraud"
+        self.plotter.add_actor(self._mesh_actor, reset_camera=False, name="mesh", pickable=True, render=False)
         large = base.n_cells > MSAA_MAX_CELLS
         self.plotter.ren_win.SetMultiSamples(0 if large else MSAA_SAMPLES)
         self.plotter.renderer.SetUseFXAA(large)
@@ -214,17 +150,29 @@ class Viewport(QFrame):
         return float(self._mesh_actor.prop.point_size) if self._mesh_actor is not None and self.points_only else None
 
     def set_colours(self, rgba: np.ndarray | None, *, clim=None, cmap=None, title: str = "") -> None:
-        """Write ``rgba`` (n, 4) uint8 into the mesh colours (grey if None) and update the colour bar."""
+        """Draw the mesh in ``rgba`` (n, 4) uint8 (grey if None) and update the colour bar.
+
+        VTK reads ``rgba`` itself, not a copy (:attr:`colours` is it): the caller hands over an array
+        it does not write any more, such as a :class:`~app.model.picture.Picture`'s.
+        """
         if self.colours is None:
             return
         if rgba is None:
-            self.colours[:] = _GREY
+            self._use_colours(self._grey)
             self._bar.SetVisibility(False)
         else:
-            self.colours[:] = rgba
+            self._use_colours(rgba)
             self._set_bar(clim, cmap, title)
-        self.poly.GetPointData().GetArray("rgba").Modified()
         self._mesh_actor.SetVisibility(True)
+
+    def _use_colours(self, rgba: np.ndarray) -> None:
+        """Make ``rgba`` the mesh's colour array (no copy: constant time at any size)."""
+        rgba = np.ascontiguousarray(rgba, dtype=np.uint8)
+        array = numpy_to_vtk(rgba, deep=False, array_type=VTK_UNSIGNED_CHAR)
+        array.SetName("rgba")
+        self.poly.GetPointData().AddArray(array)  # replaces the array of that name
+        self.poly.GetPointData().SetActiveScalars("rgba")
+        self.colours = rgba
 
     def _set_bar(self, clim, cmap, title: str) -> None:
         from curv.colors import CLIP_SHADE
@@ -248,25 +196,20 @@ class Viewport(QFrame):
         self._marker_colour = contrasting_colours(cmap, 1, avoid=self.glyph_colours)[0]
 
     def set_title(self, text: str, *, status: str = "", detail: str = "") -> None:
-        """The pane's header: estimator (``text``, with ``detail``, its full name, where the header has
-        room), the field the colours show, the direction legend and the status (computing, failed) in red."""
+        """The pane's header (:class:`~.pane_header.PaneHeader`): estimator (``text``, with ``detail``,
+        its full name, where the header has room; elided where even ``text`` has not), the field the
+        colours show, the direction legend and the status (computing, failed) in red."""
         self._title_parts = (text, status, detail)
-        self.title.setToolTip(" — ".join(x for x in (text, detail) if x) + (f" {status}" if status else ""))
         self._fit_title()
 
     def _fit_title(self) -> None:
-        """Set the header from :meth:`set_title`'s parts, leaving the estimator's full name out when
-        the whole would not fit the pane's width."""
         text, status, detail = self._title_parts
-        extra = f" &nbsp;<span style='color:#b00020'>{status}</span>" if status else ""
-        field = f" &nbsp;·&nbsp; <b>{self.field_title}</b>" if self.field_title and self._bar.GetVisibility() else ""
-        rest = f"{field}{self.glyph_legend()}{extra}"
-        full = f"{text} — {detail}{rest}" if detail else f"{text}{rest}"
-        self.title.setText(full if _html_width(self.title, full) <= self.title.width() else f"{text}{rest}")
+        field = self.field_title if self.field_title and self._bar.GetVisibility() else ""
+        self.header.show_parts(text, detail=detail, field=field, legend=self.glyph_legend(), status=status)
 
-    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt API)
-        super().resizeEvent(event)
-        self._fit_title()
+    def header_html(self) -> str:
+        """The header as shown: the estimator part (plain, perhaps elided), then the rich-text rest."""
+        return self.header.html()
 
     def glyph_legend(self) -> str:
         """What the direction crosses mean, in their colours (empty while none are drawn)."""
@@ -316,37 +259,68 @@ class Viewport(QFrame):
                 pv.PolyData(np.asarray(self.poly.points)), color=(0.1, 0.1, 0.1), point_size=3,
                 render_points_as_spheres=False, render=False, reset_camera=False, pickable=False, lighting=False)
 
-    def set_marker(self, point: np.ndarray | None) -> None:
-        """Mark the picked vertex with a small sphere (None hides it)."""
-        if self._marker_actor is not None:
+    def set_marker(self, point: np.ndarray | None) -> bool:
+        """Mark the picked vertex (None: no mark); True when the 3D scene changed (a render is due).
+
+        A small sphere in the scene; on an input of :data:`OVERLAY_MARKER_POINTS` points or more a
+        circle Qt draws over the pane instead (placed again after every frame), so that a pick costs
+        no frame of the whole input.
+        """
+        changed = self._marker_actor is not None
+        if changed:
             self.plotter.remove_actor(self._marker_actor, render=False)
             self._marker_actor = None
-        if point is not None:  # a fixed size in pixels: visible at any zoom, in a colour the map lacks
-            marker = pv.PolyData(np.asarray(point, float).reshape(1, 3))
-            self._marker_actor = self.plotter.add_mesh(
-                marker, color=tuple(c / 255 for c in self._marker_colour), point_size=max(16, (self.point_size or 0) + 8),
-                render_points_as_spheres=True, render=False, reset_camera=False, pickable=False, lighting=False)
+        self._marker_point = None if point is None else np.asarray(point, float).reshape(3)
+        diameter = max(16, (self.point_size or 0) + 8)  # a fixed size in pixels: visible at any zoom
+        if point is None or self.poly is None or self.poly.n_points < OVERLAY_MARKER_POINTS:
+            self.marker_overlay.place(None, None, diameter=diameter, colour=self._marker_colour)
+        if point is None:
+            return changed
+        if self.poly is not None and self.poly.n_points >= OVERLAY_MARKER_POINTS:
+            self._place_overlay()
+            return changed
+        marker = pv.PolyData(self._marker_point.reshape(1, 3))  # in a colour the map lacks
+        self._marker_actor = self.plotter.add_mesh(
+            marker, color=tuple(c / 255 for c in self._marker_colour), point_size=diameter,
+            render_points_as_spheres=True, render=False, reset_camera=False, pickable=False, lighting=False)
+        return True
+
+    def _place_overlay(self) -> None:
+        """Put the Qt-drawn marker where the camera shows the picked vertex now."""
+        point = self._marker_point
+        if point is None or self.poly is None or self.poly.n_points < OVERLAY_MARKER_POINTS:
+            return
+        in_front = (self.camera_matrix() @ np.append(point, 1.0))[3] > 0
+        x, y = self.display_position(point) if in_front else (None, None)
+        self.marker_overlay.place(x, y, diameter=max(16, (self.point_size or 0) + 8), colour=self._marker_colour)
 
     def set_active(self, active: bool, *, difference: bool = False) -> None:
         """Frame in the pane's colour, thick when it is the active pane (the Inspect group matches)."""
         colour = PANE_COLOURS[-1] if difference else PANE_COLOURS[self.index % (len(PANE_COLOURS) - 1)]
         width = 3 if active else 1
         self.setStyleSheet(f"#viewport{self.index} {{ border: {width}px solid {colour}; }}")
-        self.title.setStyleSheet(f"background: {colour if active else 'transparent'};"
-                                 f" color: {'white' if active else 'black'}; padding: 1px;")
+        self.header.set_active(colour if active else None)
 
     def render(self) -> None:
         self._centre_bar()
         self.plotter.render()
 
+    def render_if_stale(self) -> None:
+        """Render unless the last frame still shows the scene (a paint may have drawn it since a
+        render was asked for: a frame of a large input is not drawn twice)."""
+        self._centre_bar()  # the pane's size may have changed: the bar's strip follows it
+        if not self.plotter.frame_is_current():
+            self.plotter.renderer.ResetCameraClippingRange()
+            self.plotter.render()
+
     def _centre_bar(self) -> None:
         """Size the colour bar's strip under the mesh and centre the bar in it (its width is capped in
         pixels, so its left edge depends on the pane)."""
         w, h = max(self.plotter.width(), 1), max(self.plotter.height(), 1)
-        strip = min(_BAR_STRIP_PX, 0.22 * h) / h
+        strip = min(BAR_STRIP_PX, 0.22 * h) / h
         self._bar_renderer.SetViewport(0.0, 0.0, 1.0, strip)
         self.plotter.renderer.SetViewport(0.0, strip, 1.0, 1.0)
-        frac = min(_BAR_FRACTION, _BAR_WIDTH_PX / w)
+        frac = min(BAR_FRACTION, BAR_WIDTH_PX / w)
         self._bar.SetWidth(frac)
         self._bar.SetHeight(0.96)
         self._bar.SetPosition(0.5 * (1.0 - frac), 0.02)
@@ -378,32 +352,30 @@ class Viewport(QFrame):
             return 2.0 * cam.GetParallelScale() / height
         return 2.0 * cam.GetDistance() * np.tan(np.radians(cam.GetViewAngle()) / 2.0) / height
 
-    def clip_coordinates(self) -> np.ndarray:
-        """(n, 4) homogeneous clip coordinates of the drawn points through the camera (x, y, z in
-        [-w, w] inside the view, z growing away from the viewer)."""
+    def camera_matrix(self) -> np.ndarray:
+        """(4, 4) composite projection matrix of the camera (world to clip coordinates)."""
         renderer = self.plotter.renderer
         camera = renderer.GetActiveCamera()
         matrix = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1.0, 1.0)
-        m = np.array([[matrix.GetElement(r, c) for c in range(4)] for r in range(4)])
-        return np.asarray(self.poly.points) @ m[:, :3].T + m[:, 3]
+        return np.array([[matrix.GetElement(r, c) for c in range(4)] for r in range(4)])
+
+    def clip_coordinates(self) -> np.ndarray:
+        """(n, 4) homogeneous clip coordinates of the drawn points through the camera (x, y, z in
+        [-w, w] inside the view, z growing away from the viewer)."""
+        return clip_coordinates(np.asarray(self.poly.points), self.camera_matrix())
+
+    def point_pick(self, x: float, y: float) -> PointPick:
+        """A click at display position (x, y) (device pixels, bottom-left origin) on the cloud as
+        drawn now, for :func:`~app.views.picking.drawn_point_at`."""
+        radius = 0.5 * max(self.point_size or DEFAULT_POINT_SIZE, 4.0) * self.plotter.devicePixelRatioF()
+        return PointPick(np.asarray(self.poly.points), self.camera_matrix(), tuple(self.plotter.renderer.GetViewport()),
+                         tuple(self.plotter.ren_win.GetSize()), float(x), float(y), float(radius))
 
     def _pick_point(self, x: float, y: float) -> int | None:
         """The point of the cloud drawn under display position (x, y) (device pixels, bottom-left
         origin): of the points whose sphere covers it, the nearest the viewer, as the depth test
         draws them."""
-        clip = self.clip_coordinates()
-        w = clip[:, 3]
-        front = w > 0
-        ndc = clip[:, :3] / np.where(front, w, 1.0)[:, None]
-        x0, y0, x1, y1 = self.plotter.renderer.GetViewport()
-        width, height = self.plotter.ren_win.GetSize()
-        px = (x0 + 0.5 * (ndc[:, 0] + 1.0) * (x1 - x0)) * width
-        py = (y0 + 0.5 * (ndc[:, 1] + 1.0) * (y1 - y0)) * height
-        radius = 0.5 * max(self.point_size or DEFAULT_POINT_SIZE, 4.0) * self.plotter.devicePixelRatioF()
-        hit = np.flatnonzero(front & ((px - x) ** 2 + (py - y) ** 2 <= radius * radius) & (np.abs(ndc[:, 2]) <= 1.0))
-        if hit.size == 0:
-            return None
-        return int(hit[np.argmin(ndc[hit, 2])])
+        return drawn_point_at(self.point_pick(x, y))
 
     def display_position(self, point) -> tuple[float, float]:
         """Widget position (Qt pixels) of a world point, the inverse of what picking uses."""
@@ -422,10 +394,31 @@ class Viewport(QFrame):
         elif kind == QEvent.Type.MouseButtonRelease and event.button() == Qt.MouseButton.LeftButton:
             start, self._press = self._press, None
             if start is not None and (event.position() - start).manhattanLength() <= 3:
-                vid = self.pick_display(event.position().x(), event.position().y())
-                if vid is not None:
-                    self.vertex_picked.emit(vid)
+                x, y = event.position().x(), event.position().y()
+                if self.points_only and self.poly is not None and self.poly.n_points >= ASYNC_PICK_POINTS:
+                    self._pick_later(x, y)
+                else:
+                    vid = self.pick_display(x, y)
+                    if vid is not None:
+                        self.vertex_picked.emit(vid)
         return False
+
+    def _pick_later(self, x: float, y: float) -> None:
+        """Find the point under the click (Qt pixels) in a worker and emit :attr:`vertex_picked` with it;
+        a later click supersedes it."""
+        ratio = self.plotter.devicePixelRatioF()
+        pick = self.point_pick(x * ratio, self.plotter.height() * ratio - y * ratio - 1)
+        self._picks += 1
+        serial, poly = self._picks, self.poly
+
+        def found(index):
+            if index is not None and serial == self._picks and poly is self.poly:
+                self.vertex_picked.emit(index)
+
+        self.picking = True
+        worker = create_worker(drawn_point_at, pick, _start_thread=False, _connect={
+            "returned": found, "finished": lambda: setattr(self, "picking", serial != self._picks)})
+        worker.start()
 
     def close_plotter(self) -> None:
         """Release the VTK render window (call before the widget goes away)."""
@@ -433,44 +426,6 @@ class Viewport(QFrame):
         self.plotter.close()
 
 
-def _html_width(label: QLabel, html: str) -> float:
-    """Width in pixels of the rich text ``html`` set in ``label``'s font, with the label's margins."""
-    doc = QTextDocument()
-    doc.setDefaultFont(label.font())
-    doc.setDocumentMargin(0)
-    doc.setHtml(html)
-    return doc.idealWidth() + 2 * label.margin() + label.contentsMargins().left() + label.contentsMargins().right()
-
-
-def _scalar_bar(lut: vtkLookupTable) -> vtkScalarBarActor:
-    bar = vtkScalarBarActor()
-    bar.SetLookupTable(lut)
-    bar.SetOrientationToHorizontal()
-    bar.SetPosition(0.1, 0.01)
-    bar.SetWidth(_BAR_FRACTION)
-    bar.SetHeight(0.16)
-    bar.SetMaximumHeightInPixels(_BAR_STRIP_PX)
-    bar.SetMaximumWidthInPixels(_BAR_WIDTH_PX)
-    bar.SetNumberOfLabels(3)
-    bar.SetBarRatio(0.28)
-    bar.SetTextPositionToPrecedeScalarBar()  # labels under the bar
-    bar.SetTextPad(3)
-    bar.SetBelowRangeAnnotation("")
-    bar.SetAboveRangeAnnotation("")
-    bar.SetLabelFormat(LABEL_FORMAT)  # the same digits as the histogram and the limit fields
-    bar.DrawAboveRangeSwatchOn()  # clipped values: the darkened end colours beside the bar
-    bar.DrawBelowRangeSwatchOn()
-    bar.DrawBackgroundOn()  # labels stay readable over a dark mesh
-    bar.GetBackgroundProperty().SetColor(1.0, 1.0, 1.0)
-    bar.GetBackgroundProperty().SetOpacity(0.82)
-    bar.UnconstrainedFontSizeOn()
-    for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
-        prop.SetColor(0.1, 0.1, 0.1)
-        prop.ShadowOff()
-        prop.ItalicOff()
-        prop.BoldOff()
-        prop.SetFontSize(12)
-    label = bar.GetLabelTextProperty()  # the end labels overhang the bar: each gets its own light box
-    label.SetBackgroundColor(1.0, 1.0, 1.0)
-    label.SetBackgroundOpacity(0.85)
-    return bar
+def grey_colours(n: int) -> np.ndarray:
+    """(n, 4) uint8: every vertex in the grey of a pane without a result."""
+    return np.tile(_GREY, (n, 1))

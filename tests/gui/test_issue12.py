@@ -205,6 +205,7 @@ def test_overlays_and_glyph_colours(qtbot, window, ui):
     window.inspect.edges.setChecked(True)
     window.inspect.borders.setChecked(True)
     window.inspect.points.setChecked(True)
+    ui.wait_ready()  # the border edges are found in a worker
     assert vp._mesh_actor.prop.show_edges
     assert vp._overlay_actors["borders"].mapper.dataset.n_cells == int(window.doc.mesh.border_edges.sum())
     assert vp._overlay_actors["points"].mapper.dataset.n_points == window.doc.mesh.n_vertices

@@ -111,3 +111,27 @@ def test_the_whole_file_runs_to_an_output_with_progress_and_cancel(qtbot, window
     assert fractions and max(fractions) > 0.5
     written = laspy.read(out)
     assert len(written.points) == 60000 and "k1" in written.point_format.extra_dimension_names
+
+
+def test_the_whole_file_dialog_suggests_input_method_and_range(qtbot, window, ui, terrain, small_limit, monkeypatch):
+    from PySide6.QtWidgets import QFileDialog
+
+    asked = []
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", staticmethod(
+        lambda parent, title, path, filt: (asked.append(Path(path).name), ("", ""))[1]))
+    _open_preview(qtbot, window, ui, terrain)
+    window.doc.set_pane(0, method="qs", range=3)
+    window.large_panel.whole_file_dialog()
+    assert asked == ["terrain-qs-R3.laz"]
+    assert window.large_panel.job is window.controller.whole_file  # the controller runs it, the panel asks
+
+
+def test_the_large_file_dock_comes_to_the_front_for_a_preview_only(qtbot, window, ui, terrain, small_limit):
+    def in_front(key):
+        return not window.docks[key].visibleRegion().isEmpty()
+
+    qtbot.wait(50)
+    assert in_front("mesh") and not in_front("large")  # a first run: the input's report in front
+    _open_preview(qtbot, window, ui, terrain)
+    qtbot.waitUntil(lambda: in_front("large"), timeout=5000)
+    assert not in_front("mesh")

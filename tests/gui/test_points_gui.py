@@ -72,9 +72,11 @@ def test_point_size_control_grows_the_drawn_points(qtbot, window, ui):
     vp = window.grid.viewports[0]
     window.inspect.point_size.setValue(2)
     assert window.doc.display.state.point_size == 2 and vp._mesh_actor.prop.point_size == 2
+    qtbot.waitUntil(lambda: not window.drawing.pending)  # the frame is drawn once the loop is free
     small = _ink(vp.plotter.screenshot(return_img=True))
     window.inspect.point_size.setValue(14)
     assert window.doc.display.state.point_size == 14 and vp._mesh_actor.prop.point_size == 14
+    qtbot.waitUntil(lambda: not window.drawing.pending)
     big = _ink(vp.plotter.screenshot(return_img=True))
     assert big > 1.5 * small
     window.compare.count.setValue(2)       # a new pane draws its points at the same size

@@ -196,7 +196,7 @@ def test_switch_quantities_and_layers(qtbot, window, ui):
     assert np.nanmax(values) <= 0 and cmap.kind == "sequential"           # K < 0 everywhere: one sign
     np.testing.assert_array_equal(_shown(window), map_colours(res.gaussian, clim, cmap))
     vp = window.grid.viewports[0]
-    assert vp.field_title == "Gaussian K" and "Gaussian K" in vp.title.text()
+    assert vp.field_title == "Gaussian K" and "Gaussian K" in vp.header_html()
     window.inspect.quantity.setCurrentEnum(Quantity.CURVEDNESS)           # unsigned: sequential map
     values, clim, cmap = window.doc.fields()[0]
     assert cmap.name == "viridis" and clim[0] >= 0

@@ -92,7 +92,7 @@ def test_a_new_mesh_is_drawn_grey_while_a_long_estimate_runs(qtbot, window, ui):
     # "long": a few milliseconds, after the camera refit that the new geometry posts for the next
     # loop (with 0 the two timers could fire in either order, and a refit after the grey frame
     # draws it again; the real delay is a second)
-    window._grey_timer.setInterval(5)
+    window.drawing.grey_timer.setInterval(5)
     window.open_surface(SurfaceSource(name="torus", n_vertices=2000))
     ui.wait_ready()
     qtbot.wait(50)
