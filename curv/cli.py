@@ -135,7 +135,7 @@ def _estimate(args, progress: PhaseProgress) -> int:
         n_points = peek_points(args.input)
         counts = None if n_points is None else (n_points, 0)
     if tiled.wants_tiles(args, counts, points=points):  # asked, or too large for memory whole
-        return tiled.run(args, points=points)
+        return tiled.run(args, points=points, progress=progress)
     if counts is not None:  # refuse before reading a file that will not fit
         _check_memory(args, *counts, spec.name, rng, points=points)
     progress.label = f"{spec.name} {rng.label}"

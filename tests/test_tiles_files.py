@@ -341,3 +341,16 @@ def test_a_tile_measuring_another_coordinate_step_runs_again_with_the_whole_clou
     tiled = estimate_tiled(cloud, "qs", tile_size=3000)
     assert np.array_equal(tiled.reason, whole.reason)
     np.testing.assert_allclose(tiled.k1, whole.k1, rtol=1e-9, atol=1e-12)
+
+
+def test_the_commands_progress_says_the_tiles_done_the_rate_and_the_time_left(tmp_path, small_las, capsys,
+                                                                             monkeypatch):
+    import curv.progress
+
+    monkeypatch.setattr(curv.progress, "LINE_SECONDS", 0.01)  # a line at every tick: stderr is no terminal here
+    monkeypatch.setattr(curv.progress, "_TICK_SECONDS", 0.01)
+    assert main(["estimate", str(small_las), "-m", "qs", "--orient-normals", *map(str, SCANNER), "-o",
+                 str(tmp_path / "tiled.laz"), "--tile-size", "3000", "--workers", "1"]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.startswith("curv: qs R2: tiles ")]
+    assert any(" % after " in line and "points/s" in line and " left" in line and "tiles " in line.split(", ")[1]
+               for line in lines), lines[-5:]
