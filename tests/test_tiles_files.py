@@ -354,3 +354,16 @@ def test_the_commands_progress_says_the_tiles_done_the_rate_and_the_time_left(tm
     lines = [line for line in capsys.readouterr().err.splitlines() if line.startswith("curv: qs R2: tiles ")]
     assert any(" % after " in line and "points/s" in line and " left" in line and "tiles " in line.split(", ")[1]
                for line in lines), lines[-5:]
+
+
+def test_a_tile_whose_workers_keep_dying_is_one_line_that_says_what_to_change():
+    from distributed.scheduler import KilledWorker
+
+    from curv.core.errors import CurvError
+    from curv.tiles.driver import Runner, TileFailed
+
+    runner = Runner(workers=1, worker_bytes=2 * 2**30)
+    text = runner._failure("curv-tile-84d4d668-3", KilledWorker("curv-tile-84d4d668-3", "tcp://127.0.0.1:43075", 3))
+    assert text.startswith("tile 3: every worker that ran it died") and "--memory" in text and "\n" not in text
+    assert runner._failure("curv-tile-ab-12", ValueError("bad")) == "tile 12: ValueError: bad"
+    assert issubclass(TileFailed, CurvError)  # the command prints it as one line, not as a bug
