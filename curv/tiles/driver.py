@@ -75,7 +75,10 @@ class Runner:
             if scheduler is not None:
                 self._own_client = Client(scheduler, timeout=30)
             else:
-                env = {"CURV_THREADS": "1", "NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+                # one kernel thread through CURV_THREADS (curv.core.jit.launch), not NUMBA_NUM_THREADS:
+                # numba stops every kernel once that variable reads differently after its threads
+                # started, and a worker of a 10M-point run saw it do so mid-run (cause not found)
+                env = {"CURV_THREADS": "1", "OMP_NUM_THREADS": "1"}
                 if os.environ.get("NUMBA_CACHE_DIR"):
                     env["NUMBA_CACHE_DIR"] = os.environ["NUMBA_CACHE_DIR"]
                 import dask
