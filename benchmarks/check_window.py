@@ -53,7 +53,7 @@ def main(argv=None) -> int:
             pts.append(xyz[inside])
             start += len(chunk)
     ids, pts = np.concatenate(ids), np.concatenate(pts)
-    cloud = curv.PointCloud(pts)
+    cloud = curv.PointCloud(pts, georeferenced=True)  # as curv.load reads a LAS file: oriented up by default
     orient = {}
     if args.orient_normals:
         words = args.orient_normals

@@ -139,7 +139,7 @@ def _estimate(args, progress: PhaseProgress) -> int:
         if not args.output and args.tile_size is None and args.scheduler is None:
             # too large whole and no file for tiles to write: say how much it needs, and how to run it
             _check_memory(args, *counts, spec.name, rng, points=points, tiles=True)
-        return tiled.run(args, points=points)
+        return tiled.run(args, points=points, progress=progress)
     if counts is not None:  # refuse before reading a file that will not fit
         _check_memory(args, *counts, spec.name, rng, points=points)
     progress.label = f"{spec.name} {rng.label}"

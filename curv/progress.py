@@ -26,6 +26,9 @@ Interface:
   phase's timing again (a new pass over the points); a phase whose fractions are all 0 so far
   shows its elapsed time alone (a step without chunks, such as orienting the normals).
 - :meth:`PhaseProgress.note`: a line for a person (e.g. the first-run compilation).
+- :meth:`PhaseProgress.status`: the current phase's live words (a tiled run's ``tiles 3/40,
+  1.2M points/s, 5.0 min left``), each replacing the last: shown after the bar, or at the end of
+  the phase's line, in place of the time left measured here; a new phase starts without any.
 - :meth:`PhaseProgress.follow`: drives a generator through :meth:`update` and returns its value.
 - :meth:`PhaseProgress.close` (or leaving the ``with`` block): ends the last phase; a second call
   does nothing.
@@ -81,6 +84,7 @@ class _Phase:
         self.start = now
         self.fraction: float | None = None
         self.origin: tuple[float, float] | None = None  # (time, fraction) of the first measured fraction
+        self.status = ""  # the work's own words (PhaseProgress.status), in place of the time left
 
     def record(self, fraction: float, now: float) -> None:
         fraction = min(max(float(fraction), 0.0), 1.0)
@@ -106,6 +110,8 @@ class _Phase:
         """``normals 45 % after 18 s, about 22 s left`` (or ``load after 3.0 s``)."""
         done = "" if self.fraction is None else f" {100 * self.fraction:.0f} %"
         text = f"{self.name}{done} after {duration(now - self.start)}"
+        if self.status:
+            return f"{text}, {self.status}"
         left = self.left(now)
         return text if left is None else f"{text}, about {duration(left)} left"
 
@@ -180,6 +186,17 @@ class PhaseProgress:
                 self.stream.write(line + "\n")
                 self.stream.flush()
 
+    def status(self, text: str) -> None:
+        """The current phase's live words (module notes); an empty ``text`` clears them."""
+        with self._lock:
+            if self._closed:
+                return
+            if self._current is None:
+                self.phase("work")
+            self._current.status = str(text)
+            if self.mode == "bar":
+                self._draw(time.perf_counter())
+
     def follow(self, gen: Generator):
         """Drive ``gen`` (an ``iter_*`` generator) to its end through :meth:`update`; return its value.
 
@@ -233,7 +250,14 @@ class PhaseProgress:
             bar.bar_format = "{desc} {percentage:3.0f}%|{bar}| {elapsed}{postfix}"
             bar.n = round(100 * phase.fraction, 1)
             left = phase.left(now)
-            bar.set_postfix_str("" if left is None else f", about {duration(left)} left", refresh=False)
+            # tqdm writes its postfix after ", "
+            if phase.status:
+                bar.set_postfix_str(phase.status, refresh=False)
+            else:
+                bar.set_postfix_str("" if left is None else f"about {duration(left)} left", refresh=False)
+        elif phase.status:
+            bar.bar_format = "{desc} {elapsed}{postfix}"
+            bar.set_postfix_str(phase.status, refresh=False)
         bar.refresh()
 
     def _end_phase(self, *, completed: bool = True) -> None:

@@ -211,3 +211,29 @@ def test_a_phase_without_fractions_shows_its_time_alone():
     assert phase.words(6.7) == "orientation after 6.7 s"
     phase.record(0.25, now=7.0)
     assert phase.words(7.0).startswith("orientation 25 % after 7.0 s")
+
+
+def test_a_status_replaces_the_time_left_on_a_bar_and_on_lines(monkeypatch):
+    monkeypatch.setattr(P, "_RATE_SECONDS", 0.01)
+    words = "tiles 3/40, 1.2M points/s, 5.0 min left"
+    stream = io.StringIO()
+    with P.PhaseProgress("qs R2", stream=stream, interval=0.05) as progress:
+        progress.phase("tiles")
+        for i in range(1, 11):
+            progress.update(i / 20)
+            progress.status(words)
+            time.sleep(0.02)
+    shown = [line for line in stream.getvalue().splitlines() if line.startswith("curv: qs R2: tiles ")]
+    assert shown and all(line.endswith(f", {words}") and "about" not in line for line in shown)
+    terminal = _Terminal()
+    with P.PhaseProgress("qs R2", stream=terminal) as progress:
+        progress.phase("tiles")
+        progress.status("planning")  # before any fraction: the words alone
+        time.sleep(0.05)
+        for i in range(1, 11):
+            progress.update(i / 20)
+            progress.status(words)
+            time.sleep(0.02)
+    text = terminal.getvalue()
+    assert "qs R2: tiles" in text and ", planning" in text and f"| {words}" not in text
+    assert f", {words}" in text and ", , " not in text

@@ -238,3 +238,16 @@ def test_a_cloud_oriented_from_its_top_by_default_agrees_with_the_whole_call(tor
     whole = curv.estimate(torus_cloud, "mru")
     assert whole.info["orientation"] == "top"
     assert_same(estimate_tiled(torus_cloud, "mru", tile_size=1200), whole, rounding=True, signless_directions=True)
+
+
+def test_other_libraries_inputs_and_the_default_estimator_as_in_the_whole_call(torus_cloud, torus_mesh):
+    trimesh = pytest.importorskip("trimesh")
+    points = np.asarray(torus_cloud.points)
+    for cloud in (points, trimesh.PointCloud(points)):
+        tiled = estimate_tiled(cloud, orient=SCANNER, tile_size=1500)
+        assert tiled.method == curv.estimators.DEFAULT_ESTIMATORS["points"] and tiled.info["tiles"] >= 3
+        assert_same(tiled, curv.estimate(cloud, orient=SCANNER), rounding=True)
+    mesh = trimesh.Trimesh(torus_mesh.vertices, torus_mesh.faces, process=False)
+    tiled = estimate_tiled(mesh, tile_size=1500, noise_model="normals")  # the sampled one's errors: to 5-7 %
+    assert tiled.method == curv.estimators.DEFAULT_ESTIMATORS["mesh"]
+    assert_same(tiled, curv.estimate(mesh, noise_model="normals"))

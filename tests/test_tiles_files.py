@@ -341,3 +341,29 @@ def test_a_tile_measuring_another_coordinate_step_runs_again_with_the_whole_clou
     tiled = estimate_tiled(cloud, "qs", tile_size=3000)
     assert np.array_equal(tiled.reason, whole.reason)
     np.testing.assert_allclose(tiled.k1, whole.k1, rtol=1e-9, atol=1e-12)
+
+
+def test_the_commands_progress_says_the_tiles_done_the_rate_and_the_time_left(tmp_path, small_las, capsys,
+                                                                             monkeypatch):
+    import curv.progress
+
+    monkeypatch.setattr(curv.progress, "LINE_SECONDS", 0.01)  # a line at every tick: stderr is no terminal here
+    monkeypatch.setattr(curv.progress, "_TICK_SECONDS", 0.01)
+    assert main(["estimate", str(small_las), "-m", "qs", "--orient-normals", *map(str, SCANNER), "-o",
+                 str(tmp_path / "tiled.laz"), "--tile-size", "3000", "--workers", "1"]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.startswith("curv: qs R2: tiles ")]
+    assert any(" % after " in line and "points/s" in line and " left" in line and "tiles " in line.split(", ")[1]
+               for line in lines), lines[-5:]
+
+
+def test_a_tile_whose_workers_keep_dying_is_one_line_that_says_what_to_change():
+    from distributed.scheduler import KilledWorker
+
+    from curv.core.errors import CurvError
+    from curv.tiles.driver import Runner, TileFailed
+
+    runner = Runner(workers=1, worker_bytes=2 * 2**30)
+    text = runner._failure("curv-tile-84d4d668-3", KilledWorker("curv-tile-84d4d668-3", "tcp://127.0.0.1:43075", 3))
+    assert text.startswith("tile 3: every worker that ran it died") and "--memory" in text and "\n" not in text
+    assert runner._failure("curv-tile-ab-12", ValueError("bad")) == "tile 12: ValueError: bad"
+    assert issubclass(TileFailed, CurvError)  # the command prints it as one line, not as a bug

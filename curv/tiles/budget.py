@@ -19,7 +19,7 @@ import re
 from ..core.errors import CurvError
 
 __all__ = ["parse_memory", "Budget", "BudgetError", "plan_budget", "DRIVER_BYTES", "MIN_TILE", "HALO_SHARE",
-           "needs_tiles"]
+           "MESH_TILE_FACTOR", "needs_tiles"]
 
 
 class BudgetError(CurvError, ValueError):
@@ -35,6 +35,13 @@ around a square tile of 100k points is about 20 % of it)."""
 
 HALO_SHARE = 0.25
 """A tile's region holds about this share more points than its core (the halo), at most, as planned."""
+
+MESH_TILE_FACTOR = 2.0
+"""A mesh tile's worker peaks at about this multiple of :func:`curv.memory.estimate_peak_bytes` of
+its region (the region's vertices and faces read and renumbered, the connectivity its estimate
+builds, the rows it keeps): measured 1.19 GiB for a 683k-vertex region (model 0.67 GiB, 1.8x;
+``make_mesh_ply.py`` terrain, ``mru`` R2). Without it a 10M-vertex mesh under ``--memory 6GB`` got
+tiles of 2.5M vertices whose workers were stopped past their 2.7 GB limit."""
 
 _UNITS = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb": 1e9, "t": 1e12, "tb": 1e12,
           "kib": 2**10, "mib": 2**20, "gib": 2**30, "tib": 2**40}
@@ -85,7 +92,8 @@ def _tile_points(worker_bytes: float, method: str, *, points: bool, faces_per_ve
     from ..memory import estimate_peak_bytes
 
     def peak(n):
-        return estimate_peak_bytes(int(n), int(n * faces_per_vertex), method, points=points, threads=1)
+        bytes_ = estimate_peak_bytes(int(n), int(n * faces_per_vertex), method, points=points, threads=1)
+        return bytes_ if points else MESH_TILE_FACTOR * bytes_
 
     base = peak(0)
     per = (peak(1_000_000) - base) / 1_000_000

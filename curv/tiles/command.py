@@ -9,7 +9,6 @@ available now, :func:`curv.tiles.budget.needs_tiles`); otherwise the command run
 from __future__ import annotations
 
 import sys
-import time
 
 from ..core.errors import CurvError
 
@@ -95,45 +94,14 @@ def _refuse_for_tiles(args, points: bool) -> None:
         raise CurvError(f"--tile-size must be a positive number of points; got {args.tile_size}")
 
 
-class _Line:
-    """The tiled run's progress: a bar with the phase's words on a terminal, a line every 10 s elsewhere."""
+def run(args, *, points: bool, progress=None) -> int:
+    """``curv estimate`` on tiles: the run, its progress and its summary on stdout.
 
-    def __init__(self, quiet: bool):
-        self.stream = sys.stderr
-        self.tty = self.stream.isatty()
-        self.quiet = quiet
-        self.start = time.perf_counter()
-        self.last = -1e9
-        self.width = 0
-
-    def update(self, step) -> None:
-        if self.quiet:
-            return
-        now = time.perf_counter()
-        fraction = float(step)
-        words = getattr(step, "message", "") or ""
-        if self.tty:
-            if now - self.last < 0.2 and fraction < 1.0:
-                return
-            bar = "#" * int(30 * fraction)
-            text = f"\rtiles [{bar:<30}] {100 * fraction:5.1f}% {now - self.start:6.0f}s {words}"
-            self.stream.write(text.ljust(self.width))
-            self.width = len(text)
-        else:
-            if now - self.last < 10.0:
-                return
-            self.stream.write(f"curv: {100 * fraction:5.1f}% after {now - self.start:.0f} s {words}\n")
-        self.stream.flush()
-        self.last = now
-
-    def close(self) -> None:
-        if self.tty and not self.quiet:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def run(args, *, points: bool) -> int:
-    """``curv estimate`` on tiles: the run, its progress and its summary on stdout."""
+    ``progress`` is the command's :class:`curv.progress.PhaseProgress` (default one of its own on
+    stderr): the run is its phase ``tiles``, whose live words say the tiles done, the points a
+    second and the time left (:func:`curv.tiles.iter_estimate_file`'s messages).
+    """
+    from ..progress import PhaseProgress
     from ..core.ranges import resolve
     from ..estimators import get_spec
     from .budget import parse_memory
@@ -147,12 +115,16 @@ def run(args, *, points: bool) -> int:
         memory = parse_memory(args.memory) if args.memory is not None else None
     except ValueError as exc:
         raise CurvError(str(exc)) from None
-    line = _Line(args.quiet)
     gen = iter_estimate_file(args.input, args.output, spec.name, rng.k, radius=rng.radius, knn=rng.knn,
                              tile_size=args.tile_size, memory=memory, workers=args.workers, scheduler=args.scheduler,
                              scratch=args.scratch, keep_scratch=args.keep_scratch, quantity=args.quantity,
                              cmap=args.cmap, clim=tuple(args.clim) if args.clim else None,
                              las_extra=tuple(args.las_extra), **keywords)
+    own = progress is None
+    if own:
+        progress = PhaseProgress(mode="off" if args.quiet else None)
+    progress.label = f"{spec.name} {rng.label}"
+    progress.phase("tiles")
     try:
         while True:
             try:
@@ -160,14 +132,19 @@ def run(args, *, points: bool) -> int:
             except StopIteration as stop:
                 run_ = stop.value
                 break
-            line.update(step)
+            progress.update(float(step))
+            progress.status(getattr(step, "message", "") or "")
     except KeyboardInterrupt:
-        line.close()
+        gen.close()
+        progress.close(completed=False)
         print(f"curv: interrupted; no output written. The same command resumes from the finished tiles "
               f"(scratch folder kept)", file=sys.stderr)
         raise
-    finally:
-        line.close()
+    except BaseException:
+        gen.close()
+        progress.close(completed=False)
+        raise
+    progress.close()
     _summary(args, run_, rng)
     return 0
 

@@ -22,6 +22,8 @@ import os
 import time
 from typing import Callable, Generator, Sequence
 
+from ..core.errors import CurvError
+
 __all__ = ["Runner", "RETRIES", "TileFailed", "QUIET_CLUSTER"]
 
 RETRIES = 2
@@ -35,8 +37,9 @@ polled once a second instead of every 20-500 ms (measured: an idle cluster of tw
 seconds in 30 s with Dask's defaults, 1.8 with these)."""
 
 
-class TileFailed(RuntimeError):
-    """A tile kept failing: the message names it and its error in one line."""
+class TileFailed(CurvError, RuntimeError):
+    """A tile kept failing: the message names it and its error in one line (the command prints it
+    as it is: ``curv.core.errors.CurvError``'s one-line form)."""
 
 
 class Runner:
@@ -57,6 +60,7 @@ class Runner:
     def __init__(self, *, workers: int = 1, worker_bytes: int | None = None, scheduler: str | None = None,
                  client=None):
         self.client = client
+        self.worker_bytes = worker_bytes
         self._own_client = None
         self._cluster = None
         self.workers = workers
@@ -71,7 +75,10 @@ class Runner:
             if scheduler is not None:
                 self._own_client = Client(scheduler, timeout=30)
             else:
-                env = {"CURV_THREADS": "1", "NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+                # one kernel thread through CURV_THREADS (curv.core.jit.launch), not NUMBA_NUM_THREADS:
+                # numba stops every kernel once that variable reads differently after its threads
+                # started, and a worker of a 10M-point run saw it do so mid-run (cause not found)
+                env = {"CURV_THREADS": "1", "OMP_NUM_THREADS": "1"}
                 if os.environ.get("NUMBA_CACHE_DIR"):
                     env["NUMBA_CACHE_DIR"] = os.environ["NUMBA_CACHE_DIR"]
                 import dask
@@ -116,7 +123,7 @@ class Runner:
                 try:
                     result = future.result()
                 except Exception as exc:  # noqa: BLE001 - one line naming the tile
-                    raise TileFailed(f"{future.key}: {_one_line(exc)}") from None
+                    raise TileFailed(self._failure(future.key, exc)) from None
                 yield result, None
         finally:
             pending = [f for f in futures if not f.done()]
@@ -155,6 +162,19 @@ class Runner:
                 if attempt == RETRIES:
                     raise TileFailed(f"tile {args[0]}: {_one_line(exc)}") from None
                 time.sleep(0.1)
+
+    def _failure(self, key: str, exc: BaseException) -> str:
+        """A cluster's tile failure in one line: a worker that kept dying is named as such (on a
+        local cluster its nanny kills it past its memory limit)."""
+        tile = str(key).rsplit("-", 1)[-1]
+        if type(exc).__name__ == "KilledWorker":
+            from ..memory import format_bytes
+
+            limit = (f" (a local cluster's worker is stopped past its memory limit, "
+                     f"{format_bytes(self.worker_bytes)})") if self._cluster is not None and self.worker_bytes else ""
+            return (f"tile {tile}: every worker that ran it died{limit}; give more --memory, a smaller "
+                    f"--tile-size or fewer --workers")
+        return f"tile {tile}: {_one_line(exc)}"
 
     def close(self) -> None:
         if self._own_client is not None:

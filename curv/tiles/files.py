@@ -206,7 +206,7 @@ def _orientation(scratch: Scratch, prepared: Prepared, orient: str):
     return signs, bad, lookup(reasons_of, bad, 0)
 
 
-def iter_estimate_file(input, output, method: str = "mru", range=None, *, tile_size: int | None = None,
+def iter_estimate_file(input, output, method: str | None = None, range=None, *, tile_size: int | None = None,
                        memory=None, workers: int | None = None, scheduler: str | None = None, client=None,
                        scratch=None, keep_scratch: bool = False, quantity: str = "mean", cmap=None, clim=None,
                        las_extra=(), **keywords) -> Generator[float, None, FileRun]:
@@ -214,6 +214,11 @@ def iter_estimate_file(input, output, method: str = "mru", range=None, *, tile_s
     names the phase: tiles done, points a second, time left), returns the :class:`FileRun`."""
     t0 = time.perf_counter()
     input_path, output = Path(input), Path(output)
+    if method is None:
+        from ..estimators import DEFAULT_ESTIMATORS
+        from ..io import is_point_file
+
+        method = DEFAULT_ESTIMATORS["points" if is_point_file(input_path) else "mesh"]
     job = Job.checked(method, range, **keywords)
     source = open_source(input_path)
     georeferenced = input_path.suffix.lower() in (".las", ".laz")  # as the LAS reader says (curv.PointCloud)
@@ -396,7 +401,7 @@ def _whole(input_path, output, job, tile_size, client, quantity, cmap, clim, las
                    {"plan": t_plan, "tiles": t1 - t_plan - t0, "write": t2 - t1, "total": t2 - t0}, label=res)
 
 
-def estimate_file(input, output, method: str = "mru", range=None, **keywords) -> FileRun:
+def estimate_file(input, output, method: str | None = None, range=None, **keywords) -> FileRun:
     """Estimate a file's curvature into another file, tile by tile when it is large (module notes).
 
     Parameters
@@ -408,7 +413,8 @@ def estimate_file(input, output, method: str = "mru", range=None, **keywords) ->
         ``.ply``; ``.las`` or ``.laz`` for a LAS/LAZ input (its records with the curvature as extra
         bytes, :mod:`curv.formats.laswrite`); ``.vtu`` or ``.vtp`` for an input read whole.
     method, range
-        As in :func:`curv.estimate`.
+        As in :func:`curv.estimate`; the default estimator the input kind's
+        (:data:`curv.estimators.DEFAULT_ESTIMATORS`).
     tile_size : int, optional
         Points a tile holds at most; default what the memory budget allows each worker.
     memory : str or int, optional

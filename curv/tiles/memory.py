@@ -85,14 +85,16 @@ def halo_for(shape, job: Job, sample: int = 20000) -> float:
     return 2.0 * float(np.percentile(finite, 99)) if finite.size else 0.0
 
 
-def iter_estimate_tiled(shape, method: str = "mru", range=None, *, tile_size: int = 1_000_000,
+def iter_estimate_tiled(shape, method: str | None = None, range=None, *, tile_size: int = 1_000_000,
                         halo: float | None = None, client=None, normals=None,
                         **keywords) -> Generator[float, None, Curvature]:
     """:func:`estimate_tiled` step by step: yields the fraction done, returns the :class:`Curvature`."""
-    from ..convert import as_mesh
+    from ..convert import as_input
+    from ..estimators import default_estimator
 
-    if not isinstance(shape, PointCloud):
-        shape = as_mesh(shape)
+    shape = as_input(shape)
+    if method is None:
+        method = default_estimator(shape)
     array_normals = normals if normals is not None and not isinstance(normals, str) else None
     if array_normals is not None:
         array_normals = np.asarray(array_normals, np.float64)
@@ -237,16 +239,19 @@ class _Assembly:
                          k1_se=self.k1_se, k2_se=self.k2_se)
 
 
-def estimate_tiled(shape, method: str = "mru", range=None, *, tile_size: int = 1_000_000,
+def estimate_tiled(shape, method: str | None = None, range=None, *, tile_size: int = 1_000_000,
                    halo: float | None = None, client=None, **keywords) -> Curvature:
     """Estimate an input held in memory tile by tile: the same :class:`Curvature` as
     :func:`curv.estimate` (:mod:`curv.tiles`' notes say where it is equal to rounding).
 
     Parameters
     ----------
-    shape : PointCloud, Mesh, or what :func:`curv.as_mesh` takes
+    shape : Mesh, PointCloud, or what :func:`curv.estimate` takes
+        Other libraries' meshes and clouds (trimesh, pyvista, meshio, an (n, 3) array) through
+        :func:`curv.convert.as_input`.
     method, range, **keywords
-        As in :func:`curv.estimate` (not ``vertices=`` or ``smooth=``; ``features=`` an angle).
+        As in :func:`curv.estimate`, the default estimator the input kind's (not ``vertices=`` or
+        ``smooth=``; ``features=`` an angle).
     tile_size : int
         Points (vertices) per tile, at most about.
     halo : float, optional
