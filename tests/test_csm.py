@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import curv
-from curv.estimators._ball_clipping import disc_triangle_area
-from curv.estimators.csm import iter_csm, segment_in_ball
+from curv.estimators._ball_clipping import disc_triangle_area, segment_in_ball
+from curv.estimators.csm import iter_csm
 from curv.geometry.normals import vertex_normals
 from curv.core.ranges import Range, ball_radii
 from curv.core.validity import Reason
@@ -40,7 +40,7 @@ def _csm(mesh, k=2.0, *, radius=None, chunk=None):
     ((-2.0, 0.6, 0.0), (4.0, 0.0, 0.0), 1.0, 0.4),     # chord of half-length 0.8
 ])
 def test_segment_in_ball(start, direction, radius, expected):
-    assert segment_in_ball(*start, *direction, radius ** 2) == pytest.approx(expected, abs=1e-14)
+    assert segment_in_ball(start, direction, radius ** 2) == pytest.approx(expected, abs=1e-14)
 
 
 def test_disc_triangle_area_known_cases():
@@ -200,7 +200,7 @@ def test_disc_triangle_area_with_a_corner_just_outside(poke):
 
 
 def test_a_region_computes_only_the_triangles_and_edges_its_supports_touch():
-    from curv.estimators._ball_clipping import touched_elements
+    from curv.estimators._ball_sums import touched_elements
     from curv.geometry.neighbourhood import expansion_adjacency, supports
 
     mesh = icosphere(3)
@@ -253,7 +253,7 @@ def test_star_sums_equal_the_edge_by_edge_walk(k, monkeypatch):
 @pytest.mark.parametrize("k", [1.0, 2.0, 4.0])
 def test_star_sums_equal_the_walk_on_an_open_patch(k, monkeypatch):
     # next to the border a face's edge v -> u may have no face at v beyond it: the crossing faces
-    # then read u itself instead of v's ring (curv.estimators._ball_clipping.crossing_faces)
+    # then read u itself instead of v's ring (curv.estimators._ball_mesh.crossing_faces)
     from tests.meshes import hex_plane
 
     flat = hex_plane(16)
@@ -264,7 +264,7 @@ def test_star_sums_equal_the_walk_on_an_open_patch(k, monkeypatch):
 
 
 def test_corner_rings_name_each_corners_far_end_and_its_faces_other_edge():
-    from curv.estimators._ball_clipping import corner_rings
+    from curv.estimators._ball_mesh import corner_rings
     from tests.meshes import hex_plane
 
     mesh = hex_plane(5)
