@@ -58,49 +58,25 @@ class Scratch(NamedTuple):
     """The most corners at one vertex (:func:`~curv.estimators._ball_clipping.corner_width`)."""
 
 
-class CsmPass(NamedTuple):
-    """csm in the ball-clipping pass : :class:`~curv.estimators.csm.CsmTerms`'
-    fields, the walk's stamps and the outputs, in one flat bundle (a numba parallel kernel takes
-    tuples of arrays, not tuples of tuples)."""
-
-    half_scale: np.ndarray
-    star: np.ndarray
-    clean: np.ndarray
-    walk: bool
-    halfedge_edge: np.ndarray
-    beta_scale: np.ndarray
-    edge_faces: np.ndarray
-    fstamps: np.ndarray
-    """(parts, m) int32 or int64 zeroed face stamps of :func:`curv.estimators.csm.walk_sums`, one row per thread."""
-    estamps: np.ndarray
-    """(parts, e) the same for the edges."""
-    k1: np.ndarray
-    """(levels, n) float64, uninitialised, as the next four (:class:`~curv.estimators._output_rows.LevelOutputs`)."""
-    k2: np.ndarray
-    d1: np.ndarray
-    d2: np.ndarray
-    reason: np.ndarray
+def _flat_bundle(name: str, terms: type, *fields: str) -> type:
+    """A NamedTuple class ``name`` with the fields of the NamedTuple class ``terms``, then ``fields``: an
+    estimator's per-mesh terms, the walk's stamps and its outputs in one flat bundle (numba's parallel
+    kernels take tuples of arrays, not tuples of tuples)."""
+    bundle = NamedTuple(name, [*((field, object) for field in terms._fields),
+                               *((field, np.ndarray) for field in fields)])
+    bundle.__module__ = __name__
+    return bundle
 
 
-class IccPass(NamedTuple):
-    """icc in the ball-clipping pass : :class:`~curv.estimators.icc.IccTerms`'
-    fields, the walk's stamps and the outputs (:class:`~curv.estimators.icc.IccOutputs`), in one flat bundle (a numba
-    parallel kernel takes tuples of arrays, not tuples of tuples)."""
+CsmPass = _flat_bundle("CsmPass", csm.CsmTerms, "fstamps", "estamps", "k1", "k2", "d1", "d2", "reason")
+"""csm in the pass: :class:`~curv.estimators.csm.CsmTerms`' fields; ``fstamps`` (parts, m) and ``estamps``
+(parts, e), zeroed face and edge stamps of :func:`curv.estimators.csm.walk_sums` (int32 or int64, a row per
+thread); the outputs ``k1``, ``k2``, ``d1``, ``d2``, ``reason`` (levels, ...:
+:class:`~curv.estimators._output_rows.LevelOutputs`)."""
 
-    measures: np.ndarray
-    star: np.ndarray
-    clean: np.ndarray
-    walk: bool
-    from_measures: bool
-    fstamps: np.ndarray
-    """(parts, m) int32 or int64 zeroed face stamps of :func:`curv.estimators.icc.walk_sums`, one row per thread."""
-    k1: np.ndarray
-    k2: np.ndarray
-    d1: np.ndarray
-    d2: np.ndarray
-    mean: np.ndarray
-    gaussian: np.ndarray
-    reason: np.ndarray
+IccPass = _flat_bundle("IccPass", icc.IccTerms, "fstamps", "k1", "k2", "d1", "d2", "mean", "gaussian", "reason")
+"""icc in the pass: :class:`~curv.estimators.icc.IccTerms`' fields, ``fstamps`` (parts, m) as csm's, and the
+outputs of :class:`~curv.estimators.icc.IccOutputs`."""
 
 
 @jit_parallel
@@ -239,15 +215,7 @@ def iter_csm_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, methods=("c
     options : dict, optional
         ``{name: estimator options}``: icc's ``from_measures``.
 
-    Yields
-    ------
-    float
-        Fraction done.
-
-    Returns
-    -------
-    dict
-        ``{name: [Principal per level]}`` for each of ``methods``.
+    It yields the fraction done and returns ``{name: [Principal per level]}`` for each of ``methods``.
     """
     options = options or {}
     centres, radii, walk, touched = yield from ball_inputs(mesh, centres, radii, features)

@@ -164,12 +164,12 @@ def _farther(x, u, w, far):
 
 
 @jit_parallel
-def _corner_pass(ring, x, width, parts, flags, neighbours, longest, normals):
-    """:func:`corner_pass`'s walk: ``flags = (nonmanifold, border, inconsistent)`` (n,) bool,
-    ``neighbours = (counts (n,), spread (2 h,))``, ``longest`` (n,), ``normals`` (n, 3)."""
+def _walk_fans(ring, x, width, parts, flags, extras):
+    """The walk of :func:`corner_pass` and :func:`fan_flags`: ``flags = (nonmanifold, border,
+    inconsistent)`` (n,) bool; ``extras = (counts (n,), spread (2 h,), longest (n,), normals (n, 3))``,
+    or None for the flags alone (numba compiles that case without the rest)."""
     indptr, corners, indices, corner_next, corner_prev = ring
     nonmanifold, border, inconsistent = flags
-    counts, spread = neighbours
     n = indptr.size - 1
     for t in prange(parts):
         other, corner, parent = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
@@ -185,52 +185,43 @@ def _corner_pass(ring, x, width, parts, flags, neighbours, longest, normals):
                 c = corners[first + i]
                 b, q = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
                 lead[i], trail[i] = b, q
-                wx, wy, wz, lead2 = corner_terms(x, u, b, q)
-                sx += wx
-                sy += wy
-                sz += wz
-                far2 = lead2 if lead2 > far2 else far2
-            normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
-            fans = _one_fan(u, d, lead, trail, parent)
-            if fans > 0:
-                # the usual vertex: its neighbours are the next vertices of its corners, each once; the
-                # longest edge is the root of the longest square (sqrt is monotonic and correctly
-                # rounded: the same value, to the bit, as the longest of the roots, _farther)
-                insertion_sort(lead, d)
-                for i in range(d):
-                    spread[2 * first + i] = lead[i]
-                nonmanifold[u] = fans > 1
-                border[u] = inconsistent[u] = False
-                counts[u] = d
-                longest[u] = math.sqrt(far2)
-            else:
-                (nonmanifold[u], border[u], inconsistent[u], counts[u],
-                 longest[u]) = _sorted_fan(ring, x, u, (other, corner, parent), spread)
-
-
-@jit_parallel
-def _fan_flags(ring, x, width, parts, flags):
-    """:func:`fan_flags`' walk: ``flags = (nonmanifold, border, inconsistent)`` (n,) bool."""
-    indptr, corners, indices, corner_next, corner_prev = ring
-    nonmanifold, border, inconsistent = flags
-    n = indptr.size - 1
-    for t in prange(parts):
-        other, corner, parent = np.empty(width, np.int64), np.empty(width, np.int64), np.empty(width, np.int64)
-        lead, trail = np.empty(width, np.int64), np.empty(width, np.int64)
-        lo, hi = thread_slice(n, t, parts)
-        for u in range(lo, hi):
-            first, last = indptr[u], indptr[u + 1]
-            d = last - first
-            for i in range(d):
-                c = corners[first + i]
-                lead[i], trail[i] = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
+                if extras is not None:
+                    wx, wy, wz, lead2 = corner_terms(x, u, b, q)
+                    sx += wx
+                    sy += wy
+                    sz += wz
+                    far2 = lead2 if lead2 > far2 else far2
+            if extras is not None:
+                normals = extras[3]
+                normals[u, 0], normals[u, 1], normals[u, 2] = unit(sx, sy, sz)
             fans = _one_fan(u, d, lead, trail, parent)
             if fans > 0:
                 nonmanifold[u] = fans > 1
                 border[u] = inconsistent[u] = False
+                if extras is not None:
+                    # the usual vertex: its neighbours are the next vertices of its corners, each once; the
+                    # longest edge is the root of the longest square (sqrt is monotonic and correctly
+                    # rounded: the same value, to the bit, as the longest of the roots, _farther)
+                    insertion_sort(lead, d)
+                    spread = extras[1]
+                    for i in range(d):
+                        spread[2 * first + i] = lead[i]
+                    extras[0][u] = d
+                    extras[2][u] = math.sqrt(far2)
             else:
-                nonmanifold[u], border[u], inconsistent[u], _, _ = _sorted_fan(ring, x, u, (other, corner, parent),
-                                                                                None)
+                nonmanifold[u], border[u], inconsistent[u], distinct, far = _sorted_fan(
+                    ring, x, u, (other, corner, parent), _spread(extras))
+                if extras is not None:
+                    extras[0][u] = distinct
+                    extras[2][u] = far
+
+
+@jit
+def _spread(extras):
+    """The neighbours' slots of :func:`_walk_fans`' extras, or None without them."""
+    if extras is None:
+        return None
+    return extras[1]
 
 
 def fan_flags(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
@@ -246,8 +237,8 @@ def fan_flags(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corn
     """
     n = indptr.size - 1
     nonmanifold, border, inconsistent = np.empty(n, np.bool_), np.empty(n, np.bool_), np.empty(n, np.bool_)
-    launch(_fan_flags, (indptr, corners, indices, corner_next, corner_prev), vertices, ring_width(indptr),
-           max(1, min(threads(), n)), (nonmanifold, border, inconsistent))
+    launch(_walk_fans, (indptr, corners, indices, corner_next, corner_prev), vertices, ring_width(indptr),
+           max(1, min(threads(), n)), (nonmanifold, border, inconsistent), None)
     return nonmanifold, border, inconsistent
 
 
@@ -276,8 +267,8 @@ class CornerPass(NamedTuple):
     longest_edge: np.ndarray
     """(n,) float64 the longest edge at each vertex (0 without one)."""
     max_normals: np.ndarray
-    """(n, 3) float64, column-major: unit Max (1999) vertex normals (:func:`curv.geometry.normals.max_normal`); NaN rows where
-    the corner terms cancel or there is no corner."""
+    """(n, 3) float64, column-major: unit Max (1999) vertex normals (:func:`curv.geometry.normals.max_normal`);
+    NaN rows where the corner terms cancel or there is no corner."""
 
 
 def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, corner_next: np.ndarray,
@@ -296,7 +287,8 @@ def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     indices : (h,) int64
         Vertex of each corner.
     corner_next, corner_prev : (h,) int32 or int64, or both None
-        Next and previous corner in its face; None on a triangle mesh (:func:`~curv.core.connectivity.corners.next_corner`).
+        Next and previous corner in its face; None on a triangle mesh
+        (:func:`~curv.core.connectivity.corners.next_corner`).
     vertices : (n, 3) float64
 
     Returns
@@ -309,10 +301,11 @@ def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     counts = np.empty(n, np.int64)
     # a vertex has at most two neighbours per corner: each writes into its own slot of this
     spread = np.empty(2 * h, np.int32 if n < 2**31 else np.int64)
-    # column-major: the fit kernels read each coordinate as a contiguous column (curv.geometry.normals.cached_max_normals)
+    # column-major: the fit kernels read each coordinate as a contiguous column
+    # (curv.geometry.normals.cached_max_normals)
     longest, normals = np.empty(n), np.empty((n, 3), order="F")
-    launch(_corner_pass, (indptr, corners, indices, corner_next, corner_prev), vertices, ring_width(indptr),
-           max(1, min(threads(), n)), (nonmanifold, border, inconsistent), (counts, spread), longest, normals)
+    launch(_walk_fans, (indptr, corners, indices, corner_next, corner_prev), vertices, ring_width(indptr),
+           max(1, min(threads(), n)), (nonmanifold, border, inconsistent), (counts, spread, longest, normals))
     out_ptr = np.zeros(n + 1, np.int64)
     np.cumsum(counts, out=out_ptr[1:])
     out = np.empty(out_ptr[-1], np.int64)
@@ -320,5 +313,5 @@ def corner_pass(indptr: np.ndarray, corners: np.ndarray, indices: np.ndarray, co
     return CornerPass(nonmanifold, border, inconsistent, out_ptr, out, longest, normals)
 
 
-KERNELS = (_corner_pass, _fan_flags, _gather_neighbours)
+KERNELS = (_walk_fans, _gather_neighbours)
 """The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""
