@@ -24,20 +24,19 @@ from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertice
                                       expansion_adjacency)
 
 __all__ = ["CLIPPING_PASS", "REGION_WALK_SHARE", "BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "BallWalk",
-           "ball_inputs", "support_reason", "support_bits", "add_star_rows", "add_row", "level_mark", "level_radii", "vertex_normal",
-           "touches", "touched_elements"]
+           "ball_inputs", "support_reason", "support_bits", "add_star_rows", "add_row", "level_mark",
+           "level_radii", "vertex_normal", "touches", "touched_elements"]
 
 CLIPPING_PASS = "ball clipping"
 """The shared pass the estimators that sum over balls and clip at the sphere name
-(:attr:`~curv.estimators.EstimatorSpec.shared_pass`; ``csm`` and ``icc``:
-:mod:`curv.estimators.clipping_pair`)."""
+(:attr:`~curv.estimators.EstimatorSpec.shared_pass`), run by :mod:`curv.estimators.clipping_pair`."""
 
 REGION_WALK_SHARE = 0.05
 """A region of fewer vertices than this share of the mesh walks its supports first, so that the
 per-triangle and per-vertex terms are computed only where its supports read them. For a larger
 region the walk (a second search per centre) costs more than the terms it saves, and the terms
 are computed for the whole mesh (the same values). Measured at R4, one thread, a slab of a torus:
-at 1M vertices the walk wins up to 3 % (csm 0.20 s against 0.54 s at 1 %) and loses at 10 %
+at 1M vertices the walk wins up to 3 % (the edge sums 0.20 s against 0.54 s at 1 %) and loses at 10 %
 (1.85 s against 1.72 s); at 12k vertices it already loses at 10 % (0.022 s against 0.019 s)."""
 
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
