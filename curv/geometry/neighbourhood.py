@@ -35,10 +35,9 @@ from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii
 
-__all__ = ["ball_support", "mesh_ball_support", "start_ball_support", "widen_ball_support", "new_scratch",
-           "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices",
-           "cached_with_mesh", "latest_with_mesh", "supports", "support_sizes", "Neighbourhood",
-           "iter_neighbourhoods"]
+__all__ = ["ball_support", "mesh_ball_support", "start_ball_support", "widen_ball_support", "new_scratch", "new_queues",
+           "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh",
+           "latest_with_mesh", "supports", "support_sizes", "Neighbourhood", "iter_neighbourhoods"]
 
 def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     """The support of vertex ``p``: the mesh search (:func:`mesh_ball_support`) or a point cloud's ball.
