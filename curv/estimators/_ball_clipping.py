@@ -19,13 +19,13 @@ from __future__ import annotations
 
 import math
 
-from ..core.jit import jit
+from ..core.jit import jit, jit_inlined
 
 __all__ = ["segment_in_ball", "exit_fraction", "disc_triangle_area", "face_in_ball_area", "crossing_area", "offset",
            "dot3"]
 
 # ---------------------------------------------------------------------------- points as 3-tuples
-@jit
+@jit_inlined
 def offset(mesh, v, centre):
     """Vertex v's offset from ``centre`` (a 3-tuple; ``mesh.x``, ``mesh.y``, ``mesh.z`` the coordinates)."""
     return mesh.x[v] - centre[0], mesh.y[v] - centre[1], mesh.z[v] - centre[2]

@@ -143,7 +143,7 @@ def new_crossings(width):
             np.empty(width, np.int64), np.empty((5, width)))
 
 
-@jit
+@jit_inlined
 def may_leave(mesh, v, centre, radius):
     """Whether an edge at vertex v may leave the ball of ``centre`` and ``radius``: not when
     ``|v - p| + longest[v] <= radius`` (less rounding). A test cheap enough to run at every

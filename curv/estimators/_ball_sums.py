@@ -17,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.jit import jit
+from ..core.jit import jit, jit_inlined
 from ..core.mesh import Mesh
 from ..core.validity import precedence
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns,
@@ -68,7 +68,7 @@ def support_reason(singular, hit, normal_ok):
                       hit & BORDER_BIT != 0, singular)
 
 
-@jit
+@jit_inlined
 def support_bits(mesh, queue, lo, hi, hit):
     """``hit`` with the flags of the support rows ``queue[lo:hi]`` added (BORDER_BIT, NONMANIFOLD_BIT;
     ``mesh`` a :class:`~curv.estimators._ball_clipping.BallMesh`)."""

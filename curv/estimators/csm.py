@@ -48,7 +48,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.jit import jit, jit_parallel, launch, prange, threads
+from ..core.jit import jit, jit_inlined, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import coordinate_columns
 from ._ball_clipping import face_in_ball_area, offset, segment_in_ball
@@ -347,7 +347,7 @@ def walk_sums(centre, support, mesh, walk, terms, stamps, sums):
     return hit
 
 
-@jit
+@jit_inlined
 def add_crossings(sums, v, centre, crossings, leaving, mesh, half_scale):
     """Correct a support's star sums (7,) for the ``leaving`` faces that cross the sphere around
     ``centre`` out of v (:func:`~curv.estimators._ball_mesh.crossing_faces`' scratch ``crossings``):
@@ -407,7 +407,7 @@ def principal_from_tensor(tensor, normal, vectors, out):
     out[7] = bz
 
 
-@jit
+@jit_inlined
 def finish(p, sums, hit, normals, work, rows):
     """Centre p's principal curvatures from its sums (7,: T's upper triangle, the area) into row p of
     ``rows = (k1, k2, d1, d2, reason)`` (one level's outputs); ``hit`` the support's flags

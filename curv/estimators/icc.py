@@ -70,7 +70,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.jit import jit, jit_parallel, launch, prange, run_to_end
+from ..core.jit import jit, jit_inlined, jit_parallel, launch, prange, run_to_end
 from ..core.mesh import Mesh
 from ..core.result import Principal
 from ..core.validity import Reason
@@ -313,7 +313,7 @@ def walk_sums(centre, support, mesh, walk, measures, fstamp, sums):
     return hit
 
 
-@jit
+@jit_inlined
 def add_crossings(sums, crossings, leaving, mesh, measures):
     """Correct a support's star sums (9,) for the ``leaving`` faces that cross the sphere out of a
     vertex (:func:`~curv.estimators._ball_mesh.crossing_faces`'s scratch and count): each face's
@@ -325,7 +325,7 @@ def add_crossings(sums, crossings, leaving, mesh, measures):
 
 
 # ---------------------------------------------------------------------------- 4. measures to curvatures
-@jit
+@jit_inlined
 def finish(p, sums, hit, normals, from_measures, rows):
     """Centre p's curvatures from its nine sums, into row p of ``rows``.
 
