@@ -407,7 +407,7 @@ def principal_from_tensor(tensor, normal, vectors, out):
     out[7] = bz
 
 
-@jit_inlined
+@jit
 def finish(p, sums, hit, normals, work, rows):
     """Centre p's principal curvatures from its sums (7,: T's upper triangle, the area) into row p of
     ``rows = (k1, k2, d1, d2, reason)`` (one level's outputs); ``hit`` the support's flags

@@ -325,7 +325,7 @@ def add_crossings(sums, crossings, leaving, mesh, measures):
 
 
 # ---------------------------------------------------------------------------- 4. measures to curvatures
-@jit_inlined
+@jit
 def finish(p, sums, hit, normals, from_measures, rows):
     """Centre p's curvatures from its nine sums, into row p of ``rows``.
 
