@@ -101,7 +101,7 @@ def test_triangle_corners_step_by_arithmetic(mesh):
     if not mesh.is_triangular:
         assert steps[0] is mesh.corner_next and steps[1] is mesh.corner_prev
         return
-    assert steps[0].size == steps[1].size == 0
+    assert steps[0] is None and steps[1] is None
     c = np.arange(mesh.face_indices.size)
     nxt = np.array([connectivity.next_corner.py_func(int(k), steps[0]) for k in c])
     prv = np.array([connectivity.prev_corner.py_func(int(k), steps[1]) for k in c])
@@ -138,6 +138,6 @@ def test_edge_counts_sharp_near_the_threshold_and_beyond_a_right_angle():
     assert np.allclose(np.sort(angles), np.sort(sweep), atol=1e-6)
     indptr, corners = mesh.vertex_corners
     for threshold in (SHARP_DEGREES, 0.5 * SHARP_DEGREES, 100.0):
-        counts = connectivity.edge_counts(indptr, corners, mesh.face_indices, *mesh.corner_steps, np.empty(0, np.int32),
+        counts = connectivity.edge_counts(indptr, corners, mesh.face_indices, *mesh.corner_steps, None,
                                           mesh.face_vector_areas, mesh.face_areas, mesh.degenerate_faces, threshold)
         assert counts["sharp"] == int((angles > threshold).sum())

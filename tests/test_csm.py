@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 import curv
-from curv.estimators._ball_clipping import disc_triangle_area
-from curv.estimators.csm import iter_csm, segment_in_ball
+from curv.estimators._ball_clipping import disc_triangle_area, segment_in_ball
+from curv.estimators.csm import iter_csm
 from curv.geometry.normals import vertex_normals
 from curv.core.ranges import Range, ball_radii
 from curv.core.validity import Reason
 from tests.clipping import triangle_in_ball_area
-from tests.meshes import icosphere
+from tests.meshes import icosphere, torus_grid
 
 
 def _drain(gen):
@@ -40,7 +40,7 @@ def _csm(mesh, k=2.0, *, radius=None, chunk=None):
     ((-2.0, 0.6, 0.0), (4.0, 0.0, 0.0), 1.0, 0.4),     # chord of half-length 0.8
 ])
 def test_segment_in_ball(start, direction, radius, expected):
-    assert segment_in_ball(*start, *direction, radius ** 2) == pytest.approx(expected, abs=1e-14)
+    assert segment_in_ball(start, direction, radius ** 2) == pytest.approx(expected, abs=1e-14)
 
 
 def test_disc_triangle_area_known_cases():
@@ -200,7 +200,7 @@ def test_disc_triangle_area_with_a_corner_just_outside(poke):
 
 
 def test_a_region_computes_only_the_triangles_and_edges_its_supports_touch():
-    from curv.estimators._ball_clipping import touched_elements
+    from curv.estimators._ball_sums import touched_elements
     from curv.geometry.neighbourhood import expansion_adjacency, supports
 
     mesh = icosphere(3)
@@ -253,7 +253,7 @@ def test_star_sums_equal_the_edge_by_edge_walk(k, monkeypatch):
 @pytest.mark.parametrize("k", [1.0, 2.0, 4.0])
 def test_star_sums_equal_the_walk_on_an_open_patch(k, monkeypatch):
     # next to the border a face's edge v -> u may have no face at v beyond it: the crossing faces
-    # then read u itself instead of v's ring (curv.estimators._ball_clipping.crossing_faces)
+    # then read u itself instead of v's ring (curv.estimators._ball_mesh.crossing_faces)
     from tests.meshes import hex_plane
 
     flat = hex_plane(16)
@@ -264,7 +264,7 @@ def test_star_sums_equal_the_walk_on_an_open_patch(k, monkeypatch):
 
 
 def test_corner_rings_name_each_corners_far_end_and_its_faces_other_edge():
-    from curv.estimators._ball_clipping import corner_rings
+    from curv.estimators._ball_mesh import corner_rings
     from tests.meshes import hex_plane
 
     mesh = hex_plane(5)
@@ -284,3 +284,59 @@ def test_corner_rings_name_each_corners_far_end_and_its_faces_other_edge():
                 assert link[j] == -1
                 border_edges += 1
     assert border_edges == 6 * 5  # each border edge once, from the end it leaves
+
+
+# ---------------------------------------------------------------------------- the paper in numpy
+def _normal_cycle_in_numpy(mesh, normals, radii):
+    """Cohen-Steiner & Morvan's estimate written as the paper states it, in plain numpy.
+
+    ``T(p) = 1 / area(B ∩ mesh) sum_e beta(e) |e ∩ B| ê êᵀ`` over the edges with an end in the ball B
+    (the edges csm reaches from its support), beta the signed dihedral angle, ``|e ∩ B|`` the
+    segment/sphere intersection; the eigenvector nearest the normal dropped, each remaining eigenvalue
+    given the other eigenvector as its direction. The area inside the ball is the library's exact clip
+    (tested against sampling above).
+    """
+    from curv.estimators._ball_clipping import face_in_ball_area
+    from curv.estimators._ball_mesh import ball_mesh
+
+    ball = ball_mesh(mesh)
+    v, edges, faces = mesh.vertices, mesh.edges, mesh.edge_faces
+    inner = mesh.edge_face_count == 2
+    n0, n1 = mesh.face_normals[faces[:, 0]], mesh.face_normals[faces[:, 1]]
+    d = v[edges[:, 1]] - v[edges[:, 0]]
+    length = np.linalg.norm(d, axis=1)
+    unit = d / length[:, None]
+    beta = np.arctan2(np.einsum("ij,ij->i", np.cross(n0, n1), unit), np.einsum("ij,ij->i", n0, n1))
+    k1, k2 = np.full(mesh.n_vertices, np.nan), np.full(mesh.n_vertices, np.nan)
+    for p in range(mesh.n_vertices):
+        r = radii[p]
+        s = v[edges[:, 0]] - v[p]
+        near = inner & ((np.linalg.norm(s, axis=1) <= r) | (np.linalg.norm(s + d, axis=1) <= r))
+        a, b, c = (d[near] ** 2).sum(1), (d[near] * s[near]).sum(1), (s[near] ** 2).sum(1) - r * r
+        root = np.sqrt(np.maximum(b * b - a * c, 0.0))
+        t = np.clip((-b + root) / a, 0, 1) - np.clip((-b - root) / a, 0, 1)
+        e = unit[near]
+        tensor = np.einsum("i,ij,ik->jk", beta[near] * t * length[near], e, e)
+        touching = np.flatnonzero((np.linalg.norm(v[mesh.triangles] - v[p], axis=2) <= r).any(axis=1))
+        area = sum(face_in_ball_area(ball, f, tuple(v[p]), r * r) for f in touching)
+        values, vectors = np.linalg.eigh(tensor / area)
+        keep = np.delete(np.arange(3), np.argmax(np.abs(vectors.T @ normals[p])))
+        k1[p], k2[p] = values[keep]
+    return k1, k2
+
+
+@pytest.mark.parametrize("k", [1.0, 2.5])
+def test_the_estimate_is_the_papers_formula(k):
+    # a noisy torus: every vertex in a ball is joined to its centre inside it, so the edges csm reaches
+    # from its support are all the edges with an end in the ball
+    mesh = torus_grid(24, 12)[0]
+    rng = np.random.default_rng(8)
+    mesh = curv.Mesh(mesh.vertices + rng.normal(scale=0.01, size=mesh.vertices.shape), mesh.triangles)
+    normals = vertex_normals(mesh)
+    radii = ball_radii(mesh, Range(k=k), uses_normals=False)
+    got, _ = _drain(iter_csm(mesh, normals, radii))
+    assert (got.reason == Reason.OK).all()
+    k1, k2 = _normal_cycle_in_numpy(mesh, normals, radii)
+    scale = np.abs(k2).max()
+    np.testing.assert_allclose(got.k1, k1, rtol=0, atol=1e-9 * scale)
+    np.testing.assert_allclose(got.k2, k2, rtol=0, atol=1e-9 * scale)

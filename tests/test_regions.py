@@ -34,9 +34,9 @@ def test_region_equals_full_run(torus, method, features):
 @pytest.mark.parametrize("share", [0.0, 1.0], ids=["terms-everywhere", "walk-first"])
 def test_clipping_region_either_way(torus, method, features, share, monkeypatch):
     """Both ways of a clipping region: the per-triangle terms of the whole mesh, or a walk first."""
-    from curv.estimators import _ball_clipping
+    from curv.estimators import _ball_sums
 
-    monkeypatch.setattr(_ball_clipping, "REGION_WALK_SHARE", share)
+    monkeypatch.setattr(_ball_sums, "REGION_WALK_SHARE", share)
     _assert_region_equals_full_run(torus if features is None else box(4), method, features)
 
 

@@ -20,10 +20,6 @@ from .wording import count_text
 
 __all__ = ["Mesh", "MeshReport", "scatter_sample", "scattered_corners"]
 
-_NO_STEPS = (np.empty(0, np.int32), np.empty(0, np.int32))
-for _steps in _NO_STEPS:
-    _steps.setflags(write=False)
-
 SCATTERED_SPAN = 65536
 """A face whose vertex indices span more than this many vertices (median over a sample of faces)
 marks a numbering too scattered for the caches (:meth:`Mesh.scattered_order`): the coordinates of
@@ -304,12 +300,12 @@ class Mesh(PointSet):
                                             "the same face.")
 
     @property
-    def corner_steps(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(corner_next, corner_prev)`` as the kernels take them: two empty int32 arrays on a triangle mesh,
-        whose corners step by arithmetic (:func:`curv.core.connectivity.next_corner`), so that a fresh
-        estimate neither builds nor reads the two (h,) arrays."""
+    def corner_steps(self) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """``(corner_next, corner_prev)`` as the kernels take them: ``(None, None)`` on a triangle mesh,
+        whose corners step by arithmetic (:func:`curv.core.connectivity.next_corner`; numba compiles
+        that case apart), so that a fresh estimate neither builds nor reads the two (h,) arrays."""
         if self.is_triangular:
-            return _NO_STEPS
+            return None, None
         return self.corner_next, self.corner_prev
 
     @cached_property
@@ -425,7 +421,7 @@ class Mesh(PointSet):
         """Triangle meshes: ``(vector areas (m, 3), areas (m,), degenerate (m,))`` in one pass."""
         m = self.n_faces
         vector_area, area, degenerate = np.empty((m, 3)), np.empty(m), np.empty(m, bool)
-        launch(_kernels.triangle_geometry, self._indices.reshape(-1, 3), self._vertices, vector_area, area,
+        launch(_kernels.triangle_geometry, self._indices.reshape(-1, 3), self._vertices, (vector_area, area),
                degenerate)
         return vector_area, area, degenerate
 
@@ -487,8 +483,7 @@ class Mesh(PointSet):
                 return self._triangle_geometry[2]
             # the flags alone (meyer and ru read nothing else): the same test, without the areas
             degenerate = np.empty(self.n_faces, bool)
-            launch(_kernels.triangle_geometry, self._indices.reshape(-1, 3), self._vertices, np.empty((0, 3)),
-                   np.empty(0), degenerate)
+            launch(_kernels.triangle_geometry, self._indices.reshape(-1, 3), self._vertices, None, degenerate)
             return degenerate
         repeated = np.zeros(self.n_faces, bool)
         null = self.halfedge_edge < 0
@@ -583,7 +578,7 @@ class Mesh(PointSet):
         from .features import SHARP_DEGREES
 
         indptr, corners = self.vertex_corners
-        corner_face = _NO_STEPS[0] if self.is_triangular else self.corner_face
+        corner_face = None if self.is_triangular else self.corner_face
         counts = _kernels.edge_counts(indptr, corners, self._indices, *self.corner_steps, corner_face,
                                       self.face_vector_areas, self.face_areas, self.degenerate_faces, SHARP_DEGREES)
         loops = 0

@@ -3,10 +3,9 @@
 The codes are :class:`Reason`; the kernels read them as the uint8 constants below (:data:`OK`,
 :data:`BORDER`, ...), defined here once. When several causes apply to a vertex the most
 fundamental one names it: NONMANIFOLD > DEGENERATE > BORDER > SINGULAR, else OK
-(:func:`precedence`, the one owner of that order). It serves the 1-ring estimators
-(:func:`curv.estimators._triangle_corners.ring_reason`), the ball supports
-(:func:`curv.estimators._ball_clipping.support_reason`) and the flags an estimate's input carries
-(:func:`mark_ok_rows`, :func:`curv.estimate_finish.finish`).
+(:func:`precedence`, the one owner of that order). It serves the 1-ring estimators (``meyer``,
+``ru``), the ball supports (:func:`curv.estimators._ball_sums.support_reason`) and the flags an
+estimate's input carries (:func:`mark_ok_rows`, :func:`curv.estimate_finish.finish`).
 
 How the other codes compose with it:
 

@@ -1,4 +1,4 @@
-"""The triangle at a corner, seen from the corner's vertex: the shared helpers of meyer and ru.
+"""The triangle at a corner, seen from the corner's vertex: what the 1-ring estimators share.
 
 A corner of triangle (a, b, c) at vertex ``a`` has the edges ``ab = b - a`` and ``ac = c - a``
 (b and c the next and previous vertices of its face). Everything a 1-ring estimator needs from
@@ -12,17 +12,17 @@ parallel kernel may then stop without a word), so every division here is guarded
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-from ..core.connectivity import next_corner, prev_corner
 from ..core.jit import jit
 from ..core.mesh import Mesh
-from ..core.result import Principal
-from ..core.validity import OK, precedence
 from ..geometry.neighbourhood import all_centres
+from ._output_rows import unset_principal
 
-__all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag", "unset_principal"]
+__all__ = ["Ring", "ring_run", "corner_ends", "corner_triangle", "turn_by_corner", "angle_sum", "ring_flag"]
+
 
 @jit
 def corner_triangle(x, a, b, c, degenerate):
@@ -125,39 +125,53 @@ def angle_sum(re, im, turns):
     return angle + 2.0 * math.pi * turns
 
 
+class Ring(NamedTuple):
+    """A triangle mesh as the 1-ring kernels read it (:func:`ring_run`)."""
+
+    indptr: np.ndarray
+    """(n + 1,) int64 and (3 m,) int64: the corners grouped by vertex (:attr:`curv.Mesh.vertex_corners`)."""
+    corners: np.ndarray
+    indices: np.ndarray
+    """(3 m,) the vertex of every corner (:attr:`curv.Mesh.face_indices`): face f has the corners
+    3f, 3f + 1, 3f + 2, so a corner's neighbours in its face follow by arithmetic."""
+    x: np.ndarray
+    """(n, 3) float64 vertex positions."""
+    degenerate: np.ndarray
+    """(m,) bool :attr:`curv.Mesh.degenerate_faces`."""
+    border: np.ndarray | None
+    """(n,) bool :attr:`curv.Mesh.border_vertices`, None when no vertex is on a border (a closed
+    mesh: the kernels then compile without the look-ups)."""
+    nonmanifold: np.ndarray
+    """(n,) bool :attr:`curv.Mesh.nonmanifold_vertices`."""
+
+
 @jit
-def ring_flag(p, lo, hi, corners, indices, corner_next, corner_prev, flags):
-    """Whether ``flags`` is set at p or at an edge neighbour of p (the next and previous vertices
-    of the corners ``corners[lo:hi]`` at p); an empty ``flags`` is set nowhere."""
-    if flags.size == 0:
+def corner_ends(ring, c):
+    """The next and the previous vertex of corner c in its triangle: ``(b, q)`` for the corner at a of (a, b, q)."""
+    return ring.indices[c - 2 if c % 3 == 2 else c + 1], ring.indices[c + 2 if c % 3 == 0 else c - 1]
+
+
+@jit
+def ring_flag(ring, p, flags):
+    """Whether ``flags`` (n,) bool is set at p or at an edge neighbour of p (the next and previous
+    vertices of p's corners); None is set nowhere."""
+    if flags is None:
         return False
     if flags[p]:
         return True
-    for i in range(lo, hi):
-        c = corners[i]
-        if flags[indices[next_corner(c, corner_next)]] or flags[indices[prev_corner(c, corner_prev)]]:
+    for i in range(ring.indptr[p], ring.indptr[p + 1]):
+        b, q = corner_ends(ring, ring.corners[i])
+        if flags[b] or flags[q]:
             return True
     return False
-
-
-@jit
-def ring_reason(singular, border, degenerate, nonmanifold):
-    """Reason code of a vertex for an estimator that needs a closed, clean 1-ring, in the one
-    precedence (:func:`curv.core.validity.precedence`): NONMANIFOLD, then DEGENERATE (a degenerate
-    face around it, or no finite normal), BORDER (on or next to a border), SINGULAR, else OK.
-    """
-    return precedence(nonmanifold, degenerate, border, singular)
 
 
 def ring_run(mesh: Mesh, centres: np.ndarray | None) -> tuple:
     """What a 1-ring estimator on triangles starts from: ``(centres, out, ring)``.
 
     ``centres`` (c,) int64 (every vertex when None), ``out`` the unset outputs
-    (:func:`unset_principal`) and ``ring`` the mesh's corner arrays the ring kernels read, in their
-    order: vertex corners (indptr, corners), face indices, next and previous corner
-    (:attr:`curv.Mesh.corner_steps`: empty, the kernels step by arithmetic), vertex positions, and
-    the degenerate-face, border (empty when no vertex is on a border: nothing to look up) and
-    non-manifold vertex flags (the face of corner c is c // 3: no corner-to-face array is built). A
+    (:func:`~curv.estimators._output_rows.unset_principal`) and ``ring`` the :class:`Ring` the
+    kernels read (the face of corner c is c // 3: no corner-to-face array is built). A
     :class:`~curv.core.errors.MeshError` naming the polygon sizes when the mesh is not all triangles.
     """
     n = mesh.n_vertices
@@ -165,16 +179,6 @@ def ring_run(mesh: Mesh, centres: np.ndarray | None) -> tuple:
         mesh.triangles  # raises the MeshError that names the polygon sizes
     indptr, corners = mesh.vertex_corners
     border = mesh.border_vertices
-    ring = (indptr, corners, mesh.face_indices, *mesh.corner_steps, mesh.vertices,
-            mesh.degenerate_faces, border if border.any() else border[:0], mesh.nonmanifold_vertices)
+    ring = Ring(indptr, corners, mesh.face_indices, mesh.vertices, mesh.degenerate_faces,
+                border if border.any() else None, mesh.nonmanifold_vertices)
     return all_centres(n, centres), unset_principal(n), ring
-
-
-def unset_principal(n: int) -> Principal:
-    """Uninitialised (n,) and (n, 3) outputs of a 1-ring kernel, which writes every row it estimates.
-
-    Unlike a NaN-filled result, allocating them costs nothing until a row is written, so an estimate
-    over a small region of a large mesh touches only the region's rows.
-    """
-    return Principal(k1=np.empty(n), k2=np.empty(n), d1=np.empty((n, 3)), d2=np.empty((n, 3)),
-                     reason=np.empty(n, np.uint8))

@@ -33,18 +33,24 @@ vertex noise the eigenvalues of M are the more robust (K from mu2 is the noisier
 noise of 0.1 mean edge lengths on the 3169-vertex patches, median e_rel at R4 0.09-0.25 from M
 against 0.15-0.68 from mu1 and mu2. :func:`icc_mean_gaussian` returns H and K themselves.
 
-The measures of the triangles are computed once per call, and a third of them summed at each vertex
-(:func:`star_measures`; the kernel is csm's too, :mod:`curv.estimators._clipped_sums`, and run
-together, :mod:`curv.estimators.clipping_pair`, the two share the search and the clips); summed over a support, these hold every triangle inside the ball whole,
-by thirds. Only the triangles that cross the sphere are clipped: each is found once, as its one
-halfedge v -> w leaving the ball (v in the support; each vertex's ring read once,
-:func:`curv.estimators._ball_clipping.corner_rings`), and its thirds in the sum are replaced by its
-area fraction (:func:`curv.estimators._ball_clipping.crossing_area`). Support vertices whose
-every edge stays inside the ball are not walked. A support holding a non-manifold vertex, a
-degenerate triangle or one without measures (with ``features``, one touching a crease) is summed
-the long way, face by face. For a region of less than 5 % of the mesh
-(:data:`~curv.estimators._ball_clipping.REGION_WALK_SHARE`), the measures and the thirds are
-computed only for the triangles and vertices its supports touch.
+The module reads as the paper's steps:
+
+1. **support**: the triangles touching p or a vertex of its support, walked by the pass that runs
+   csm and icc (:mod:`curv.estimators.clipping_pair`), which also clips the triangles crossing the
+   sphere (:mod:`curv.estimators._ball_clipping`);
+2. **rows**: each triangle's measures (:func:`face_measures`) and every vertex's third of the
+   measures of its triangles (:func:`star_measures`);
+3. **sum**: over the support, the thirds corrected at the sphere (:func:`add_crossings`), or, where
+   a vertex's thirds are not exact, the triangles one by one (:func:`walk_sums`);
+4. **measures to curvatures**: H, K and the tensor M / mu0 in the vertex's tangent plane (:func:`finish`).
+
+Summed over a support, the thirds hold every triangle inside the ball whole. Only the triangles
+that cross the sphere are clipped: each is found once, as its one halfedge v -> w leaving the ball
+(:func:`~curv.estimators._ball_mesh.crossing_faces`), and its thirds in the sum are replaced by
+its area fraction. A support holding a non-manifold vertex, a degenerate triangle or one without
+measures (with ``features``, one touching a crease) is summed the long way, face by face. For a
+region of less than 5 % of the mesh (:data:`~curv.estimators._ball_sums.REGION_WALK_SHARE`), the
+measures and the thirds are computed only for the triangles and vertices its supports touch.
 With ``features``, the triangles touching a crease vertex are left out of the sums: their normal
 field would use the crease vertex's normal (or its side's), tilted by O(h) from the surface's,
 which the normal differences turn into an O(1) error next to the crease.
@@ -59,22 +65,38 @@ is not implemented).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from ..core.jit import jit_parallel, launch, prange, run_to_end
+from ..core.jit import jit, jit_inlined, jit_parallel, launch, prange, run_to_end
 from ..core.mesh import Mesh
-from ..geometry.neighbourhood import coordinate_columns
+from ..core.result import Principal
 from ..core.validity import Reason
-from ._ball_clipping import _corner_rings, clipping_inputs, corner_rings, element_list, touches
-from ._clipped_sums import CLIPPING_PASS, MEASURES, IccTerms, _clip_chunk, _row_is_finite, run_clipping
-from .registry import EstimatorSpec, register
+from ..geometry.neighbourhood import coordinate_columns
+from ._ball_clipping import face_in_ball_area
+from ._ball_mesh import element_list
+from ._ball_sums import CLIPPING_PASS, DEGENERATE_BIT, add_row, support_reason, touches, vertex_normal
+from ..core.small_linalg import sym3_bilinear
+from ._frames import tangent_frame
+from ._principal import store_principal
+from ._output_rows import LevelOutputs, nan_row
+from .registry import SHARED_PASSES, EstimatorSpec, register
 
-__all__ = ["iter_icc", "icc_terms", "icc_mean_gaussian", "face_measures", "star_measures"]
+__all__ = ["iter_icc", "icc_terms", "IccTerms", "icc_mean_gaussian", "face_measures", "star_measures", "walk_sums",
+           "add_crossings", "finish", "IccPrincipal", "IccOutputs", "MEASURES"]
+
+EPS = float(np.finfo(np.float64).eps)
+
+MEASURES = 9
+"""Columns of :func:`face_measures`: mu0, mu1, mu2 and the symmetric part of M (xx, xy, xz, yy, yz, zz)."""
 
 
+# ---------------------------------------------------------------------------- 2. rows: the measures of a triangle
 @jit_parallel
-def _face_measures(ids, tri, x, y, z, normals, degenerate, out):
+def _face_measures(ids, tri, coords, normals, degenerate, out):
+    x, y, z = coords
     for index in prange(ids.size):
         f = ids[index]
         i, j, k = tri[f, 0], tri[f, 1], tri[f, 2]
@@ -135,15 +157,26 @@ def face_measures(mesh: Mesh, normals: np.ndarray, ids: np.ndarray | None = None
         degenerate.
     """
     tri = np.ascontiguousarray(mesh.triangles)
-    x, y, z = coordinate_columns(mesh)
     out = np.empty((tri.shape[0], MEASURES))
-    launch(_face_measures, element_list(tri.shape[0], ids), tri, x, y, z,
+    launch(_face_measures, element_list(tri.shape[0], ids), tri, coordinate_columns(mesh),
            np.asarray(normals, dtype=np.float64), mesh.degenerate_faces, out)
     return out
 
 
+@jit
+def _row_is_finite(a, r):
+    for c in range(a.shape[1]):
+        if not math.isfinite(a[r, c]):
+            return False
+    return True
+
+
+# ---------------------------------------------------------------------------- 2. rows: every vertex's third
 @jit_parallel
-def _star_measures(ids, vc_ptr, vc, tri, measures, degenerate, nonmanifold, crease, star, clean):
+def _star_measures(ids, corners, measures, flags, out):
+    vc_ptr, vc, tri = corners
+    degenerate, nonmanifold, crease = flags
+    star, clean = out
     for i in prange(ids.size):
         v = ids[i]
         ok = not nonmanifold[v]
@@ -198,37 +231,182 @@ def star_measures(mesh: Mesh, measures: np.ndarray, ids: np.ndarray | None = Non
     star = np.empty((n, MEASURES))
     clean = np.empty(n, np.bool_)
     crease = np.zeros(n, np.bool_) if crease is None else crease
-    launch(_star_measures, element_list(n, ids), vc_ptr, vc, np.ascontiguousarray(mesh.triangles), measures,
-           mesh.degenerate_faces, mesh.nonmanifold_vertices, crease, star, clean)
+    launch(_star_measures, element_list(n, ids), (vc_ptr, vc, np.ascontiguousarray(mesh.triangles)), measures,
+           (mesh.degenerate_faces, mesh.nonmanifold_vertices, crease), (star, clean))
     return star, clean
+
+
+class IccTerms(NamedTuple):
+    """icc's per-mesh terms (:func:`icc_terms`)."""
+
+    measures: np.ndarray
+    """(m, 9) float64: :func:`face_measures`."""
+    star: np.ndarray
+    """(n, 9) float64: :func:`star_measures`."""
+    clean: np.ndarray
+    """(n,) bool: the vertex's star sums are exact."""
+    walk: bool
+    """Some support is summed face by face."""
+    from_measures: bool
+    """k1, k2 from mu1 and mu2 (else from M's eigenvalues)."""
 
 
 def icc_terms(mesh: Mesh, normals: np.ndarray, touched: tuple, crease: np.ndarray, from_measures: bool = True
               ) -> IccTerms:
     """icc's per-mesh terms: :func:`face_measures` and :func:`star_measures` (a region's only,
-    ``touched``: :func:`~curv.estimators._ball_clipping.clipping_inputs`), and whether a support is
+    ``touched``: :func:`~curv.estimators._ball_sums.ball_inputs`), and whether a support is
     summed face by face. ``normals`` (n, 3) float64 C-contiguous."""
     measures = face_measures(mesh, normals, touched[1])
     star, clean = star_measures(mesh, measures, touched[0], crease)
     walk = not (clean.all() if touched[0] is None else clean[touched[0]].all())
-    return IccTerms(measures, star, clean, walk, from_measures)
+    return IccTerms(measures, star, clean, walk, bool(from_measures))
 
 
-def _iter_measures(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, chunk: int | None,
-                   from_measures: bool = True, centres: np.ndarray | None = None, features=None):
-    """Run the kernel over chunks of vertices at one or several levels of radii (``radii`` (n,) or
-    (levels, n), :func:`iter_icc`); returns ``(LevelOutputs, mean (levels, n), gaussian (levels, n))``."""
-    tri, centres, x, y, z, indptr, indices, cut, crease, radii, touched = yield from clipping_inputs(
-        mesh, centres, radii, features)
-    normals = np.asarray(normals, dtype=np.float64)  # the cached normals are column-major: read as they are
-    terms = icc_terms(mesh, normals, touched, crease, from_measures)
-    after, link = corner_rings(mesh, touched[0])
-    yield 0.0
-    _, out = yield from run_clipping(mesh, centres, radii, (tri, x, y, z, indptr, indices, cut, crease, after, link),
-                                     normals, icc=terms, chunk=chunk)
-    return out
+# ---------------------------------------------------------------------------- 3. the sums over a support
+@jit
+def walk_sums(centre, support, mesh, walk, measures, fstamp, sums):
+    """The nine sums of a centre whose support is not clean (or that stops at creases), face by face.
+
+    Parameters
+    ----------
+    centre : (p, r2, mark)
+        The centre vertex, its squared radius and this walk's stamp
+        (:func:`~curv.estimators._ball_sums.level_mark`; the stamps start zeroed).
+    support : (queue, count)
+        ``queue[:count]`` the support.
+    mesh : BallMesh
+    walk : BallWalk
+        Its creases.
+    measures : (m, 9) float64
+    fstamp : (m,) int
+        The thread's face stamps.
+    sums : (9,) float64
+        Added to.
+
+    Returns
+    -------
+    int
+        The DEGENERATE_BIT if a degenerate face or a face without measures was met.
+    """
+    p, r2, mark = centre
+    queue, count = support
+    at = (mesh.x[p], mesh.y[p], mesh.z[p])
+    hit = 0
+    for i in range(count):
+        v = queue[i]
+        for j in range(mesh.vc_ptr[v], mesh.vc_ptr[v + 1]):
+            f = mesh.vc[j] // 3  # the corners of triangle f are 3f, 3f + 1, 3f + 2
+            if fstamp[f] == mark:
+                continue
+            fstamp[f] = mark
+            if mesh.degenerate[f]:
+                hit |= DEGENERATE_BIT
+                continue
+            if walk.cut and touches(walk.crease, mesh.tri, f):
+                continue  # the surface ends at a crease for this centre: its faces are left out
+            if not _row_is_finite(measures, f):
+                hit |= DEGENERATE_BIT  # a corner without a normal
+                continue
+            # weight: the fraction of the face's area inside B
+            inside = face_in_ball_area(mesh, f, at, r2)
+            w = min(inside / mesh.area[f], 1.0)
+            if w > 0.0:
+                add_row(sums, w, measures, f)
+    return hit
 
 
+@jit_inlined
+def add_crossings(sums, crossings, leaving, mesh, measures):
+    """Correct a support's star sums (9,) for the ``leaving`` faces that cross the sphere out of a
+    vertex (:func:`~curv.estimators._ball_mesh.crossing_faces`'s scratch and count): each face's
+    one or two thirds of its measures become the fraction of its area inside the ball."""
+    out_h, _, _, out_area, out_in, _ = crossings
+    for a in range(leaving):
+        f = out_h[a] // 3
+        add_row(sums, min(out_area[a] / mesh.area[f], 1.0) - out_in[a] * (1.0 / 3.0), measures, f)
+
+
+# ---------------------------------------------------------------------------- 4. measures to curvatures
+@jit
+def finish(p, sums, hit, normals, from_measures, rows):
+    """Centre p's curvatures from its nine sums, into row p of ``rows``.
+
+    Parameters
+    ----------
+    p : int
+    sums : (9,) float64
+        mu0, mu1, mu2 and M's upper triangle, summed over the ball.
+    hit : int
+        The support's flags (:func:`~curv.estimators._ball_sums.support_reason`).
+    normals : (n, 3) float64
+    from_measures : bool
+        k1, k2 from H and K (else M's eigenvalues).
+    rows : (k1, k2, d1, d2, mean, gaussian, reason)
+        One level's outputs (:class:`IccOutputs`).
+    """
+    k1, k2, d1, d2, mean, gaussian, reason = rows
+    nx, ny, nz, normal_ok = vertex_normal(normals, p)
+    mean[p] = gaussian[p] = math.nan
+    mu0, s1, s2 = sums[0], sums[1], sums[2]
+    total = 0.0
+    for c in range(MEASURES):
+        total += sums[c]
+    singular = not (mu0 > 0.0 and math.isfinite(total))
+    if not singular and normal_ok:
+        h = mean[p] = 0.5 * s1 / mu0
+        kk = gaussian[p] = s2 / mu0
+        # W = M / mu0 in the tangent frame (U, V) of the vertex normal
+        ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
+        m = (sums[3], sums[4], sums[5], sums[6], sums[7], sums[8])  # M's upper triangle
+        e = sym3_bilinear(m, (ux, uy, uz), (ux, uy, uz)) / mu0
+        f_ = sym3_bilinear(m, (ux, uy, uz), (vx, vy, vz)) / mu0
+        g = sym3_bilinear(m, (vx, vy, vz), (vx, vy, vz)) / mu0
+        store_principal(p, (e, f_, g), (ux, uy, uz, vx, vy, vz), k1, k2, d1, d2)
+        if from_measures:
+            # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
+            # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8.
+            # H and K are sums of a few hundred clipped terms, rounded to tens of EPS.
+            disc = h * h - kk
+            if disc <= 64.0 * EPS * (h * h + abs(kk)):
+                disc = 0.0
+            rad = math.sqrt(disc)
+            k1[p] = h + rad
+            k2[p] = h - rad
+        if not (math.isfinite(k1[p]) and math.isfinite(k2[p])):
+            singular = True
+    else:
+        nan_row(p, k1, k2, d1, d2)
+    reason[p] = support_reason(singular, hit, normal_ok)
+
+
+@dataclass
+class IccPrincipal(Principal):
+    """icc's :class:`~curv.core.result.Principal` with its mean and Gaussian curvature from the
+    measures (``mu1 / (2 mu0)``, ``mu2 / mu0``; NaN where the estimate is not usable)."""
+
+    mean: np.ndarray | None = None
+    gaussian: np.ndarray | None = None
+
+
+class IccOutputs(LevelOutputs):
+    """icc's outputs for ``levels`` radii: :class:`~curv.estimators._output_rows.LevelOutputs` and
+    ``mean``, ``gaussian`` (levels, n), uninitialised (written at each centre before its sums)."""
+
+    def __init__(self, levels: int, n: int):
+        super().__init__(levels, n)
+        self.mean, self.gaussian = np.empty((levels, n)), np.empty((levels, n))
+
+    @property
+    def rows(self) -> tuple:
+        """``(k1, k2, d1, d2, mean, gaussian, reason)``."""
+        return self.k1, self.k2, self.d1, self.d2, self.mean, self.gaussian, self.reason
+
+    def principal(self, level: int) -> IccPrincipal:
+        return IccPrincipal(k1=self.k1[level], k2=self.k2[level], d1=self.d1[level], d2=self.d2[level],
+                            reason=self.reason[level], mean=self.mean[level], gaussian=self.gaussian[level])
+
+
+# ---------------------------------------------------------------------------- the estimator
 def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int | None = None,
              from_measures: bool = True, centres: np.ndarray | None = None, features=None):
     """Principal curvatures from the interpolated corrected curvature measures in a ball per vertex.
@@ -255,13 +433,13 @@ def iter_icc(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
         (a crease vertex's normal, or its side's, tilts them: an error that does not shrink with
         the mesh).
 
-    It yields the fraction done and returns the :class:`~curv.core.result.Principal` (:data:`~curv.estimators.registry.EstimatorFunction`):
+    It yields the fraction done and returns the :class:`IccPrincipal`
+    (:data:`~curv.estimators.registry.EstimatorFunction`):
     ``k1 >= k2``, reasons as in the module notes.
     """
-    out, _, _ = yield from _iter_measures(mesh, normals, radii, chunk, from_measures, centres, features)
-    if np.ndim(radii) == 2:
-        return [out.principal(level) for level in range(out.k1.shape[0])]
-    return out.principal(0)
+    out = yield from SHARED_PASSES[CLIPPING_PASS](mesh, normals, radii, ("icc",), chunk=chunk, centres=centres,
+                                                  features=features, options={"icc": {"from_measures": from_measures}})
+    return out["icc"] if np.ndim(radii) == 2 else out["icc"][0]
 
 
 def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
@@ -276,8 +454,8 @@ def icc_mean_gaussian(mesh: Mesh, normals: np.ndarray, radii: np.ndarray
         ``H = mu1 / (2 mu0)`` and ``K = mu2 / mu0``; NaN where ``reason`` is not OK.
     reason : (n,) uint8
     """
-    out, mean, gaussian = run_to_end(_iter_measures(mesh, normals, radii, None))
-    principal, mean, gaussian = out.principal(0), mean[0], gaussian[0]
+    principal = run_to_end(iter_icc(mesh, normals, radii))
+    mean, gaussian = principal.mean, principal.gaussian
     bad = principal.reason != Reason.OK
     mean[bad] = np.nan
     gaussian[bad] = np.nan
@@ -294,7 +472,7 @@ register(EstimatorSpec(
     summary="curvature measures of the linearly interpolated vertex normals, summed over the area "
             "fraction of each triangle in a ball; H, K from the mean and Gaussian measures, directions "
             "from the anisotropic one",
-    kernels=(_face_measures, _star_measures, _corner_rings, _clip_chunk), takes_levels=True,
+    kernels=(_face_measures, _star_measures), takes_levels=True,
     shared_pass=CLIPPING_PASS,
     options={"from_measures": (True, False)},
 ))

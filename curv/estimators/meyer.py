@@ -25,13 +25,13 @@ import math
 import numpy as np
 
 from ..core import connectivity
-from ..core.connectivity import next_corner, prev_corner
-from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.filled import filled
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, threads
 from ..core.mesh import Mesh
+from ..core.validity import precedence
 from ..geometry.normals import KERNELS as NORMAL_KERNELS, max_weight, unit, unusable_normal_vertices
 from ._frames import MIN_TANGENT_LENGTH, tangent_frame
-from ._triangle_corners import angle_sum, corner_triangle, ring_flag, ring_reason, ring_run, turn_by_corner
+from ._triangle_corners import angle_sum, corner_ends, corner_triangle, ring_flag, ring_run, turn_by_corner
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_meyer"]
@@ -44,27 +44,31 @@ TINY2 = MIN_TANGENT_LENGTH**2
 
 
 @jit_parallel
-def _meyer(centres, lo, hi, parts, width, indptr, corners, indices, corner_next, corner_prev, x,
-           degenerate_faces, border, nonmanifold, unusable, own_normals, normals, k1, k2, d1, d2, reason):
+def _meyer(centres, lo, hi, parts, width, ring, normals, unusable, out):
+    """Meyer et al.'s operators at ``centres[lo:hi]`` into ``out`` (k1, k2, d1, d2, reason), ``parts``
+    thread slices with a scratch of ``width`` corners each. ``unusable`` None: ``normals`` (n, 3)
+    are given and read; else ``normals`` receives the Max normals of the same corners, NaN where
+    ``unusable`` (n,) bool."""
+    k1, k2, d1, d2, reason = out
     for t in prange(parts):
         # the leaving edges ab of the current vertex's corners, for the direction fit
         edge_x, edge_y, edge_z = np.empty(width), np.empty(width), np.empty(width)
         start, stop = lo + (hi - lo) * t // parts, lo + (hi - lo) * (t + 1) // parts
         for j in range(start, stop):
             p = centres[j]
-            c_lo, c_hi = indptr[p], indptr[p + 1]
+            c_lo, c_hi = ring.indptr[p], ring.indptr[p + 1]
             a_mixed = 0.0
             turn_re, turn_im, turns = 1.0, 0.0, 0  # sum of the corner angles theta (turn_by_corner)
             kx = ky = kz = 0.0  # 2 A_mixed K(p): sum of (p - q_j)(cot a_j + cot b_j), one term per corner
             sx = sy = sz = 0.0  # the Max normal, unnormalised
             touches_degenerate = False
             for i in range(c_lo, c_hi):
-                c = corners[i]
-                bad = degenerate_faces[c // 3]  # a triangle mesh: face f has the corners 3f .. 3f + 2
+                c = ring.corners[i]
+                bad = ring.degenerate[c // 3]  # a triangle mesh: face f has the corners 3f .. 3f + 2
                 touches_degenerate |= bad
+                b, q = corner_ends(ring, c)
                 (abx, aby, abz, acx, acy, acz, nx, ny, nz, ab2, ac2, twice_area, cos_a, cot_b, cot_c,
-                 area) = corner_triangle(x, p, indices[next_corner(c, corner_next)],
-                                                indices[prev_corner(c, corner_prev)], bad)
+                 area) = corner_triangle(ring.x, p, b, q, bad)
                 # (a - b) cot c + (a - c) cot b
                 kx += -(cot_c * abx + cot_b * acx)
                 ky += -(cot_c * aby + cot_b * acy)
@@ -76,7 +80,7 @@ def _meyer(centres, lo, hi, parts, width, indptr, corners, indices, corner_next,
                 sy += wy
                 sz += wz
                 edge_x[i - c_lo], edge_y[i - c_lo], edge_z[i - c_lo] = abx, aby, abz
-            if own_normals:
+            if unusable is not None:
                 # the Max normal (as vertex_normals), NaN where the fan has no meaningful normal
                 nx, ny, nz = unit(sx, sy, sz)
                 if unusable[p]:
@@ -131,9 +135,8 @@ def _meyer(centres, lo, hi, parts, width, indptr, corners, indices, corner_next,
             d1[p, 0], d1[p, 1], d1[p, 2] = cs * ux + sn * vx, cs * uy + sn * vy, cs * uz + sn * vz
             d2[p, 0], d2[p, 1], d2[p, 2] = -sn * ux + cs * vx, -sn * uy + cs * vy, -sn * uz + cs * vz
             finite = math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
-            reason[p] = ring_reason(empty or fit_singular,
-                                    ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, border),
-                                    touches_degenerate or not finite, nonmanifold[p])
+            reason[p] = precedence(ring.nonmanifold[p], touches_degenerate or not finite,
+                                   ring_flag(ring, p, ring.border), empty or fit_singular)
 
 
 def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, chunk: int | None = None,
@@ -161,7 +164,7 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
     """
     n = mesh.n_vertices
     centres, out, ring = ring_run(mesh, centres)
-    indptr = ring[0]
+    indptr = ring.indptr
     own_normals = normals is None
     if own_normals:
         # NaN outside a region, at the cost of the region's rows
@@ -169,12 +172,12 @@ def iter_meyer(mesh: Mesh, normals: np.ndarray | None, radii: None = None, *, ch
         unusable = unusable_normal_vertices(mesh)
     else:
         normals = np.asarray(normals, dtype=np.float64)  # any layout: no copy of the whole mesh
-        unusable = np.zeros(0, bool)
+        unusable = None
     width = int((indptr[centres + 1] - indptr[centres]).max(initial=0)) + 1
-    args = (width, *ring, unusable, own_normals, normals, out.k1, out.k2, out.d1, out.d2, out.reason)
+    rows = (out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
-        launch(_meyer, centres, lo, hi, max(1, min(threads(), hi - lo)), *args)
+        launch(_meyer, centres, lo, hi, max(1, min(threads(), hi - lo)), width, ring, normals, unusable, rows)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     if own_normals:

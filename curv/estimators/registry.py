@@ -6,7 +6,7 @@ one module with one ``register(EstimatorSpec(...))`` call.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Generator
 
 from ..core.errors import EstimatorError
@@ -15,7 +15,7 @@ from ..core.result import Principal
 
 __all__ = ["EstimatorSpec", "ESTIMATORS", "DEFAULT_ESTIMATOR", "DEFAULT_ESTIMATORS", "default_estimator", "input_kind",
            "register", "get_spec", "EstimatorFunction",
-           "SHARED_PASSES", "SharedPass", "register_pass",
+           "SHARED_PASSES", "SharedPass", "register_pass", "PASS_KERNELS",
            "polygon_estimators", "point_estimators", "refusal"]
 
 DEFAULT_ESTIMATORS = {"mesh": "mru", "points": "jet"}
@@ -168,9 +168,11 @@ ESTIMATORS: dict[str, EstimatorSpec] = {}
 
 
 def register(spec: EstimatorSpec) -> EstimatorSpec:
-    """Add ``spec`` to :data:`ESTIMATORS` (the name must be new)."""
+    """Add ``spec`` to :data:`ESTIMATORS` (the name must be new); the kernels of its shared pass, if
+    registered already, join its :attr:`~EstimatorSpec.kernels`."""
     if spec.name in ESTIMATORS:
         raise ValueError(f"estimator {spec.name!r} is registered twice")
+    spec = replace(spec, kernels=spec.kernels + PASS_KERNELS.get(spec.shared_pass, ()))
     ESTIMATORS[spec.name] = spec
     return spec
 
@@ -184,12 +186,20 @@ estimator options. Otherwise as :data:`EstimatorFunction`."""
 SHARED_PASSES: dict[str, SharedPass] = {}
 """Registry: pass name -> the function running its estimators together (:attr:`EstimatorSpec.shared_pass`)."""
 
+PASS_KERNELS: dict[str, tuple] = {}
+"""Registry: pass name -> the numba dispatchers the pass calls (part of each of its estimators' kernels)."""
 
-def register_pass(name: str, function: SharedPass) -> SharedPass:
-    """Add a shared pass to :data:`SHARED_PASSES` (the name must be new)."""
+
+def register_pass(name: str, function: SharedPass, kernels: tuple = ()) -> SharedPass:
+    """Add a shared pass to :data:`SHARED_PASSES` (the name must be new); ``kernels`` join the
+    :attr:`~EstimatorSpec.kernels` of every estimator naming the pass."""
     if name in SHARED_PASSES:
         raise ValueError(f"shared pass {name!r} is registered twice")
     SHARED_PASSES[name] = function
+    PASS_KERNELS[name] = tuple(kernels)
+    for key, spec in ESTIMATORS.items():
+        if spec.shared_pass == name:
+            ESTIMATORS[key] = replace(spec, kernels=spec.kernels + PASS_KERNELS[name])
     return function
 
 

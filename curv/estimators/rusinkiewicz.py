@@ -23,13 +23,13 @@ import math
 import numpy as np
 
 from ..core import connectivity
-from ..core.connectivity import next_corner, prev_corner
 from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
 from ..core.small_linalg import solve_sym3
+from ..core.validity import precedence
 from ._frames import tangent_frame
 from ._principal import store_principal
-from ._triangle_corners import corner_triangle, ring_flag, ring_reason, ring_run
+from ._triangle_corners import corner_ends, corner_triangle, ring_flag, ring_run
 from .registry import EstimatorSpec, register
 
 __all__ = ["iter_ru"]
@@ -39,21 +39,24 @@ MIN_ROTATION_COS = -1.0 + 1e-9
 
 
 @jit_parallel
-def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, x, degenerate_faces,
-        border, nonmanifold, normals, crease, k1, k2, d1, d2, reason):
+def _ru(centres, lo, hi, ring, normals, crease, out):
+    """Rusinkiewicz's tensors at ``centres[lo:hi]`` into ``out`` (k1, k2, d1, d2, reason); ``crease``
+    (n,) bool the feature vertices, or None without ``features``."""
+    k1, k2, d1, d2, reason = out
+    x = ring.x
     for j in prange(lo, hi):
         p = centres[j]
-        c_lo, c_hi = indptr[p], indptr[p + 1]
+        c_lo, c_hi = ring.indptr[p], ring.indptr[p + 1]
         nax, nay, naz = normals[p, 0], normals[p, 1], normals[p, 2]  # N_p
         ux, uy, uz, vx, vy, vz = tangent_frame(nax, nay, naz)  # (U_p, V_p)
         total = e = f = g = 0.0
         any_bad = any_opposite = touches_degenerate = False
         for i in range(c_lo, c_hi):
-            c = corners[i]
-            b, q = indices[next_corner(c, corner_next)], indices[prev_corner(c, corner_prev)]
-            if crease.size and (crease[b] or crease[q]):
+            c = ring.corners[i]
+            b, q = corner_ends(ring, c)
+            if _on_crease(crease, b, q):
                 continue  # no normal of this face's crease vertex belongs to p's side
-            degenerate = degenerate_faces[c // 3]  # a triangle mesh: face f has the corners 3f .. 3f + 2
+            degenerate = ring.degenerate[c // 3]  # a triangle mesh: face f has the corners 3f .. 3f + 2
             touches_degenerate |= degenerate
             nbx, nby, nbz = normals[b, 0], normals[b, 1], normals[b, 2]
             ncx, ncy, ncz = normals[q, 0], normals[q, 1], normals[q, 2]
@@ -111,8 +114,10 @@ def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, x, 
             axz = -(nfx * nay - nfy * nax)
             inv = 0.0 if opposite else 1.0 / (1.0 + cos)
             # R^T U and R^T V, in the face frame: (uu, uv) and (vu, vv)
-            uu, uv = _rotated_coords(ux, uy, uz, axx, axy, axz, cos, inv, ufx, ufy, ufz, vfx, vfy, vfz)
-            vu, vv = _rotated_coords(vx, vy, vz, axx, axy, axz, cos, inv, ufx, ufy, ufz, vfx, vfy, vfz)
+            rotation = ((axx, axy, axz), cos, inv)
+            uf, vf = (ufx, ufy, ufz), (vfx, vfy, vfz)
+            uu, uv = _rotated_coords((ux, uy, uz), rotation, uf, vf)
+            vu, vv = _rotated_coords((vx, vy, vz), rotation, uf, vf)
             # (a, b)^T W (c, d) with W = [[e, f], [f, g]]
             e_p = fe * uu * uu + 2.0 * ff * uu * uv + fg * uv * uv
             f_p = fe * uu * vu + ff * (uu * vv + uv * vu) + fg * uv * vv
@@ -133,15 +138,26 @@ def _ru(centres, lo, hi, indptr, corners, indices, corner_next, corner_prev, x, 
         singular = empty or any_opposite or not math.isfinite(k1[p]) or any_bad
         finite = math.isfinite(nax) and math.isfinite(nay) and math.isfinite(naz)
         # the neighbours' normals enter the estimate: a non-manifold neighbour spoils it too
-        reason[p] = ring_reason(singular,
-                                ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, border),
-                                touches_degenerate or not finite,
-                                ring_flag(p, c_lo, c_hi, corners, indices, corner_next, corner_prev, nonmanifold))
+        reason[p] = precedence(ring_flag(ring, p, ring.nonmanifold), touches_degenerate or not finite,
+                               ring_flag(ring, p, ring.border), singular)
 
 
 @jit
-def _rotated_coords(bx, by, bz, ax, ay, az, cos, inv, ufx, ufy, ufz, vfx, vfy, vfz):
-    """``(R^T b . u_f, R^T b . v_f)`` for the rotation of :func:`_ru` (axis a, cosine, 1 / (1 + cos))."""
+def _on_crease(crease, b, q):
+    """Whether vertex b or q is a crease vertex (``crease`` None: no creases)."""
+    if crease is None:
+        return False
+    return crease[b] or crease[q]
+
+
+@jit
+def _rotated_coords(b, rotation, uf, vf):
+    """``(R^T b . u_f, R^T b . v_f)`` for the rotation of :func:`_ru`, ``rotation = (axis a, cosine,
+    1 / (1 + cos))``; b, a, u_f, v_f 3-tuples."""
+    bx, by, bz = b
+    (ax, ay, az), cos, inv = rotation
+    ufx, ufy, ufz = uf
+    vfx, vfy, vfz = vf
     tx = ay * bz - az * by
     ty = az * bx - ax * bz
     tz = ax * by - ay * bx
@@ -175,12 +191,13 @@ def iter_ru(mesh: Mesh, normals: np.ndarray, radii: None = None, *, chunk: int |
     ``radii``, ``chunk``, the yields and the result: as :func:`~curv.estimators.meyer.iter_meyer`.
     """
     centres, out, ring = ring_run(mesh, centres)
-    crease = features.vertices if features is not None and features.any else np.zeros(0, bool)
+    crease = features.vertices if features is not None and features.any else None
     # normals in any memory layout: a copy would cost the whole mesh for a small region
-    args = (*ring, np.asarray(normals, dtype=np.float64), crease, out.k1, out.k2, out.d1, out.d2, out.reason)
+    normals = np.asarray(normals, dtype=np.float64)
+    rows = (out.k1, out.k2, out.d1, out.d2, out.reason)
 
     def run(lo: int, hi: int) -> None:
-        launch(_ru, centres, lo, hi, *args)
+        launch(_ru, centres, lo, hi, ring, normals, crease, rows)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return out

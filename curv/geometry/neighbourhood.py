@@ -35,8 +35,9 @@ from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii
 
-__all__ = ["ball_support", "mesh_ball_support", "start_ball_support", "widen_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "latest_with_mesh", "supports", "support_sizes", "Neighbourhood",
-           "iter_neighbourhoods"]
+__all__ = ["ball_support", "mesh_ball_support", "start_ball_support", "widen_ball_support", "new_scratch", "new_queues",
+           "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh",
+           "latest_with_mesh", "supports", "support_sizes", "Neighbourhood", "iter_neighbourhoods"]
 
 def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     """The support of vertex ``p``: the mesh search (:func:`mesh_ball_support`) or a point cloud's ball.
@@ -306,15 +307,32 @@ def _same(a, b) -> bool:
 
 
 @jit_parallel
-def _search_supports(centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops, counts,
-                     flagged, out_ptr, out):
+def _search_supports(centres, radius2, indptr, indices, coords, scratch, counts, flagging, members):
     """The support of every centre, a slice of centres per thread (:func:`_search_setup`).
 
-    Writes ``counts[i]``, the support size of centre i (itself excluded); where ``flags`` (n,) has
-    entries, ``flagged[i]``: the support (the centre included) holds a flagged vertex; where
-    ``out_ptr`` (c + 1,) has entries, the members (BFS order, the centre left out) into
-    ``out[out_ptr[i]:out_ptr[i + 1]]``. An empty array is an output not asked for.
+    Parameters
+    ----------
+    centres : (c,) int64
+    radius2 : (n,) float64
+        Squared ball radius of every vertex.
+    indptr, indices
+        :func:`expansion_adjacency` (CSR edges, or a point cloud's grid).
+    coords : tuple of three (n,) float64
+        x, y, z.
+    scratch : tuple
+        ``(stamps, queues, starts, stops)``: per-thread stamps and queues (:func:`new_scratch`,
+        :func:`new_queues`) and each thread's slice of ``centres``.
+    counts : (c,) int64
+        Out: the support size of centre i, itself excluded.
+    flagging : tuple ``(flags, flagged)`` or None
+        ``flags`` (n,) bool; out ``flagged`` (c,) bool: the support (the centre included) holds a
+        flagged vertex. None: not asked for (numba compiles that case without the loop).
+    members : tuple ``(out_ptr, out)`` or None
+        Out: the members of centre i (BFS order, the centre left out) in
+        ``out[out_ptr[i]:out_ptr[i + 1]]``; None: not asked for.
     """
+    x, y, z = coords
+    stamps, queues, starts, stops = scratch
     for t in prange(starts.size):
         queue = queues[t]
         stamp = stamps[t]
@@ -322,27 +340,27 @@ def _search_supports(centres, radius2, indptr, indices, x, y, z, flags, stamps, 
             p = centres[i]
             count, queue = ball_support(p, radius2[p], indptr, indices, x, y, z, stamp, queue)
             counts[i] = count - 1
-            if flags.size:
+            if flagging is not None:
                 hit = False
                 for j in range(count):
-                    hit = hit or flags[queue[j]]
-                flagged[i] = hit
-            if out_ptr.size:
-                start = out_ptr[i]
+                    hit = hit or flagging[0][queue[j]]
+                flagging[1][i] = hit
+            if members is not None:
+                start = members[0][i]
                 for j in range(1, count):
-                    out[start + j - 1] = queue[j]
+                    members[1][start + j - 1] = queue[j]
 
 
 def _search_setup(mesh, radii, vertices, blocked=None):
     """What a support search over some centres needs: the centres (c,), squared radii (n,), the
-    expansion CSR, the coordinate columns, per-thread stamps and queues, and each thread's slice."""
+    expansion CSR (or grid), the coordinate columns and the scratch of :func:`_search_supports`."""
     centres = all_centres(mesh.n_vertices, vertices)
     radius2 = np.ascontiguousarray(radii, dtype=np.float64) ** 2
     indptr, indices = expansion_adjacency(mesh, blocked, radii)
     parts = max(1, min(threads(), centres.size))
     starts, stops = thread_slices(centres.size, parts)
-    return (centres, radius2, indptr, indices, coordinate_columns(mesh), new_scratch(mesh.n_vertices, parts),
-            new_queues(mesh.n_vertices, parts), starts, stops)
+    scratch = (new_scratch(mesh.n_vertices, parts), new_queues(mesh.n_vertices, parts), starts, stops)
+    return centres, radius2, indptr, indices, coordinate_columns(mesh), scratch
 
 
 def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None,
@@ -366,13 +384,14 @@ def support_sizes(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = N
     flagged : (c,) bool
         The support (the centre included) holds a flagged vertex.
     """
-    flags = np.zeros(mesh.n_vertices, np.bool_) if flags is None else np.ascontiguousarray(flags, np.bool_)
-    centres, radius2, indptr, indices, (x, y, z), stamps, queues, starts, stops = _search_setup(mesh, radii, vertices)
+    centres, radius2, indptr, indices, coords, scratch = _search_setup(mesh, radii, vertices)
     counts = np.empty(centres.size, np.int64)
+    if flags is None:
+        launch(_search_supports, centres, radius2, indptr, indices, coords, scratch, counts, None, None)
+        return counts, np.zeros(centres.size, np.bool_)
     flagged = np.empty(centres.size, np.bool_)
-    none = np.empty(0, np.int64)
-    launch(_search_supports, centres, radius2, indptr, indices, x, y, z, flags, stamps, queues, starts, stops,
-           counts, flagged, none, none)
+    launch(_search_supports, centres, radius2, indptr, indices, coords, scratch, counts,
+           (np.ascontiguousarray(flags, np.bool_), flagged), None)
     return counts, flagged
 
 
@@ -394,18 +413,14 @@ def supports(mesh: Mesh, radii: np.ndarray, vertices: np.ndarray | None = None, 
     indices : (nnz,) int64
         Support of centre i (itself excluded) in ``indices[indptr[i]:indptr[i+1]]``, in BFS order.
     """
-    centres, radius2, indptr, indices, (x, y, z), stamps, queues, starts, stops = _search_setup(
-        mesh, radii, vertices, blocked)
+    centres, radius2, indptr, indices, coords, scratch = _search_setup(mesh, radii, vertices, blocked)
     counts = np.empty(centres.size, np.int64)
-    no_flags, none = np.empty(0, np.bool_), np.empty(0, np.int64)
-    launch(_search_supports, centres, radius2, indptr, indices, x, y, z, no_flags, stamps, queues, starts, stops,
-           counts, no_flags, none, none)
+    launch(_search_supports, centres, radius2, indptr, indices, coords, scratch, counts, None, None)
     out_ptr = np.zeros(centres.size + 1, np.int64)
     np.cumsum(counts, out=out_ptr[1:])
     out = np.empty(out_ptr[-1], np.int64)
-    stamps.fill(0)
-    launch(_search_supports, centres, radius2, indptr, indices, x, y, z, no_flags, stamps, queues, starts, stops,
-           counts, no_flags, out_ptr, out)
+    scratch[0].fill(0)
+    launch(_search_supports, centres, radius2, indptr, indices, coords, scratch, counts, None, (out_ptr, out))
     return out_ptr, out
 
 
