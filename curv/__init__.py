@@ -33,6 +33,7 @@ _LAZY = {
     "as_mesh": ("curv.convert", "as_mesh"),
     "surfaces": ("curv.surfaces", None),
     "advise": ("curv.advice.advisor", "advise"),
+    "iter_advise": ("curv.advice.advising", "iter_advise"),
     "Advice": ("curv.advice.advisor", "Advice"),
     "Candidate": ("curv.advice.advisor", "Candidate"),
     "features": ("curv.core.features", None),
