@@ -30,6 +30,8 @@ def sphere_points(n: int) -> np.ndarray:
 def main() -> None:
     import curv
     from curv import point_normals as pn
+    from curv.point_normals.normals import _default_spreads, _radii
+    from curv.point_normals.one_pass import _one_pass
     from curv.core.jit import run_to_end
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
@@ -51,9 +53,9 @@ def main() -> None:
     cloud = phase("grid order", lambda: pn.grid_ordered(cloud)[0])
     phase("grid + 10 nearest", lambda: cloud.nearest)
     border = phase("border radii", lambda: pn.border_radii(cloud))
-    r2, spreads = pn._radii(cloud, 2), pn._default_spreads(cloud)
+    r2, spreads = _radii(cloud, 2), _default_spreads(cloud)
     found = phase("one pass (frames, jet, line checks)",
-                  lambda: run_to_end(pn._one_pass(cloud, border, r2, jet=True, spreads=spreads)))
+                  lambda: run_to_end(_one_pass(cloud, border, r2, jet=True, spreads=spreads)))
     phase("neighbour graph", lambda: cloud.adjacency)
     phase("orientation", lambda: pn.orient_normals(cloud, found.normal_a))
     phase("coincident points", lambda: cloud.coincident_points)

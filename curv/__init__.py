@@ -1,4 +1,4 @@
-"""curv: curvature estimation on surface meshes (numpy/scipy only).
+"""curv: curvature estimation on surface meshes and point clouds (numpy, scipy; numba kernels).
 
 >>> import curv
 >>> res = curv.estimate(mesh, method="mru", range=2)   # doctest: +SKIP

@@ -3,6 +3,7 @@ import pytest
 
 import curv
 from curv.core.validity import Reason
+from curv.locality import locality_ordered
 from tests.meshes import icosphere, torus_grid, tube
 
 
@@ -148,7 +149,7 @@ def test_a_scattered_numbering_runs_in_grid_order_with_the_same_result(monkeypat
     monkeypatch.setattr(curv.core.mesh, "SCATTERED_SPAN", 40)
     assert shuffled.scattered_order()
     res = curv.estimate(shuffled, method, k)
-    assert curv.api._locality_ordered(shuffled, None, None) is not None
+    assert locality_ordered(shuffled, None, None) is not None
     assert np.array_equal(res.valid, ref.valid[perm]) and np.array_equal(res.reason, ref.reason[perm])
     for field in ("k1", "k2", "normals", "k1_se", "k2_se"):
         got, want = getattr(res, field), getattr(ref, field)[perm]

@@ -9,8 +9,8 @@ import pytest
 import trimesh
 
 import curv
-from curv.geometry.neighbourhood import neighbourhood_matrix
 from curv.core.validity import Reason
+from tests.supports import neighbourhood_matrix
 
 VARIANTS = [("meyer", 1), ("csm", 1), ("csm", 2), ("csm", 3), ("csm", 4), ("ru", 2)]
 

@@ -5,8 +5,8 @@ import pytest
 
 import curv
 from curv.estimators import all_variants
-from curv.geometry.neighbourhood import neighbourhood_matrix
 from curv.surfaces import EllipsoidPatch, QuadraticPatch, TrigonometricPatch, hexagon_mesh
+from tests.supports import neighbourhood_matrix
 from tests.tolerances import LATTICE_BIASED, extra_tolerance
 
 PATCHES = {

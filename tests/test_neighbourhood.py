@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 import curv
-from curv.geometry.neighbourhood import iter_neighbourhoods, neighbourhood_matrix
+from curv.geometry.neighbourhood import iter_neighbourhoods
 from tests.meshes import hex_plane, icosphere
+from tests.supports import neighbourhood_matrix
 
 
 def reference_support(mesh, p, factor):

@@ -244,7 +244,7 @@ def test_a_cloud_reads_its_coincident_and_isolated_points_from_its_twin():
 
 def test_stable_rank_is_the_stable_argsort():
     """Kruskal's edge order: the radix sort gives numpy's stable argsort, ties in their order."""
-    from curv.point_normals import _stable_rank
+    from curv.point_normals.orientation import _stable_rank
 
     rng = np.random.default_rng(3)
     for w in (rng.random(3000), np.round(rng.random(5000), 2) + 1e-9, np.full(7, 1e-9), np.zeros(0),

@@ -7,7 +7,7 @@ import pytest
 import scipy.sparse as sp
 
 import curv
-from curv.geometry.smoothing import cotan_weights, smooth_positions, smooth_values
+from curv.geometry.smoothing import _cotan_data, smooth_positions, smooth_values
 from tests.meshes import icosphere, torus_grid, tube
 
 
@@ -27,6 +27,14 @@ def _reference_weights(mesh: curv.Mesh) -> np.ndarray:
     w = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(mesh.n_vertices,) * 2).toarray()
     return np.maximum(w, 0.0)
+
+
+def cotan_weights(mesh: curv.Mesh) -> sp.csr_matrix:
+    """The smoothing kernel's per-edge weights (:func:`curv.geometry.smoothing._cotan_data`) as an
+    (n, n) sparse matrix on :attr:`curv.Mesh.adjacency`'s pattern."""
+    mesh.triangles  # raises on polygons
+    adjacency = mesh.adjacency
+    return sp.csr_matrix((_cotan_data(mesh), adjacency.indices, adjacency.indptr), shape=adjacency.shape)
 
 
 def _soup() -> curv.Mesh:

@@ -8,7 +8,6 @@ and dropped.
 
 from __future__ import annotations
 
-import inspect
 import time
 
 from curv.api import iter_estimate
@@ -232,11 +231,6 @@ class Controller(QObject):
         pane = self.doc.pane_for(key)
         gen = self._generation
         kwargs = pane.estimate_kwargs()
-        for name in ("radius", "knn"):
-            if name in kwargs and not _ACCEPTS.get(name):
-                self.doc.set_failure(key, f"{pane.title} failed: this curv does not take {name}= yet")
-                self.failed.emit(self.doc.failures[key])
-                return
         call, args = iter_estimate, (self.doc.mesh, pane.method)
         if self._early is not None and self._early.follows(self.doc.mesh, pane.method, kwargs):
             call, args, kwargs = self._early.follow, (), {}  # started with the file's read: follow it
@@ -435,11 +429,6 @@ class Controller(QObject):
         self._closed = True
         self._stop_all()
         return QThreadPool.globalInstance().waitForDone(timeout_ms)
-
-
-_ACCEPTS = {name: True for name in inspect.signature(iter_estimate).parameters}
-"""Keywords the installed ``curv.iter_estimate`` takes. The chunk size is left to curv: its kernels
-chunk adaptively so that every yield (progress and cancel point) comes within about 0.1 s."""
 
 
 def _one_line(exc: Exception) -> str:

@@ -33,7 +33,7 @@ from .filled import filled
 from .pointcloud import PointCloud
 
 __all__ = ["describe_spacing", "Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
-           "default_range", "smallest_range", "takes_any_range", "canonical_k", "nearest_allowed",
+           "default_range", "takes_any_range", "canonical_k", "nearest_allowed",
            "allowed_paper_ranges", "describe_ranges", "unit_lengths", "point_spacing", "TIE_TOLERANCE",
            "PAPER_RANGES", "FORMS", "SPACING_NEIGHBOUR", "MIN_KNN"]
 
@@ -107,10 +107,6 @@ def takes_any_range(spec) -> bool:
     """
     return bool(spec.has_support)
 
-
-def smallest_range(spec):
-    """The smallest k ``spec`` accepts (its only one for a fixed 1-ring formula)."""
-    return canonical_k(min(spec.ranges))
 
 
 def default_range(spec):

@@ -1,4 +1,22 @@
-"""Why a vertex has no trustworthy estimate: one reason code per vertex."""
+"""Why a vertex has no trustworthy estimate: one reason code per vertex, and the one order of precedence.
+
+The codes are :class:`Reason`; the kernels read them as the uint8 constants below (:data:`OK`,
+:data:`BORDER`, ...), defined here once. When several causes apply to a vertex the most
+fundamental one names it: NONMANIFOLD > DEGENERATE > BORDER > SINGULAR, else OK
+(:func:`precedence`, the one owner of that order). It serves the 1-ring estimators
+(:func:`curv.estimators._triangle_corners.ring_reason`), the ball supports
+(:func:`curv.estimators._ball_clipping.support_reason`) and the flags an estimate's input carries
+(:func:`mark_ok_rows`, :func:`curv.estimate_finish.finish`).
+
+How the other codes compose with it:
+
+- ``TOO_FEW_NEIGHBOURS`` is a fit's own outcome (:func:`curv.estimators._local_fit.finish_fit`,
+  the jet): a fit checks it before ``SINGULAR`` (a system with too few rows is not solved), and it
+  stands where the precedence's SINGULAR would; the input's flags mark only the rows a fit left OK.
+- ``FEATURE`` (a crease) and the root causes an input forces (an isolated vertex DEGENERATE, an
+  undecided orientation ``ORIENTATION``) override whatever the estimator found;
+  ``NOT_COMPUTED`` is a region's outside.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +24,11 @@ import enum
 
 import numpy as np
 
-__all__ = ["Reason", "describe_reasons", "reason_legend"]
+from .jit import jit_inlined, jit_parallel, prange
+
+__all__ = ["Reason", "describe_reasons", "reason_legend", "precedence", "mark_ok_rows", "PRECEDENCE",
+           "OK", "BORDER", "TOO_FEW", "SINGULAR", "DEGENERATE", "NONMANIFOLD", "NOT_COMPUTED", "FEATURE",
+           "ORIENTATION"]
 
 
 class Reason(enum.IntEnum):
@@ -36,6 +58,51 @@ class Reason(enum.IntEnum):
     ORIENTATION = 8
     """A point-cloud normal whose orientation its neighbourhood cannot decide (a thin sheet, a fold,
     a sparse spot; :mod:`curv.point_normals`): no sign is guessed, so there is no estimate."""
+
+
+OK = np.uint8(Reason.OK)
+BORDER = np.uint8(Reason.BORDER)
+TOO_FEW = np.uint8(Reason.TOO_FEW_NEIGHBOURS)
+SINGULAR = np.uint8(Reason.SINGULAR)
+DEGENERATE = np.uint8(Reason.DEGENERATE)
+NONMANIFOLD = np.uint8(Reason.NONMANIFOLD)
+NOT_COMPUTED = np.uint8(Reason.NOT_COMPUTED)
+FEATURE = np.uint8(Reason.FEATURE)
+ORIENTATION = np.uint8(Reason.ORIENTATION)
+"""The codes as the kernels store them (uint8, :attr:`curv.Curvature.reason`'s type)."""
+
+PRECEDENCE = (Reason.NONMANIFOLD, Reason.DEGENERATE, Reason.BORDER, Reason.SINGULAR)
+"""The codes :func:`precedence` orders, the most fundamental first (the rows of :func:`mark_ok_rows`'s marks)."""
+
+
+@jit_inlined
+def precedence(nonmanifold, degenerate, border, singular):
+    """The reason code of a vertex from the causes that apply to it, the most fundamental first:
+    NONMANIFOLD, then DEGENERATE, BORDER, SINGULAR, else OK (uint8; the module notes)."""
+    if nonmanifold:
+        return NONMANIFOLD
+    if degenerate:
+        return DEGENERATE
+    if border:
+        return BORDER
+    if singular:
+        return SINGULAR
+    return OK
+
+
+@jit_parallel
+def mark_ok_rows(reason, marks):
+    """In place: every row still ``OK`` takes the :func:`precedence` of the causes ``marks`` flags there.
+
+    Parameters
+    ----------
+    reason : (c,) uint8
+    marks : (4, c) bool
+        Rows in the order of :data:`PRECEDENCE`: non-manifold, degenerate, border, singular.
+    """
+    for i in prange(reason.size):
+        if reason[i] == OK:
+            reason[i] = precedence(marks[0, i], marks[1, i], marks[2, i], marks[3, i])
 
 
 def describe_reasons(reason: np.ndarray) -> dict[str, int]:

@@ -17,12 +17,12 @@ from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertice
                                       expansion_adjacency, start_ball_support,
                                       widen_ball_support)
 from ..core.jit import jit_inlined
-from ..core.validity import Reason
+from ..core.validity import precedence
 
 __all__ = ["BORDER_BIT", "NONMANIFOLD_BIT", "DEGENERATE_BIT", "support_reason", "disc_triangle_area", "clipping_inputs",
            "face_in_ball_area", "crossing_area", "exit_fraction", "vertex_bits", "touches", "touched_elements", "element_list",
            "corner_width", "corner_rings", "crossing_scratch", "may_leave", "crossing_faces", "add_row",
-           "vertex_normal", "unset_row", "level_radii", "start_ball_support", "widen_ball_support", "add_star_rows",
+           "vertex_normal", "level_radii", "start_ball_support", "widen_ball_support", "add_star_rows",
            "level_mark", "LevelOutputs"]
 
 REGION_WALK_SHARE = 0.05
@@ -36,26 +36,17 @@ at 1M vertices the walk wins up to 3 % (csm 0.20 s against 0.54 s at 1 %) and lo
 BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT = 1, 2, 4
 """Bits of what a support may hit: a border or non-manifold vertex (:func:`vertex_bits`), a degenerate triangle."""
 
-_OK, _BORDER, _SINGULAR = int(Reason.OK), int(Reason.BORDER), int(Reason.SINGULAR)
-_DEGENERATE, _NONMANIFOLD = int(Reason.DEGENERATE), int(Reason.NONMANIFOLD)
 
 @jit
 def support_reason(singular, hit, normal_ok):
     """Reason code of an estimate over a ball, from what its support touched.
 
     ``hit`` holds the flags of the support's vertices (BORDER_BIT, NONMANIFOLD_BIT, DEGENERATE_BIT:
-    a degenerate face touches it). The most fundamental cause wins: NONMANIFOLD, then DEGENERATE
-    (also for a missing normal), BORDER, SINGULAR, else OK.
+    a degenerate face touches it), in the one precedence (:func:`curv.core.validity.precedence`):
+    NONMANIFOLD, then DEGENERATE (also for a missing normal), BORDER, SINGULAR, else OK.
     """
-    if hit & NONMANIFOLD_BIT:
-        return _NONMANIFOLD
-    if hit & DEGENERATE_BIT or not normal_ok:
-        return _DEGENERATE
-    if hit & BORDER_BIT:
-        return _BORDER
-    if singular:
-        return _SINGULAR
-    return _OK
+    return precedence(hit & NONMANIFOLD_BIT != 0, hit & DEGENERATE_BIT != 0 or not normal_ok,
+                      hit & BORDER_BIT != 0, singular)
 
 
 @jit
@@ -645,13 +636,6 @@ def vertex_normal(normals, p):
     nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
     return nx, ny, nz, math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)
 
-
-@jit
-def unset_row(p, k1, k2, d1, d2):
-    """NaN curvatures and directions at vertex p."""
-    k1[p] = k2[p] = math.nan
-    for c in range(3):
-        d1[p, c] = d2[p, c] = math.nan
 
 
 @jit

@@ -40,7 +40,7 @@ from ..core.jit import iter_chunks, jit, jit_inlined, launch, rescaled, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_queues, new_scratch
 from ..core.result import Principal
-from ..core.validity import Reason
+from ..core.validity import DEGENERATE, OK, SINGULAR, TOO_FEW
 from ._pooling import pool_members, pool_rings, pool_standard_errors, rad_bias
 
 __all__ = ["run_fit", "run_fit_levels", "start_levels", "tangent_frame", "offset_in_frame", "solve_sym3", "solve_scaled", "store_principal", "finish_fit",
@@ -48,7 +48,7 @@ __all__ = ["run_fit", "run_fit_levels", "start_levels", "tangent_frame", "offset
            "cholesky_scaled", "factor_whiten", "row_dot", "store_se3", "tilt_residual", "deviator_gradients", "eigen_bias",
            "clear_parts", "store_parts", "store_se3_weighted", "sym3_sandwich", "ring_gradient", "gradient_column", "list_room", "list_slot", "centre_columns",
            "add_ring_columns", "fit_frame", "normal_in_frame", "checked_noise_model", "sampled_scales",
-           "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND", "OK", "TOO_FEW", "SINGULAR", "DEGENERATE"]
+           "MIN_TANGENT_LENGTH", "MIN_PAIRS", "SE_PARTS_BYTES", "SLOT_BYTES", "RCOND"]
 
 
 MIN_TANGENT_LENGTH = 1e-9
@@ -66,12 +66,6 @@ SE_PARTS_BYTES = 16.0
 per size unit (vertices + faces / 2, about 2 vertices on a triangle mesh)."""
 SLOT_BYTES = 16.0
 """The noise model's vertex slots (an int64 per vertex and kernel thread, 4 threads) per size unit."""
-
-OK = np.uint8(Reason.OK)
-TOO_FEW = np.uint8(Reason.TOO_FEW_NEIGHBOURS)
-SINGULAR = np.uint8(Reason.SINGULAR)
-DEGENERATE = np.uint8(Reason.DEGENERATE)
-
 
 @jit
 def tangent_frame(nx, ny, nz):
@@ -814,7 +808,10 @@ def finish_fit(p, e, f, g, singular, used, frame, k1, k2, d1, d2, reason):
     """Write vertex p's principal curvatures, directions and reason from its fitted (e, f, g).
 
     ``frame`` is (ux, uy, uz, vx, vy, vz) from :func:`tangent_frame`; ``used`` the number of
-    usable neighbours.
+    usable neighbours. The fit's own codes: TOO_FEW_NEIGHBOURS before SINGULAR (too few rows
+    decide no system), else OK. They stand where :func:`curv.core.validity.precedence` puts
+    SINGULAR: the input's flags (non-manifold, degenerate, border) then mark only the rows left OK
+    (:func:`curv.estimate_finish.finish`).
     """
     ux, uy, uz, vx, vy, vz = frame
     store_principal(p, e, f, g, ux, uy, uz, vx, vy, vz, k1, k2, d1, d2)

@@ -25,11 +25,10 @@ import numpy as np
 
 from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
-from ..core.validity import Reason
+from ..core.validity import OK
 
 __all__ = ["pool_rings", "pool_members", "pool_standard_errors", "rad_bias", "POOL_KERNEL"]
 
-_OK = np.uint8(Reason.OK)
 
 
 @jit
@@ -74,7 +73,7 @@ def _pool_kernel(centres, ring_ptr, ring, reason, parts, k1_se, k2_se):
             continue
         for j in range(ring_ptr[p], ring_ptr[p + 1] if not alone else ring_ptr[p]):
             q = ring[j]
-            if reason[q] == _OK and parts[q, 1] > 0.0 and math.isfinite(parts[q, 0]):
+            if reason[q] == OK and parts[q, 1] > 0.0 and math.isfinite(parts[q, 0]):
                 rss += parts[q, 0]
                 dof += parts[q, 1]
         sigma2 = max(rss, 0.0) / dof

@@ -19,17 +19,10 @@ from ..core.connectivity import next_corner, prev_corner
 from ..core.jit import jit
 from ..core.mesh import Mesh
 from ..core.result import Principal
-from ..core.validity import Reason
+from ..core.validity import OK, precedence
 from ..geometry.neighbourhood import all_centres
 
 __all__ = ["corner_triangle", "turn_by_corner", "angle_sum", "ring_reason", "ring_flag", "unset_principal"]
-
-OK = np.uint8(Reason.OK)
-BORDER = np.uint8(Reason.BORDER)
-SINGULAR = np.uint8(Reason.SINGULAR)
-DEGENERATE = np.uint8(Reason.DEGENERATE)
-NONMANIFOLD = np.uint8(Reason.NONMANIFOLD)
-
 
 @jit
 def corner_triangle(x, a, b, c, degenerate):
@@ -149,20 +142,11 @@ def ring_flag(p, lo, hi, corners, indices, corner_next, corner_prev, flags):
 
 @jit
 def ring_reason(singular, border, degenerate, nonmanifold):
-    """Reason code of a vertex for an estimator that needs a closed, clean 1-ring.
-
-    Later rules override earlier ones: SINGULAR, then BORDER (on or next to a border), then
-    DEGENERATE (a degenerate face around it, or no finite normal), then NONMANIFOLD.
+    """Reason code of a vertex for an estimator that needs a closed, clean 1-ring, in the one
+    precedence (:func:`curv.core.validity.precedence`): NONMANIFOLD, then DEGENERATE (a degenerate
+    face around it, or no finite normal), BORDER (on or next to a border), SINGULAR, else OK.
     """
-    if nonmanifold:
-        return NONMANIFOLD
-    if degenerate:
-        return DEGENERATE
-    if border:
-        return BORDER
-    if singular:
-        return SINGULAR
-    return OK
+    return precedence(nonmanifold, degenerate, border, singular)
 
 
 def ring_run(mesh: Mesh, centres: np.ndarray | None) -> tuple:

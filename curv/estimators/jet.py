@@ -50,7 +50,7 @@ from ..core.mesh import Mesh
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns, expansion_adjacency,
                                       new_scratch, start_ball_support, widen_ball_support)
 from ..core.result import Principal
-from ..core.validity import Reason
+from ..core.validity import DEGENERATE, OK, SINGULAR, TOO_FEW
 from ._local_fit import factor_whiten, noise_variance, principal_gradients, row_dot, slice_bounds
 from ._small_linalg import solve_spd_scaled, sym2_eigen, sym3_eigen
 from .jet_width import DEFAULT_WIDTH, WIDTHS, iter_adaptive_jet
@@ -75,14 +75,9 @@ RCOND = 1e-12
 """A fit whose scaled normal matrix has an estimated reciprocal condition number below this (a
 least-squares matrix condition above 1e6) is ``SINGULAR``."""
 
-_OK = int(Reason.OK)
-_TOO_FEW = int(Reason.TOO_FEW_NEIGHBOURS)
 MIN_NORMAL_COSINE = 0.2
 """The PCA normal and the jet's normal must be within about 78 degrees of the vertex normal, or the fit
 does not describe the surface at the vertex (``DEGENERATE``)."""
-
-_SINGULAR = int(Reason.SINGULAR)
-_DEGENERATE = int(Reason.DEGENERATE)
 
 
 WEIGHTS = ("uniform", "smooth")
@@ -173,10 +168,10 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
     """
     nd = (degree + 1) * (degree + 2) // 2  # unknowns(degree); the registry's min_neighbours is nd - 1
     if count < nd:
-        return _TOO_FEW, 0.0, 0.0
+        return TOO_FEW, 0.0, 0.0
     rx, ry, rz = normals[p, 0], normals[p, 1], normals[p, 2]
     if not (math.isfinite(rx) and math.isfinite(ry) and math.isfinite(rz)):
-        return _DEGENERATE, 0.0, 0.0
+        return DEGENERATE, 0.0, 0.0
     px, py, pz = x[p], y[p], z[p]
     # centroid c and covariance sum (q - c)(q - c)^T, from offsets to p for accuracy
     cx = cy = cz = 0.0
@@ -193,7 +188,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
         total += wt
         h2 = max(h2, d2)
     if not (h2 > 0.0 and total > 0.0):
-        return _DEGENERATE, 0.0, 0.0
+        return DEGENERATE, 0.0, 0.0
     cx /= total
     cy /= total
     cz /= total
@@ -219,7 +214,7 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
     # (a support wrapping round a thin rim) gives an arbitrary fit whose sign flips with rounding.
     along = evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz
     if not abs(along) >= MIN_NORMAL_COSINE * math.sqrt(rx * rx + ry * ry + rz * rz):
-        return _DEGENERATE, 0.0, 0.0
+        return DEGENERATE, 0.0, 0.0
     # e3: least variance (the height axis), turned towards the reference normal; e1: most variance
     sign = 1.0 if along >= 0.0 else -1.0
     for a in range(3):
@@ -252,11 +247,11 @@ def fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
                 m[a, b] += ma * vec[1, b]
     rcond = solve_spd_scaled(m, vec, nd)
     if not rcond >= RCOND:
-        return _SINGULAR, 0.0, 0.0
+        return SINGULAR, 0.0, 0.0
     for a in range(nd):
         if not math.isfinite(vec[1, a]):
-            return _SINGULAR, 0.0, 0.0
-    return _OK, math.sqrt(h2), ww
+            return SINGULAR, 0.0, 0.0
+    return OK, math.sqrt(h2), ww
 
 
 @jit
@@ -341,11 +336,11 @@ def jet_principal(vec, frame, h, normals, out_k, out_d1, out_d2, row):
     rx, ry, rz = normals[row, 0], normals[row, 1], normals[row, 2]
     cosine = nw0 * rx + nw1 * ry + nw2 * rz
     if not cosine >= MIN_NORMAL_COSINE:
-        return _DEGENERATE
+        return DEGENERATE
     ax0, ax1, ax2 = nw1 * rz - nw2 * ry, nw2 * rx - nw0 * rz, nw0 * ry - nw1 * rx
     _rotate(out_d1, row, ax0, ax1, ax2, cosine)
     _rotate(out_d2, row, ax0, ax1, ax2, cosine)
-    return _OK
+    return OK
 
 
 @jit
@@ -422,7 +417,7 @@ def _jet_kernel(centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, 
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, stamp, queue)
             code, h, ww = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
                                   r2 if smooth else 0.0)
-            if code == _OK:
+            if code == OK:
                 code = jet_principal(vec, frame, h, normals, k, d1, d2, p)
                 jet_se(vec, m, h, count, nd, ww, grads, k_se, p)
             reason[p] = code
@@ -454,7 +449,7 @@ def _jet_levels_kernel(centres, lo, hi, degree, smooth, radii, indptr, indices, 
                                                           queue, count, head, waiting, waiting_d2, pending)
                 code, h, ww = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec,
                                       r2 if smooth else 0.0)
-                if code == _OK:
+                if code == OK:
                     code = jet_principal(vec, frame, h, normals, k[level], d1[level], d2[level], p)
                     jet_se(vec, m, h, count, nd, ww, grads, k_se[level], p)
                 reason[level, p] = code
@@ -474,7 +469,7 @@ def _jet_normal_kernel(centres, lo, hi, degree, smooth, radius, indptr, indices,
             r2 = radius[p] ** 2
             count, queue = ball_support(p, r2, indptr, indices, x, y, z, stamp, queue)
             code, _, _ = fit_jet(p, count, queue, x, y, z, normals, degree, m, vec, cov, frame, evec, r2 if smooth else 0.0)
-            if code == _OK:
+            if code == OK:
                 jet_normal(vec, frame, out, p)
             reason[p] = code
 
@@ -600,7 +595,7 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     for level in range(count):
         res = Principal(k1=k[level, 0], k2=k[level, 1], d1=d1[level], d2=d2[level], reason=reason[level],
                         k1_se=k_se[level, 0], k2_se=k_se[level, 1])
-        bad = centres[res.reason[centres] != _OK]
+        bad = centres[res.reason[centres] != OK]
         for arr in (res.k1, res.k2, res.d1, res.d2, res.k1_se, res.k2_se):
             arr[bad] = np.nan
         out.append(res)
@@ -632,7 +627,7 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
         launch(_jet_normal_kernel, centres, lo, hi, degree, smooth, radius, indptr, indices, x, y, z, ref, stamps, queues, out, reason)
 
     yield from iter_chunks(n, run, chunk=chunk)
-    out[reason != _OK] = np.nan
+    out[reason != OK] = np.nan
     return out, reason
 
 

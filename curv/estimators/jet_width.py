@@ -44,7 +44,7 @@ import numpy as np
 from ..core.jit import rescaled
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import all_centres, support_sizes
-from ..core.validity import Reason
+from ..core.validity import OK
 
 __all__ = ["WIDTHS", "DEFAULT_WIDTH", "WIDTH_FRACTIONS", "GAMMA", "RATIO", "POINTS_PER_UNKNOWN", "LAST_DEGREE",
            "LAST_WEIGHTS", "iter_adaptive_jet", "ici_walk", "adaptive_choice"]
@@ -81,7 +81,6 @@ stopped among them kept an outlier (k1 off the last candidate's by up to 2.6 whe
 0.1); with 5 no point is off it by more than 0.12. The point clouds of docs/ACCURACY.md (at least
 119 points in the narrowest ball) do not reach the limit."""
 
-_OK = int(Reason.OK)
 
 
 def ici_walk(k: np.ndarray, se: np.ndarray, gamma: float = GAMMA,
@@ -214,7 +213,7 @@ def iter_adaptive_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chu
         if j != widest:
             for name in ("k1", "k2", "k1_se", "d1", "d2"):
                 getattr(out, name)[rows] = getattr(res, name)[rows]
-        out.reason[rows] = _OK
+        out.reason[rows] = OK
     rows = np.flatnonzero(choice2 >= 0)
     out.k2_se[rows] = se2[choice2[rows], rows]
     out.k1[:] = np.where(choice1 >= 0, est1, out.k1)

@@ -9,10 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Generator
 
-import numpy as np
-
 from ..core.errors import EstimatorError
-from ..core.filled import filled
 from ..core.pointcloud import PointCloud
 from ..core.result import Principal
 
@@ -23,13 +20,19 @@ __all__ = ["EstimatorSpec", "ESTIMATORS", "DEFAULT_ESTIMATOR", "register", "get_
 DEFAULT_ESTIMATOR = "mru"
 """The estimator used when none is named (the API, the CLI, the viewer): the paper's own method."""
 
-EstimatorFunction = Callable[..., Generator[float, None, Principal]]
-"""``fn(mesh, normals, radii, *, chunk) -> Generator[fraction done, None, Principal]``.
+EstimatorFunction = Callable[..., Generator[float, None, "Principal | list[Principal]"]]
+"""``fn(mesh, normals, radii, *, chunk, centres, features, **options) -> Generator[fraction done, None, Principal]``.
 
+``mesh`` a :class:`curv.Mesh` (or a :class:`curv.PointCloud` for a spec with ``takes_points``);
 ``normals`` (n, 3) is None only for a spec with ``computes_normals``; ``radii`` (n,) float64 is the
 ball radius every vertex collects its support in (:func:`curv.core.ranges.ball_radii`), None for an
-estimator without a support (``has_support=False``); ``chunk`` fixes the vertices per kernel call
-(default adaptive, :func:`curv.core.jit.iter_chunks`)."""
+estimator without a support (``has_support=False``), or (levels, n) ascending per vertex for a spec
+with ``takes_levels``, which then returns a list of one :class:`Principal` per level; ``chunk``
+fixes the vertices per kernel call (default adaptive, :func:`curv.core.jit.iter_chunks`);
+``centres`` (c,) int64 the vertices to estimate (None: all; a whole point cloud passes every point
+in its grid's order), whose rows alone it must write; ``features`` a
+:class:`curv.core.features.FeatureSet` on a mesh with creases, else None; ``options`` the spec's
+own ``options`` and, for a spec with ``skips_errors``, ``standard_errors``."""
 
 
 @dataclass(frozen=True)
@@ -213,18 +216,3 @@ def refusal(spec: EstimatorSpec, mesh) -> str | None:
 def all_variants() -> list[tuple[str, int]]:
     """Every (name, range) pair of the registry, in registry order."""
     return [v for spec in ESTIMATORS.values() for v in spec.variants()]
-
-
-def empty_principal(n: int, *, most_written: bool = False) -> Principal:
-    """A :class:`Principal` of NaNs with every reason ``OK`` (to be filled by an estimator).
-
-    The NaN arrays cost only the rows an estimator writes (:func:`curv.core.filled.filled`), so an
-    estimate over a small region of a large mesh does not pay for filling the whole mesh;
-    ``most_written`` (a whole-mesh estimate) fills them the ordinary way, which is cheaper then.
-    """
-    full = dict(most_written=most_written)
-    return Principal(
-        k1=filled(n, np.nan, **full), k2=filled(n, np.nan, **full),
-        d1=filled((n, 3), np.nan, **full), d2=filled((n, 3), np.nan, **full),
-        reason=np.zeros(n, np.uint8),
-    )

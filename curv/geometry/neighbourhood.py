@@ -26,7 +26,6 @@ from typing import Iterator
 import weakref
 
 import numpy as np
-import scipy.sparse as sp
 from numba.core import types
 from numba.extending import overload
 
@@ -37,7 +36,7 @@ from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii
 
 __all__ = ["ball_support", "mesh_ball_support", "start_ball_support", "widen_ball_support", "new_scratch", "new_queues", "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh", "latest_with_mesh", "supports", "support_sizes", "Neighbourhood",
-           "iter_neighbourhoods", "neighbourhood_matrix"]
+           "iter_neighbourhoods"]
 
 def ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     """The support of vertex ``p``: the mesh search (:func:`mesh_ball_support`) or a point cloud's ball.
@@ -484,14 +483,3 @@ def iter_neighbourhoods(mesh: Mesh, factor: float, *, block_size: int | None = N
         ids = ids_all[start:start + block]
         indptr, indices = supports(mesh, radii, ids)
         yield Neighbourhood(ids, indptr, indices, radii[ids])
-
-
-def neighbourhood_matrix(mesh: Mesh, factor: float) -> sp.csr_matrix:
-    """(n, n) boolean CSR matrix of all supports at range factor ``factor`` (centre excluded)."""
-    if not factor > 0:
-        raise ValueError(f"range factor must be positive, got {factor}")
-    indptr, indices = supports(mesh, ball_radii(mesh, Range(k=float(factor)), uses_normals=False))
-    n = mesh.n_vertices
-    mat = sp.csr_matrix((np.ones(indices.size, bool), indices, indptr), shape=(n, n))
-    mat.sort_indices()
-    return mat

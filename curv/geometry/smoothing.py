@@ -11,13 +11,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..core.errors import MeshError
 from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.mesh import Mesh
 
-__all__ = ["cotan_weights", "smooth_positions", "smooth_values", "KERNELS"]
+__all__ = ["smooth_positions", "smooth_values", "KERNELS"]
 
 
 @jit
@@ -97,21 +96,6 @@ def _cotan_data(mesh: Mesh) -> np.ndarray:
            mesh.corner_prev, mesh.vertices, weights)
     return weights
 
-
-def cotan_weights(mesh: Mesh) -> sp.csr_matrix:
-    """(n, n) symmetric sparse matrix of cotan weights ``(cot a + cot b) / 2`` per edge.
-
-    Negative weights (obtuse triangles) are clamped to zero so that an explicit smoothing step
-    stays a convex combination. Its entries are those of :attr:`Mesh.adjacency`.
-
-    Raises
-    ------
-    MeshError
-        On a non-triangle mesh.
-    """
-    mesh.triangles  # raises on polygons
-    adjacency = mesh.adjacency
-    return sp.csr_matrix((_cotan_data(mesh), adjacency.indices, adjacency.indptr), shape=adjacency.shape)
 
 
 def _smooth(mesh: Mesh, x: np.ndarray, keep: np.ndarray, step: np.ndarray, iterations: int) -> np.ndarray:

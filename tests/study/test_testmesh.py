@@ -71,7 +71,7 @@ def test_border_exclusion_on_a_regular_plane_matches_brute_force():
 
 
 def test_evaluated_vertices_have_no_border_vertex_in_their_r4_support():
-    from curv.geometry.neighbourhood import neighbourhood_matrix
+    from tests.supports import neighbourhood_matrix
 
     tm = build_test_mesh(Task(0, "trigonometric", 817, 25.0, 0.0, 0))
     mesh = tm.sampled.mesh

@@ -1,0 +1,245 @@
+"""Orienting a point cloud's normals (module notes, 2 and 3): Hoppe's spanning tree, the ambiguous points.
+
+The neighbour graph's edges weighted ``1 - |n_p . n_q|``, ranked by a stable radix sort
+(:func:`_stable_rank`), Kruskal's spanning forest (:func:`_spanning_forest`), a breadth-first walk
+of each part's tree from its root (:func:`_propagate`) and the neighbours' agreement
+(:func:`_agreement`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.connectivity import find_root
+from ..core.errors import EstimatorError
+from ..core.jit import jit, jit_parallel, launch, prange
+from ..core.pointcloud import PointCloud
+
+__all__ = ["orient_normals", "AGREE_COSINE", "GRAZING_COSINE"]
+
+AGREE_COSINE = 0.5
+"""Neighbours whose normals are within 60 degrees (or opposed within 60) count as agreeing (or not)."""
+
+GRAZING_COSINE = 0.05
+"""Orienting towards a viewpoint fails for normals within ~3 degrees of perpendicular to the view ray."""
+
+
+@jit
+def _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight):
+    """Count (``rows`` None) or write the edges of :func:`_tree_edges`; returns their number."""
+    n = indptr.size - 1
+    m = 0
+    for p in range(n):
+        if finite[p]:
+            for j in range(indptr[p], indptr[p + 1]):
+                q = neighbours[j]
+                if q > p and finite[q]:
+                    if rows is not None:
+                        rows[m] = p
+                        cols[m] = q
+                        c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+                        # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
+                        weight[m] = 1.0 - abs(c) + 1e-9
+                    m += 1
+    return m
+
+
+@jit
+def _tree_edges(indptr, neighbours, normal, finite):
+    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
+    m = _edge_pass(indptr, neighbours, normal, finite, None, None, None)
+    rows = np.empty(m, np.int32)
+    cols = np.empty(m, np.int32)
+    weight = np.empty(m)
+    _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight)
+    return rows, cols, weight
+
+
+RADIX_BITS = 11
+"""Bits per pass of :func:`_stable_rank` (2048 buckets: their counts stay in the cache)."""
+
+
+@jit
+def _radix_rank(weight, rank, spare_rank):
+    """:func:`_stable_rank` into one of the two (m,) int scratch arrays, which it returns."""
+    m = weight.size
+    keys = weight.view(np.int64).copy()
+    spare_keys = np.empty(m, np.int64)
+    for i in range(m):
+        rank[i] = i
+    buckets = 1 << RADIX_BITS
+    count = np.empty(buckets + 1, np.int64)
+    for shift in range(0, 64, RADIX_BITS):
+        count[:] = 0
+        for i in range(m):
+            count[((keys[i] >> shift) & (buckets - 1)) + 1] += 1
+        if count.max() == m:
+            continue
+        for d in range(buckets):
+            count[d + 1] += count[d]
+        for i in range(m):
+            d = (keys[i] >> shift) & (buckets - 1)
+            at = count[d]
+            count[d] = at + 1
+            spare_keys[at] = keys[i]
+            spare_rank[at] = rank[i]
+        keys, spare_keys = spare_keys, keys
+        rank, spare_rank = spare_rank, rank
+    return rank
+
+
+def _stable_rank(weight: np.ndarray) -> np.ndarray:
+    """(m,) ``np.argsort(weight, kind="stable")`` of non-negative finite floats (int32 below 2^31
+    weights), by a least-significant-digit radix sort of their bit patterns (which order such
+    floats as their values): each pass keeps the order of equal digits, so ties keep their order.
+    Passes whose digit is the same for every weight are skipped (the high bits of weights in [0, 2))."""
+    weight = np.ascontiguousarray(weight, dtype=np.float64)
+    dtype = np.int32 if weight.size < 2 ** 31 else np.int64
+    return _radix_rank(weight, np.empty(weight.size, dtype), np.empty(weight.size, dtype))
+
+
+@jit
+def _spanning_forest(n, rank, rows, cols):
+    """Kruskal: the edges of the minimum spanning forest, lightest first (``rank`` sorts the
+    weights), as a CSR adjacency ``(ptr (n+1,), adj)``, and each point's part (a representative)."""
+    parent = np.arange(n)
+    take = np.zeros(rank.size, np.bool_)
+    degree = np.zeros(n + 1, np.int64)
+    for e in rank:
+        a = find_root(parent, rows[e])
+        b = find_root(parent, cols[e])
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+            take[e] = True
+            degree[rows[e] + 1] += 1
+            degree[cols[e] + 1] += 1
+    ptr = np.cumsum(degree)
+    adj = np.empty(ptr[n], np.int64)
+    fill = ptr[:n].copy()
+    for e in range(rank.size):
+        if take[e]:
+            adj[fill[rows[e]]] = cols[e]
+            fill[rows[e]] += 1
+            adj[fill[cols[e]]] = rows[e]
+            fill[cols[e]] += 1
+    part = np.empty(n, np.int64)
+    for p in range(n):
+        part[p] = find_root(parent, p)
+    return ptr, adj, part
+
+
+@jit
+def _propagate(ptr, adj, part, key, root_sign, normal):
+    """Walk each part's tree breadth first from its root (the greatest ``key``, the smallest index
+    on ties), turning the root by ``root_sign`` (its value < 0: flip) and every other normal to
+    agree with its tree parent."""
+    n = part.size
+    root = np.full(n, -1, np.int64)
+    for p in range(n):
+        r = part[p]
+        if root[r] < 0 or key[p] > key[root[r]]:
+            root[r] = p
+    seen = np.zeros(n, np.bool_)
+    queue = np.empty(n, np.int64)
+    for r in range(n):
+        s = root[r]
+        if s < 0:
+            continue
+        if root_sign[s] < 0.0:
+            normal[s, 0] = -normal[s, 0]
+            normal[s, 1] = -normal[s, 1]
+            normal[s, 2] = -normal[s, 2]
+        seen[s] = True
+        queue[0] = s
+        head, tail = 0, 1
+        while head < tail:
+            p = queue[head]
+            head += 1
+            for j in range(ptr[p], ptr[p + 1]):
+                q = adj[j]
+                if seen[q]:
+                    continue
+                seen[q] = True
+                if normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2] < 0.0:
+                    normal[q, 0] = -normal[q, 0]
+                    normal[q, 1] = -normal[q, 1]
+                    normal[q, 2] = -normal[q, 2]
+                queue[tail] = q
+                tail += 1
+
+
+@jit_parallel
+def _agreement(indptr, neighbours, normal, cosine, ambiguous):
+    n = indptr.size - 1
+    for p in prange(n):
+        agree = 0
+        oppose = 0
+        for j in range(indptr[p], indptr[p + 1]):
+            q = neighbours[j]
+            c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+            if c >= cosine:
+                agree += 1
+            elif c <= -cosine:
+                oppose += 1
+        ambiguous[p] = agree == 0 or oppose >= agree
+
+
+def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tuple[np.ndarray, np.ndarray]:
+    """Orient unoriented normals consistently (module notes, step 2) and find the ambiguous ones.
+
+    Parameters
+    ----------
+    cloud : PointCloud
+    normals : (n, 3) float64
+        Unit normals, either sign; NaN rows take no part.
+    orient : {"up", "outward"} or (3,) array_like
+        How each connected part's root is turned: up (+z, Hoppe's choice), away from the part's
+        centroid, or every normal towards this viewpoint.
+
+    Returns
+    -------
+    normals : (n, 3) float64
+        Oriented copy; NaN at ambiguous points.
+    ambiguous : (n,) bool
+        Points whose orientation could not be decided (module notes, step 3).
+    """
+    out = np.array(normals, dtype=np.float64, copy=True)
+    n = out.shape[0]
+    finite = np.isfinite(out).all(axis=1)
+    if not isinstance(orient, str):
+        view = np.asarray(orient, dtype=np.float64).reshape(3)
+        ray = view - cloud.points
+        ray /= np.linalg.norm(ray, axis=1, keepdims=True)
+        cosine = np.einsum("ij,ij->i", out, ray)
+        out[cosine < 0] *= -1.0
+        ambiguous = finite & ~(np.abs(cosine) >= GRAZING_COSINE)
+        out[ambiguous] = np.nan
+        return out, ambiguous
+    if orient not in ("up", "outward"):
+        raise EstimatorError(f"orient must be 'up', 'outward' or a viewpoint (x, y, z); got {orient!r}")
+    graph = cloud.adjacency
+    indptr, neighbours = graph.indptr, graph.indices
+    safe = np.where(finite[:, None], out, 0.0)
+    rows, cols, weight = _tree_edges(indptr, neighbours, safe, finite)
+    # Kruskal in the order of the weights (stable: ties keep the edges' order)
+    ptr, adj, part = _spanning_forest(n, _stable_rank(weight), rows, cols)
+    del rows, cols, weight
+    # one root per part: its highest point (turned up), or the point farthest from its centroid (turned away)
+    if orient == "up":
+        key = cloud.points[:, 2].copy()
+        root_sign = out[:, 2].copy()
+    else:
+        centroid = np.stack([np.bincount(part, cloud.points[:, c], n) for c in range(3)], axis=1)
+        centroid /= np.maximum(np.bincount(part, minlength=n), 1)[:, None]
+        away = cloud.points - centroid[part]
+        key = np.linalg.norm(away, axis=1)
+        root_sign = np.einsum("ij,ij->i", out, away)
+    key[~finite] = -np.inf
+    root_sign[~finite] = 0.0
+    _propagate(ptr, adj, part, key, root_sign, out)
+    ambiguous = np.zeros(n, bool)
+    safe = np.where(finite[:, None], out, 0.0)
+    launch(_agreement, indptr, neighbours, safe, AGREE_COSINE, ambiguous)
+    ambiguous &= finite
+    out[ambiguous] = np.nan
+    return out, ambiguous
