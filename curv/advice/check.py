@@ -189,7 +189,8 @@ def _score(twin, res, flip: bool) -> np.ndarray:
 
 
 def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres: int = CHECK_CENTRES, seed: int = 0,
-               noise: float | None = None, twin_options: dict | None = None) -> Generator[Progress, None, CheckReport]:
+               noise: float | None = None, twin_options: dict | None = None,
+               noise_policy: str = "share") -> Generator[Progress, None, CheckReport]:
     """Run ``calls`` on noisy copies of ``shape``'s smooth twin; yields progress, returns the report.
 
     Parameters
@@ -240,7 +241,11 @@ def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres:
     resolved = np.concatenate([t.resolved for t in twins])
     finite = np.isfinite(sigma)
     noise_resolved = bool(2 * np.sum(resolved & finite) > sigma.size)
-    if noise is None:
+    if noise is None and noise_policy == "share":
+        noise = float(np.median(np.concatenate([t.noise for t in twins])[finite])) if finite.any() else 0.0
+    elif noise is None and noise_policy == "residual":
+        noise = float(np.median(sigma[finite])) if finite.any() else 0.0
+    elif noise is None:
         noise = float(np.median(sigma[resolved & finite])) if noise_resolved else 0.0
     bound = float(np.median(sigma[finite])) if finite.any() else float("nan")
     estimate, quiet = _estimate_keywords()

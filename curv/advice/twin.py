@@ -65,8 +65,11 @@ class Twin:
         The twin's unit normal at every one of its vertices (the direction the noisy copies move
         them in).
     sigma : (c,) float64
-        The input's noise along the normal measured about each patch's fit (leverage-corrected
-        root mean square weighted residual), in input units.
+        The spread of the input about each patch's fit along the normal (leverage-corrected root
+        mean square weighted residual), in input units: the noise where the residual is noise.
+    noise : (c,) float64
+        The part of :attr:`sigma` that is noise, in input units (:meth:`Fits.noise_share
+        <curv.advice.twin_fit.Fits.noise_share>`: what did not fall over the fits' last two degrees).
     degree : (c,) int64
         The polynomial degree chosen for each patch.
     resolved : (c,) bool
@@ -92,6 +95,7 @@ class Twin:
     normals: np.ndarray
     surface_normals: np.ndarray
     sigma: np.ndarray
+    noise: np.ndarray
     degree: np.ndarray
     resolved: np.ndarray
     origin: np.ndarray
@@ -306,6 +310,8 @@ def _assemble(shape, centres, members, bases, surface, fits, w, k1, k2, centre_n
         raise ValueError("no patch of the twin could be fitted")
     points, normals, patch_of, faces, starts = [], [], [], [], []
     sigma = np.full(len(members), np.nan)
+    height_sigma2 = np.sum(w * fits.residual**2, axis=1) / np.maximum(fits.dof, 1e-300)
+    share = fits.noise_share(height_sigma2)
     offset = 0
     for out, c in enumerate(keep):
         n = members[c].size
@@ -336,6 +342,7 @@ def _assemble(shape, centres, members, bases, surface, fits, w, k1, k2, centre_n
         twin_shape = PointCloud(vertices)
     return Twin(shape=twin_shape, centres=np.array(starts, np.int64), source=centres[keep], k1=k1[keep],
                 k2=k2[keep], normals=centre_normals[keep], surface_normals=np.concatenate(normals),
-                sigma=sigma[keep], degree=fits.degree[keep], resolved=fits.resolved[keep],
+                sigma=sigma[keep], noise=sigma[keep] * np.sqrt(share[keep]), degree=fits.degree[keep],
+                resolved=fits.resolved[keep],
                 origin=np.concatenate([members[c] for c in keep]), patch=np.concatenate(patch_of),
                 radius=bases.radius[keep], oriented=is_mesh)

@@ -81,6 +81,10 @@ class Fits:
         Whether the fit's highest-degree terms are at the noise (mean squared coefficient over its
         variance below :data:`RESOLVED_RATIO`): the residual then is noise. Where they are still far
         above it, the residual is the surface's own terms beyond the fit, and the noise is below it.
+    lower : (c,) float64
+        The residual variance (leverage-corrected, scaled units) of the fit two degrees lower (NaN
+        where the fit's degree is below 4): with the full fit's, it tells the noise from the
+        surface's own terms (:attr:`noise_share`).
     """
 
     coef: np.ndarray
@@ -88,6 +92,16 @@ class Fits:
     residual: np.ndarray
     dof: np.ndarray
     resolved: np.ndarray
+    lower: np.ndarray
+
+    def noise_share(self, full: np.ndarray) -> np.ndarray:
+        """(c,) the share of the full fit's residual variance ``full`` that is noise, by the residuals'
+        fall over the last two degrees: ``(2 v_D - v_{D-2}) / v_D``, clipped to 0..1. Pure noise
+        leaves ``v_{D-2} = v_D`` (share 1); the surface's own terms, falling at least twofold over two
+        degrees, leave ``v_{D-2} >= 2 v_D`` (share 0); in between, the part that did not fall.
+        Where the fit's degree is below 4 the residual is taken as noise (share 1)."""
+        share = np.where(np.isfinite(self.lower), (2.0 * full - self.lower) / np.maximum(full, 1e-300), 1.0)
+        return np.clip(share, 0.0, 1.0)
 
     @property
     def powers(self) -> np.ndarray:
@@ -130,6 +144,7 @@ def fit_heights(s, t, z, w, count, max_degree: int = MAX_DEGREE, *, threshold: f
     residual = np.zeros_like(z)
     dof = np.full(c, np.nan)
     resolved = np.zeros(c, bool)
+    lower = np.full(c, np.nan)
     wsum = w.sum(axis=1)
     n_eff = wsum**2 / np.maximum((w * w).sum(axis=1), 1e-300)
     allowed = np.full(c, -1, np.int64)
@@ -160,7 +175,11 @@ def fit_heights(s, t, z, w, count, max_degree: int = MAX_DEGREE, *, threshold: f
         residual[rows] = res
         dof[rows] = dof_k
         resolved[rows] = np.mean(strength[:, order == d], axis=1) < RESOLVED_RATIO
-    return Fits(coef=coef, degree=degree, residual=residual, dof=dof, resolved=resolved)
+        if d >= 4:
+            low = _n_unknowns(d - 2)
+            rss_low = np.sum(ww * res * res, axis=1) + np.sum(qb[:, low:] ** 2, axis=1)
+            lower[rows] = rss_low / np.maximum(wsum[rows] - spread[:, :low].sum(axis=1), 1e-300)
+    return Fits(coef=coef, degree=degree, residual=residual, dof=dof, resolved=resolved, lower=lower)
 
 
 def evaluate(fits: Fits, s: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
