@@ -11,8 +11,9 @@ The order is:
 3. then the calls not measured, by the table's prediction (or, without a table, in the order
    given).
 
-A measured call is *within noise* of the recommendation when on at least one noisy copy its median
-error was at or below the recommendation's: the copies do not tell them apart.
+A measured call that covers the input as well is *within noise* of the recommendation when on at
+least one noisy copy its median error was at or below the recommendation's: the copies do not tell
+them apart.
 """
 
 from __future__ import annotations
@@ -67,7 +68,8 @@ def rank_candidates(candidates: list, measured: dict | None, slack: float) -> li
     best = ordered[0].measured
     if best is None or not best.ok:
         return ordered
-    return [ordered[0]] + [dataclasses.replace(c, within_noise=_within_noise(best, c.measured)) for c in ordered[1:]]
+    return [ordered[0]] + [dataclasses.replace(c, within_noise=c.valid_share >= top - slack
+                                               and _within_noise(best, c.measured)) for c in ordered[1:]]
 
 
 def _within_noise(best, other) -> bool:

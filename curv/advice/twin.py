@@ -39,6 +39,10 @@ CAP_COSINE = 0.34
 """A mesh patch keeps the vertices whose normal is within 70 degrees of the centre's (and are joined
 to the centre through them): on a coarse closed surface the patch is a cap, never wrapped around."""
 
+SPHERE_SLACK = 1.1
+"""A patch is measured from its sphere unless the sphere-based fit leaves more than this times the
+plane-based fit's mean squared residual."""
+
 WEIGHT_WIDTH = 0.35
 """Standard deviation of the fit's Gaussian weights, as a share of the patch radius."""
 
@@ -254,9 +258,11 @@ def build_twin(shape: Mesh | PointCloud, centres, radii, *, max_degree: int = MA
         if sphere is not None and sphere.sphere.any():
             packed = _pack(sphere, x, members, weight)
             sphere_fits = fit_heights(*packed[:5], max_degree)
-            # a sphere helps where it is close to the patch (a cap, an ellipsoid); a tube or a saddle
-            # may be better measured from its plane: keep the base whose fit leaves less
-            better = sphere.sphere & (_residual_share(sphere_fits, packed[3]) < _residual_share(fits, w))
+            # a sphere helps where it is close to the patch (a cap, an ellipsoid): fewer terms, so fewer
+            # noisy ones; a tube or a saddle may be better measured from its plane. Where both leave
+            # the noise (within SPHERE_SLACK), the sphere
+            better = sphere.sphere & (_residual_share(sphere_fits, packed[3])
+                                      <= SPHERE_SLACK * _residual_share(fits, w))
             if better.any():
                 bases = sphere.restricted(better)
                 s, t, z, w, count, members = _pack(bases, x, members, weight)

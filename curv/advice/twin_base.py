@@ -145,6 +145,32 @@ class Bases:
         return k1, k2, normal
 
 
+GEOMETRIC_STEPS = 4
+"""Gauss-Newton steps from Kasa's sphere to the sphere of least weighted squared distances."""
+
+
+def _geometric_sphere(y, w, centre, big):
+    """The sphere of least weighted squared (geometric) distances, from ``centre``, ``big`` (c, 3), (c,).
+
+    Kasa's algebraic fit is exact on a sphere but biased off it (towards smaller spheres under
+    noise); measured from it, a noisy sphere still needs quadratic terms, and a sphere with
+    quadratic terms is no sphere: its curvature varies over the patch. From the geometric fit a
+    spherical patch needs none (each is then within its noise and dropped)."""
+    ok = np.isfinite(big)
+    c, r = np.where(ok[:, None], centre, 0.0), np.where(ok, big, 1.0)
+    for _ in range(GEOMETRIC_STEPS):
+        d = y - c[:, None, :]
+        dist = np.sqrt(np.maximum(np.sum(d * d, axis=-1), 1e-300))
+        res = dist - r[:, None]
+        jac = np.concatenate([-d / dist[..., None], -np.ones(dist.shape + (1,))], axis=-1)  # (c, N, 4)
+        jw = jac * w[..., None]
+        step = np.linalg.solve(np.swapaxes(jw, 1, 2) @ jac + 1e-12 * np.eye(4),
+                               -(np.swapaxes(jw, 1, 2) @ res[..., None]))[..., 0]
+        c, r = c + step[:, :3], r + step[:, 3]
+    good = ok & np.isfinite(r) & (r > 0) & np.isfinite(c).all(axis=1)
+    return np.where(good[:, None], c, centre), np.where(good, r, big)
+
+
 def choose_bases(origin, frame, radius, s, t, z, w) -> Bases:
     """Each patch's base from its plane frame and a sphere fitted to its points.
 
@@ -162,9 +188,10 @@ def choose_bases(origin, frame, radius, s, t, z, w) -> Bases:
     Returns
     -------
     Bases
-        The sphere of least weighted algebraic distance (Kasa's fit: ``|y|^2 + b.y + c = 0``, linear,
-        exact for points on a sphere) where its curvature times the patch radius exceeds
-        :data:`SPHERE_MIN`, the plane elsewhere (and where the fit fails).
+        The sphere of least weighted squared distances (from Kasa's algebraic fit, ``|y|^2 + b.y +
+        c = 0``, linear and exact for points on a sphere, by :data:`GEOMETRIC_STEPS` Gauss-Newton
+        steps) where its curvature times the patch radius exceeds :data:`SPHERE_MIN`, the plane
+        elsewhere (and where the fit fails).
     """
     c = len(radius)
     y = np.stack([s, t, z], axis=-1)  # (c, N, 3)
@@ -179,6 +206,7 @@ def choose_bases(origin, frame, radius, s, t, z, w) -> Bases:
     centre = -0.5 * sol[:, :3]  # scaled, in the plane frame
     big2 = np.sum(centre * centre, axis=1) - sol[:, 3]
     big = np.sqrt(np.where(big2 > 0, big2, np.nan))
+    centre, big = _geometric_sphere(y, w, centre, big)
     sphere = np.isfinite(big) & (1.0 / np.where(np.isfinite(big), big, np.inf) > SPHERE_MIN)
     side = np.where(centre[:, 2] < 0, 1.0, -1.0)  # centre below the input's side: bends away from it
     toward = -centre / np.maximum(np.linalg.norm(centre, axis=1), 1e-300)[:, None]  # centre -> origin

@@ -160,8 +160,8 @@ def fit_heights(s, t, z, w, count, max_degree: int = MAX_DEGREE, *, threshold: f
         a = _monomials(s[rows], t[rows], powers[:p]) * root[..., None]  # (k, N, p)
         col = np.sqrt(np.maximum(np.sum(a * a, axis=1), 1e-300))  # column scaling: a better-conditioned Gram
         a /= col[:, None, :]
-        lower = np.linalg.cholesky(np.swapaxes(a, 1, 2) @ a + 1e-12 * np.eye(p))  # Q = A L^-T: orthonormal
-        q = np.swapaxes(np.linalg.solve(lower, np.swapaxes(a, 1, 2)), 1, 2)  # (k, N, p)
+        chol = np.linalg.cholesky(np.swapaxes(a, 1, 2) @ a + 1e-12 * np.eye(p))  # Q = A L^-T: orthonormal
+        q = np.swapaxes(np.linalg.solve(chol, np.swapaxes(a, 1, 2)), 1, 2)  # (k, N, p)
         qb = (np.swapaxes(q, 1, 2) @ (root * z[rows])[..., None])[..., 0]  # (k, p)
         fitted = (q @ qb[..., None])[..., 0]
         res = np.where(root > 0, (root * z[rows] - fitted) / np.where(root > 0, root, 1.0), 0.0)
@@ -170,7 +170,7 @@ def fit_heights(s, t, z, w, count, max_degree: int = MAX_DEGREE, *, threshold: f
         sigma2 = np.sum(ww * res * res, axis=1) / np.maximum(dof_k, 1e-300)
         strength = qb * qb / np.maximum(sigma2[:, None] * spread, 1e-300)
         keep = strength > threshold**2
-        coef[rows, :p] = np.linalg.solve(np.swapaxes(lower, 1, 2), (qb * keep)[..., None])[..., 0] / col
+        coef[rows, :p] = np.linalg.solve(np.swapaxes(chol, 1, 2), (qb * keep)[..., None])[..., 0] / col
         degree[rows] = np.maximum(np.max(np.where(keep, order[None, :], 0), axis=1), 2)
         residual[rows] = res
         dof[rows] = dof_k
