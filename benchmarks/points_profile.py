@@ -2,15 +2,17 @@
 
 Run by hand from the repository root::
 
-    PYTHONPATH=. .venv/bin/python benchmarks/points_profile.py 1000000 qs
+    PYTHONPATH=. .venv/bin/python benchmarks/points_profile.py 1000000 qs [up|top|outward]
 
 N uniform random points of the unit sphere (seed 0), no normals, as ``bench_estimators.py
 --points``. The phases are those of ``curv.estimate(curv.PointCloud(points), method, 2)``, run one
 by one on one cloud: its twin in grid order (the estimate's first step, which every later phase
 runs on), the grid and the 10 nearest (the spacing), the one pass per point (PCA and
 gap at the border test's radius, the jet normals and their gap at R2, the line checks at R2 and
-R1), the neighbour graph, the orientation, the coincident points; then the whole call on a fresh
-cloud, whose remainder over the phases is the estimator's own kernel. CPU seconds are the
+R1), the neighbour graph (only the propagating rules read it), the orientation (the rule named last:
+``top``, the default for such a cloud, or ``up``, the default of a georeferenced scan, which reads
+the 10 nearest and no graph), the coincident points and the coordinates' grid step; then the whole
+call on a fresh cloud with that rule, whose remainder over the phases is the estimator's own kernel. CPU seconds are the
 process's over all threads: on a shared machine they move much less with the load than the wall.
 """
 
@@ -36,6 +38,7 @@ def main() -> None:
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
     method = sys.argv[2] if len(sys.argv) > 2 else "qs"
+    orient = sys.argv[3] if len(sys.argv) > 3 else "top"
     curv.estimate(curv.PointCloud(sphere_points(2000)), method, 2)  # kernels from the cache
     points = sphere_points(n)
     total_wall = total_cpu = 0.0
@@ -56,12 +59,14 @@ def main() -> None:
     r2, spreads = _radii(cloud, 2), _default_spreads(cloud)
     found = phase("one pass (frames, jet, line checks)",
                   lambda: run_to_end(_one_pass(cloud, border, r2, jet=True, spreads=spreads)))
-    phase("neighbour graph", lambda: cloud.adjacency)
-    phase("orientation", lambda: pn.orient_normals(cloud, found.normal_a))
+    if orient != "up":
+        phase("neighbour graph", lambda: cloud.adjacency)
+    phase(f"orientation ({orient})", lambda: pn.orient_normals(cloud, found.normal_a, orient=orient))
     phase("coincident points", lambda: cloud.coincident_points)
+    phase("coordinate step", lambda: cloud.coordinate_step)
     print(f"{'phases':<34} wall {total_wall:7.2f}  cpu {total_cpu:7.2f}")
     t, c = time.perf_counter(), time.process_time()
-    res = curv.estimate(curv.PointCloud(points), method, 2)
+    res = curv.estimate(curv.PointCloud(points), method, 2, orient=orient)
     print(f"{'whole ' + method + ' R2 call':<34} wall {time.perf_counter() - t:7.2f}  "
           f"cpu {time.process_time() - c:7.2f}  (valid {res.valid.mean():.4f})")
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-from .core.errors import CurvError, EstimatorError, LoadError, MeshError
+from .core.errors import CurvError, CurvWarning, EstimatorError, LoadError, MeshError, RadiusWarning
 from .core.mesh import Mesh, MeshReport
 from .core.pointcloud import PointCloud
 from .core.quantities import QUANTITIES
@@ -31,6 +31,7 @@ _LAZY = {
     "save_vtp": ("curv.io", "save_vtp"),
     "save_result": ("curv.io", "save_result"),
     "as_mesh": ("curv.convert", "as_mesh"),
+    "as_input": ("curv.convert", "as_input"),
     "surfaces": ("curv.surfaces", None),
     "advise": ("curv.advice.advisor", "advise"),
     "iter_advise": ("curv.advice.advising", "iter_advise"),
@@ -46,7 +47,7 @@ _LAZY = {
 
 __all__ = [
     "Mesh", "MeshReport", "PointCloud", "Curvature", "Principal", "Reason", "QUANTITIES",
-    "CurvError", "MeshError", "LoadError", "EstimatorError", *_LAZY,
+    "CurvError", "MeshError", "LoadError", "EstimatorError", "CurvWarning", "RadiusWarning", *_LAZY,
 ]
 
 

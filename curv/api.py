@@ -13,18 +13,18 @@ from typing import Generator
 
 import numpy as np
 
-from .convert import as_mesh
-from .core.errors import EstimatorError, MeshError
-from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, run_to_end
+from .convert import as_input
+from .core.errors import EstimatorError, MeshError, RadiusWarning, warn
+from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, iter_watched, rescaled, run_to_end
 from .core.mesh import Mesh
 from .core.pointcloud import PointCloud
 from .core.ranges import ball_radii, parse_range, resolve
 from .core.result import Curvature
 from .core.validity import mark_ok_rows
-from .estimate_finish import finish, settle
+from .estimate_finish import finish, radius_note, settle
 from .estimate_setup import (Smoothing, cached_feature_set, check_vertices, mesh_normals_label, mesh_setup, point_setup,
                              without_rows)
-from .estimators import DEFAULT_ESTIMATOR, SHARED_PASSES, get_spec, refusal
+from .estimators import SHARED_PASSES, default_estimator, get_spec, refusal
 from .estimators._pooling import pool_members
 from .geometry.neighbourhood import latest_with_mesh
 from .geometry.normals import NormalWeighting
@@ -38,7 +38,7 @@ builtins_range = builtins.range  # the keyword ``range`` shadows it in the funct
 
 def iter_estimate(
     mesh: Mesh,
-    method: str = DEFAULT_ESTIMATOR,
+    method: str | None = None,
     range=None,
     *,
     radius: float | None = None,
@@ -52,14 +52,19 @@ def iter_estimate(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
 
     Every ``yield`` is a point where a caller may stop (cancel); the yielded values are
-    :class:`curv.core.jit.Progress` floats, whose ``message`` says when kernels are being compiled.
+    :class:`curv.core.jit.Progress` floats, whose ``message`` says when kernels are being compiled
+    and whose ``phase`` names the part of the work the fraction belongs to: ``"setup"`` (the
+    input's connectivity, normals and flags; ``"normals"`` when they are fitted, then
+    ``"orientation"`` on a point cloud), ``"estimate"`` (the estimator's kernels) and ``"checks"``
+    (the supports' checks and the validity pass). The set-up reports through
+    :func:`curv.core.jit.iter_watched`, so it is measured and a cancel reaches it too.
     Parameters as in :func:`estimate`.
     """
     results = yield from _iter_estimates(
@@ -67,18 +72,20 @@ def iter_estimate(
         smooth_iterations=smooth_iterations, smooth_strength=smooth_strength, fit_range=fit_range,
         block_size=block_size, features=features, vertices=vertices, knn=knn, orient=orient,
         standard_errors=standard_errors, **options)
-    return results[method][0]
+    return next(iter(results.values()))[0]
 
 
-def iter_estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords
+def iter_estimate_ranges(mesh: Mesh, method: str | None = None, ranges=(1, 2, 3, 4), **keywords
                          ) -> Generator[float, None, list]:
     """:func:`estimate_ranges` step by step: yields the fraction done, returns the list of
     :class:`Curvature` (as :func:`iter_estimate` does for one range)."""
+    mesh = as_input(mesh)
+    method = default_estimator(mesh) if method is None else method
     results = yield from iter_estimate_table(mesh, (method,), ranges, **keywords)
     return results[method]
 
 
-def estimate_ranges(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, ranges=(1, 2, 3, 4), **keywords) -> list:
+def estimate_ranges(mesh: Mesh, method: str | None = None, ranges=(1, 2, 3, 4), **keywords) -> list:
     """Estimate at several ranges of one estimator on the same mesh: one :class:`Curvature` per range.
 
     The result for each range equals ``estimate(mesh, method, range, **keywords)``: bit for bit for
@@ -127,6 +134,7 @@ def iter_estimate_table(mesh: Mesh, methods, ranges=(1, 2, 3, 4), **keywords) ->
     """:func:`estimate_table` step by step: yields the fraction done, returns the dict of lists of
     :class:`Curvature`."""
     methods = (methods,) if isinstance(methods, str) else tuple(methods)
+    mesh = as_input(mesh)
     if not methods or len(set(methods)) != len(methods):
         raise EstimatorError(f"methods must name each estimator once; got {list(methods)}")
     wanted = {m: _range_tuple(ranges[m] if isinstance(ranges, dict) else ranges) for m in methods}
@@ -193,7 +201,7 @@ def _split_options(specs, options: dict) -> dict:
 
 def _iter_estimates(
     mesh: Mesh,
-    methods: tuple = (DEFAULT_ESTIMATOR,),
+    methods: tuple = (None,),
     ranges=(None,),
     *,
     radius: float | None = None,
@@ -207,7 +215,7 @@ def _iter_estimates(
     features=None,
     vertices=None,
     knn: int | None = None,
-    orient="up",
+    orient=None,
     standard_errors: bool = True,
     **options,
 ) -> Generator[float, None, dict]:
@@ -219,7 +227,10 @@ def _iter_estimates(
     ``nc``, ``qs``, ``an``, ``mru``, ``jet``) runs the ranges of a mesh in one call, in ascending order; the
     others (and a point cloud's) run once per range. Several ``methods`` must name one shared pass
     (:attr:`~curv.estimators.EstimatorSpec.shared_pass`), which runs them and their ranges in one call.
+    ``None`` in ``methods`` is the input's default estimator (:func:`curv.estimators.default_estimator`).
     """
+    mesh = as_input(mesh)
+    methods = tuple(default_estimator(mesh) if m is None else m for m in methods)
     specs = [get_spec(m) for m in methods]
     spec = specs[0]  # the estimators of one pass take the same normals, ranges and supports
     if len(specs) > 1 and not (spec.shared_pass and all(s.shared_pass == spec.shared_pass for s in specs)):
@@ -229,45 +240,59 @@ def _iter_estimates(
         for r in ranges:
             resolve(other, r, radius, knn)
     options_of = _split_options(specs, options)
-    mesh = mesh if isinstance(mesh, PointCloud) else as_mesh(mesh)
     for s in specs:
         why_not = refusal(s, mesh)
         if why_not is not None:
             raise MeshError(why_not)
     smooth = Smoothing(smooth or Smoothing.NONE)
     centres = check_vertices(vertices, mesh.n_vertices)
-    twin = cloud_twin(mesh) if isinstance(mesh, PointCloud) else locality_ordered(mesh, centres, features)
-    if twin is not None:
-        # a point cloud runs in its grid's order (curv.point_normals, notes 6), and so does a whole mesh
-        # numbered too scattered for the caches (locality_ordered); the rows go back at the end
-        mesh, rows = twin
-        normals = rows_of(normals, rows)
-        centres = None if centres is None else rank(rows)[centres]
     if centres is not None and smooth is Smoothing.VALUES:
         raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
     if isinstance(mesh, PointCloud) and (features is not None or smooth is not Smoothing.NONE):
         raise EstimatorError("features= and smooth= need a mesh's edges and faces; a point cloud takes neither")
-    feats = None if features is None else cached_feature_set(mesh, features)
     # before the connectivity and normals: on a first run their kernels compile too
     kernels = tuple(k for s in specs for k in s.kernels)
-    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, settle, mark_ok_rows)) else "")
-    t0 = time.perf_counter()
-    if isinstance(mesh, PointCloud):
-        work_mesh = mesh
-        used_normals, flags, normals_label = point_setup(mesh, normals, orient=orient, fit_range=fit_range)
-        fused = False
-    else:
-        work_mesh, used_normals, flags, fused = mesh_setup(mesh, spec, normals, normal_weighting, smooth,
-                                                           smooth_iterations, smooth_strength, fit_range, feats)
-        normals_label = mesh_normals_label(normals, normal_weighting, fit_range)
-    # a region's fits also run at its neighbours, whose residuals its standard errors pool
+    fits_normals = (isinstance(mesh, PointCloud) and normals is None and mesh.normals is None) or (
+        isinstance(normals, str))
+    first_phase = "normals" if fits_normals else "setup"
+    yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, settle, mark_ok_rows)) else "", first_phase)
+    called_with = mesh, centres
+
+    def prepare():
+        """What every range and estimator shares, on iter_watched's thread: the twin in grid order,
+        the creases, the normals and flags, the support radii (a large cloud's normals take longer
+        than its estimate)."""
+        mesh, centres, given = called_with[0], called_with[1], normals
+        twin = cloud_twin(mesh) if isinstance(mesh, PointCloud) else locality_ordered(mesh, centres, features)
+        if twin is not None:
+            # a point cloud runs in its grid's order (curv.point_normals, notes 6), and so does a whole mesh
+            # numbered too scattered for the caches (locality_ordered); the rows go back at the end
+            mesh, rows = twin
+            given = rows_of(given, rows)
+            centres = None if centres is None else rank(rows)[centres]
+        feats = None if features is None else cached_feature_set(mesh, features)
+        t0 = time.perf_counter()
+        if isinstance(mesh, PointCloud):
+            work_mesh = mesh
+            used_normals, flags, normals_label = point_setup(mesh, given, orient=orient, fit_range=fit_range)
+            fused = False
+        else:
+            work_mesh, used_normals, flags, fused = mesh_setup(mesh, spec, given, normal_weighting, smooth,
+                                                               smooth_iterations, smooth_strength, fit_range, feats)
+            normals_label = mesh_normals_label(given, normal_weighting, fit_range)
+        # a region's fits also run at its neighbours, whose residuals its standard errors pool
+        fitted = (pool_members(work_mesh, centres) if spec.skips_errors and standard_errors and centres is not None
+                  and not isinstance(work_mesh, PointCloud) else centres)
+        radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support
+                    else None for rng in rngs]
+        return (mesh, twin, centres, feats, t0, work_mesh, used_normals, flags, normals_label, fused, fitted,
+                radii_of)
+
+    (mesh, twin, centres, feats, t0, work_mesh, used_normals, flags, normals_label, fused, fitted,
+     radii_of) = yield from iter_watched(prepare, phase=first_phase)
     skips = spec.skips_errors
-    fitted = (pool_members(work_mesh, centres) if skips and standard_errors and centres is not None
-              and not isinstance(work_mesh, PointCloud) else centres)
     kernel_options = {s.name: {**options_of[s.name], "standard_errors": bool(standard_errors)} if skips
                       else options_of[s.name] for s in specs}
-    radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support else None
-                for rng in rngs]
     on_crease = feats is not None and feats.any
     kernel_normals = used_normals
     if on_crease and used_normals is not None:
@@ -283,11 +308,13 @@ def _iter_estimates(
         stacked = np.stack([radii_of[i] for i in ascending])
         common = dict(chunk=block_size, centres=centres, features=feats if on_crease else None)
         if len(specs) > 1:
-            by_method = yield from SHARED_PASSES[spec.shared_pass](
-                work_mesh, kernel_normals, stacked, tuple(methods), options=kernel_options, **common)
+            by_method = yield from rescaled(SHARED_PASSES[spec.shared_pass](
+                work_mesh, kernel_normals, stacked, tuple(methods), options=kernel_options, **common),
+                0.0, 1.0, phase="estimate")
         else:
-            by_method = {spec.name: (yield from spec.function(work_mesh, kernel_normals, stacked, **common,
-                                                              **kernel_options[spec.name]))}
+            by_method = {spec.name: (yield from rescaled(spec.function(
+                work_mesh, kernel_normals, stacked, **common, **kernel_options[spec.name]),
+                0.0, 1.0, phase="estimate"))}
         raws_of = {}
         for name, levels in by_method.items():
             raws_of[name] = [None] * len(rngs)
@@ -295,49 +322,72 @@ def _iter_estimates(
                 raws_of[name][i] = level
     else:
         raws = []
-        for radii in radii_of:
+        for i, radii in enumerate(radii_of):
             order = centres
             if centres is None and isinstance(work_mesh, PointCloud) and radii is not None:
                 # a whole cloud in its grid's cell order: neighbouring points are estimated one after
                 # another and share what is in the cache (a random-order cloud's kernel ran about 3x
                 # slower); every point writes its own rows, so the result is the same
                 order = work_mesh.ball_grid(radii)[0][3]
-            raws.append((yield from spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
-                                                  features=feats if on_crease else None,
-                                                  **kernel_options[spec.name])))
+            raws.append((yield from rescaled(
+                spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
+                              features=feats if on_crease else None, **kernel_options[spec.name]),
+                i / len(radii_of), (i + 1) / len(radii_of), phase="estimate")))
         raws_of = {spec.name: raws}
     # the neighbours an estimator that reads their normals can use (a NaN normal is left out)
     usable = (np.isfinite(kernel_normals).all(axis=1)
               if spec.uses_normals and kernel_normals is not None else None)
     results = {}
+    parts = len(specs) * len(rngs)
     for s in specs:
         results[s.name] = []
         for rng, radii, raw in zip(rngs, radii_of, raws_of[s.name]):
-            results[s.name].append((yield from finish(
+            part = sum(map(len, results.values()))
+            results[s.name].append((yield from rescaled(finish(
                 mesh, s, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
-                smooth_iterations, smooth_strength, standard_errors, normals_label, options_of[s.name], twin, t0)))
-    yield 1.0
+                smooth_iterations, smooth_strength, standard_errors, normals_label, options_of[s.name], twin, t0),
+                part / parts, (part + 1) / parts, phase="checks")))
+    if radius is not None:  # one range of one estimator (estimate_ranges and estimate_table take no radius)
+        # the spacing of the twin (a cloud's is measured there already) has the same median
+        _warn_of_radius(mesh, radius, results[spec.name][0], called_with[1])
+    yield Progress(1.0, "", "checks")
     return results
 
 
-def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords) -> Curvature:
+def _warn_of_radius(mesh, radius: float, result: Curvature, centres) -> None:
+    """A :class:`~curv.core.errors.RadiusWarning` when ``radius=`` is below the input's spacing or leaves
+    most rows without an estimate (:func:`curv.estimate_finish.radius_note`); the note goes into the
+    result's ``info["warnings"]`` too, for the command line's summary and the viewer's status."""
+    note = radius_note(mesh, radius, result.reason, centres)
+    if note is not None:
+        result.info["warnings"] = (*result.info.get("warnings", ()), note)
+        warn(note, RadiusWarning)
+
+
+def estimate(mesh: Mesh, method: str | None = None, range=None, **keywords) -> Curvature:
     """Estimate principal curvatures and directions at every vertex.
 
     Parameters
     ----------
-    mesh : Mesh, PointCloud, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
-        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`. On a
-        :class:`curv.PointCloud` the estimators with ``takes_points`` run (``nc``, ``qs``, ``an``,
-        ``mru``, ``jet``); the range unit is each point's spacing (:mod:`curv.core.ranges`), points on
-        the rim of an open scan are ``BORDER``, repeats of a point ``DEGENERATE``.
-    method : str
-        Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru`` (see ``curv.ESTIMATORS``).
+    mesh : Mesh, PointCloud, trimesh.Trimesh or PointCloud, pyvista.PolyData, meshio.Mesh or (n, 3) array
+        Other libraries' meshes and point clouds are converted by :func:`curv.convert.as_input`
+        (without faces: a point cloud). On a point cloud the estimators with ``takes_points`` run
+        (``nc``, ``qs``, ``an``, ``mru``, ``jet``); the range unit is each point's spacing
+        (:mod:`curv.core.ranges`), points on the rim of an open scan are ``BORDER``, repeats of a
+        point ``DEGENERATE``.
+    method : str, optional
+        Registry name: ``meyer``, ``csm``, ``nc``, ``qs``, ``an``, ``ru``, ``mru``, ``jet``, ``icc``
+        (see ``curv.ESTIMATORS``). Default the registry's for the input's kind
+        (:data:`curv.estimators.DEFAULT_ESTIMATORS`): ``mru`` on a mesh, ``qs`` on a point cloud.
     range : int, float or str, optional
         k of the range Rk: ``2``, ``2.5`` or ``"R2"`` (:mod:`curv.core.ranges`); any real k at least the
         estimator's smallest named range for the estimators with a support, the one named range
         for ``meyer`` (R1) and ``ru`` (R2). Default R2 where the estimator has it, else its range.
     radius : float, optional
-        Instead of ``range``: the same ball radius in mesh units at every vertex.
+        Instead of ``range``: the same ball radius in mesh units at every vertex. A radius below the
+        input's median spacing, or one that leaves more than half of the vertices with too few
+        neighbours or a singular fit, gives a :class:`curv.RadiusWarning` (once per call; its text
+        is in ``info["warnings"]`` too).
     normals : (n, 3) array_like or "fit", optional
         Vertex normals to use (normalised here); ``"fit"``: each normal from a local jet fit at
         range ``fit_range`` (:func:`curv.fitted_normals.fitted_normals`); default Max-weighted
@@ -367,10 +417,13 @@ def estimate(mesh: Mesh, method: str = DEFAULT_ESTIMATOR, range=None, **keywords
         full run's at these vertices.
     knn : int, optional
         Point clouds only, instead of ``range``: each point's support is its ``knn`` nearest points.
-    orient : {"up", "outward"} or (3,) array_like
-        Point clouds whose normals are estimated: turn each connected part up (+z at its highest
-        point, Hoppe et al. 1992) or outward before propagating, or every normal towards this
-        viewpoint (a scanner's position).
+    orient : {"up", "top", "outward"} or (3,) array_like, optional
+        Point clouds whose normals are estimated: every normal up (nz >= 0 point by point, as
+        PDAL does; a normal within 3 degrees of horizontal is ``Reason.ORIENTATION``), each
+        connected part turned up at its highest point or outward and propagated (Hoppe et al.
+        1992), or every normal towards this viewpoint (a scanner's position). Default
+        (:func:`curv.point_normals.default_orientation`): ``"up"`` for a georeferenced cloud
+        (LAS/LAZ), ``"top"`` for any other; ``info["orientation"]`` says which ran.
     standard_errors : bool
         False: the caller reads no standard errors; ``k1_se`` and ``k2_se`` are then NaN everywhere,
         and the fits that pool their noise level over each vertex's edge neighbours (``nc``, ``qs``,

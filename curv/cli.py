@@ -7,51 +7,24 @@ never a traceback.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import traceback
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from .core.errors import CurvError
+from .core.errors import CurvError, CurvWarning
+from .progress import PhaseProgress
 
 __all__ = ["main"]
 
 EXIT_INPUT = 2
 EXIT_INTERNAL = 3
 EXIT_INTERRUPTED = 130
-
-
-class Progress:
-    """A one-line progress bar with ETA on stderr (silent when stderr is not a terminal)."""
-
-    def __init__(self, label: str, *, stream=None, enabled: bool | None = None):
-        self.stream = stream or sys.stderr
-        self.enabled = self.stream.isatty() if enabled is None else enabled
-        self.label = label
-        self.start = time.perf_counter()
-        self._last = -1.0
-
-    def update(self, fraction: float) -> None:
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if fraction < 1.0 and now - self._last < 0.1:
-            return
-        self._last = now
-        elapsed = now - self.start
-        eta = elapsed * (1 - fraction) / fraction if fraction > 0 else float("nan")
-        bar = "#" * int(30 * fraction)
-        eta_text = f"ETA {eta:5.1f}s" if np.isfinite(eta) else "ETA   ?"
-        self.stream.write(f"\r{self.label} [{bar:<30}] {100 * fraction:5.1f}% {elapsed:6.1f}s {eta_text}")
-        self.stream.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            self.stream.write("\n")
-            self.stream.flush()
 
 
 def _cmd_list(args) -> int:
@@ -117,8 +90,14 @@ def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng, *, poin
 
 
 def _cmd_estimate(args) -> int:
+    # progress on stderr (curv.progress), closed before an error's line
+    with PhaseProgress(mode="off" if args.quiet else None) as progress:
+        return _estimate(args, progress)
+
+
+def _estimate(args, progress: PhaseProgress) -> int:
     from .api import iter_estimate
-    from .estimators import get_spec
+    from .estimators import DEFAULT_ESTIMATORS, get_spec
     from .io import check_output_suffix, is_point_file, load, peek_counts, save_result
     from .pointcli import check_mesh_options, check_point_options
     from .formats.pointio import peek_points
@@ -127,6 +106,8 @@ def _cmd_estimate(args) -> int:
     from .core.validity import describe_reasons
 
     points = is_point_file(args.input)
+    if args.method is None:
+        args.method = DEFAULT_ESTIMATORS["points" if points else "mesh"]
     if args.method == "auto":
         _apply_advice(args, points=points)
     spec = get_spec(args.method)
@@ -137,18 +118,26 @@ def _cmd_estimate(args) -> int:
         check_mesh_options(args)
         args.normals = args.normals or "max"
     _check_colours(args)
+    from .tiles import command as tiled
+
     if args.output:
         try:
-            check_output_suffix(args.output)
+            if not tiled.las_output(args.output):  # a LAS/LAZ output keeps the input's records
+                check_output_suffix(args.output)
         except ValueError as exc:
             raise CurvOutputError(str(exc)) from None
+        tiled.check_las_output(args)
         _check_output(args.output)
     counts = peek_counts(args.input)  # a PLY header, mesh or points
     if counts is None and points:
         n_points = peek_points(args.input)
         counts = None if n_points is None else (n_points, 0)
+    if tiled.wants_tiles(args, counts, points=points):  # asked, or too large for memory whole
+        return tiled.run(args, points=points)
     if counts is not None:  # refuse before reading a file that will not fit
         _check_memory(args, *counts, spec.name, rng, points=points)
+    progress.label = f"{spec.name} {rng.label}"
+    progress.phase("load")
     t0 = time.perf_counter()
     if points:
         mesh = load(args.input)
@@ -158,7 +147,6 @@ def _cmd_estimate(args) -> int:
     t_load = time.perf_counter() - t0
     if counts is None:
         _check_memory(args, mesh.n_vertices, getattr(mesh, "n_faces", 0), spec.name, rng, points=points)
-    progress = Progress(f"{spec.name} {rng.label}", enabled=None if not args.quiet else False)
     if points:
         from .pointcli import estimate_keywords
 
@@ -190,26 +178,28 @@ def _cmd_estimate(args) -> int:
         options["knn"] = rng.knn
     gen = iter_estimate(mesh, spec.name, rng.k, radius=rng.radius, vertices=region, **options)
     t1 = time.perf_counter()
-    try:
-        while True:
-            step = next(gen)
-            if getattr(step, "message", "") and not args.quiet:
-                print(f"curv: {step.message}", file=sys.stderr, flush=True)
-            progress.update(step)
-    except StopIteration as stop:
-        res = stop.value
-    finally:
-        progress.close()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CurvWarning)  # the summary says it (res.info["warnings"])
+        res = progress.follow(gen)
     t_est = time.perf_counter() - t1
     t_write = None
     if args.output:
+        progress.phase("write")
         t2 = time.perf_counter()
         try:
-            save_result(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
-                        clim=tuple(args.clim) if args.clim else None)
+            if tiled.las_output(args.output):
+                from .formats.laswrite import save_las
+
+                save_las(args.output, args.input, res, groups=tuple(args.las_extra))
+            else:
+                save_result(args.output, mesh, res, quantity=args.quantity, cmap=args.cmap,
+                            clim=tuple(args.clim) if args.clim else None)
+        except CurvError:
+            raise
         except OSError as exc:
             raise CurvOutputError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
         t_write = time.perf_counter() - t2
+    progress.close()
     t3 = time.perf_counter()
     if points:
         from .pointcli import report_lines
@@ -230,6 +220,8 @@ def _cmd_estimate(args) -> int:
     unit = "points" if points else "vertices"
     print(f"{res.method} {res.info['range_label']}: {res.valid.sum()} of {mesh.n_vertices} {unit} valid "
           f"({100 * res.valid_fraction:.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
+    for note in res.info.get("warnings", ()):
+        print(f"warning: {note}")
     for name in EXPORTED:
         print(_stats_line(name, res.quantity(name)))
     written = f", write {t_write:.2f} s; wrote {args.output}" if args.output else ""
@@ -239,8 +231,10 @@ def _cmd_estimate(args) -> int:
 
 def _print_mesh_report(args, mesh) -> None:
     rep = mesh.report()
-    print(f"{args.input}: {rep.lines()[0]}")
-    for line in rep.lines()[1:]:
+    # a hint below gives the flag; the report's line would suggest it again as the library's keyword
+    lines = dataclasses.replace(rep, suggested_features=None).lines()
+    print(f"{args.input}: {lines[0]}")
+    for line in lines[1:]:
         print(f"  {line}")
     for line in mesh.info.get("repairs", []):
         print(f"  repair: {line}")
@@ -382,7 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .estimators._local_fit import NOISE_MODELS
     from .estimators.jet import WEIGHTS as JET_WEIGHTS
     from .estimators.jet import WIDTHS as JET_WIDTHS
-    from .estimators.registry import DEFAULT_ESTIMATOR
+    from .estimators.registry import DEFAULT_ESTIMATORS
     from .io import OUTPUT_FORMATS
     from .formats.pointio import POINT_SUFFIXES
     from .core.quantities import QUANTITIES
@@ -397,15 +391,17 @@ def build_parser() -> argparse.ArgumentParser:
     p_est = sub.add_parser("estimate", help="estimate curvature on a mesh or point-cloud file")
     p_est.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...) or point cloud (PLY without "
                        "faces, " + ", ".join(POINT_SUFFIXES) + ")")
-    p_est.add_argument("--method", "-m", default=DEFAULT_ESTIMATOR,
-                       help=f"estimator name (see `curv list`), or auto (ask `curv advise`); default {DEFAULT_ESTIMATOR}")
+    p_est.add_argument("--method", "-m",
+                       help=f"estimator name (see `curv list`), or auto (ask `curv advise`); default "
+                            f"{DEFAULT_ESTIMATORS['mesh']} on a mesh, {DEFAULT_ESTIMATORS['points']} on a point cloud")
     p_est.add_argument("--range", "-r", help="range k of Rk: 2, R2 or any real k such as 2.5 (at least the "
                        "estimator's smallest); default R2, or the estimator's one range (meyer R1)")
     p_est.add_argument("--radius", type=float, help="instead of --range: the same ball radius in mesh units at "
                        "every vertex")
     p_est.add_argument("--knn", type=int, metavar="K", help="point clouds, instead of --range: the K nearest points")
     p_est.add_argument("--output", "-o", help="write the result: " + "; ".join(
-        f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items()))
+        f"{suffix} {what}" for suffix, what in OUTPUT_FORMATS.items())
+        + "; .las/.laz (a LAS/LAZ input) its records with the curvature as extra bytes")
     p_est.add_argument("--quantity", default="mean", choices=list(QUANTITIES),
                        help="what the output colours show; default mean (" + "; ".join(describe_quantities()) + ")")
     p_est.add_argument("--cmap", help="matplotlib colour map; default coolwarm (signed) or viridis")
@@ -414,9 +410,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="vertex normals: Max, area or angle weighted face normals, or a local jet fit "
                             "(R2); default max (the paper's protocol). Point clouds: the file's normals, "
                             "else fit (jet fits, R2); pca: local plane fits")
-    p_est.add_argument("--orient-normals", nargs="+", metavar="up|outward|X Y Z",
-                       help="point clouds whose normals are estimated: turn them up (+z, default), outward, "
-                            "or towards a viewpoint X Y Z (a scanner's position)")
+    p_est.add_argument("--orient-normals", nargs="+", metavar="up|top|outward|X Y Z",
+                       help="point clouds whose normals are estimated: up (nz >= 0 at every point; default for "
+                            "LAS/LAZ), top (propagated from each part's top turned up; default otherwise), "
+                            "outward (closed objects), or towards a viewpoint X Y Z (a scanner's position)")
     p_est.add_argument("--fit-range", help="range k of the fitted normals (with --normals fit); "
                        "default 2")
     p_est.add_argument("--degree", type=int, choices=[2, 3, 4], help="jet degree (estimator jet); default 2")
@@ -445,9 +442,13 @@ def build_parser() -> argparse.ArgumentParser:
     p_est.add_argument("--vertices", metavar="FILE", help="estimate only at these vertices (one index a line)")
     p_est.add_argument("--region", nargs=4, type=float, metavar=("X", "Y", "Z", "R"),
                        help="estimate only at the vertices within R of the point (X, Y, Z)")
-    p_est.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p_est.add_argument("--quiet", "-q", action="store_true",
+                       help="no progress (else a bar per phase on a terminal, a line every few seconds elsewhere)")
     p_est.add_argument("--no-memory-check", dest="memory_check", action="store_false",
                        help="estimate even when the predicted peak memory exceeds the available memory")
+    from .tiles.command import add_arguments as add_tile_arguments
+
+    add_tile_arguments(p_est)
     p_est.set_defaults(func=_cmd_estimate)
 
     p_adv = sub.add_parser("advise", help="which estimator, range and options for this mesh or point cloud "

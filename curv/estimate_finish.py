@@ -3,7 +3,8 @@
 :func:`finish` applies the input's flags (:class:`curv.estimate_setup.Flags`) in the precedence
 :mod:`curv.core.validity` owns, settles each row (:func:`settle`: non-finite values SINGULAR,
 k1 >= k2, right-handed directions), smooths the values when asked, NaN-fills the invalid rows and
-scatters a region's rows into full-length arrays.
+scatters a region's rows into full-length arrays. :func:`radius_note` says when a ``radius=`` left
+most rows without an estimate.
 """
 
 from __future__ import annotations
@@ -15,13 +16,22 @@ import numpy as np
 
 from .core.filled import filled
 from .core.jit import jit_parallel, launch, prange
+from .core.pointcloud import PointCloud
+from .core.ranges import unit_lengths
 from .core.result import Curvature
-from .core.validity import OK, PRECEDENCE, SINGULAR, Reason, mark_ok_rows
+from .core.validity import OK, PRECEDENCE, SINGULAR, TOO_FEW, Reason, mark_ok_rows
 from .estimate_setup import Smoothing
 from .geometry.smoothing import smooth_values
 from .locality import rows_back
 
-__all__ = ["finish", "settle"]
+__all__ = ["finish", "settle", "radius_note", "SHORT_SHARE"]
+
+SHORT_SHARE = 0.5
+"""A ``radius=`` estimate is said to fail when more than this share of its rows have too few
+neighbours in the ball or a singular fit (:func:`radius_note`)."""
+
+_SPACING_SAMPLE = 100_000
+"""The median spacing of :func:`radius_note` is taken over at most about this many evenly spread vertices."""
 
 
 def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, centres, feats, on_crease, smooth,
@@ -29,16 +39,19 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
     """The :class:`Curvature` of one range from the estimator's raw result: the validity rules,
     the settling pass, smoothing of the values, a region's full-length rows (a generator, as the
     support checks of a point cloud are)."""
-    for mask_of in flags.support_marks:
-        # checks of the supports themselves (points: a support along a curve), on the estimated rows
-        mask, code = yield from mask_of(radii, centres, usable)
-        flags = flags.marked(mask, code)
-    if fused:
-        used_normals = raw.normals
-
     def at(flags: np.ndarray) -> np.ndarray:
         """The rows of a per-vertex array that this call estimates."""
         return flags if centres is None else flags[centres]
+
+    found = {}
+    for mask_of in flags.support_marks:
+        # checks of the supports themselves (points: a support along a curve, or a few steps of the
+        # coordinates' grid wide), on the estimated rows; the info counts each check's points
+        mask, code, name = yield from mask_of(radii, centres, usable)
+        flags = flags.marked(mask, code)
+        found[name] = int(at(mask).sum())
+    if fused:
+        used_normals = raw.normals
 
     k1, k2, d1, d2, reason = at(raw.k1), at(raw.k2), at(raw.d1), at(raw.d2), at(raw.reason).copy()
     k1_se, k2_se = _standard_errors(raw if standard_errors else None, at, smooth, k1.shape[0])
@@ -83,9 +96,52 @@ def finish(mesh, spec, rng, radii, raw, flags, fused, used_normals, usable, cent
               "smooth_iterations": smooth_iterations if smooth is not Smoothing.NONE else 0,
               "features": None if feats is None else feats.label,
               "feature_edges": 0 if feats is None else feats.count,
-              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info},
+              "region": mesh.n_vertices if centres is None else int(centres.size), **flags.info, **found},
     )
     return result if twin is None else rows_back(result, twin[1])
+
+
+def radius_note(mesh, radius: float, reason: np.ndarray, centres: np.ndarray | None = None) -> str | None:
+    """What to tell a caller whose ``radius=`` is below the input's median spacing, or left more than
+    :data:`SHORT_SHARE` of the estimated rows with too few neighbours or a singular fit; None otherwise.
+
+    Parameters
+    ----------
+    mesh : Mesh or PointCloud
+        The input; its spacing is :func:`curv.core.ranges.unit_lengths` (the longest 1-ring edge,
+        a point's distance to its 6th nearest), the median of an even sample.
+    radius : float
+        The ball radius the call was given.
+    reason : (n,) uint8
+        The result's reason codes.
+    centres : (c,) int64, optional
+        The rows estimated (a region); default all.
+
+    Returns
+    -------
+    str or None
+        One sentence naming the radius, the median spacing, the share without an estimate and a
+        radius or range to try.
+    """
+    unit = unit_lengths(mesh)
+    sample = unit[:: max(1, unit.size // _SPACING_SAMPLE)]
+    sample = sample[np.isfinite(sample) & (sample > 0)]
+    if not sample.size:
+        return None
+    spacing = float(np.median(sample))
+    rows = np.asarray(reason) if centres is None else np.asarray(reason)[centres]
+    short = float(np.isin(rows, (TOO_FEW, SINGULAR)).mean()) if rows.size else 0.0
+    if radius >= spacing and short <= SHORT_SHARE:
+        return None
+    points = isinstance(mesh, PointCloud)
+    items = "points" if points else "vertices"
+    unit_words = "the distance to the 6th nearest point" if points else "the longest 1-ring edge"
+    if radius < spacing:
+        head = f"radius={radius:g} is below the median spacing {spacing:.4g} ({unit_words})"
+    else:
+        head = f"radius={radius:g} is only {radius / spacing:.2g} times the median spacing {spacing:.4g} ({unit_words})"
+    return (f"{head}: {100 * short:.0f} % of the {items} have too few neighbours or a singular fit (NaN); "
+            f"try radius={2 * spacing:.3g} (2 spacings) or range=2")
 
 
 def _standard_errors(raw, at, smooth: Smoothing, rows: int) -> tuple[np.ndarray, np.ndarray]:

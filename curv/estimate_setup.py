@@ -68,8 +68,9 @@ class Flags:
     info: dict
     forced: tuple = ()
     support_marks: tuple = ()
-    """Generators ``(radii, centres, usable) -> (mask, Reason)`` run after the estimate; ``usable``
-    (n,) bool marks the points whose normals the estimator reads (None: it reads none)."""
+    """Generators ``(radii, centres, usable) -> (mask, Reason, name)`` run after the estimate; ``usable``
+    (n,) bool marks the points whose normals the estimator reads (None: it reads none); the
+    result's ``info[name]`` counts the estimated points the mask holds."""
 
     def marked(self, mask: np.ndarray, code) -> "Flags":
         """These flags with one more ``(mask, code)`` mark, applied last."""
@@ -126,16 +127,19 @@ def point_setup(cloud: PointCloud, normals, *, orient, fit_range):
     ``normals``: None (the cloud's if it has them, else jet fits), ``"fit"`` (jet), ``"pca"``, or
     an (n, 3) array.
     """
-    from .point_normals import border_points, point_normals
+    from .point_normals import border_points, point_normals, support_floor
 
     n = cloud.n_points
-    ambiguous = one_sided = np.zeros(n, bool)
+    ambiguous = one_sided = widened = np.zeros(n, bool)
+    orientation = None  # normals not estimated here are not turned
     if normals is None and cloud.normals is not None:
         used, label = normalize_rows(np.asarray(cloud.normals)), "file"
     elif normals is None or (isinstance(normals, str) and normals in ("pca", "fit")):
         method = "pca" if isinstance(normals, str) and normals == "pca" else "jet"
         est = point_normals(cloud, method=method, range=fit_range, orient=orient)
         used, ambiguous, one_sided, label = est.normals, est.ambiguous, est.one_sided, f"{method} {est.label}"
+        orientation = est.orient if isinstance(est.orient, str) else tuple(float(v) for v in est.orient)
+        widened = est.widened
     elif isinstance(normals, str):
         raise EstimatorError(f"normals on a point cloud must be an (n, 3) array, 'pca' or 'fit'; got {normals!r}")
     else:
@@ -150,9 +154,12 @@ def point_setup(cloud: PointCloud, normals, *, orient, fit_range):
         (coincident, Reason.DEGENERATE),
         # on the rim of an open scan the fits see one side only, as on a mesh border
         (border, Reason.BORDER),
-    ), info={"points": True, "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
-             "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum())},
-                  support_marks=(_line_supports(cloud),))
+    ), info={"points": True, "orientation": orientation,
+             "border_points": int(border.sum()), "coincident_points": int(coincident.sum()),
+             "ambiguous_normals": int(ambiguous.sum()), "one_sided_normals": int(one_sided.sum()),
+             "coordinate_step": cloud.coordinate_step, "support_floor": support_floor(cloud),
+             "widened_normals": int(widened.sum())},
+                  support_marks=(_line_supports(cloud), _quantised_supports(cloud)))
     return used, flags, label
 
 
@@ -164,7 +171,19 @@ def _line_supports(cloud: PointCloud):
 
     def check(radii, centres, usable=None):
         spread = yield from support_spread(cloud, radii, centres, usable=usable)
-        return ~(spread >= MIN_SPREAD), Reason.SINGULAR
+        return ~(spread >= MIN_SPREAD), Reason.SINGULAR, "line_supports"
+
+    return check
+
+
+def _quantised_supports(cloud: PointCloud):
+    """A support check: supports only a few steps of the grid the coordinates are stored on wide
+    see its stairs, not the surface: SINGULAR (:data:`curv.point_normals.MIN_SUPPORT_STEPS`)."""
+    from .point_normals import quantised_supports
+
+    def check(radii, centres, usable=None):
+        yield 1.0
+        return quantised_supports(cloud, radii), Reason.SINGULAR, "quantised_supports"
 
     return check
 

@@ -1,8 +1,10 @@
 """Reading meshes (keeping polygons where the format has them) and writing coloured PLY files.
 
-Readers: PLY through plyfile (polygons kept), OBJ and OFF through meshio (polygons kept), anything
+Readers: PLY through plyfile (polygons kept), OBJ through meshio and OFF (polygons kept), anything
 else trimesh reads (STL, glTF/GLB, 3MF, ...) through trimesh (triangles). Every failure becomes a
-:class:`LoadError` or :class:`MeshError` whose one-line message starts with the file name.
+:class:`LoadError` or :class:`MeshError` whose one-line message starts with the file name. Before a
+library sees a file, :func:`curv.formats.guards.check_header` checks what its header promises
+against its size, so that no header makes a reader allocate or loop beyond the file.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from .core.paths import check_readable as _check_path
 from .core.paths import read_with
 from .core.pointcloud import PointCloud
 from .core.quantities import EXPORTED, STANDARD_ERRORS
+from .formats.guards import check_header, check_off_header, check_ply_header, read_ply_header
 from .geometry.repair import repair
 from .core.result import Curvature
 from .core.validity import Reason, reason_legend
@@ -31,26 +34,9 @@ _MESHIO_SUFFIXES = {".obj"}
 
 
 def _ply_header(fh) -> tuple[str, dict[str, int], dict[str, list[str]]]:
-    """Parse just enough of a PLY header: format, element counts, list property names per element."""
-    fmt, counts, lists, current = "", {}, {}, None
-    for _ in range(10_000):
-        line = fh.readline()
-        if not line:
-            break
-        words = line.decode("ascii", errors="replace").split()
-        if not words:
-            continue
-        if words[0] == "format" and len(words) > 1:
-            fmt = words[1]
-        elif words[0] == "element" and len(words) == 3 and words[2].isdigit():
-            current = words[1]
-            counts[current] = int(words[2])
-            lists[current] = []
-        elif words[0] == "property" and len(words) == 5 and words[1] == "list" and current:
-            lists[current].append(words[4])
-        elif words[0] == "end_header":
-            return fmt, counts, lists
-    return fmt, counts, lists
+    """Format, element counts and list property names per element of the PLY header after the ``ply`` line."""
+    header = read_ply_header(fh)
+    return header.format, header.counts, {e.name: e.lists for e in header.elements}
 
 
 def _ply_trailing_data(fh, fmt: str, header_end: int, counts: dict[str, int], position: int) -> bool:
@@ -174,18 +160,17 @@ def peek_counts(path) -> tuple[int, int] | None:
     """
     path = Path(path)
     try:
-        with open(path, "rb") as fh:
-            if path.suffix.lower() == ".ply":
-                if fh.readline().strip() != b"ply":
-                    return None
-                _, counts, _ = _ply_header(fh)
-                if "vertex" in counts:
-                    return counts["vertex"], counts.get("face", 0)
-            elif path.suffix.lower() == ".off":
+        if path.suffix.lower() == ".ply":
+            counts = check_ply_header(path).counts  # counts the file can hold, or a LoadError
+            if "vertex" in counts:
+                return counts["vertex"], counts.get("face", 0)
+        elif path.suffix.lower() == ".off":
+            check_off_header(path)
+            with open(path, "rb") as fh:
                 words = fh.read(4096).split()
-                if words and words[0].upper().endswith(b"OFF") and len(words) >= 3:
-                    return int(words[1]), int(words[2])
-    except (OSError, ValueError):
+            if words and words[0].upper().endswith(b"OFF") and len(words) >= 3:
+                return int(words[1]), int(words[2])
+    except (OSError, ValueError):  # LoadError is an OSError
         return None
     return None
 
@@ -208,14 +193,20 @@ def read_arrays(path) -> tuple[np.ndarray, list | np.ndarray]:
     Raises
     ------
     LoadError
-        Missing, unreadable, empty, malformed or face-less file.
+        Missing, unreadable, empty, malformed or face-less file, or a header that promises more
+        than the file holds.
     """
     path = Path(path)
     _check_path(path)
     suffix = path.suffix.lower()
     reader = {".ply": _read_ply, ".off": _read_off}.get(suffix) or (
         _read_meshio if suffix in _MESHIO_SUFFIXES else _read_trimesh)
-    return read_with(reader, path, suffix.lstrip(".").upper() or "mesh")
+
+    def guarded(path: Path):
+        check_header(path)
+        return reader(path)
+
+    return read_with(guarded, path, suffix.lstrip(".").upper() or "mesh")
 
 
 def load(path, *, merge_vertices: bool = False, remove_degenerate: bool = False, orient: bool = False,

@@ -40,7 +40,8 @@ STAMP_BYTES_PER_THREAD = 8.0
 """Bytes per vertex and kernel thread of the support search's visited stamps (int64)."""
 
 
-def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: bool = False) -> int:
+def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: bool = False,
+                        threads: int | None = None) -> int:
     """Predicted peak resident memory of estimating ``method`` on a mesh of this size, at any range.
 
     The kernels hold no per-range temporaries beyond each thread's small queue, so the peak does
@@ -54,6 +55,8 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: b
         Registry name.
     points : bool
         A point cloud: :data:`PER_POINT_BYTES` per point in place of the mesh's per-unit bytes.
+    threads : int, optional
+        Kernel threads (their stamps); default the process's (:func:`curv.core.jit.threads`).
 
     Returns
     -------
@@ -61,13 +64,14 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: b
         Bytes.
     """
     units = float(n_vertices) + 0.5 * float(n_faces)
-    from .core.jit import threads
+    from .core.jit import threads as kernel_threads
 
     from .estimators import get_spec
 
     per_unit = PER_POINT_BYTES if points else PER_UNIT_BYTES + get_spec(method).extra_bytes_per_unit
     linear = BASE_BYTES + per_unit * units
-    return int(linear + STAMP_BYTES_PER_THREAD * threads() * float(n_vertices))
+    threads = kernel_threads() if threads is None else int(threads)
+    return int(linear + STAMP_BYTES_PER_THREAD * threads * float(n_vertices))
 
 
 def _cgroup_free() -> int | None:

@@ -21,17 +21,18 @@ _MESH_NORMALS = ("max", "area", "angle")
 
 
 def _orientation(words):
-    """``--orient-normals``: ``"up"``, ``"outward"`` or a viewpoint (3,) from three numbers."""
+    """``--orient-normals``: ``"up"``, ``"top"``, ``"outward"``, a viewpoint (3,) from three numbers,
+    or None (the cloud's default, :func:`curv.point_normals.default_orientation`)."""
     if words is None:
-        return "up"
-    if len(words) == 1 and words[0] in ("up", "outward"):
+        return None
+    if len(words) == 1 and words[0] in ("up", "top", "outward"):
         return words[0]
     try:
         point = np.array([float(w) for w in words], dtype=np.float64)
     except ValueError:
         point = np.empty(0)
     if point.shape != (3,) or not np.isfinite(point).all():
-        raise CurvError(f"--orient-normals takes up, outward or a viewpoint X Y Z; got {' '.join(words)}")
+        raise CurvError(f"--orient-normals takes up, top, outward or a viewpoint X Y Z; got {' '.join(words)}")
     return point
 
 
@@ -49,7 +50,9 @@ def check_point_options(args, spec) -> None:
         raise CurvError(why_not)
     given = [flag for name, flag in MESH_ONLY.items() if getattr(args, name, None) not in (None, False)]
     if given:
-        raise CurvError(f"{args.input} is a point cloud; {', '.join(given)} need(s) a mesh's faces")
+        flags = given[0] if len(given) == 1 else f"{', '.join(given[:-1])} and {given[-1]}"
+        verb = "needs" if len(given) == 1 else "need"
+        raise CurvError(f"{args.input} is a point cloud; {flags} {verb} a mesh's faces")
     if args.normals in _MESH_NORMALS:
         raise CurvError(f"--normals {args.normals} weights face normals; on a point cloud use fit (jet) or pca "
                         f"(default: the file's normals, else jet fits)")
@@ -78,15 +81,14 @@ def estimate_keywords(args, cloud) -> dict:
 def report_lines(args, cloud, res) -> list[str]:
     """The point cloud's part of the summary: points, spacing, normals, coincident and border points."""
     from .core.ranges import describe_spacing
+    from .point_normals import describe_orientation
 
     spaced = describe_spacing(cloud)
     label = res.info.get("normals", "")
     if label == "file":
         normals = "normals from the file"
     else:
-        orient = args.orient_normals
-        towards = orient if isinstance(orient, str) else "towards " + " ".join(f"{v:g}" for v in orient)
-        normals = f"normals estimated ({label}, oriented {towards})"
+        normals = f"normals estimated ({label}, oriented {describe_orientation(res.info['orientation'])})"
     info = res.info
     lines = [f"{args.input}: {cloud.n_points:,} points; {spaced}; {normals}",
              f"  coincident points {info.get('coincident_points', 0):,} (repeats of an earlier point: degenerate)",
@@ -95,4 +97,26 @@ def report_lines(args, cloud, res) -> list[str]:
         lines.append(f"  ambiguous normals {info['ambiguous_normals']:,} (orientation undecided: no estimate there)")
     if info.get("one_sided_normals"):
         lines.append(f"  one-sided normals {info['one_sided_normals']:,} (fitted across an empty side: no estimate there)")
+    lines += _grid_lines(args, cloud, info)
+    return lines
+
+
+def _grid_lines(args, cloud, info) -> list[str]:
+    """What the coordinates' grid did (:data:`curv.point_normals.MIN_SUPPORT_STEPS`): the normals
+    widened to it, the estimates over narrower supports marked, and the range that clears it."""
+    from .estimators import get_spec
+    from .point_normals import MIN_SUPPORT_STEPS, range_above_grid
+
+    widened, marked = info.get("widened_normals", 0), info.get("quantised_supports", 0)
+    if not (widened or marked):
+        return []
+    step, floor = info["coordinate_step"], info["support_floor"]
+    lines = [f"  coordinates on a {step:.4g} grid: fits narrower than {floor:.4g} ({MIN_SUPPORT_STEPS} steps) "
+             f"see its stairs"]
+    if widened:
+        lines.append(f"  normals fitted over at least {floor:.4g} at {widened:,} points")
+    if marked:
+        k = range_above_grid(cloud, uses_normals=get_spec(args.method).uses_normals)
+        lines.append(f"  {marked:,} estimates over narrower supports are SINGULAR (no estimate there): "
+                     f"try -r {k} or more")
     return lines

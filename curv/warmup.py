@@ -104,10 +104,12 @@ def _estimator_step(name: str) -> None:
 
 
 def _cloud_step() -> None:
-    """A point cloud's spacing, normals, orientation and border test, with the default estimator."""
+    """A point cloud's spacing, normals, orientation (propagated, and up as for a scan) and border
+    test, with the default estimator."""
     import curv
 
-    curv.estimate(_cloud(), "mru", 2)
+    curv.estimate(_cloud(), range=2)
+    curv.estimate(_cloud(), range=2, orient="up")
 
 
 def _advice_step() -> None:
@@ -129,15 +131,24 @@ def _export_step() -> None:
         curv.load(path)
 
 
+def _tiles_step() -> None:
+    """A tiled estimate of a mesh and of a cloud: the reach kernel (curv.tiles.reach), redone points included."""
+    from curv.tiles import estimate_tiled
+
+    estimate_tiled(_mesh(), "mru", tile_size=300, halo=0.0)
+    estimate_tiled(_cloud(), "qs", tile_size=800, orient=(0.0, 0.0, 10.0))
+
+
 def _steps() -> dict:
     from curv.estimators import ESTIMATORS
 
-    steps = {"mesh": _mesh_step, "cloud": _cloud_step, "advice": _advice_step, "export": _export_step}
+    steps = {"mesh": _mesh_step, "cloud": _cloud_step, "advice": _advice_step, "export": _export_step,
+             "tiles": _tiles_step}
     steps.update({name: (lambda n=name: _estimator_step(n)) for name in ESTIMATORS})
     return steps
 
 
-STEPS = ("mesh", "cloud", "advice", "export")
+STEPS = ("mesh", "cloud", "advice", "export", "tiles")
 """The steps besides one per registered estimator (:func:`warm` runs them all)."""
 
 
@@ -207,7 +218,8 @@ def warm(labels=None, *, jobs: int = 1, report=print) -> list[tuple[str, float]]
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m curv.warmup", description=__doc__.split("\n\n")[0])
-    parser.add_argument("steps", nargs="*", help="steps to run (default all): mesh, cloud, advice, export, or estimator names")
+    parser.add_argument("steps", nargs="*", help="steps to run (default all): mesh, cloud, advice, export, tiles, "
+                        "or estimator names")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes (default: the cores)")
     parser.add_argument("--if-needed", action="store_true",
                         help="do nothing when the estimators' kernels (those named, or all) are already cached")

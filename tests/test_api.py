@@ -110,8 +110,10 @@ def test_value_smoothing_averages_neighbours_only_over_valid_vertices():
 
 
 def test_not_a_mesh_is_rejected():
-    with pytest.raises(curv.MeshError, match="expected a curv.Mesh"):
-        curv.estimate(np.zeros((3, 3)), "nc", 1)
+    with pytest.raises(curv.MeshError, match="expected a curv.Mesh or curv.PointCloud"):
+        curv.estimate(object(), "nc", 1)
+    with pytest.raises(curv.MeshError, match=r"must have shape \(n, 3\)"):
+        curv.estimate(np.zeros((3, 2)), "nc", 1)  # an (n, 3) array is a point cloud (curv.convert.as_input)
 
 
 def test_fitted_normals_option(sphere):

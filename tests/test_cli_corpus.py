@@ -175,13 +175,19 @@ def test_cli_failure_mid_write_keeps_previous_output(tmp_path):
 def test_cli_refuses_up_front_when_memory_would_not_fit(tmp_path):
     """A PLY header announcing 10^9 vertices is refused from the header alone, naming the estimate."""
     path = tmp_path / "huge.ply"
-    path.write_text("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty double x\n"
-                    "property double y\nproperty double z\nelement face 2000000000\n"
-                    "property list uchar int vertex_indices\nend_header\n")
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty double x\n"
+              "property double y\nproperty double z\nelement face 2000000000\n"
+              "property list uchar int vertex_indices\nend_header\n").encode()
+    with open(path, "wb") as fh:  # the data the header promises, as a sparse file (no disk used)
+        fh.write(header)
+        fh.truncate(len(header) + 24 * 10**9 + 13 * 2 * 10**9)
     proc = _run(["estimate", path, "-q"], timeout=30)
     assert proc.returncode == 2
     line = _one_line_error(proc, path)
     assert "needs about" in line and "GiB" in line and "available" in line
+    path.write_bytes(header)  # the header alone promises what the file cannot hold: refused as such
+    proc = _run(["estimate", path, "-q"], timeout=30)
+    assert proc.returncode == 2 and "element vertex count 1000000000 needs at least" in _one_line_error(proc, path)
 
 
 def test_cli_hints_at_repairs():

@@ -143,8 +143,8 @@ def test_other_libraries_meshes_are_accepted():
     assert sorted(as_mesh(mixed).face_sizes.tolist()) == [3, 3, 4]
     with pytest.raises(curv.MeshError, match="no surface faces"):
         as_mesh(meshio.Mesh(v, [("line", np.array([[0, 1]]))]))
-    with pytest.raises(curv.MeshError, match="trimesh.Trimesh, a pyvista.PolyData or a meshio.Mesh"):
-        curv.estimate(np.zeros((3, 3)))
+    with pytest.raises(curv.MeshError, match="trimesh.PointCloud, a pyvista.PolyData, a meshio.Mesh"):
+        curv.estimate(np.zeros((3, 2)))
 
 
 def test_pyvista_polydata_is_accepted():
@@ -155,8 +155,10 @@ def test_pyvista_polydata_is_accepted():
     v, _ = _tet()
     mixed = pv.PolyData(v, faces=[3, 0, 1, 2, 4, 0, 1, 2, 3])
     assert as_mesh(mixed).face_sizes.tolist() == [3, 4]
-    with pytest.raises(curv.MeshError, match="no polygon faces"):
-        as_mesh(pv.PolyData(v))
+    with pytest.raises(curv.MeshError, match="needs a mesh's faces; got a point cloud"):
+        as_mesh(pv.PolyData(v))  # points alone: a cloud (curv.convert.as_input)
+    with pytest.raises(curv.MeshError, match="no polygon faces, only lines or strips"):
+        as_mesh(pv.PolyData(v, lines=[2, 0, 1]))
 
 
 def test_save_vtu_is_top_level_and_quantities_have_one_owner():

@@ -139,13 +139,13 @@ def test_las_input_end_to_end(tmp_path, capsys):
 @pytest.mark.parametrize("flags, words", [
     (["-m", "meyer"], "does not run on point clouds; use one of:"),
     (["-m", "csm"], "does not run on point clouds"),
-    (["--merge-vertices"], "--merge-vertices need(s) a mesh's faces"),
-    (["--features", "30"], "--features need(s) a mesh's faces"),
-    (["--smooth", "mesh"], "--smooth need(s) a mesh's faces"),
+    (["--merge-vertices"], "--merge-vertices needs a mesh's faces"),
+    (["--features", "30"], "--features needs a mesh's faces"),
+    (["--smooth", "mesh"], "--smooth needs a mesh's faces"),
     (["--normals", "max"], "--normals max weights face normals"),
     (["--knn", "2"], "knn must be a whole number of neighbours >= 3"),
     (["--knn", "20", "-r", "2"], "give one of range=, radius= or knn="),
-    (["--orient-normals", "sideways"], "--orient-normals takes up, outward or a viewpoint"),
+    (["--orient-normals", "sideways"], "--orient-normals takes up, top, outward or a viewpoint"),
     (["-m", "auto"], "advises on meshes only"),
     (["-o", "out.stl"], "cannot write .stl"),
 ])
@@ -200,13 +200,18 @@ def test_advise_refuses_a_point_cloud_in_one_line(files, capsys):
 
 
 def test_a_cloud_too_big_for_memory_is_refused_from_its_header(tmp_path, capsys):
-    path = tmp_path / "huge.ply"  # a header that declares 10^9 points, and no data
-    path.write_text("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
-                    "property float y\nproperty float z\nend_header\n")
+    path = tmp_path / "huge.ply"  # a header that declares 10^9 points, and their 12 GB (a sparse file)
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
+              "property float y\nproperty float z\nend_header\n").encode()
+    with open(path, "wb") as fh:
+        fh.write(header)
+        fh.truncate(len(header) + 12 * 10**9)
     code, _, err = _run(capsys, path, "-m", "qs")
     assert code == 2 and "qs R2 on 1,000,000,000 points needs about" in err and "refusing to start" in err
-    code, _, err = _run(capsys, path, "-m", "qs", "--no-memory-check")
-    assert code == 2 and "refusing" not in err and str(path) in err  # now the reader finds no data
+    path.write_bytes(header)  # the header alone: a promise the file cannot hold, whatever the memory
+    for flags in ((), ("--no-memory-check",)):
+        code, _, err = _run(capsys, path, "-m", "qs", *flags)
+        assert code == 2 and "refusing" not in err and str(path) in err and "element vertex count 1000000000" in err
 
 
 def test_summary_counts_the_one_sided_normals(tmp_path, capsys):

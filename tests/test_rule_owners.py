@@ -41,13 +41,14 @@ def test_fitted_normals_take_every_form_the_range_rule_takes():
     assert (labelled == number).all()
 
 
-def test_cli_default_method_is_the_registrys(monkeypatch):
-    other = next(name for name in ESTIMATORS if name != registry.DEFAULT_ESTIMATOR)
-    monkeypatch.setattr(registry, "DEFAULT_ESTIMATOR", other)
+def test_cli_default_methods_are_the_registrys(monkeypatch):
+    other = next(name for name in ESTIMATORS if name != registry.DEFAULT_ESTIMATORS["mesh"])
+    monkeypatch.setitem(registry.DEFAULT_ESTIMATORS, "mesh", other)
     parser = build_parser()
-    assert parser.parse_args(["estimate", "part.ply"]).method == other
+    assert parser.parse_args(["estimate", "part.ply"]).method is None  # the input's kind decides
     sub = next(a for a in parser._subparsers._group_actions if a.choices)  # the subcommands
-    assert f"default {other}" in sub.choices["estimate"].format_help()
+    help_text = " ".join(sub.choices["estimate"].format_help().split())
+    assert f"default {other} on a mesh, {registry.DEFAULT_ESTIMATORS['points']} on a point cloud" in help_text
 
 
 @pytest.mark.parametrize("method", list(ESTIMATORS))

@@ -271,7 +271,7 @@ class Controller(QObject):
         took = f" in {secs:.2f} s" if secs is not None else ""
         of = "" if computed == result.n else f" of {computed} computed"
         bad = count_text(n_bad, f"invalid {item_word(self.doc.mesh)}", f"invalid {items_word(self.doc.mesh)}")
-        self.message.emit(f"{key[0]} {key[1]}{took}; {bad}{of}")
+        self.message.emit(f"{key[0]} {key[1]}{took}; {bad}{of}" + "".join(f"; {w}" for w in result.info.get("warnings", ())))
         self._update_busy()
 
     def _estimate_failed(self, worker, gen, key, exc) -> None:

@@ -15,6 +15,8 @@ from curv.point_normals import grid_ordered
 from curv.surfaces import SURFACES, make_surface, sample_points
 
 from app.model.inputs import cloud_report, is_points
+
+from .large import load_large
 from app.model.sources import FileSource, SurfaceSource
 
 __all__ = ["EarlyEstimate", "load_source", "preload", "prepare_source", "mesh_report", "Loaded"]
@@ -195,6 +197,9 @@ def load_source(source):
     curv.CurvError or ValueError
         With a one-line message (unreadable file, bad parameters, ...).
     """
+    big = load_large(source)  # a file too large to draw whole: its preview (app.model.large)
+    if big is not None:
+        return big
     if isinstance(source, FileSource) and is_point_file(source.path):
         # the opt-in repairs are a mesh's (the Mesh report's checkboxes): a point file is read as it is
         return source, load(source.path), None

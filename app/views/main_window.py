@@ -32,6 +32,7 @@ from .feature_controls import FeatureControl
 from .geometry import direction_glyphs, edge_lines, glyph_subsample, prepare_geometry
 from .help import about_text, guide_text
 from .inspect_panel import InspectPanel
+from .large_panel import attach_large_panel
 from .mesh_panel import MeshPanel
 from .pane_grid import PaneGrid
 from .readout import Readout
@@ -41,9 +42,9 @@ from .source_panel import SourcePanel
 
 __all__ = ["MainWindow", "MESH_FILTER", "DEFAULT_SOURCE"]
 
-MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf *.xyz *.txt *.csv *.pcd *.las *.laz);;"
+MESH_FILTER = ("Meshes and point clouds (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf *.xyz *.txt *.csv *.pcd *.pts *.las *.laz);;"
                "Meshes (*.ply *.obj *.stl *.off *.gltf *.glb *.3mf);;"
-               "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.las *.laz);;All files (*)")
+               "Point clouds (*.ply *.xyz *.txt *.csv *.pcd *.pts *.las *.laz);;All files (*)")
 DEFAULT_SOURCE = SurfaceSource(name="saddle", n_vertices=3169)
 ADVISE_TIP = ("Measure this mesh's noise, irregularity and density and rank the estimators and ranges by the "
               "error the paper's study predicts; Apply in the Advice panel uses one (Ctrl+Shift+A)")
@@ -171,6 +172,7 @@ class MainWindow(QMainWindow):
         self._set_busy(False)
         self._build_menus()
         self._connect()
+        self.large_panel = attach_large_panel(self)
         self._restore_settings()
 
     # -- set-up ---------------------------------------------------------------------------------

@@ -56,6 +56,9 @@ class RegionPanel(QWidget):
         self.follow = QCheckBox("Follow picks")
         self.follow.setToolTip("While a region around a vertex is shown, picking another vertex moves it there")
         self.follow.setChecked(True)
+        self.around_hook = None
+        """Called first by *Around picked vertex*; True when it handled the pick (a large file's preview
+        is read at full resolution there, app.views.large_panel)."""
         self.status = QLabel()
         self.status.setWordWrap(True)
         self.status.setObjectName("region_status")
@@ -90,6 +93,8 @@ class RegionPanel(QWidget):
         doc = self.doc
         if doc.mesh is None or doc.picked is None:
             self.message.emit("Pick a vertex in a pane first (click on the mesh)", True)
+            return
+        if self.around_hook is not None and self.around_hook():
             return
         if not self.radius.text().strip():  # a new mesh's default, asked when first needed
             self.radius.setText(f"{DEFAULT_RADIUS_EDGES * unit_length(doc.mesh):.3g}")

@@ -12,7 +12,10 @@ Every hot loop in curv is a numba kernel compiled with :data:`jit` (serial) or :
   vertices (:func:`iter_chunks`), two estimates interleave chunk by chunk.
 - **Progress and cancel.** :func:`iter_chunks` cuts the vertices into chunks whose size adapts so
   that each kernel call lasts about :data:`TARGET_SECONDS`; it yields between chunks, which is
-  where a caller may stop.
+  where a caller may stop. Work that is not a generator all the way down (a cached property, a
+  driver that runs its passes to the end) runs under :func:`iter_watched`, on a helper thread
+  whose chunks and announced steps (:func:`announce`) it yields as progress, and which a cancel
+  stops at its next chunk.
 - **Compilation.** Kernels are cached on disk (``cache=True``), in a folder of their own for each
   state of curv's sources (:func:`source_fingerprint`: numba would otherwise keep a kernel's old
   machine code when only a helper it calls from another module changed); :func:`compile_pending`
@@ -35,7 +38,7 @@ from numba import njit
 __all__ = [
     "jit", "jit_parallel", "jit_inlined", "prange", "threads", "launch", "iter_chunks", "run_to_end",
     "rescaled", "thread_slices", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
-    "source_fingerprint",
+    "source_fingerprint", "iter_watched", "announce", "POLL_SECONDS",
 ]
 
 # must be chosen before the first parallel launch of the process
@@ -146,16 +149,23 @@ COMPILE_MESSAGE = "compiling curvature kernels (first run only)..."
 
 
 class Progress(float):
-    """A fraction done (0..1) that may carry a status message for a person (e.g. compiling).
+    """A fraction done (0..1) that may carry a status message for a person (e.g. compiling) and
+    the name of the phase it measures.
 
-    It is a float, so consumers that only want the fraction can ignore the message.
+    It is a float, so consumers that only want the fraction can ignore the rest. ``message`` is a
+    note to show once (the first-run compilation); ``phase`` names the part of the work the
+    fraction belongs to (``curv.estimate``'s ``"setup"``, ``"normals"``, ``"orientation"``,
+    ``"estimate"``, ``"checks"``); empty: the phase of the previous step goes on. The fraction is
+    that phase's own: it starts again from 0 when the phase changes.
     """
 
     message: str = ""
+    phase: str = ""
 
-    def __new__(cls, fraction: float, message: str = ""):
+    def __new__(cls, fraction: float, message: str = "", phase: str = ""):
         obj = super().__new__(cls, fraction)
         obj.message = message
+        obj.phase = phase
         return obj
 
 
@@ -220,7 +230,11 @@ def iter_chunks(n: int, run: Callable[[int, int], None], *, chunk: int | None = 
             wanted = int(size * TARGET_SECONDS / took)
             size = max(MIN_CHUNK, min(MAX_CHUNK, 4 * size, wanted))
         lo = hi
-        yield start_fraction + span * hi / max(n, 1)
+        done = start_fraction + span * hi / max(n, 1)
+        watcher = getattr(_WATCHED, "watcher", None)
+        if watcher is not None:  # this thread runs under iter_watched: report the chunk (or stop here)
+            watcher.chunk(done)
+        yield done
 
 
 def run_to_end(gen: Generator):
@@ -233,9 +247,10 @@ def run_to_end(gen: Generator):
             return stop.value
 
 
-def rescaled(gen: Generator, start: float, end: float) -> Generator[Progress, None, object]:
+def rescaled(gen: Generator, start: float, end: float, *, phase: str | None = None) -> Generator[Progress, None, object]:
     """``yield from gen`` with its fractions mapped to ``start .. end`` (a part of a larger piece of
-    work), messages kept; returns ``gen``'s value. Closing this closes ``gen``."""
+    work), messages kept, and phases kept or, with ``phase``, all named so; returns ``gen``'s value.
+    Closing this closes ``gen``."""
     span = end - start
     try:
         while True:
@@ -243,9 +258,95 @@ def rescaled(gen: Generator, start: float, end: float) -> Generator[Progress, No
                 done = next(gen)
             except StopIteration as stop:
                 return stop.value
-            yield Progress(start + span * float(done), getattr(done, "message", ""))
+            yield Progress(start + span * float(done), getattr(done, "message", ""),
+                           getattr(done, "phase", "") if phase is None else phase)
     finally:
         gen.close()
+
+
+POLL_SECONDS = 0.1
+"""How often :func:`iter_watched` yields while its work runs."""
+
+_WATCHED = threading.local()
+"""``_WATCHED.watcher``: the :class:`_Watcher` of the work this thread runs for :func:`iter_watched`."""
+
+
+class _Stopped(Exception):
+    """Raised at a chunk of watched work whose caller went away (a cancel)."""
+
+
+class _Watcher:
+    """What watched work reports: the fraction of its latest chunk loop and the step it is in."""
+
+    def __init__(self, phase: str):
+        self.phase = phase
+        self.fraction = 0.0
+        self.stopped = False
+
+    def chunk(self, fraction: float) -> None:
+        if self.stopped:
+            raise _Stopped
+        self.fraction = float(fraction)
+
+    def step(self, name: str) -> None:
+        if self.stopped:
+            raise _Stopped
+        self.phase, self.fraction = name, 0.0
+
+    def progress(self) -> Progress:
+        return Progress(self.fraction, "", self.phase)
+
+
+def announce(step: str) -> None:
+    """Say that a step of long work without chunks of its own begins (e.g. ``"orientation"``).
+
+    Under :func:`iter_watched` the step becomes the phase of the progress it yields, from 0 until
+    the next chunk loop reports; elsewhere nothing happens. A cancelled watch stops the work here.
+    """
+    watcher = getattr(_WATCHED, "watcher", None)
+    if watcher is not None:
+        watcher.step(step)
+
+
+def iter_watched(work: Callable[[], object], *, phase: str = "") -> Generator[Progress, None, object]:
+    """Run ``work()`` on a helper thread and yield its progress while it runs; return its value.
+
+    For work that cannot yield itself (a cached property, a driver that runs its generators to
+    the end with :func:`run_to_end`): every chunk of every :func:`iter_chunks` loop on that thread
+    sets the fraction (that loop's), every :func:`announce` the phase. The progress is yielded
+    every :data:`POLL_SECONDS` as :class:`Progress` with ``phase`` (the given one until a step is
+    announced); nothing is yielded when the work ends sooner.
+
+    Closing the generator (a caller's cancel) lets the work stop at its next chunk or announced
+    step, in the background; an exception of ``work`` is raised here, with its traceback.
+    """
+    watcher = _Watcher(phase)
+    done = threading.Event()
+    outcome: dict = {}
+
+    def run() -> None:
+        _WATCHED.watcher = watcher
+        try:
+            outcome["value"] = work()
+        except _Stopped:
+            pass
+        except BaseException as exc:  # handed to the caller's thread
+            outcome["error"] = exc
+        finally:
+            _WATCHED.watcher = None
+            done.set()
+
+    thread = threading.Thread(target=run, name=f"curv {phase or 'work'}", daemon=True)
+    thread.start()
+    try:
+        while not done.wait(POLL_SECONDS):
+            yield watcher.progress()
+    finally:
+        watcher.stopped = True  # only matters when the caller left early
+    if "error" in outcome:
+        error = outcome.pop("error")
+        raise error
+    return outcome["value"]
 
 
 def compile_pending(kernels: Iterable) -> bool:

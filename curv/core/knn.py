@@ -23,7 +23,8 @@ import numpy as np
 from .errors import MeshError
 from .jit import jit, jit_parallel, launch, prange
 
-__all__ = ["build_grid", "nearest_neighbours", "grid_ball", "grid_gather", "symmetric_graph", "GRAPH_NEIGHBOURS"]
+__all__ = ["build_grid", "sample_cell_size", "cell_sample_step", "nearest_neighbours", "grid_ball", "grid_gather",
+           "symmetric_graph", "neighbour_steps", "GRAPH_NEIGHBOURS"]
 
 GRAPH_NEIGHBOURS = 10
 """Neighbours per point of a point cloud's neighbour graph (made symmetric: about 13 edges a
@@ -42,10 +43,21 @@ def _cell_size(points: np.ndarray, k: int) -> float:
     """A grid cell edge giving about ``_POINTS_PER_CELL * k`` points per occupied cell on a surface."""
     n = points.shape[0]
     extent = float(np.ptp(points, axis=0).max())
+    return sample_cell_size(points[::cell_sample_step(n)], n, extent, k)
+
+
+def cell_sample_step(n: int) -> int:
+    """Every how many points :func:`build_grid` samples to choose its cell size (in the points' order)."""
+    return max(1, n // _SUBSAMPLE)
+
+
+def sample_cell_size(sample: np.ndarray, n: int, extent: float, k: int) -> float:
+    """The cell edge :func:`build_grid` chooses for ``n`` points spanning ``extent`` (the largest
+    side of their bounding box), from ``sample``, every :func:`cell_sample_step`-th of them in their
+    order: a caller that sees the points a chunk at a time (a file too large for memory) gets the
+    grid an in-memory call would build."""
     if not extent > 0:
         return 1.0
-    step = max(1, n // _SUBSAMPLE)
-    sample = points[::step]
     fraction = sample.shape[0] / n
     target = max(2.0, _POINTS_PER_CELL * k)
     # a surface: occupied cells ~ area / h^2, so points a cell ~ h^2
@@ -147,7 +159,7 @@ def _knn_kernel(cell_keys, cell_start, dims, lo, h, xs, ys, zs, k, out_d, out_i)
                 ring += 1
 
 
-def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
+def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None, origin: np.ndarray | None = None):
     """The uniform grid of :func:`nearest_neighbours` and of point-cloud ball supports.
 
     Parameters
@@ -158,6 +170,9 @@ def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
     cell : float, optional
         The cell edge instead (ball queries: about the balls' radius, so that a ball spans one
         ring of cells around its centre's cell).
+    origin : (3,) float64, optional
+        The grid's lower corner instead of the points' least coordinates (at most those): a part
+        of a larger cloud searched in the larger cloud's cells (:mod:`curv.tiles`).
 
     Returns
     -------
@@ -172,7 +187,7 @@ def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None):
     points = np.ascontiguousarray(points, dtype=np.float64)
     n = points.shape[0]
     h = _cell_size(points, k) if cell is None else float(cell)
-    lo = points.min(axis=0)
+    lo = points.min(axis=0) if origin is None else np.asarray(origin, dtype=np.float64).reshape(3)
     cells3 = np.floor((points - lo) / h).astype(np.int64)
     dims = cells3.max(axis=0) + 1
     if float(dims[0]) * float(dims[1]) * float(dims[2]) > 2.0 ** 62:
@@ -412,3 +427,36 @@ def symmetric_graph(indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     new = np.empty(new_ptr[-1], np.int64)
     launch(_graph_compact, indptr, out, new_ptr, new)
     return new_ptr, new
+
+
+@jit_parallel
+def _steps_kernel(points, indices, parts, out):
+    n, k = indices.shape
+    for t in prange(parts):
+        lo, hi = t * n // parts, (t + 1) * n // parts
+        for a in range(3):
+            out[t, a] = np.inf
+        for p in range(lo, hi):
+            for j in range(k):
+                q = indices[p, j]
+                if q >= 0:
+                    for a in range(3):
+                        d = abs(points[q, a] - points[p, a])
+                        if 0.0 < d < out[t, a]:
+                            out[t, a] = d
+
+
+def neighbour_steps(points: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """(3,) float64: per axis, the smallest non-zero coordinate difference between a point and one of
+    its nearest (``indices`` (n, k), -1 entries skipped); 0 where every difference is 0.
+
+    On coordinates stored on a grid (a LAS file's scale, rounding) no two points differ by less than
+    the grid's step, and near neighbours differ by one step somewhere, so this is the step; on
+    coordinates of full precision it is tiny (n k differences of spread values)."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    indices = np.ascontiguousarray(indices, dtype=np.int64)
+    parts = max(1, min(64, indices.shape[0]))
+    out = np.empty((parts, 3))
+    launch(_steps_kernel, points, indices, parts, out)
+    least = out.min(axis=0)
+    return np.where(np.isfinite(least), least, 0.0)

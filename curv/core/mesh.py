@@ -18,7 +18,7 @@ from .jit import launch
 from .pointcloud import PointSet, as_positions
 from .wording import count_text
 
-__all__ = ["Mesh", "MeshReport"]
+__all__ = ["Mesh", "MeshReport", "scatter_sample", "scattered_corners"]
 
 _NO_STEPS = (np.empty(0, np.int32), np.empty(0, np.int32))
 for _steps in _NO_STEPS:
@@ -156,6 +156,19 @@ def _part(of: str, index: int, doc: str) -> property:
     return property(lambda mesh: getattr(mesh, of)[index], doc=doc)
 
 
+def scatter_sample(n_faces: int, sample: int = 4096) -> np.ndarray:
+    """(s,) int64: the faces :meth:`Mesh.scattered_order` reads, evenly spaced over ``n_faces``."""
+    return np.linspace(0, n_faces - 1, min(sample, n_faces)).astype(np.int64)
+
+
+def scattered_corners(n_vertices: int, corners: np.ndarray) -> bool:
+    """:meth:`Mesh.scattered_order`'s rule on the first three corners (s, 3) of its sampled faces
+    (:func:`scatter_sample`), for a caller that reads a mesh's faces from a file a few at a time."""
+    if n_vertices <= SCATTERED_SPAN or corners.shape[0] == 0:
+        return False
+    return bool(np.median(corners.max(axis=1) - corners.min(axis=1)) > SCATTERED_SPAN)
+
+
 class Mesh(PointSet):
     """A polygon mesh with validated data and cached connectivity.
 
@@ -244,9 +257,8 @@ class Mesh(PointSet):
         m = self.n_faces
         if self.n_vertices <= SCATTERED_SPAN or m == 0:
             return False
-        first = self._offsets[np.linspace(0, m - 1, min(sample, m)).astype(np.int64)]
-        corners = self._indices[first[:, None] + np.arange(3)]
-        return bool(np.median(corners.max(axis=1) - corners.min(axis=1)) > SCATTERED_SPAN)
+        first = self._offsets[scatter_sample(m, sample)]
+        return scattered_corners(self.n_vertices, self._indices[first[:, None] + np.arange(3)])
 
     def renumbered(self, order: np.ndarray) -> "Mesh":
         """The same mesh with its vertices renumbered: vertex i of the result is vertex ``order[i]``.

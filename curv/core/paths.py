@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .errors import LoadError
 
-__all__ = ["check_readable", "one_line", "read_with"]
+__all__ = ["check_readable", "one_line", "read_with", "is_panic"]
 
 
 def one_line(exc: BaseException) -> str:
@@ -43,3 +43,12 @@ def read_with(reader, path: Path, kind: str):
         raise LoadError(f"{path}: not enough memory to read the file") from None
     except Exception as exc:  # noqa: BLE001 (see above)
         raise LoadError(f"{path}: not a readable {kind} file ({one_line(exc)})") from None
+    except BaseException as exc:  # a Rust library's panic (pyo3's PanicException) is no Exception
+        if not is_panic(exc):
+            raise
+        raise LoadError(f"{path}: not a readable {kind} file (the reader failed: {one_line(exc)})") from None
+
+
+def is_panic(exc: BaseException) -> bool:
+    """True for pyo3's ``PanicException`` (lazrs, a Rust library, raises it when it panics)."""
+    return type(exc).__name__ == "PanicException"

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import MeshError
-from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, symmetric_graph
+from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, neighbour_steps, symmetric_graph
 
 __all__ = ["PointCloud", "PointSet", "as_positions"]
 
@@ -83,12 +83,30 @@ class PointCloud(PointSet):
     normals : (n, 3) array_like, optional
         Per-point normals as given (rows of zero length or NaN are allowed: such points have no
         usable normal). None when the input has none.
+    georeferenced : bool
+        The points are a scan in a map's coordinates with z up (aerial or terrestrial LiDAR; the
+        LAS/LAZ reader says so): estimated normals are then turned up at every point by default
+        (:func:`curv.point_normals.default_orientation`).
+    grid_frame : (origin (3,), cell), optional
+        Lay the grids over these points from this lower corner (at most their least coordinates),
+        the neighbour grid with this cell edge: the grid of a larger cloud these points are a part
+        or a reordering of (its twin in grid order, a tile), so that the searches visit the same
+        cells in the same order and break ties in distance alike. Default: the points' own.
+    coordinate_step : float, optional
+        The step of the grid the coordinates are stored on (:attr:`coordinate_step`), when it is
+        known for a larger cloud these points are a part of (a tile): the same resolution, the same
+        quantisation checks. Default: measured on these points.
 
     The arrays are read-only copies: a point cloud is immutable, like :class:`curv.Mesh`.
     """
 
-    def __init__(self, points, normals=None):
+    def __init__(self, points, normals=None, *, georeferenced: bool = False, grid_frame=None, coordinate_step=None):
         self._vertices = as_positions(points)
+        self._georeferenced = bool(georeferenced)
+        self.grid_frame = None if grid_frame is None else (np.asarray(grid_frame[0], np.float64).reshape(3),
+                                                            float(grid_frame[1]))
+        if coordinate_step is not None:
+            self.__dict__["coordinate_step"] = float(coordinate_step)  # the cached value, given
         if normals is None:
             self._normals = None
         else:
@@ -107,10 +125,18 @@ class PointCloud(PointSet):
         """(n, 3) float64 normals given with the points (read-only), or None."""
         return self._normals
 
+    @property
+    def georeferenced(self) -> bool:
+        """Whether the points are a scan in a map's coordinates with z up (see the class notes)."""
+        return self._georeferenced
+
     @cached_property
     def grid(self):
         """The uniform grid over the points (:func:`curv.core.knn.build_grid`), made once: it answers the
         nearest-neighbour queries and every ball support of an estimate."""
+        if self.grid_frame is not None:
+            origin, cell = self.grid_frame
+            return build_grid(self._vertices, GRAPH_NEIGHBOURS, cell=cell, origin=origin)
         return build_grid(self._vertices, GRAPH_NEIGHBOURS)
 
     def ball_grid(self, radii: np.ndarray):
@@ -128,7 +154,8 @@ class PointCloud(PointSet):
         if step not in cache:
             if len(cache) >= 4:
                 cache.pop(next(iter(cache)))
-            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0))
+            origin = None if self.grid_frame is None else self.grid_frame[0]
+            cache[step] = build_grid(self._vertices, cell=2.0 ** (step / 4.0), origin=origin)
         return cache[step]
 
     @cached_property
@@ -176,6 +203,25 @@ class PointCloud(PointSet):
             out.setflags(write=False)
             cache[k] = out
         return cache[k]
+
+    @cached_property
+    def coordinate_step(self) -> float:
+        """The resolution the coordinates are stored with: the step of their grid, 0.0 for floats of
+        full precision.
+
+        Per axis, the smallest non-zero coordinate difference between a point and its nearest
+        points (:func:`curv.core.knn.neighbour_steps`); the step is the finest of the three (an
+        axis that never varies is exact: 0.0, and rounding along the others only moves points
+        within the surface). E.g. 0.01 for a LAS file whose points lie on a
+        1 cm grid, about 1e-6 of the spacing for full-precision floats. An axis whose step is
+        coarser than that is a sampling lattice (a raster's x and y, with the heights measured
+        exactly there), not a rounding of the positions. A support only a few steps wide sees the
+        grid's stairs rather than the surface (:mod:`curv.point_normals`, the quantisation check).
+        """
+        twin = self.__dict__.get("_twin")
+        if twin is not None:
+            return twin[0].coordinate_step
+        return float(neighbour_steps(self._vertices, self.nearest[0]).min())
 
     @cached_property
     def adjacency(self) -> sp.csr_matrix:
@@ -230,4 +276,5 @@ class PointCloud(PointSet):
 
     def __repr__(self) -> str:
         with_normals = "with normals" if self._normals is not None else "without normals"
-        return f"PointCloud({self.n_points} points, {with_normals})"
+        where = ", georeferenced" if self._georeferenced else ""
+        return f"PointCloud({self.n_points} points, {with_normals}{where})"

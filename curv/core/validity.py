@@ -44,7 +44,9 @@ class Reason(enum.IntEnum):
     TOO_FEW_NEIGHBOURS = 2
     """Fewer neighbours in range than the fit has unknowns."""
     SINGULAR = 3
-    """The least-squares system (or the tensor) is numerically singular."""
+    """The least-squares system (or the tensor) is numerically singular, or ill-conditioned at the
+    data's resolution (on a point cloud: a support along a line, or only a few steps of the grid
+    its coordinates are stored on wide; :mod:`curv.point_normals`)."""
     DEGENERATE = 4
     """Isolated vertex, zero-area faces around it, or no usable normal."""
     NONMANIFOLD = 5

@@ -1,10 +1,16 @@
-"""Reading point clouds: vertex-only PLY, ``x y z [nx ny nz]`` text, PCD and LAS/LAZ files.
+"""Reading point clouds: vertex-only PLY, ``x y z [nx ny nz]`` text, PCD, PTS and LAS/LAZ files.
 
 Every reader works on whole columns (plyfile's memory map, ``np.loadtxt``, ``np.memmap``, laspy's
 structured arrays), never point by point. Nothing is made up: a NaN coordinate, a wrong column
 count, a missing field or a file shorter or longer than its header says is a :class:`LoadError`
 whose one-line message starts with the file name, like the mesh readers' in :mod:`curv.io`.
-Normals are taken from the file when it has all three components, as they are (not renormalised).
+Normals are taken from the file when it has all three components, as they are (not renormalised);
+other attributes (colours, intensity) are not kept.
+
+Work is bounded by the file's size: a header is checked against the file before anything is
+allocated from its counts (:func:`curv.formats.guards.check_header` for the files a library reads,
+the PCD checks here, :mod:`.pts`), so a count the file cannot hold is a one-line error, never an
+allocation or a loop that runs away.
 """
 
 from __future__ import annotations
@@ -16,12 +22,16 @@ import numpy as np
 from ..core.errors import LoadError, MeshError
 from ..core.paths import check_readable, one_line as _one_line, read_with
 from ..core.pointcloud import PointCloud
+from .guards import check_header
+from .lasheader import check_las_header
+from .pts import read_pts_arrays
 
 __all__ = ["POINT_SUFFIXES", "read_points", "peek_points"]
 
 POINT_SUFFIXES = {".xyz": "text: x y z [nx ny nz], whitespace or comma separated, optional header line",
                   ".txt": "text, as .xyz", ".csv": "text, as .xyz",
                   ".pcd": "PCD (ascii, binary, binary_compressed)",
+                  ".pts": "PTS: Leica (a count line, then x y z [i] [r g b]) or Expe point sets",
                   ".las": "LAS (laspy)", ".laz": "LAZ (laspy with its lazrs backend)"}
 """Suffixes that always hold points; a ``.ply`` holds points when it declares no faces (:func:`curv.io.is_point_file`)."""
 
@@ -39,12 +49,14 @@ def peek_points(path) -> int | None:
     suffix = path.suffix.lower()
     try:
         if suffix == ".pcd":
-            return _pcd_header(path)[0]["points"]
+            header, offset = _pcd_header(path)
+            _check_pcd_size(path, header, offset)
+            text_bytes = 2 * header["points"] * sum(header["counts"]) - 1  # a character and a separator a value
+            if header["data"] == "ascii" and text_bytes > path.stat().st_size - offset:
+                return None  # more than the file can hold: the reader counts the rows and says so
+            return header["points"]
         if suffix in (".las", ".laz"):
-            import laspy
-
-            with laspy.open(path) as reader:
-                return int(reader.header.point_count)
+            return check_las_header(path).point_count
     except Exception:  # noqa: BLE001 - a peek only; the reader gives the one-line error
         return None
     return None
@@ -64,10 +76,10 @@ def _named_normals(path: Path, names, kind: str) -> tuple[str, str, str] | None:
     return None
 
 
-def _cloud(path: Path, points: np.ndarray, normals: np.ndarray | None) -> PointCloud:
+def _cloud(path: Path, points: np.ndarray, normals: np.ndarray | None, *, georeferenced: bool = False) -> PointCloud:
     """The :class:`PointCloud`; its own checks (no points, a NaN or infinite row) name the file."""
     try:
-        return PointCloud(points, normals)
+        return PointCloud(points, normals, georeferenced=georeferenced)
     except MeshError as exc:
         raise LoadError(f"{path}: {exc}") from None
 
@@ -216,8 +228,16 @@ def _pcd_header(path: Path) -> tuple[dict, int]:
         points = int(keys["POINTS"][0]) if "POINTS" in keys else width * height
     except (ValueError, IndexError):
         raise LoadError(f"{path}: PCD header has a non-integer SIZE, COUNT, WIDTH, HEIGHT or POINTS") from None
+    for key, value in (("WIDTH", width), ("HEIGHT", height), ("POINTS", points)):
+        if value < 0:
+            raise LoadError(f"{path}: PCD {key} {value} is negative")
     if width * height != points:
         raise LoadError(f"{path}: PCD header says WIDTH {width} x HEIGHT {height} but POINTS {points}")
+    file_size = path.stat().st_size
+    for name, size, n in zip(fields, sizes, counts):
+        if n < 1 or n * size > file_size:  # one point's field must fit in the file
+            raise LoadError(f"{path}: PCD field {name} has COUNT {n}; a file of {file_size} bytes holds "
+                            f"1 to {max(file_size // max(size, 1), 1)}")
     kinds = {"F": "f", "I": "i", "U": "u"}
     dtype = []
     for i, (name, size, kind, n) in enumerate(zip(fields, sizes, types, counts)):
@@ -235,7 +255,6 @@ def _pcd_header(path: Path) -> tuple[dict, int]:
 def _pcd_table(path: Path, header: dict, offset: int):
     """The points' records as a structured array (or a dict of columns) from the data section."""
     dtype, n = header["dtype"], header["points"]
-    size = path.stat().st_size
     if header["data"] == "ascii":
         try:
             values = np.loadtxt(path, dtype=np.float64, skiprows=_lines_before(path, offset), ndmin=2,
@@ -249,11 +268,6 @@ def _pcd_table(path: Path, header: dict, offset: int):
         starts = np.cumsum([0] + header["counts"])
         return {name: values[:, starts[i]] for i, name in enumerate(dtype.names)}
     if header["data"] == "binary":
-        expected = offset + n * dtype.itemsize
-        if size != expected:
-            more = "more" if size > expected else "fewer"
-            raise LoadError(f"{path}: holds {abs(size - expected)} bytes {more} than its header declares "
-                            f"({n} points of {dtype.itemsize} bytes)")
         return np.memmap(path, dtype=dtype, mode="r", offset=offset, shape=(n,)) if n else np.empty(0, dtype)
     if header["data"] == "binary_compressed":
         from .lzf import decompress
@@ -261,14 +275,7 @@ def _pcd_table(path: Path, header: dict, offset: int):
         with open(path, "rb") as fh:
             fh.seek(offset)
             sizes = np.frombuffer(fh.read(8), dtype="<u4")
-            if sizes.size != 2:
-                raise LoadError(f"{path}: PCD compressed data has no size header")
             packed = fh.read()
-        if len(packed) != int(sizes[0]):
-            raise LoadError(f"{path}: PCD compressed data holds {len(packed)} bytes, its header says {int(sizes[0])}")
-        if int(sizes[1]) != n * dtype.itemsize:
-            raise LoadError(f"{path}: PCD compressed data unpacks to {int(sizes[1])} bytes, "
-                            f"{n} points of {dtype.itemsize} bytes need {n * dtype.itemsize}")
         try:
             raw = decompress(packed, int(sizes[1]))
         except ValueError as exc:
@@ -280,6 +287,43 @@ def _pcd_table(path: Path, header: dict, offset: int):
             at += n * field.itemsize
         return columns
     raise LoadError(f"{path}: PCD DATA {header['data'] or '(missing)'} is not ascii, binary or binary_compressed")
+
+
+_LZF_MAX_RATIO = 88
+"""The most an LZF stream can expand: a 3-byte back reference copies at most 264 bytes."""
+
+
+def _check_pcd_size(path: Path, header: dict, offset: int) -> None:
+    """The PCD header's points x record size against the data after the header (one-line LoadError).
+
+    Binary: exactly the records; binary_compressed: the size header's compressed size is the rest of
+    the file, its unpacked size the records and at most an LZF stream's largest expansion of the
+    compressed bytes. (Ascii data are read as text, bounded by the file, then counted.)
+    """
+    dtype, n = header["dtype"], header["points"]
+    size = path.stat().st_size
+    body = size - offset
+    if header["data"] == "binary":
+        expected = offset + n * dtype.itemsize
+        if size != expected:
+            more = "more" if size > expected else "fewer"
+            raise LoadError(f"{path}: holds {abs(size - expected)} bytes {more} than its header declares "
+                            f"(POINTS {n} of {dtype.itemsize} bytes)")
+    elif header["data"] == "binary_compressed":
+        with open(path, "rb") as fh:
+            fh.seek(offset)
+            sizes = np.frombuffer(fh.read(8), dtype="<u4")
+        if sizes.size != 2:
+            raise LoadError(f"{path}: PCD compressed data has no size header")
+        packed, unpacked = int(sizes[0]), int(sizes[1])
+        if packed != body - 8:
+            raise LoadError(f"{path}: PCD compressed data holds {body - 8} bytes, its header says {packed}")
+        if unpacked != n * dtype.itemsize:
+            raise LoadError(f"{path}: PCD compressed data unpacks to {unpacked} bytes, "
+                            f"POINTS {n} of {dtype.itemsize} bytes need {n * dtype.itemsize}")
+        if unpacked > _LZF_MAX_RATIO * packed:
+            raise LoadError(f"{path}: PCD compressed data's {packed} bytes cannot unpack to {unpacked} "
+                            f"(LZF expands {_LZF_MAX_RATIO} times at most)")
 
 
 def _lines_before(path: Path, offset: int) -> int:
@@ -296,6 +340,7 @@ def _read_pcd(path: Path) -> PointCloud:
     if any(header["dtype"].fields[c][0].shape for c in "xyz"):
         raise LoadError(f"{path}: PCD coordinates must have COUNT 1")
     normal_names = _named_normals(path, names, "PCD FIELDS")
+    _check_pcd_size(path, header, offset)
     table = _pcd_table(path, header, offset)
     normals = _columns(table, normal_names) if normal_names else None
     return _cloud(path, _columns(table, "xyz"), normals)
@@ -318,11 +363,24 @@ def _read_las(path: Path) -> PointCloud:
         points[:, i] = las[axis]  # scaled and offset coordinates
     normal_names = _named_normals(path, list(las.point_format.extra_dimension_names), "LAS extra bytes")
     normals = np.column_stack([np.asarray(las[c], dtype=np.float64) for c in normal_names]) if normal_names else None
-    return _cloud(path, points, normals)
+    # LAS holds aerial and terrestrial scans in a map's coordinates, z up: their normals are turned up
+    return _cloud(path, points, normals, georeferenced=True)
+
+
+def _read_pts(path: Path) -> PointCloud:
+    return _cloud(path, *read_pts_arrays(path))
 
 
 _READERS = {".ply": _read_ply, ".xyz": _read_text, ".txt": _read_text, ".csv": _read_text,
-            ".pcd": _read_pcd, ".las": _read_las, ".laz": _read_las}
+            ".pcd": _read_pcd, ".pts": _read_pts, ".las": _read_las, ".laz": _read_las}
+
+
+def _guarded(reader):
+    """``reader`` run after the header checks (:func:`curv.formats.guards.check_header`)."""
+    def read(path: Path):
+        check_header(path)
+        return reader(path)
+    return read
 
 
 def read_points(path) -> PointCloud:
@@ -335,7 +393,8 @@ def read_points(path) -> PointCloud:
         ``x y z`` or ``x y z nx ny nz``, whitespace or comma separated; an optional first line names the
         columns, and then other columns are ignored), PCD (ascii, binary, binary_compressed; fields
         ``x y z`` and optionally ``normal_x normal_y normal_z``) or LAS/LAZ (laspy; normals from extra
-        dimensions ``nx ny nz`` or ``normal_x ...`` when present).
+        dimensions ``nx ny nz`` or ``normal_x ...`` when present), PTS (Leica text: a count line, then
+        ``x y z [i] [r g b]`` rows; Expe point sets, their ``normal`` property as normals).
 
     Returns
     -------
@@ -345,11 +404,12 @@ def read_points(path) -> PointCloud:
     Raises
     ------
     LoadError
-        Missing, empty or malformed file, a NaN coordinate, a missing field: one line naming the file.
+        Missing, empty or malformed file, a NaN coordinate, a missing field, a header that promises
+        more than the file holds: one line naming the file.
     """
     path = Path(path)
     check_readable(path)
     reader = _READERS.get(path.suffix.lower())
     if reader is None:
         raise LoadError(f"{path}: not a point-cloud file (use one of .ply, {', '.join(POINT_SUFFIXES)})")
-    return read_with(reader, path, path.suffix.lstrip(".").upper())
+    return read_with(_guarded(reader), path, path.suffix.lstrip(".").upper())

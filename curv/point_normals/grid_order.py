@@ -6,7 +6,7 @@ from ..core.knn import GRAPH_NEIGHBOURS, build_grid
 from ..core.pointcloud import PointCloud
 from ..geometry.neighbourhood import cached_with_mesh
 
-__all__ = ["grid_ordered"]
+__all__ = ["grid_ordered", "mark_ordered"]
 
 
 def grid_ordered(cloud: PointCloud):
@@ -21,11 +21,21 @@ def grid_ordered(cloud: PointCloud):
         estimate of the cloud.
     """
     def build():
-        order = build_grid(cloud.points, GRAPH_NEIGHBOURS)[0][3]
+        (_, _, _, order), (origin, *_) = cloud.grid if cloud.grid_frame is not None else build_grid(
+            cloud.points, GRAPH_NEIGHBOURS)
         normals = None if cloud.normals is None else cloud.normals[order]
-        twin = PointCloud(cloud.points[order], normals)
-        cached_with_mesh(twin, "grid order", lambda: None)
+        # the twin searches the cloud's own cells: the same neighbours, ties in distance broken alike,
+        # and a part of the cloud in the same order searches them too (curv.tiles)
+        twin = PointCloud(cloud.points[order], normals, georeferenced=cloud.georeferenced,
+                          grid_frame=(origin[:3], origin[3]))
+        mark_ordered(twin)
         cloud.same_points_as(twin, order)
         return twin, order
 
     return cached_with_mesh(cloud, "grid order", build)
+
+
+def mark_ordered(cloud: PointCloud) -> None:
+    """Say that ``cloud`` is already in its grid's order (a twin, or a part of one laid in the whole
+    cloud's grid: :attr:`curv.PointCloud.grid_frame`): an estimate runs on it as it is."""
+    cached_with_mesh(cloud, "grid order", lambda: None)

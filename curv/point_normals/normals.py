@@ -12,14 +12,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import EstimatorError
-from ..core.jit import jit_parallel, launch, prange, run_to_end
+from ..core.jit import announce, jit_parallel, launch, prange, run_to_end
 from ..core.pointcloud import PointCloud
-from ..core.ranges import ball_radii, point_spacing, resolve
+from ..core.ranges import TIE_TOLERANCE, ball_radii, point_spacing, resolve
 from ..estimators import get_spec
 from ..estimators._local_fit import slice_bounds
 from ..geometry.neighbourhood import cached_with_mesh, latest_with_mesh
 from .one_pass import _one_pass, _Pass
-from .orientation import orient_normals
+from .orientation import default_orientation, orient_normals
+from .quantised import support_floor
 
 __all__ = ["PointNormals", "point_normals", "border_points", "border_radii", "NORMAL_RANGE", "BORDER_RANGE",
            "BORDER_GAP", "ONE_SIDED_GAP", "NORMAL_METHODS"]
@@ -66,7 +67,7 @@ class PointNormals:
         does not extrapolate).
     gap : (n,) float64
         Widest angular gap of the projected support (radians); exact whenever at least
-        7.2 degrees (:data:`.frames.GAP_BINS`).
+        7.2 degrees (:data:`GAP_BINS`).
     border : (n,) bool
         On the border of an open scan (:func:`border_points`: ``gap > BORDER_GAP``, or a one-sided
         support).
@@ -74,6 +75,10 @@ class PointNormals:
     the normals' range.)
     method, label : str
         ``"pca"`` or ``"jet"``; the range label, e.g. ``"R2"``.
+    orient : str or (3,) float64
+        The orientation rule that ran (:data:`ORIENTATIONS`, or the viewpoint).
+    widened : (n,) bool or None
+        Points whose fit was widened to :func:`support_floor` (coordinates on a coarse grid).
     """
 
     normals: np.ndarray
@@ -83,6 +88,8 @@ class PointNormals:
     border: np.ndarray
     method: str
     label: str
+    orient: object = "top"
+    widened: np.ndarray | None = None
 
 
 def _radii(cloud: PointCloud, k, *, uses_normals: bool = False, knn=None) -> np.ndarray:
@@ -170,7 +177,7 @@ def _frames(cloud: PointCloud):
 
 
 def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE, radius: float | None = None,
-                  knn: int | None = None, orient="up") -> PointNormals:
+                  knn: int | None = None, orient=None) -> PointNormals:
     """Estimate and orient the normals of a point cloud (module notes).
 
     Parameters
@@ -182,8 +189,8 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         by 0.1 % in H, against 10-20 % with the PCA normals), or the PCA of the support.
     range, radius, knn
         The support of the fits, as for an estimate (:func:`curv.core.ranges.resolve`); default R2.
-    orient : {"up", "outward"} or (3,) array_like
-        See :func:`orient_normals`.
+    orient : {"up", "top", "outward"} or (3,) array_like, optional
+        See :func:`orient_normals`; default :func:`default_orientation`.
 
     Returns
     -------
@@ -195,19 +202,40 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         range = None
     rng = resolve(get_spec("jet"), range, radius, knn)
     radii = ball_radii(cloud, rng, uses_normals=False)
+    # on coordinates stored on a coarse grid, fits over fewer than MIN_SUPPORT_STEPS steps see its
+    # stairs: the normals are fitted over at least that radius (the estimates there are SINGULAR)
+    floor = support_floor(cloud)
+    widened = radii < floor
+    if widened.any():
+        radii = np.where(widened, floor * (1.0 + TIE_TOLERANCE), radii)
     # one pass: the frames at BORDER_RANGE (borders; the PCA normals that orient), the frame and
     # the jet normals at the fits' range (module notes, "One pass"), the default line checks
     spread_radii = _default_spreads(cloud)
-    found = latest_with_mesh(cloud, "normals pass", (rng.label, method),
+    found = latest_with_mesh(cloud, "normals pass", (rng.label, method, floor),
                              lambda: run_to_end(_one_pass(cloud, border_radii(cloud), radii,
                                                     jet=method == "jet", normals_b=method == "pca",
                                                     spreads=spread_radii)))
     _keep(cloud, found, spread_radii)
     pca, gap = _frames(cloud)
-    if method == "pca" and rng.label != resolve(get_spec("jet"), BORDER_RANGE).label:
+    if method == "pca" and (rng.label != resolve(get_spec("jet"), BORDER_RANGE).label or widened.any()):
         pca = found.normal_b
-    oriented, ambiguous = orient_normals(cloud, pca, orient=orient)
+    announce("orientation")  # a phase of the estimate's progress (curv.core.jit.iter_watched)
+    orient = default_orientation(cloud) if orient is None else orient
     one_sided = np.zeros(cloud.n_points, bool)
+    if isinstance(orient, str) and orient == "up":
+        # point by point: the normal used is the one turned up (a fit's sign is free, module notes 5)
+        normals = pca
+        if method == "jet":
+            normals = found.fitted.copy()
+            normals[~np.isfinite(pca).all(axis=1)] = np.nan
+        oriented, ambiguous = orient_normals(cloud, normals, orient="up")
+        if method == "jet":
+            one_sided = (found.gap_b > ONE_SIDED_GAP) & ~border_points(cloud) & np.isfinite(oriented).all(axis=1)
+            oriented[one_sided] = np.nan
+        return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
+                            border=border_points(cloud), method=method, label=rng.label, orient=orient,
+                            widened=widened)
+    oriented, ambiguous = orient_normals(cloud, pca, orient=orient)
     if method == "jet":
         fitted = found.fitted.copy()
         # fitted with the unoriented PCA normal as reference: the same fit up to its sign
@@ -218,7 +246,7 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         fitted[one_sided] = np.nan
         oriented = fitted
     return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
-                        border=border_points(cloud), method=method, label=rng.label)
+                        border=border_points(cloud), method=method, label=rng.label, orient=orient, widened=widened)
 
 
 def border_points(cloud: PointCloud) -> np.ndarray:

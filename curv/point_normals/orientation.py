@@ -1,9 +1,11 @@
-"""Orienting a point cloud's normals (module notes, 2 and 3): Hoppe's spanning tree, the ambiguous points.
+"""Orienting a point cloud's normals (module notes, 2 and 3): up point by point, Hoppe's spanning
+tree, a viewpoint; the undecided points.
 
-The neighbour graph's edges weighted ``1 - |n_p . n_q|``, ranked by a stable radix sort
-(:func:`_stable_rank`), Kruskal's spanning forest (:func:`_spanning_forest`), a breadth-first walk
-of each part's tree from its root (:func:`_propagate`) and the neighbours' agreement
-(:func:`_agreement`).
+"up": each normal turned by its own nz, the edge-on ones and those their nearest oppose undecided
+(:func:`_orient_up`, :func:`_opposed`). The propagation: the neighbour graph's edges weighted
+``1 - |n_p . n_q|``, ranked by a stable radix sort (:func:`_stable_rank`), Kruskal's spanning forest
+(:func:`_spanning_forest`), a breadth-first walk of each part's tree from its root
+(:func:`_propagate`) and the neighbours' agreement (:func:`_agreement`).
 """
 
 from __future__ import annotations
@@ -15,13 +17,23 @@ from ..core.errors import EstimatorError
 from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.pointcloud import PointCloud
 
-__all__ = ["orient_normals", "AGREE_COSINE", "GRAZING_COSINE"]
+__all__ = ["orient_normals", "default_orientation", "describe_orientation", "AGREE_COSINE", "GRAZING_COSINE",
+           "ORIENTATIONS"]
 
 AGREE_COSINE = 0.5
 """Neighbours whose normals are within 60 degrees (or opposed within 60) count as agreeing (or not)."""
 
 GRAZING_COSINE = 0.05
-"""Orienting towards a viewpoint fails for normals within ~3 degrees of perpendicular to the view ray."""
+"""Orienting towards a viewpoint, or up, fails for normals within ~3 degrees of perpendicular to the
+view ray (to the vertical): the side is then within the normals' own error (a jet normal at R2
+errs by about a degree on a clean sample, several on a scan's noise). A side that noise flips
+above this shows up as neighbours that oppose each other (module notes, step 3), which are left
+undecided too. On ``autzen_trim.laz`` (110,000 aerial points: ground, roofs, walls, trees) 0.5 %
+of the jet normals are within it, 1.0 % within 0.1 and 2.6 % within 0.25: a wider band would
+leave out steep roofs and slopes whose up side is clear."""
+
+ORIENTATIONS = ("up", "top", "outward")
+"""The named orientation rules (module notes, step 2); a viewpoint (x, y, z) is the fourth."""
 
 
 @jit
@@ -170,6 +182,8 @@ def _propagate(ptr, adj, part, key, root_sign, normal):
 
 @jit_parallel
 def _agreement(indptr, neighbours, normal, cosine, ambiguous):
+    """``ambiguous[p]``: p's normal agrees (cos >= ``cosine``) with none of its neighbours
+    ``neighbours[indptr[p]:indptr[p + 1]]``, or with no more of them than disagree (cos <= -``cosine``)."""
     n = indptr.size - 1
     for p in prange(n):
         agree = 0
@@ -184,28 +198,81 @@ def _agreement(indptr, neighbours, normal, cosine, ambiguous):
         ambiguous[p] = agree == 0 or oppose >= agree
 
 
-def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tuple[np.ndarray, np.ndarray]:
-    """Orient unoriented normals consistently (module notes, step 2) and find the ambiguous ones.
+@jit_parallel
+def _opposed(indptr, neighbours, normal, cosine, ambiguous):
+    """``ambiguous[p]``: as many of p's neighbours (-1 entries skipped) disagree with its normal
+    (cos <= -``cosine``) as agree with it (cos >= ``cosine``), and at least one does."""
+    n = indptr.size - 1
+    for p in prange(n):
+        agree = 0
+        oppose = 0
+        for j in range(indptr[p], indptr[p + 1]):
+            q = neighbours[j]
+            if q < 0:
+                continue
+            c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+            if c >= cosine:
+                agree += 1
+            elif c <= -cosine:
+                oppose += 1
+        ambiguous[p] = oppose > 0 and oppose >= agree
+
+
+def default_orientation(cloud: PointCloud) -> str:
+    """The orientation rule of a cloud's estimated normals when none is asked for (module notes, 2):
+    ``"up"`` for a georeferenced scan (:attr:`curv.PointCloud.georeferenced`), else ``"top"``."""
+    return "up" if cloud.georeferenced else "top"
+
+
+def describe_orientation(orient) -> str:
+    """The orientation rule in words, e.g. ``up (nz >= 0 at every point)`` (the summaries' wording)."""
+    if isinstance(orient, str):
+        return {"up": "up (nz >= 0 at every point)",
+                "top": "by propagation from each part's top, turned up (Hoppe)",
+                "outward": "outward (propagated from each part's farthest point, Hoppe)"}.get(orient, orient)
+    return "towards " + " ".join(f"{v:g}" for v in np.asarray(orient, dtype=np.float64).reshape(-1))
+
+
+def _orient_up(cloud: PointCloud, out: np.ndarray, finite: np.ndarray) -> np.ndarray:
+    """``"up"``, point by point, in place: flip every normal with nz < 0; the edge-on ones and those
+    their nearest points oppose (module notes, step 3) are undecided (NaN). Returns those (n,) bool."""
+    out[out[:, 2] < 0.0] *= -1.0
+    nearest = cloud.nearest[0]
+    k = nearest.shape[1]
+    indptr = np.arange(0, k * nearest.shape[0] + 1, k, dtype=np.int64)
+    ambiguous = np.zeros(out.shape[0], bool)
+    launch(_opposed, indptr, nearest.reshape(-1), np.where(finite[:, None], out, 0.0), AGREE_COSINE, ambiguous)
+    ambiguous |= ~(np.abs(out[:, 2]) >= GRAZING_COSINE)
+    ambiguous &= finite
+    out[ambiguous] = np.nan
+    return ambiguous
+
+
+def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tuple[np.ndarray, np.ndarray]:
+    """Orient unoriented normals (module notes, step 2) and find the undecided ones (step 3).
 
     Parameters
     ----------
     cloud : PointCloud
     normals : (n, 3) float64
         Unit normals, either sign; NaN rows take no part.
-    orient : {"up", "outward"} or (3,) array_like
-        How each connected part's root is turned: up (+z, Hoppe's choice), away from the part's
-        centroid, or every normal towards this viewpoint.
+    orient : {"up", "top", "outward"} or (3,) array_like, optional
+        Every normal up (nz >= 0), propagation from each connected part's top turned up or from its
+        farthest point turned away from its centroid, or every normal towards this viewpoint;
+        default :func:`default_orientation`.
 
     Returns
     -------
     normals : (n, 3) float64
-        Oriented copy; NaN at ambiguous points.
+        Oriented copy; NaN at undecided points.
     ambiguous : (n,) bool
         Points whose orientation could not be decided (module notes, step 3).
     """
     out = np.array(normals, dtype=np.float64, copy=True)
     n = out.shape[0]
     finite = np.isfinite(out).all(axis=1)
+    if orient is None:
+        orient = default_orientation(cloud)
     if not isinstance(orient, str):
         view = np.asarray(orient, dtype=np.float64).reshape(3)
         ray = view - cloud.points
@@ -215,8 +282,10 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tu
         ambiguous = finite & ~(np.abs(cosine) >= GRAZING_COSINE)
         out[ambiguous] = np.nan
         return out, ambiguous
-    if orient not in ("up", "outward"):
-        raise EstimatorError(f"orient must be 'up', 'outward' or a viewpoint (x, y, z); got {orient!r}")
+    if orient not in ORIENTATIONS:
+        raise EstimatorError(f"orient must be 'up', 'top', 'outward' or a viewpoint (x, y, z); got {orient!r}")
+    if orient == "up":
+        return out, _orient_up(cloud, out, finite)
     graph = cloud.adjacency
     indptr, neighbours = graph.indptr, graph.indices
     safe = np.where(finite[:, None], out, 0.0)
@@ -225,7 +294,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient="up") -> tu
     ptr, adj, part = _spanning_forest(n, _stable_rank(weight), rows, cols)
     del rows, cols, weight
     # one root per part: its highest point (turned up), or the point farthest from its centroid (turned away)
-    if orient == "up":
+    if orient == "top":
         key = cloud.points[:, 2].copy()
         root_sign = out[:, 2].copy()
     else:

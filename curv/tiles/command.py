@@ -1,0 +1,219 @@
+"""``curv estimate`` on tiles: its flags, when it tiles, its progress line and its summary.
+
+``curv estimate IN -o OUT [--tile-size N] [--memory 4GB] [--scheduler ADDRESS]`` runs tile by tile
+(:func:`curv.tiles.estimate_file`) when asked (``--tile-size``, ``--scheduler``) or when the whole
+input's estimate would not fit in the memory budget (``--memory``, default 80 % of the memory
+available now, :func:`curv.tiles.budget.needs_tiles`); otherwise the command runs as it always did.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+from ..core.errors import CurvError
+
+__all__ = ["add_arguments", "wants_tiles", "run", "las_output", "check_las_output"]
+
+
+def add_arguments(parser) -> None:
+    """The tiled run's flags of ``curv estimate``."""
+    from ..formats.laswrite import GROUPS
+
+    group = parser.add_argument_group("large inputs (tiles)")
+    group.add_argument("--tile-size", type=int, metavar="N",
+                       help="estimate tile by tile, at most N points (vertices) a tile, whatever the input's size; "
+                            "the result equals the whole estimate's (docs/LARGE_SCANS.md)")
+    group.add_argument("--memory", metavar="SIZE",
+                       help="memory budget of the whole run, every process (e.g. 4GB); an input whose estimate "
+                            "would not fit is tiled. Default 80 %% of the memory available now")
+    group.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run the tiles on the Dask cluster at ADDRESS (tcp://host:8786); its workers must see "
+                            "the input and the scratch folder")
+    group.add_argument("--workers", type=int, metavar="N",
+                       help="worker processes of the local cluster (default: the cores the budget can feed)")
+    group.add_argument("--scratch", metavar="DIR",
+                       help="the tiled run's scratch folder (default .OUTPUT.tiles beside the output); an "
+                            "interrupted run resumes from it")
+    group.add_argument("--keep-scratch", action="store_true", help="keep the scratch folder after the run")
+    group.add_argument("--las-extra", nargs="+", choices=list(GROUPS), default=(), metavar="GROUP",
+                       help="LAS/LAZ output: also write " + ", ".join(GROUPS) + " as extra bytes")
+
+
+def las_output(path) -> bool:
+    """Whether ``path`` is a LAS/LAZ output (the input's records kept, :mod:`curv.formats.laswrite`)."""
+    from pathlib import Path
+
+    return path is not None and Path(path).suffix.lower() in (".las", ".laz")
+
+
+def wants_tiles(args, counts, *, points: bool) -> bool:
+    """Whether this ``curv estimate`` runs on tiles (module notes). ``counts`` is ``(points, faces)``
+    from the file's header, or None when the header does not say (then only when asked)."""
+    from .budget import needs_tiles, parse_memory
+
+    if args.tile_size is not None or args.scheduler is not None:
+        return True
+    if counts is None or (args.memory is None and not args.memory_check):
+        return False
+    try:
+        total = parse_memory(args.memory) if args.memory is not None else _available()
+    except ValueError as exc:
+        raise CurvError(str(exc)) from None
+    return needs_tiles(counts[0], counts[1], args.method, total, points=points)
+
+
+def check_las_output(args) -> None:
+    """A LAS/LAZ output keeps the input's records: refuse it for another input (one line)."""
+    from pathlib import Path
+
+    if las_output(args.output) and Path(args.input).suffix.lower() not in (".las", ".laz"):
+        raise CurvError(f"{args.output}: a LAS/LAZ output keeps the input's point records; the input must be "
+                        f"LAS/LAZ (write .ply, .vtu or .vtp instead)")
+
+
+def _available() -> int:
+    from .files import _available as available
+
+    return available()
+
+
+def _refuse_for_tiles(args, points: bool) -> None:
+    """The options a tiled run cannot take, refused in one line before any work."""
+    if not args.output:
+        raise CurvError("a tiled run writes its result to a file: give -o OUT (.ply, or .las/.laz for a LAS input)")
+    given = [flag for flag, value in (("--vertices", args.vertices), ("--region", args.region),
+                                      ("--smooth", getattr(args, "smooth", None))) if value is not None]
+    if given:
+        raise CurvError(f"{', '.join(given)} cannot run on tiles (a tiled run estimates every point whole; "
+                        f"estimate a region of a large file with curv.estimate(vertices=) on the part you read)")
+    if args.tile_size is not None and args.tile_size < 1:
+        raise CurvError(f"--tile-size must be a positive number of points; got {args.tile_size}")
+
+
+class _Line:
+    """The tiled run's progress: a bar with the phase's words on a terminal, a line every 10 s elsewhere."""
+
+    def __init__(self, quiet: bool):
+        self.stream = sys.stderr
+        self.tty = self.stream.isatty()
+        self.quiet = quiet
+        self.start = time.perf_counter()
+        self.last = -1e9
+        self.width = 0
+
+    def update(self, step) -> None:
+        if self.quiet:
+            return
+        now = time.perf_counter()
+        fraction = float(step)
+        words = getattr(step, "message", "") or ""
+        if self.tty:
+            if now - self.last < 0.2 and fraction < 1.0:
+                return
+            bar = "#" * int(30 * fraction)
+            text = f"\rtiles [{bar:<30}] {100 * fraction:5.1f}% {now - self.start:6.0f}s {words}"
+            self.stream.write(text.ljust(self.width))
+            self.width = len(text)
+        else:
+            if now - self.last < 10.0:
+                return
+            self.stream.write(f"curv: {100 * fraction:5.1f}% after {now - self.start:.0f} s {words}\n")
+        self.stream.flush()
+        self.last = now
+
+    def close(self) -> None:
+        if self.tty and not self.quiet:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def run(args, *, points: bool) -> int:
+    """``curv estimate`` on tiles: the run, its progress and its summary on stdout."""
+    from ..core.ranges import resolve
+    from ..estimators import get_spec
+    from .budget import parse_memory
+    from .files import iter_estimate_file
+
+    _refuse_for_tiles(args, points)
+    spec = get_spec(args.method)
+    rng = resolve(spec, args.range, args.radius, args.knn)
+    keywords = _keywords(args, points)
+    try:
+        memory = parse_memory(args.memory) if args.memory is not None else None
+    except ValueError as exc:
+        raise CurvError(str(exc)) from None
+    line = _Line(args.quiet)
+    gen = iter_estimate_file(args.input, args.output, spec.name, rng.k, radius=rng.radius, knn=rng.knn,
+                             tile_size=args.tile_size, memory=memory, workers=args.workers, scheduler=args.scheduler,
+                             scratch=args.scratch, keep_scratch=args.keep_scratch, quantity=args.quantity,
+                             cmap=args.cmap, clim=tuple(args.clim) if args.clim else None,
+                             las_extra=tuple(args.las_extra), **keywords)
+    try:
+        while True:
+            try:
+                step = next(gen)
+            except StopIteration as stop:
+                run_ = stop.value
+                break
+            line.update(step)
+    except KeyboardInterrupt:
+        line.close()
+        print(f"curv: interrupted; no output written. The same command resumes from the finished tiles "
+              f"(scratch folder kept)", file=sys.stderr)
+        raise
+    finally:
+        line.close()
+    _summary(args, run_, rng)
+    return 0
+
+
+def _keywords(args, points: bool) -> dict:
+    """The estimate's keywords from the command's flags (as the in-memory command passes them)."""
+    out = {}
+    if points:
+        out["normals"] = args.normals
+        out["orient"] = args.orient_normals
+    else:
+        if args.normals == "fit":
+            out["normals"] = "fit"
+        elif args.normals not in (None, "max"):
+            out["normal_weighting"] = args.normals
+        if args.features is not None:
+            from ..core.features import check_angle
+
+            out["features"] = check_angle(args.features)
+    if args.fit_range is not None:
+        out["fit_range"] = args.fit_range
+    for name in ("degree", "weights", "width", "noise_model"):
+        if getattr(args, name, None) is not None:
+            out[name] = getattr(args, name)
+    if args.no_standard_errors:
+        out["standard_errors"] = False
+    return out
+
+
+def _summary(args, run_, rng) -> None:
+    from ..memory import format_bytes
+
+    unit = "vertices" if run_.mesh else "points"
+    reasons = dict(run_.reasons)
+    valid = reasons.pop("OK", 0)
+    invalid = ", ".join(f"{k.lower().replace('_', ' ')} {v:,}" for k, v in reasons.items())
+    budget = run_.budget
+    if budget is not None:
+        where = (f"{run_.tiles} tiles of at most {budget.tile_size:,} {unit} on {run_.where}"
+                 f" (memory budget {format_bytes(budget.total)})")
+    else:
+        where = f"read whole ({run_.where})"
+    if run_.resumed:
+        where += f"; {run_.resumed} tiles finished by an earlier run"
+    print(f"{args.input}: {run_.points:,} {unit}; {where}")
+    if run_.read:
+        print(f"  halos: the tiles read {run_.read / max(run_.points, 1):.2f} {unit} a {unit[:-1] if unit == 'points' else 'vertex'}"
+              f"; {run_.redone:,} redone on a wider region")
+    print(f"{args.method} {rng.label}: {valid:,} of {run_.points:,} {unit} valid "
+          f"({100 * valid / max(run_.points, 1):.1f} %)" + (f"; invalid: {invalid}" if invalid else ""))
+    s = run_.seconds
+    print(f"time: plan {s['plan']:.2f} s, tiles {s['tiles']:.2f} s, write {s['write']:.2f} s "
+          f"(total {s['total']:.2f} s); wrote {args.output}")

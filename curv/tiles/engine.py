@@ -1,0 +1,320 @@
+"""One tile: read its region, estimate it, keep the rows whose whole support lay inside, redo the rest.
+
+A tile's **core** is the points the plan gave it (:class:`curv.tiles.plan.TilePlan`); its region
+is its box widened by a halo (:class:`curv.tiles.plan.Region`). :func:`iter_run_tile` estimates the
+region's points as the whole call would (:mod:`curv.tiles.frame`: the whole input's order and
+grid), asks :func:`curv.tiles.reach.support_reach` how far each core point's estimate read, and
+keeps the core points whose reach is within their room (their distance to the region's closed
+sides): their rows are the whole call's. The others are never kept as they are: they are
+estimated again (``vertices=`` those points) on a wider region around them, the halo twice as
+wide as their own reach, until every one is kept; a region that reaches every side of the input
+holds all of it, so this ends.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Generator
+
+import numpy as np
+
+from ..core.errors import EstimatorError
+from ..core.jit import Progress
+from ..core.mesh import Mesh
+from ..core.pointcloud import PointCloud
+from ..core.validity import Reason
+from .frame import GridFrame, framed_cloud, tile_mesh
+from .plan import Region
+from .reach import support_reach
+
+__all__ = ["Job", "Piece", "TileRows", "iter_run_tile", "shape_of", "step_redo", "whole_step", "ROW_FIELDS",
+           "empty_rows"]
+
+ROW_FIELDS = ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se")
+"""The per-point columns of a result a tile hands back (as :class:`curv.Curvature` names them)."""
+
+_TILED_KEYWORDS = {"radius", "knn", "normals", "normal_weighting", "fit_range", "orient", "standard_errors",
+                   "features", "block_size"}
+"""Keywords of :func:`curv.estimate` a tiled run passes on to every tile."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """What every tile estimates: :func:`curv.estimate`'s method, range and keywords.
+
+    ``normals`` may be None, ``"fit"`` or ``"pca"`` (arrays are the input's, handed to each tile
+    with its points); ``features`` an angle. What a tile cannot run is refused by :meth:`checked`.
+    """
+
+    method: str
+    range: object = None
+    keywords: dict = field(default_factory=dict)
+
+    @classmethod
+    def checked(cls, method: str, range=None, **keywords) -> "Job":
+        """A job, or an :class:`EstimatorError` naming what tiles cannot do."""
+        from ..core.ranges import resolve
+        from ..estimators import get_spec
+
+        spec = get_spec(method)
+        resolve(spec, range, keywords.get("radius"), keywords.get("knn"))
+        if keywords.get("vertices") is not None:
+            raise EstimatorError("a tiled estimate covers every point; estimate a region with curv.estimate(vertices=)")
+        if keywords.get("smooth") not in (None, "none"):
+            raise EstimatorError("smooth= is not tiled: its smoothing passes reach further with every iteration; "
+                                 "estimate such an input whole")
+        features = keywords.get("features")
+        if features is not None and (isinstance(features, (bool, np.bool_)) or np.ndim(features) != 0):
+            raise EstimatorError("a tiled estimate takes features= as an angle (a per-edge mask is numbered by the "
+                                 "whole mesh's edges)")
+        normals = keywords.get("normals")
+        if normals is not None and not isinstance(normals, str):
+            raise EstimatorError("a tiled estimate takes normals= as 'fit' or 'pca' (or the input's own normals)")
+        for name in ("smooth", "smooth_iterations", "smooth_strength", "vertices"):
+            keywords.pop(name, None)
+        return cls(method, range, dict(keywords))
+
+    def for_input(self, *, points: bool, georeferenced: bool = False) -> "Job":
+        """This job with a point cloud's default orientation made explicit
+        (:func:`curv.point_normals.default_orientation` of the whole input: ``"up"`` for a
+        georeferenced scan, ``"top"`` otherwise), so that every tile orients as the whole call."""
+        if not points or self.keywords.get("orient") is not None:
+            return self
+        from ..point_normals import default_orientation
+
+        stand_in = PointCloud(np.zeros((1, 3)), georeferenced=georeferenced)
+        return Job(self.method, self.range, {**self.keywords, "orient": default_orientation(stand_in)})
+
+    @property
+    def call(self) -> dict:
+        """The keywords of :func:`curv.iter_estimate` (the method and range included)."""
+        return {"method": self.method, "range": self.range, **self.keywords}
+
+    def reach(self, shape, centres) -> np.ndarray:
+        """:func:`curv.tiles.reach.support_reach` of this job at ``centres`` of ``shape``."""
+        kw = self.keywords
+        return support_reach(shape, self.method, self.range, radius=kw.get("radius"), knn=kw.get("knn"),
+                             normals=kw.get("normals"), fit_range=kw.get("fit_range", 2),
+                             orient=kw.get("orient"), standard_errors=kw.get("standard_errors", True),
+                             centres=centres)
+
+
+@dataclass
+class Piece:
+    """The points of a region, as a fetch hands them to a tile.
+
+    Attributes
+    ----------
+    ids : (m,) int64
+        The points' numbers in the whole input, ascending.
+    points : (m, 3) float64
+    normals : (m, 3) float64 or None
+        The input's own normals, if it has them.
+    faces : (f, k) int64 or None
+        A mesh's faces that have a vertex in the region (indices into ``ids``; -1 pads polygons),
+        in the whole mesh's order; their other vertices are among ``ids`` too.
+    """
+
+    ids: np.ndarray
+    points: np.ndarray
+    normals: np.ndarray | None = None
+    faces: np.ndarray | None = None
+
+
+Fetch = Callable[[Region], Piece]
+"""``fetch(region)``: every point of the input inside ``region`` (a mesh's: and its faces' vertices)."""
+
+
+@dataclass
+class TileRows:
+    """The kept rows of a tile: its core points' results, by their numbers in the whole input.
+
+    Attributes
+    ----------
+    ids : (c,) int64
+        Ascending.
+    columns : dict
+        :data:`ROW_FIELDS` arrays of c rows.
+    info : dict
+        ``points`` read (core and halo, every pass), ``passes``, ``redone`` (core points estimated
+        again on a wider region), ``halo`` (the first pass's), ``seconds``, and the estimate's own
+        info entries (its normals' label, ...).
+    """
+
+    ids: np.ndarray
+    columns: dict
+    info: dict
+
+
+def empty_rows() -> dict:
+    return {"k1": np.empty(0), "k2": np.empty(0), "d1": np.empty((0, 3)), "d2": np.empty((0, 3)),
+            "normals": np.empty((0, 3)), "valid": np.empty(0, bool), "reason": np.empty(0, np.uint8),
+            "k1_se": np.empty(0), "k2_se": np.empty(0)}
+
+
+def shape_of(piece: Piece, frame: GridFrame | None, *, points: bool, georeferenced: bool = False,
+             step: float | None = None):
+    """The tile's shape in the whole call's order, and that order (shape row i = piece row order[i]);
+    a cloud's ``georeferenced`` and coordinate ``step`` are the whole input's (None: measured)."""
+    if points:
+        return framed_cloud(piece.points, piece.normals, piece.ids, frame, georeferenced=georeferenced, step=step)
+    return tile_mesh(piece.points, piece.faces, piece.ids, frame)
+
+
+def _steps(shape, job: Job, kept_rows: np.ndarray) -> tuple:
+    """``(used, certified, least radius)`` of a cloud's pass: the coordinate step the estimate used,
+    the step measured over the kept points' nearest (their neighbours are the whole call's, so the
+    smallest over every tile is the whole cloud's :attr:`curv.PointCloud.coordinate_step`), and the
+    narrowest radius the quantisation checks compare with the support floor."""
+    from ..core.knn import neighbour_steps
+    from .reach import floored_radii
+
+    nearest = np.full_like(shape.nearest[0], -1)
+    nearest[kept_rows] = shape.nearest[0][kept_rows]
+    certified = float(neighbour_steps(shape.points, nearest).min()) if kept_rows.size else np.inf
+    return float(shape.coordinate_step), certified, float(np.min(floored_radii(shape, job), initial=np.inf))
+
+
+def _estimate(shape, job: Job, centres) -> Generator[float, None, object]:
+    from ..api import iter_estimate
+
+    call = job.call
+    return (yield from iter_estimate(shape, call.pop("method"), call.pop("range"), vertices=centres, **call))
+
+
+def _faceless(piece: Piece, rows: np.ndarray) -> dict:
+    """The rows of vertices in a region that no face touches: isolated, as :func:`curv.estimate`
+    marks them (DEGENERATE, no normal, NaN)."""
+    c = rows.size
+    nan3 = np.full((c, 3), np.nan)
+    return {"k1": np.full(c, np.nan), "k2": np.full(c, np.nan), "d1": nan3, "d2": nan3.copy(), "normals": nan3.copy(),
+            "valid": np.zeros(c, bool), "reason": np.full(c, Reason.DEGENERATE, np.uint8),
+            "k1_se": np.full(c, np.nan), "k2_se": np.full(c, np.nan)}
+
+
+def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch, job: Job, frame: GridFrame | None,
+                  *, halo: float, points: bool, overlap: bool = False, georeferenced: bool = False,
+                  step: float | None = None) -> Generator[float, None, TileRows]:
+    """Estimate one tile (module notes): yields the fraction done, returns its :class:`TileRows`.
+
+    Parameters
+    ----------
+    core_ids : (c,) int64
+        The tile's points (ascending numbers in the whole input).
+    box : ((3,), (3,))
+        The tile's box.
+    bounds : ((3,), (3,))
+        The whole input's least and greatest coordinates.
+    fetch : callable
+        ``fetch(region) -> Piece``.
+    job : Job
+    frame : GridFrame or None
+        The whole cloud's grid (points), or the whole mesh's locality grid when it is estimated in
+        grid order (None: its own order).
+    halo : float
+        The first pass's halo width.
+    points : bool
+        The input is a point cloud.
+    overlap : bool
+        Also hand back the normals of the first pass's halo points (``info["overlap"]``: ids and
+        normals), for the orientation across tiles (:mod:`curv.tiles.orient`).
+    georeferenced, step : bool, float
+        A cloud's: the whole input's flag, and the whole cloud's coordinate step when known (None:
+        each pass measures its own and reports it in ``info["steps"]``, :func:`step_redo`).
+    """
+    t0 = time.perf_counter()
+    pending = np.asarray(core_ids, np.int64)
+    total = max(pending.size, 1)
+    lo, hi = (np.asarray(b, np.float64) for b in box)
+    h = float(halo)
+    ids_out, parts = [], []
+    info = {"points": 0, "passes": 0, "redone": 0, "halo": h}
+    while pending.size:
+        region = Region.around(lo, hi, h, bounds)
+        piece = fetch(region)
+        info["points"] += int(piece.ids.size)
+        info["passes"] += 1
+        if info["passes"] > 1:
+            info["redone"] += int(pending.size)
+        at = np.searchsorted(piece.ids, pending)
+        if not (at < piece.ids.size).all() or not np.array_equal(piece.ids[np.minimum(at, piece.ids.size - 1)], pending):
+            raise RuntimeError("a tile's region does not hold its own points (the fetch and the plan disagree)")
+        if not points and (piece.faces is None or piece.faces.size == 0):
+            ids_out.append(pending)
+            parts.append(_faceless(piece, pending))
+            break
+        shape, order = shape_of(piece, frame, points=points, georeferenced=georeferenced, step=step)
+        rank = np.empty(order.size, np.int64)
+        rank[order] = np.arange(order.size)
+        centres = rank[at]  # the pending points' rows of the shape
+        whole = 2 * centres.size >= shape.n_vertices
+        done_before = 1.0 - pending.size / total
+        gen = _estimate(shape, job, None if whole else np.sort(centres))
+        while True:
+            try:
+                progress = next(gen)
+            except StopIteration as stop:
+                res = stop.value
+                break
+            yield Progress(done_before + (1.0 - done_before) * 0.9 * float(progress), getattr(progress, "message", ""))
+        if not info.get("estimate_info"):
+            info["estimate_info"] = {k: v for k, v in res.info.items() if isinstance(v, (str, int, float, bool))}
+        if overlap and info["passes"] == 1:
+            from .reach import normal_reach
+
+            halo_rows = np.setdiff1d(np.arange(shape.n_vertices), centres, assume_unique=True)
+            # only the halo points whose normal this tile decided as the whole call does vote
+            decided = normal_reach(shape, fit_range=job.keywords.get("fit_range", 2),
+                                   orient=job.keywords.get("orient"))[halo_rows]
+            halo_rows = halo_rows[decided <= region.room(shape.vertices[halo_rows])]
+            halo_ids = piece.ids[order[halo_rows]]
+            sort = np.argsort(halo_ids)
+            info["overlap"] = (halo_ids[sort], np.asarray(res.normals)[halo_rows[sort]])
+        reach = job.reach(shape, centres)
+        room = region.room(shape.vertices[centres])
+        kept = reach <= room
+        rows = centres[kept]
+        if points:
+            info.setdefault("steps", []).append(_steps(shape, job, rows))
+        ids_out.append(pending[kept])
+        parts.append({name: np.asarray(getattr(res, name))[rows] for name in ("k1", "k2", "d1", "d2", "normals",
+                                                                             "valid", "reason", "k1_se", "k2_se")})
+        failing = ~kept
+        if not failing.any():
+            break
+        # the rest again, on a region around them twice as wide as the widest of their reaches
+        far = shape.vertices[centres[failing]]
+        lo, hi = far.min(axis=0), far.max(axis=0)
+        wanted = reach[failing]
+        h = max(2.0 * h, 2.0 * float(np.max(wanted[np.isfinite(wanted)], initial=0.0)))
+        if not np.isfinite(wanted).all() or region.everything:
+            h = np.inf
+        pending = pending[failing]
+        del shape, res, piece
+    ids = np.concatenate(ids_out) if ids_out else np.empty(0, np.int64)
+    sort = np.argsort(ids, kind="stable")
+    columns = {name: np.concatenate([p[name] for p in parts])[sort] for name in parts[0]} if parts else empty_rows()
+    info["seconds"] = time.perf_counter() - t0
+    yield Progress(1.0)
+    return TileRows(ids[sort], columns, info)
+
+
+def whole_step(infos) -> float | None:
+    """The whole cloud's coordinate step from its tiles' infos (the smallest certified step of any
+    pass), or None for a mesh."""
+    certified = [c for info in infos for _, c, _ in info.get("steps", ())]
+    return min(certified) if certified else None
+
+
+def step_redo(info: dict, step: float) -> bool:
+    """Whether a tile must run again with the whole cloud's coordinate ``step``: some pass used
+    another step and a radius the quantisation checks read lies between the two support floors
+    (only then can a decision differ; on coordinates of full precision both floors are far below
+    every radius)."""
+    from ..point_normals import MIN_SUPPORT_STEPS
+
+    for used, _, least in info.get("steps", ()):
+        if used != step and MIN_SUPPORT_STEPS * max(used, step) > least:
+            return True
+    return False

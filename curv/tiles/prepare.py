@@ -1,0 +1,197 @@
+"""Before the tiles run: scan the input, plan the tiles, put each tile's points in its own file.
+
+Three passes over the input (:class:`curv.tiles.sources.Source`), each a chunk at a time:
+
+1. **scan**: the count, the bounds and the sample the whole input's grid comes from
+   (:mod:`curv.tiles.frame`); a compressed input is copied as plain columns on the way;
+2. **count**: the points per cell of a fine grid (:class:`curv.tiles.plan.Histogram`), from which
+   the tiles are cut (:func:`curv.tiles.plan.plan_tiles`);
+3. **bucket**: each point appended to its tile's file, in the input's order (so every tile's
+   points are sorted by their number); a mesh's faces go to the file of every tile that holds one
+   of their vertices.
+
+:class:`FileInput` then answers a tile's region from those files (:meth:`FileInput.fetch`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Generator
+
+import numpy as np
+
+from ..core.jit import Progress
+from ..core.knn import GRAPH_NEIGHBOURS, cell_sample_step
+from ..core.mesh import scatter_sample, scattered_corners
+from .engine import Piece
+from .frame import GridFrame, frame_from_sample
+from .plan import Histogram, Region, TilePlan, plan_tiles
+from .scratch import FACE_DTYPE, Scratch, point_dtype
+from .sources import CHUNK, Source
+
+__all__ = ["Prepared", "iter_prepare", "FileInput"]
+
+
+@dataclass
+class Prepared:
+    """A planned run: the tiles, the whole input's grid, and how to read a tile's region.
+
+    Attributes
+    ----------
+    plan : TilePlan
+    frame : GridFrame or None
+        The whole input's grid (a point cloud), or a whole mesh's locality grid when it is
+        estimated in grid order (else None).
+    n : int
+        Points (vertices).
+    is_mesh, has_normals : bool
+    """
+
+    plan: TilePlan
+    frame: GridFrame | None
+    n: int
+    is_mesh: bool
+    has_normals: bool
+
+
+class FileInput:
+    """A planned input's points read back from the scratch folder, a region at a time (picklable:
+    it travels to a cluster's workers, which read the same folder)."""
+
+    def __init__(self, scratch: Scratch, prepared: Prepared, source_path: Path):
+        self.folder = scratch.folder
+        self.tiles = prepared.plan.tiles
+        self.histogram_cell = prepared.plan.histogram.cell
+        self.is_mesh = prepared.is_mesh
+        self.dtype = point_dtype(prepared.has_normals)
+        self.has_normals = prepared.has_normals
+        self.source_path = Path(source_path)
+        self._source = None
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_source"] = None  # a memory map is opened again where it is used
+        return state
+
+    def _meeting(self, region: Region) -> list:
+        eps = 1e-9 * self.histogram_cell
+        out = []
+        for t in self.tiles:
+            lo, hi = np.asarray(t.lo), np.asarray(t.hi)
+            if ((~region.open_hi) & (lo - eps > region.hi)).any() or ((~region.open_lo) & (hi + eps < region.lo)).any():
+                continue
+            out.append(t.index)
+        return out
+
+    def fetch(self, region: Region) -> Piece:
+        scratch = Scratch(self.folder)
+        parts = []
+        meeting = self._meeting(region)
+        for t in meeting:
+            records = scratch.read_points(t, self.dtype)
+            parts.append(records[region.contains(records["xyz"])])
+        records = np.concatenate(parts) if parts else np.empty(0, self.dtype)
+        records = records[np.argsort(records["id"], kind="stable")]
+        ids = np.ascontiguousarray(records["id"])
+        points = np.ascontiguousarray(records["xyz"])
+        normals = np.ascontiguousarray(records["normal"]) if self.has_normals else None
+        if not self.is_mesh:
+            return Piece(ids, points, normals)
+        faces = np.concatenate([scratch.read_faces(t) for t in meeting]) if meeting else np.empty(0, FACE_DTYPE)
+        corners = faces["v"]
+        touched = np.isin(corners, ids).any(axis=1)
+        faces = faces[touched]
+        faces = faces[np.unique(faces["face"], return_index=True)[1]]  # in the mesh's order, each once
+        corners = faces["v"]
+        ring = np.setdiff1d(np.unique(corners), ids, assume_unique=True)
+        if ring.size:
+            all_ids = np.concatenate([ids, ring])
+            all_points = np.concatenate([points, self._vertices_at(ring)])
+            sort = np.argsort(all_ids, kind="stable")
+            ids, points = all_ids[sort], all_points[sort]
+        local = np.searchsorted(ids, corners)
+        return Piece(ids, points, None, local)
+
+    def _vertices_at(self, ids: np.ndarray) -> np.ndarray:
+        if self._source is None:
+            from .sources import open_source
+
+            self._source = open_source(self.source_path)
+        return self._source.vertices_at(ids)
+
+
+def _mesh_frame(source: Source, scan) -> GridFrame | None:
+    """A whole mesh's locality grid when the whole call would estimate it in grid order
+    (:meth:`curv.Mesh.scattered_order`), else None."""
+    picked = scatter_sample(source.n_faces)
+    corners = source.faces_at(picked)
+    if not scattered_corners(source.n, corners):
+        return None
+    return frame_from_sample(scan.sample, scan.n, scan.lo, scan.hi)
+
+
+def iter_prepare(source: Source, scratch: Scratch, tile_size: int) -> Generator[float, None, Prepared]:
+    """Scan, count and bucket ``source`` into ``scratch`` (module notes): yields the fraction done
+    (with a message per pass), returns the :class:`Prepared` run (also saved in the folder)."""
+    n = source.n
+    yield Progress(0.0, "reading the input")
+    scan = source.scan(scratch.folder, cell_sample_step(n))
+    if scan.n == 0:
+        from ..core.errors import LoadError
+
+        raise LoadError(f"{source.path}: has no points")
+    yield Progress(0.3, "planning the tiles")
+    if source.is_mesh:
+        frame = _mesh_frame(source, scan)
+    else:
+        frame = frame_from_sample(scan.sample, scan.n, scan.lo, scan.hi, GRAPH_NEIGHBOURS)
+    histogram = Histogram.over(scan.lo, scan.hi)
+    for start, pts, _ in source.chunks():
+        histogram.add(pts)
+        yield Progress(0.3 + 0.2 * (start + pts.shape[0]) / n, "planning the tiles")
+    plan = plan_tiles(histogram, tile_size, (scan.lo, scan.hi))
+    dtype = point_dtype(source.has_normals)
+    tile_file = scratch.folder / "tile_of.i4" if source.is_mesh else None
+    tile_of_all = np.lib.format.open_memmap(tile_file, mode="w+", dtype=np.int32, shape=(n,)) if tile_file else None
+    for start, pts, normals in source.chunks():
+        tiles = plan.tile_of(pts)
+        records = np.empty(pts.shape[0], dtype)
+        records["id"] = np.arange(start, start + pts.shape[0])
+        records["xyz"] = pts
+        if normals is not None:
+            records["normal"] = normals
+        if tile_of_all is not None:
+            tile_of_all[start:start + pts.shape[0]] = tiles
+        order = np.argsort(tiles, kind="stable")
+        cuts = np.flatnonzero(np.diff(tiles[order])) + 1
+        for group in np.split(order, cuts):
+            if group.size:
+                scratch.append(scratch.points_path(int(tiles[group[0]])), records[group])
+        yield Progress(0.5 + (0.5 if not source.is_mesh else 0.25) * (start + pts.shape[0]) / n, "sorting points into tiles")
+    if source.is_mesh:
+        tile_of_all.flush()
+        for start, faces in source.face_chunks():
+            owners = np.asarray(tile_of_all[faces.ravel()]).reshape(-1, 3)
+            records = np.empty(faces.shape[0], FACE_DTYPE)
+            records["face"] = np.arange(start, start + faces.shape[0])
+            records["v"] = faces
+            # each face once per distinct tile among its vertices
+            for column in range(3):
+                first = np.ones(faces.shape[0], bool)
+                for other in range(column):
+                    first &= owners[:, column] != owners[:, other]
+                rows = np.flatnonzero(first)
+                tiles = owners[rows, column]
+                order = np.argsort(tiles, kind="stable")
+                cuts = np.flatnonzero(np.diff(tiles[order])) + 1
+                for group in np.split(order, cuts):
+                    if group.size:
+                        scratch.append(scratch.faces_path(int(tiles[group[0]])), records[rows[group]])
+            yield Progress(0.75 + 0.25 * (start + faces.shape[0]) / max(source.n_faces, 1), "sorting faces into tiles")
+        del tile_of_all
+        tile_file.unlink(missing_ok=True)
+    prepared = Prepared(plan, frame, n, source.is_mesh, source.has_normals)
+    scratch.save_plan(prepared)
+    yield Progress(1.0, "")
+    return prepared
