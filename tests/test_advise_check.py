@@ -76,7 +76,8 @@ def test_a_noise_free_patch_twin_has_the_surfaces_curvature(function):
     # a hundred times below the best estimator's error on such a mesh (about 1e-2)
     assert np.median(e) < 2e-4
     moved = np.linalg.norm(twin.shape.vertices - tm.mesh.vertices[twin.origin], axis=1)
-    assert np.median(moved) < 1e-5 * tm.mesh.mean_edge_length
+    # a thousandth of the paper's noise level (0.1 of an edge): nothing an estimator can tell
+    assert np.median(moved) < 1e-4 * tm.mesh.mean_edge_length
 
 
 def test_the_twin_measures_the_noise_along_the_normal():
@@ -162,6 +163,10 @@ def test_the_ranking_is_by_measured_error_and_says_what_is_within_noise():
     ranked = rank_candidates(cands, report, 0.02)
     assert [c.method for c in ranked] == ["b", "c", "a", "e", "d"]   # measured first, then predicted, coverage above
     assert [c.within_noise for c in ranked] == [False, True, False, False, False]   # c beat b on one copy
+    # the prior's first stays first where the copies cannot tell the measured best from it
+    close = {**report, keys[0]: measured(0.12, 0.10, 0.13)}
+    ranked = rank_candidates(cands, close, 0.02)
+    assert [c.method for c in ranked] == ["a", "b", "c", "e", "d"] and ranked[1].within_noise
     floor = rank_candidates(cands[:2], {keys[0]: measured(1e-9, 1e-9, 1e-9), keys[1]: measured(1e-8, 1e-8, 1e-8)},
                             0.02)
     assert [c.method for c in floor] == ["a", "b"] and floor[1].within_noise   # both at the floor: the table decides

@@ -222,6 +222,28 @@ def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres:
     -------
     CheckReport
     """
+    # the fractions below are sums of shares: rounding may put one a few ulps below the one before
+    return (yield from _monotone(_check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
+                                              noise_policy)))
+
+
+def _monotone(gen: Generator) -> Generator[Progress, None, object]:
+    """``yield from gen`` with every fraction at least the one before; returns ``gen``'s value."""
+    last = 0.0
+    try:
+        while True:
+            try:
+                done = next(gen)
+            except StopIteration as stop:
+                return stop.value
+            last = max(last, float(done))
+            yield Progress(last, getattr(done, "message", ""), getattr(done, "phase", ""))
+    finally:
+        gen.close()
+
+
+def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options, noise_policy):
+    """:func:`iter_check`'s work (its parameters in order)."""
     from .copies import noisy_copy
     from .twin import build_twin, range_units
 
