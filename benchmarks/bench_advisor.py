@@ -473,7 +473,7 @@ def main(argv=None) -> int:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="48 meshes of at most ~3700 vertices")
-    parser.add_argument("--meshes", type=int, default=200)
+    parser.add_argument("--meshes", type=int, help="held-out meshes; default 200 (48 with --quick)")
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
     parser.add_argument("--out", help="also write the markdown report here")
@@ -512,7 +512,8 @@ def main(argv=None) -> int:
     if args.rescore:
         runs = readvise(json.loads(Path(args.rescore).read_text()), table)
     else:
-        n, s_range = (48, (8, 34)) if args.quick else (args.meshes, (8, 81))
+        n, s_range = (48, (8, 34)) if args.quick else (200, (8, 81))
+        n = args.meshes or n
         settings = [{**s, "table": args.table} for s in draw_settings(n, args.seed, s_range=s_range)]
         runs = []
         with open_executor(workers=args.workers) as pool:  # one kernel thread per worker

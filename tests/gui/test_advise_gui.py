@@ -86,8 +86,15 @@ def test_advise_runs_in_the_background_and_fills_the_panel(qtbot, window, ui):
     errors = [float(s[4]) for s in shown]
     shares = [float(s[3].rstrip(" %")) / 100 for s in shown]
     np.testing.assert_allclose(shares, [c.valid_share for c in expected.ranking], atol=0.006)
-    first = [e for e, share in zip(errors, shares) if share >= max(shares) - 0.02 - 0.006]
-    assert first == sorted(first) and errors[: len(first)] == first               # best first among the fullest
+    # checked: the measured calls first, by their measured error (shown with its spread over the copies)
+    assert expected.checked and panel.check.text().startswith("checked ")
+    measured = [c for c in expected.ranking if c.measured is not None and c.measured.ok]
+    assert len(measured) >= 3 and expected.ranking[: len(measured)] == measured
+    assert [c.measured.erel for c in measured] == sorted(c.measured.erel for c in measured)
+    shown_measured = [table.item(r, 5).text() for r in range(len(measured))]
+    assert [t.split()[0] for t in shown_measured] == [f"{c.measured.erel:.3g}" for c in measured]
+    assert all(f"×{c.measured.spread:.2f}" in t for c, t in zip(measured, shown_measured))
+    assert all(table.item(r, 5).text() == "" for r in range(len(measured), table.rowCount()))
     np.testing.assert_allclose(errors, [c.expected_erel for c in expected.ranking], rtol=5e-3)
     assert shown[0][:2] == (expected.method, f"R{expected.range}")               # the recommendation on top
     assert table.item(0, 0).font().bold() and not table.item(1, 0).font().bold()
