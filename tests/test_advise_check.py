@@ -200,7 +200,9 @@ def test_advice_on_a_point_cloud_is_checked_and_runs():
     assert adv.features.noise > 0 and adv.features.n_points == 2500
     measured = [c for c in adv.ranking if c.measured is not None and c.measured.ok]
     assert len(measured) >= 10 and adv.best is measured[0]
-    assert [c.measured.erel for c in measured] == sorted(c.measured.erel for c in measured)
+    # by measured error, the prior's first kept first where the copies cannot tell them apart
+    assert [c.measured.erel for c in measured[1:]] == sorted(c.measured.erel for c in measured[1:])
+    assert measured[0].measured.erel == min(c.measured.erel for c in measured) or measured[1].within_noise
     res = curv.estimate(cloud, **adv.kwargs)
     assert res.valid_fraction > 0.8
     data = json.loads(json.dumps(adv.as_dict(), default=float))
