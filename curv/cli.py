@@ -278,16 +278,9 @@ def _advise_with_progress(shape, *, check, quiet: bool, seed: int = 0):
     """``curv.iter_advise`` with a progress bar on stderr (Ctrl-C stops it: the check yields often)."""
     from .advice.advising import iter_advise
 
-    progress = Progress("advise", enabled=None if not quiet else False)
-    gen = iter_advise(shape, check=check, seed=seed)
-    try:
-        while True:
-            progress.update(next(gen))
-    except StopIteration as stop:
-        return stop.value
-    finally:
-        gen.close()
-        progress.close()
+    with PhaseProgress("advise", mode="off" if quiet else None) as progress:
+        progress.phase("advise")
+        return progress.follow(iter_advise(shape, check=check, seed=seed))
 
 
 def _apply_advice(args, *, points: bool = False) -> None:

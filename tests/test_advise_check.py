@@ -197,7 +197,7 @@ def test_advice_on_a_point_cloud_is_checked_and_runs():
     cloud = curv.PointCloud(sampled.cloud.points + rng.normal(scale=0.004, size=sampled.cloud.points.shape))
     adv = curv.advise(cloud)
     assert adv.is_cloud and adv.checked and np.isnan(adv.expected_erel)
-    assert adv.features.noise > 0 and adv.features.n_points == 2500
+    assert adv.features.noise > 0 and adv.features.n_points == cloud.n_points > 2000
     measured = [c for c in adv.ranking if c.measured is not None and c.measured.ok]
     assert len(measured) >= 10 and adv.best is measured[0]
     # by measured error, the prior's first kept first where the copies cannot tell them apart

@@ -236,7 +236,7 @@ def _monotone(gen: Generator) -> Generator[Progress, None, object]:
                 done = next(gen)
             except StopIteration as stop:
                 return stop.value
-            last = max(last, float(done))
+            last = min(1.0, max(last, float(done)))  # never back, never past the end
             yield Progress(last, getattr(done, "message", ""), getattr(done, "phase", ""))
     finally:
         gen.close()
