@@ -75,7 +75,8 @@ def _check_colours(args) -> None:
         raise CurvUsageError(str(exc)) from None
 
 
-def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng, *, points: bool = False) -> None:
+def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng, *, points: bool = False,
+                  tiles: bool = False) -> None:
     from .memory import check_memory
 
     if not args.memory_check:
@@ -85,8 +86,8 @@ def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng, *, poin
         size = f"{n_vertices:,} points" if points else f"{n_vertices:,} vertices and {n_faces:,} faces"
         raise CurvMemoryError(
             f"{args.input}: {method} {rng.label} on {size} "
-            f"{est.describe()}; refusing to start (use a smaller range, another estimator, "
-            f"a bigger machine, or --no-memory-check)")
+            f"{est.describe()}; refusing to start ({'give -o OUT to run it on tiles, or ' if tiles else ''}"
+            f"use a smaller range, another estimator, a bigger machine, or --no-memory-check)")
 
 
 def _cmd_estimate(args) -> int:
@@ -133,6 +134,9 @@ def _estimate(args, progress: PhaseProgress) -> int:
         n_points = peek_points(args.input)
         counts = None if n_points is None else (n_points, 0)
     if tiled.wants_tiles(args, counts, points=points):  # asked, or too large for memory whole
+        if not args.output and args.tile_size is None and args.scheduler is None:
+            # too large whole and no file for tiles to write: say how much it needs, and how to run it
+            _check_memory(args, *counts, spec.name, rng, points=points, tiles=True)
         return tiled.run(args, points=points)
     if counts is not None:  # refuse before reading a file that will not fit
         _check_memory(args, *counts, spec.name, rng, points=points)

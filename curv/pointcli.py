@@ -111,8 +111,8 @@ def _grid_lines(args, cloud, info) -> list[str]:
     if not (widened or marked):
         return []
     step, floor = info["coordinate_step"], info["support_floor"]
-    lines = [f"  coordinates on a {step:.4g} grid: fits narrower than {floor:.4g} ({MIN_SUPPORT_STEPS} steps) "
-             f"see its stairs"]
+    lines = [f"  coordinates stored on a grid of step {step:.4g}: a fit narrower than {floor:.4g} "
+             f"({MIN_SUPPORT_STEPS} steps) sees its stairs, not the surface"]
     if widened:
         lines.append(f"  normals fitted over at least {floor:.4g} at {widened:,} points")
     if marked:

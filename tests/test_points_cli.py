@@ -213,6 +213,7 @@ def test_a_cloud_too_big_for_memory_is_refused_from_its_header(tmp_path, capsys)
         fh.truncate(len(header) + 12 * 10**9)
     code, _, err = _run(capsys, path, "-m", "qs")
     assert code == 2 and "qs R2 on 1,000,000,000 points needs about" in err and "refusing to start" in err
+    assert "give -o OUT to run it on tiles" in err  # too large whole: it would run on tiles, which need a file
     path.write_bytes(header)  # the header alone: a promise the file cannot hold, whatever the memory
     for flags in ((), ("--no-memory-check",)):
         code, _, err = _run(capsys, path, "-m", "qs", *flags)

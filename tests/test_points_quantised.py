@@ -87,5 +87,5 @@ def test_plane_laz_is_marked_at_r2_and_right_at_a_wide_range(capsys):
     code = main(["estimate", str(laspy_sample("plane.laz")), "-m", "qs", "-q"])
     text = capsys.readouterr().out
     assert code == 0
-    assert "coordinates on a 0.01 grid: fits narrower than 0.1 (10 steps) see its stairs" in text
+    assert "coordinates stored on a grid of step 0.01: a fit narrower than 0.1 (10 steps) sees its stairs" in text
     assert "28,185 estimates over narrower supports are SINGULAR (no estimate there): try -r 10 or more" in text

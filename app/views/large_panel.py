@@ -201,6 +201,9 @@ def attach_large_panel(window) -> LargePanel:
     window.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, dock)
     if "region" in window.docks:
         window.tabifyDockWidget(window.docks["region"], dock)
+    if "mesh" in window.docks:
+        # a tabified dock comes to the front; a first run shows the mesh report there
+        window.docks["mesh"].raise_()
     window.docks["large"] = dock
     panel.message.connect(lambda text, error: window.statusBar().showMessage(text, 8000))
     region = getattr(window, "region_panel", None)
