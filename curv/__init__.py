@@ -35,6 +35,7 @@ _LAZY = {
     "as_input": ("curv.convert", "as_input"),
     "surfaces": ("curv.surfaces", None),
     "advise": ("curv.advice.advisor", "advise"),
+    "iter_advise": ("curv.advice.advising", "iter_advise"),
     "Advice": ("curv.advice.advisor", "Advice"),
     "Candidate": ("curv.advice.advisor", "Candidate"),
     "features": ("curv.core.features", None),

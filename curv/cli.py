@@ -110,9 +110,7 @@ def _estimate(args, progress: PhaseProgress) -> int:
     if args.method is None:
         args.method = DEFAULT_ESTIMATORS["points" if points else "mesh"]
     if args.method == "auto":
-        if points:
-            raise CurvError(f"{args.input} is a point cloud; --method auto advises on meshes only")
-        _apply_advice(args)
+        _apply_advice(args, points=points)
     spec = get_spec(args.method)
     rng = resolve(spec, args.range, args.radius, args.knn)
     if points:
@@ -264,38 +262,54 @@ def _region_vertices(args, mesh):
 
 def cli_arguments(kwargs: dict) -> str:
     """The ``curv estimate`` flags of a call's keyword arguments: ``--method jet --range 4 --degree 4``."""
-    flags = {"method": "--method", "range": "--range", "degree": "--degree", "weights": "--weights",
-             "width": "--width", "noise_model": "--noise-model", "normals": "--normals", "fit_range": "--fit-range",
-             "features": "--features"}
+    flags = {"method": "--method", "range": "--range", "radius": "--radius", "knn": "--knn", "degree": "--degree",
+             "weights": "--weights", "width": "--width", "noise_model": "--noise-model", "normals": "--normals",
+             "fit_range": "--fit-range", "features": "--features"}
     return " ".join(f"{flag} {kwargs[k]:g}" if isinstance(kwargs[k], float) else f"{flag} {kwargs[k]}"
                     for k, flag in flags.items() if k in kwargs)
 
 
-def _apply_advice(args) -> None:
-    """``--method auto``: put the advisor's whole call (method, range, options) into ``args``, announced
-    on stdout."""
-    from .advice.advisor import advise
+def _load_for_advice(args, points: bool):
     from .io import load
 
-    given = [flag for flag, value in (("--range", args.range), ("--radius", args.radius), ("--degree", args.degree),
-                                      ("--weights", args.weights), ("--width", args.width),
-                                      ("--fit-range", args.fit_range))
+    if points:
+        return load(args.input)
+    return load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
+                orient=args.orient, remove_unreferenced=args.remove_unreferenced)
+
+
+def _advise_with_progress(shape, *, check, quiet: bool, seed: int = 0):
+    """``curv.iter_advise`` with a progress bar on stderr (Ctrl-C stops it: the check yields often)."""
+    from .advice.advising import iter_advise
+
+    with PhaseProgress("advise", mode="off" if quiet else None) as progress:
+        progress.phase("advise")
+        return progress.follow(iter_advise(shape, check=check, seed=seed))
+
+
+def _apply_advice(args, *, points: bool = False) -> None:
+    """``--method auto``: put the advisor's whole call (method, range or radius or knn, options) into
+    ``args``, announced on stdout."""
+    given = [flag for flag, value in (("--range", args.range), ("--radius", args.radius), ("--knn", args.knn),
+                                      ("--degree", args.degree), ("--weights", args.weights),
+                                      ("--width", args.width), ("--fit-range", args.fit_range))
              if value is not None]
     if args.normals not in (None, "max"):
         given.append("--normals")
     if given:
         raise CurvError(f"--method auto chooses the range and the options too; drop {', '.join(given)}")
-    mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
-                orient=args.orient, remove_unreferenced=args.remove_unreferenced)
-    adv = advise(mesh)
+    shape = _load_for_advice(args, points)
+    adv = _advise_with_progress(shape, check=None, quiet=args.quiet)
     kwargs = dict(adv.kwargs)
     if args.features is not None:  # the user's own crease angle wins
         kwargs.pop("features", None)
     print(f"auto: {adv.label} ({adv.why}); the same as {cli_arguments(kwargs)}", flush=True)
-    args.method, args.range = kwargs["method"], str(kwargs["range"])
-    args.degree = kwargs.get("degree")
-    if kwargs.get("normals") == "fit":
-        args.normals, args.fit_range = "fit", kwargs.get("fit_range")
+    args.method = kwargs["method"]
+    args.range = None if kwargs.get("range") is None else str(kwargs["range"])
+    args.radius, args.knn = kwargs.get("radius"), kwargs.get("knn")
+    args.degree, args.weights, args.width = kwargs.get("degree"), kwargs.get("weights"), kwargs.get("width")
+    if kwargs.get("normals") in ("fit", "pca"):
+        args.normals, args.fit_range = kwargs["normals"], kwargs.get("fit_range")
     if "features" in kwargs:
         args.features = kwargs["features"]
 
@@ -303,39 +317,29 @@ def _apply_advice(args) -> None:
 def _cmd_advise(args) -> int:
     import json
 
-    from .advice.advisor import advise
-    from .io import is_point_file, load
+    from .io import is_point_file
 
-    if is_point_file(args.input):
-        raise CurvError(f"{args.input} is a point cloud; curv advise ranks estimators for meshes only "
-                        f"(its table comes from the mesh study)")
-    mesh = load(args.input, merge_vertices=args.merge_vertices, remove_degenerate=args.remove_degenerate,
-                orient=args.orient, remove_unreferenced=args.remove_unreferenced)
-    adv = advise(mesh)
+    points = is_point_file(args.input)
+    if points:
+        given = [flag for flag in ("merge_vertices", "remove_degenerate", "orient", "remove_unreferenced")
+                 if getattr(args, flag)]
+        if given:
+            raise CurvError(f"{args.input} is a point cloud; --{given[0].replace('_', '-')} needs a mesh's faces")
+    shape = _load_for_advice(args, points)
+    check = False if args.no_check else (True if args.check else None)
+    adv = _advise_with_progress(shape, check=check, quiet=args.quiet or args.json, seed=args.seed)
     if args.json:
-        print(json.dumps({"input": args.input, **adv.as_dict()}, indent=2))
+        print(json.dumps({"input": args.input, **adv.as_dict()}, indent=2, default=float))
         return 0
-    f = adv.features
-    kinds = ", ".join(f"{n} {k}-gons" if k != 3 else f"{n} triangles" for k, n in f.polygon_kinds.items())
-    print(f"{args.input}: {f.n_vertices} vertices; {kinds}; {100 * f.border_share:.1f} % on a border")
-    print(f"  noise        {f.noise:.4f} mean edges ({f.noise_level:.2f} of the paper's level)")
-    print(f"  irregularity {f.irregularity_deg:.1f} degrees RMS from 60")
-    print(f"  density      {f.density:.4f} (mean edge x median |k1|+|k2|)")
-    print(f"  spreads      valence {f.valence_sd:.2f} (sd), curvature {f.curvature_spread:.2f} (IQR of log |k1|+|k2|)")
-    print(f"  shape        anisotropy {f.anisotropy:.2f}, model residual {f.residual_ratio:.2g} (quartic / quadric "
-          f"fit residual: about 1 noise, near 0 the surface's own shape)")
+    from .advice.report import check_lines, feature_lines, ranking_lines
+
+    print("\n".join(feature_lines(args.input, adv)))
     print(f"advice: {adv.why}")
     print(f"  call: {adv.call}")
     print(f"  or:   curv estimate {args.input} {cli_arguments(adv.kwargs)}")
     if adv.suggested_features is not None:
         print(f"  sharp edges: the call above estimates with features={adv.suggested_features:g}")
-    width = max(len(c.label) for c in adv.ranking[: args.top]) if adv.ranking else 7
-    print(f"{'rank':>4}  {'variant':<{width}}  valid  predicted median e_rel")
-    shown = adv.ranking[: args.top]
-    for i, c in enumerate(shown, 1):
-        print(f"{i:>4}  {c.label:<{width}}  {100 * c.valid_share:4.0f}%  {c.expected_erel:.3g}")
-    if len(adv.ranking) > len(shown):
-        print(f"  ... {len(adv.ranking) - len(shown)} more (--top N, --json)")
+    print("\n".join(check_lines(adv) + ranking_lines(adv, args.top)))
     return 0
 
 
@@ -445,10 +449,18 @@ def build_parser() -> argparse.ArgumentParser:
     add_tile_arguments(p_est)
     p_est.set_defaults(func=_cmd_estimate)
 
-    p_adv = sub.add_parser("advise", help="which estimator and range for this mesh (from the study)")
-    p_adv.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...)")
-    p_adv.add_argument("--json", action="store_true", help="features, ranking and advice as JSON")
+    p_adv = sub.add_parser("advise", help="which estimator, range and options for this mesh or point cloud "
+                           "(the study's table, checked on noisy copies of the input's smooth twin)")
+    p_adv.add_argument("input", help="mesh file (PLY, OBJ, OFF, STL, glTF, ...) or point cloud")
+    p_adv.add_argument("--json", action="store_true", help="features, ranking, check and advice as JSON")
     p_adv.add_argument("--top", type=int, default=12, help="variants of the ranking shown; default 12")
+    checking = p_adv.add_mutually_exclusive_group()
+    checking.add_argument("--no-check", action="store_true", help="the table's ranking alone (a mesh; a point "
+                          "cloud: the prior order), no self-check")
+    checking.add_argument("--check", action="store_true", help="check even an input above the size the check "
+                          "is skipped at")
+    p_adv.add_argument("--seed", type=int, default=0, help="seed of the check's centres and noise; default 0")
+    p_adv.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     for flag, text in (("--merge-vertices", "merge vertices at identical positions"),
                        ("--remove-degenerate", "drop zero-area / repeated-index faces"),
                        ("--orient", "make face orientation consistent"),

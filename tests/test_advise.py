@@ -104,8 +104,8 @@ def test_kernel_prediction_tends_to_the_nearest_point_and_to_the_mean():
 
 def test_ranking_covers_every_candidate_best_first(noisy):
     table = load_table()
-    adv = curv.advise(noisy.mesh)
-    assert isinstance(adv, Advice)
+    adv = curv.advise(noisy.mesh, check=False)
+    assert isinstance(adv, Advice) and not adv.checked and adv.note
     assert len(adv.ranking) == len(table["variants"])  # a triangle mesh admits every registered variant
     errs = [c.expected_erel for c in adv.ranking]
     assert all(np.isfinite(errs)) and min(errs) > 0
@@ -125,7 +125,7 @@ def test_ranking_covers_every_candidate_best_first(noisy):
 
 
 def test_why_line_names_the_noise_the_irregularity_and_the_choice(noisy):
-    adv = advise(noisy.mesh)
+    adv = advise(noisy.mesh, check=False)
     assert "\n" not in adv.why
     assert f"noise about {adv.features.noise_level:.2g} of the paper's level" in adv.why
     assert f"({adv.features.irregularity_deg:.0f} degrees)" in adv.why
@@ -133,7 +133,7 @@ def test_why_line_names_the_noise_the_irregularity_and_the_choice(noisy):
 
 
 def test_noise_raises_the_expected_error():
-    clean, noisy = advise(_study_mesh(0.0, 12.5).mesh), advise(_study_mesh(1.0, 12.5).mesh)
+    clean, noisy = (advise(_study_mesh(level, 12.5).mesh, check=False) for level in (0.0, 1.0))
     assert noisy.expected_erel > 2 * clean.expected_erel
 
 
@@ -146,10 +146,11 @@ def test_lazy_export_is_the_function_even_after_the_module_loads():
 # ------------------------------------------------------------------ CLI
 def test_cli_text(tmp_path, capsys, noisy):
     path = _write_off(tmp_path / "m.off", noisy.mesh)
-    assert main(["advise", path, "--top", "5"]) == 0
+    assert main(["advise", path, "--top", "5", "--no-check"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith(f"{path}: 3169 vertices; ")
-    adv = advise(noisy.mesh)
+    adv = advise(noisy.mesh, check=False)
+    assert "  not checked: the table's ranking alone (check=False)" in out
     assert f"advice: {adv.why}" in out
     assert f"  call: {adv.call}" in out
     f = adv.features  # the table's other axes are said too
@@ -166,8 +167,9 @@ def test_cli_text(tmp_path, capsys, noisy):
 
 def test_cli_json(tmp_path, capsys, noisy):
     path = _write_off(tmp_path / "m.off", noisy.mesh)
-    assert main(["advise", path, "--json"]) == 0
+    assert main(["advise", path, "--json", "--no-check"]) == 0
     data = json.loads(capsys.readouterr().out)
+    assert data["checked"] is False and data["check"] is None
     assert data["input"] == path
     ranking = data["ranking"]
     assert (data["method"], data["range"], data["options"]) == tuple(ranking[0][k] for k in ("method", "range", "options"))
@@ -214,19 +216,19 @@ def test_estimate_method_auto_refuses_a_range(tmp_path, capsys, noisy):
 
 
 def test_estimate_method_auto_applies_the_options(tmp_path, capsys, monkeypatch, noisy):
-    import curv.advice.advisor
+    import curv.advice.advising
 
     path = _write_off(tmp_path / "m.off", noisy.mesh)
-    real = curv.advice.advisor.advise
+    real = curv.advice.advising.iter_advise
     for options in ({"degree": 4}, {"normals": "fit", "fit_range": 4}):
 
         def fake(mesh, **kw):  # the advisor's answer with the first candidate carrying these options
-            adv = real(mesh, **kw)
+            adv = yield from real(mesh, **{**kw, "check": False})
             best = curv.advice.advisor.Candidate("jet" if "degree" in options else "mru", 3, options, 0.01)
             return Advice(features=adv.features, ranking=[best], method=best.method, range=3, expected_erel=0.01,
                           why="test", options=options)
 
-        monkeypatch.setattr(curv.advice.advisor, "advise", fake)
+        monkeypatch.setattr(curv.advice.advising, "iter_advise", fake)
         assert main(["estimate", path, "--method", "auto", "-q"]) == 0
         out = capsys.readouterr().out.splitlines()
         method = "jet" if "degree" in options else "mru"
@@ -271,7 +273,7 @@ def test_a_tiny_table_builds_advises_and_rebuilds_from_its_measured_rows(tmp_pat
     assert table["metadata"]["command"] == "test" and table["metadata"]["settings"]["samples"] == 1
     assert table["kernel"]["bandwidth"] in at.BANDWIDTHS
     table = json.loads(json.dumps(table))  # what load_table reads back
-    adv = advise(noisy.mesh, table=table)
+    adv = advise(noisy.mesh, table=table, check=False)
     assert len(adv.ranking) == len(table["variants"])
 
     # the study resumes and the measured rows are cached in the study directory: nothing is measured again
@@ -477,7 +479,7 @@ def test_the_mixed_quad_mesh_is_not_advised_a_call_that_leaves_it_invalid():
     assert mesh.n_vertices == 900 and curv.advice.advisor.polygon_kinds(mesh) == {3: 242, 4: 720}
     jet1 = curv.estimate(mesh, method="jet", range=1)
     assert np.sum(jet1.reason == curv.Reason.TOO_FEW_NEIGHBOURS) > 600           # the 676 of 900
-    adv = advise(mesh)
+    adv = advise(mesh, check=False)
     shares = {c.variant.id: c.valid_share for c in adv.ranking}
     assert shares["jet:R1"] == pytest.approx(jet1.valid_fraction)
     assert adv.valid_share >= max(shares.values()) - curv.advice.advisor.VALID_SHARE_SLACK

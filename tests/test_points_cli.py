@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import plyfile
 import pytest
@@ -146,7 +148,6 @@ def test_las_input_end_to_end(tmp_path, capsys):
     (["--knn", "2"], "knn must be a whole number of neighbours >= 3"),
     (["--knn", "20", "-r", "2"], "give one of range=, radius= or knn="),
     (["--orient-normals", "sideways"], "--orient-normals takes up, top, outward or a viewpoint"),
-    (["-m", "auto"], "advises on meshes only"),
     (["-o", "out.stl"], "cannot write .stl"),
 ])
 def test_bad_requests_are_one_line_errors_before_the_file_is_read(tmp_path, capsys, flags, words):
@@ -192,11 +193,15 @@ def test_list_names_the_estimators_that_take_points(capsys):
     assert taking == {name for name, spec in curv.ESTIMATORS.items() if spec.takes_points}
 
 
-def test_advise_refuses_a_point_cloud_in_one_line(files, capsys):
-    assert main(["advise", str(files["normals"])]) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.endswith("is a point cloud; curv advise ranks estimators for meshes only (its table comes from "
-                        "the mesh study)") and len(err.splitlines()) == 1
+def test_advise_and_method_auto_take_a_point_cloud(files, capsys):
+    """Point clouds are advised too (their candidates checked on the cloud's twin); ``--method
+    auto`` estimates with the advised call and says it as flags."""
+    assert main(["advise", str(files["normals"]), "--json", "--no-check"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["call"].startswith("curv.estimate(cloud") and not data["checked"] and "check=False" in data["note"]
+    assert main(["estimate", str(files["bare"]), "--method", "auto", "-q"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("auto: ") and "; the same as --method " in out[0] and "measured median e_rel" in out[0]
 
 
 def test_a_cloud_too_big_for_memory_is_refused_from_its_header(tmp_path, capsys):

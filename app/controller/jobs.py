@@ -20,7 +20,7 @@ from app.model import AdviceRecord, Document, count_text
 from app.model.inputs import item_word, items_word
 from app.model.picture import scene_of
 
-from .advice import advice_compile_note, advise_mesh
+from .advice import advice_compile_note, advise_steps
 from .large import WholeFileJob
 from .outputs import overlay_edges, write_export
 from .sources import mesh_report, prepare_source
@@ -58,9 +58,12 @@ class Controller(QObject):
         A one-line error message (the document keeps its previous state).
     advising(bool)
         The advisor started or stopped (finished, failed, cancelled or superseded).
+    advice_progress(float, str)
+        The advisor's fraction done and what it runs (its self-check's steps).
     """
 
     advising = Signal(bool)
+    advice_progress = Signal(float, str)
     busy_changed = Signal(bool)
     progress = Signal(str, float)
     message = Signal(str)
@@ -127,10 +130,10 @@ class Controller(QObject):
             self.progress.emit("Checking the mesh", -1.0)
         elif self._side_jobs:
             self.progress.emit("; ".join(label for _, label in self._side_jobs.values()), -1.0)
-        elif self._advice_job is not None:  # the advisor reports no fraction: a busy indicator
+        elif self._advice_job is not None:
             label = self.doc.source.label if self.doc.source is not None else "the mesh"
             note = f": {self._advice_note}" if self._advice_note else ""
-            self.progress.emit(f"Advising on {label}{note}", -1.0)
+            self.progress.emit(f"Advising on {label}{note}", getattr(self, "_advice_fraction", -1.0))
 
     # -- sources --------------------------------------------------------------------------------
     def open_source(self, source, *, loaded=None) -> None:
@@ -321,15 +324,36 @@ class Controller(QObject):
         doc = self.doc
         serial, label = doc.mesh_serial, doc.source.label
         box = []  # the worker, for the callbacks (they must exist before it does)
-        worker = create_worker(advise_mesh, doc.mesh, mesh_serial=serial, source_label=label,
+        worker = create_worker(advise_steps, doc.mesh, mesh_serial=serial, source_label=label,
                                _start_thread=False, _connect={
+            "yielded": lambda done: self._advice_step(box[0], done),
             "returned": lambda record: self._advice_done(box[0], record),
             "errored": lambda exc: self._advice_failed(box[0], serial, label, exc)})
         box.append(worker)
         self._advice_job = worker
+        self._advice_fraction = -1.0
         self._advice_note = advice_compile_note()
         worker.start()
         self.advising.emit(True)
+
+    def _advice_step(self, worker, done) -> None:
+        """The advisor's progress (its check's steps): the fraction and what runs."""
+        if self._closed or self._advice_job is not worker:
+            return
+        self._advice_fraction = float(done)
+        message = getattr(done, "message", "")
+        if message and message != "done":
+            self._advice_note = message
+        self.advice_progress.emit(self._advice_fraction, self._advice_note)
+        self._update_busy()
+
+    def cancel_advice(self) -> None:
+        """Stop the advisor (at its next step); nothing else."""
+        if self._advice_job is not None:
+            self._advice_job.quit()
+            self._forget_advice()
+            self._update_busy()
+            self.message.emit("Advice cancelled")
 
     def _advice_done(self, worker, record) -> None:
         if self._closed or self._advice_job is not worker:
@@ -337,8 +361,9 @@ class Controller(QObject):
         self._forget_advice()
         self.doc.set_advice(record)
         adv = record.advice
-        self.message.emit(f"Advice for {record.source_label} in {record.seconds:.2f} s: "
-                          f"{adv.method} R{adv.range}, expected median e_rel {adv.expected_erel:.2g}")
+        error = (f"measured median e_rel {adv.best.measured_erel:.2g}" if adv.checked and adv.best.measured is not None
+                 else f"expected median e_rel {adv.expected_erel:.2g}")
+        self.message.emit(f"Advice for {record.source_label} in {record.seconds:.2f} s: {adv.label}, {error}")
         self._update_busy()
 
     def _advice_failed(self, worker, serial, label, exc) -> None:
@@ -463,7 +488,7 @@ class Controller(QObject):
         for key in [k for k in self._side_jobs if k[0] == "edges"]:  # an export is not stopped midway
             self._side_jobs.pop(key)[0].quit()
         if self._advice_job is not None:
-            # curv.advise cannot stop midway: its thread finishes and its answer is dropped
+            # the advisor stops at its next step (its check yields between calls and inside them)
             self._advice_job.quit()
             self._forget_advice()
 

@@ -128,8 +128,8 @@ class Pane:
         spec = ESTIMATORS[self.method]
         features = None if self.features is None else check_angle(self.features)
         opts = dict(self.options)
-        if opts.pop("normals", "fit") != "fit":
-            raise EstimatorError("the only normals option of a pane is 'fit'")
+        if opts.pop("normals", "fit") not in ("fit", "pca"):
+            raise EstimatorError("the normals options of a pane are 'fit' and 'pca' (a point cloud's)")
         if "fit_range" in opts:
             opts.pop("fit_range")
             ranges.resolve(ESTIMATORS["jet"], range=dict(self.options)["fit_range"])

@@ -1,6 +1,9 @@
-"""The advice panel: what the advisor measured on the mesh, its ranking of the estimators by predicted
-error (the recommendation first and highlighted), and Apply, which puts the selected row into the
-active pane. Advice computed for an earlier mesh is shown as stale and cannot be applied."""
+"""The advice panel: what the advisor measured on the mesh or point cloud, its ranking of the candidate
+calls (the recommendation first and highlighted) with the error the study's table predicts and the
+error measured on noisy copies of the input's smooth twin (with its spread over the copies; the calls
+the copies cannot tell from the recommendation marked ≈), and Apply, which puts the selected row
+into the active pane. While the advisor runs, a progress bar and Cancel. Advice computed for an
+earlier input is shown as stale and cannot be applied."""
 
 from __future__ import annotations
 
@@ -11,12 +14,12 @@ from curv.estimators import ESTIMATORS
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QBrush, QColor, QFont
 from PySide6.QtWidgets import (
-    QAbstractItemView, QFormLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSizePolicy,
-    QTableWidget, QTableWidgetItem, QToolButton, QVBoxLayout, QWidget,
+    QAbstractItemView, QFormLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QProgressBar, QPushButton,
+    QSizePolicy, QTableWidget, QTableWidgetItem, QToolButton, QVBoxLayout, QWidget,
 )
 
 from app.model import FEATURE_LABELS, Document, Pane, feature_rows, pane_letter, ranking_rows
-from app.model.advice import RankingRow
+from app.model.advice import CLOUD_FEATURE_LABELS, RankingRow, check_text
 
 from .inspect_panel import RANGE_TIP, estimator_tooltip
 
@@ -28,10 +31,17 @@ RECOMMENDED_BACKGROUND = "#dcefd8"
 STALE_COLOUR = "#a15c00"
 ERROR_COLOUR = "#b00020"
 
-INTRO = ("Advise measures the mesh (noise, irregularity, density, borders, polygons) and ranks every "
-         "estimator and range by the median relative error the paper's study predicts for such a mesh.")
-ERREL_TIP = ("Predicted median relative error e_rel (paper eq. 5.2) of this estimator and range on a mesh "
-             "with the measured features, from the study's results on its test surfaces. Lower is better.")
+INTRO = ("Advise measures the mesh (noise, irregularity, density, borders, polygons), ranks every "
+         "estimator and range by the median relative error the paper's study predicts for such a mesh, then "
+         "checks the first of them on noisy copies of the mesh's own smooth twin and ranks them by the error "
+         "measured there. On a point cloud every candidate is checked.")
+ERREL_TIP = ("Predicted median relative error e_rel (paper eq. 5.2) of this call on a mesh with the measured "
+             "features, from the study's results on its test surfaces (none on a point cloud). Lower is better.")
+MEASURED_TIP = ("Median relative error e_rel measured on noisy copies of the input's smooth twin (the input's "
+                "sampling or connectivity, its noise removed by wide polynomial fits, so its curvature is exact), "
+                "with the noise measured on the input put back: the geometric mean over the copies, and × its "
+                "spread over them (a factor). ≈: within noise of the recommendation (it did as well on at least "
+                "one copy). Empty: not checked. Checked calls rank by this, the others after them.")
 OPTIONS_TIP = ("Options of the call besides estimator and range: the jet's degree (deg 4), or normals from a "
                "local jet fit at a range (fit R4: normals=\"fit\", fit_range=4). Apply sets them in the pane too.")
 VALID_TIP = ("Share of this mesh's vertices the call gives a value at: border vertices, supports with fewer "
@@ -41,7 +51,8 @@ COLUMNS = (("Estimator", "Registry name of the estimator (hover a row for its me
            ("Range", RANGE_TIP),
            ("Options", OPTIONS_TIP),
            ("Valid", VALID_TIP),
-           ("e_rel", ERREL_TIP))
+           ("Predicted", ERREL_TIP),
+           ("Measured", MEASURED_TIP))
 
 
 class AdvicePanel(QWidget):
@@ -55,9 +66,12 @@ class AdvicePanel(QWidget):
     -------
     apply_requested(Pane)
         Show this (validated) estimator and range in the active pane and compute it.
+    cancel_requested()
+        Stop the advisor.
     """
 
     apply_requested = Signal(object)
+    cancel_requested = Signal()
 
     def __init__(self, doc: Document, parent=None) -> None:
         super().__init__(parent)
@@ -71,6 +85,19 @@ class AdvicePanel(QWidget):
         self.status.setTextFormat(Qt.TextFormat.RichText)
         self.advise_button = QToolButton()
         self.advise_button.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextOnly)
+        self.progress = QProgressBar()
+        self.progress.setRange(0, 1000)
+        self.progress.setTextVisible(True)
+        self.progress.setToolTip("The advisor's progress: measuring the input, building its smooth twin, "
+                                 "checking the candidates on noisy copies")
+        self.cancel_button = QPushButton("Cancel")
+        self.cancel_button.setToolTip("Stop the advisor (the advice shown before stays)")
+        self.cancel_button.clicked.connect(self.cancel_requested)
+        self.check = QLabel()
+        self.check.setWordWrap(True)
+        self.check.setObjectName("advice_check")
+        self.check.setToolTip("What the self-check did: how many calls it measured on how many noisy copies, "
+                              "and the noise it measured on the input")
         self.why = QLabel()
         self.why.setWordWrap(True)
         self.why.setObjectName("advice_why")
@@ -80,15 +107,15 @@ class AdvicePanel(QWidget):
         self.why.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
 
         self.features_box = QGroupBox("Measured on the mesh")
-        features_form = QFormLayout(self.features_box)
-        features_form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
+        self._features_form = QFormLayout(self.features_box)
+        self._features_form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
         self.feature_labels: dict[str, QLabel] = {}
         self.feature_values: dict[str, QLabel] = {}
-        for name in FEATURE_LABELS:
+        for name in dict.fromkeys((*FEATURE_LABELS, *CLOUD_FEATURE_LABELS)):
             label, value = QLabel(name), QLabel()
             value.setWordWrap(True)
             value.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
-            features_form.addRow(label, value)
+            self._features_form.addRow(label, value)
             self.feature_labels[name], self.feature_values[name] = label, value
 
         self.ranking_box = QGroupBox("Ranking by predicted error, best first")
@@ -109,7 +136,8 @@ class AdvicePanel(QWidget):
         header.setSectionResizeMode(1, QHeaderView.ResizeMode.ResizeToContents)
         header.setSectionResizeMode(2, QHeaderView.ResizeMode.ResizeToContents)
         header.setSectionResizeMode(3, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(4, QHeaderView.ResizeMode.Stretch)
+        header.setSectionResizeMode(4, QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(5, QHeaderView.ResizeMode.Stretch)
         self.table.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.table.setMinimumHeight(5 * (self.fontMetrics().height() + 6))  # the header and four rows
         # the table takes the height left over (its own scroll bar), never asks for more: the dock's
@@ -123,10 +151,18 @@ class AdvicePanel(QWidget):
         top = QHBoxLayout()
         top.addWidget(self.status, 1)
         top.addWidget(self.advise_button, 0, Qt.AlignmentFlag.AlignTop)
+        running = QHBoxLayout()
+        running.addWidget(self.progress, 1)
+        running.addWidget(self.cancel_button)
+        self._running_row = QWidget()
+        self._running_row.setLayout(running)
+        running.setContentsMargins(0, 0, 0, 0)
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
         lay.addLayout(top)
+        lay.addWidget(self._running_row)
         lay.addWidget(self.why)
+        lay.addWidget(self.check)
         lay.addWidget(self.features_box)
         lay.addWidget(self.ranking_box, 1)
         lay.addStretch(0)  # takes the height only while the ranking is hidden: the text stays on top
@@ -162,9 +198,20 @@ class AdvicePanel(QWidget):
         self.table.selectRow(row)
 
     def set_running(self, running: bool) -> None:
-        """The advisor started or stopped: say so above the advice."""
+        """The advisor started or stopped: say so above the advice, show or hide its progress."""
         self._running = bool(running)
+        if running:
+            self.set_progress(-1.0, "measuring the input")
         self.refresh()
+
+    def set_progress(self, fraction: float, text: str = "") -> None:
+        """The advisor's progress: ``fraction`` done (negative: not known yet) and what runs."""
+        if fraction < 0:
+            self.progress.setRange(0, 0)  # a busy indicator
+        else:
+            self.progress.setRange(0, 1000)
+            self.progress.setValue(int(round(1000 * min(max(fraction, 0.0), 1.0))))
+        self.progress.setFormat(f"{text} %p%" if text and fraction >= 0 else (text or "%p%"))
 
     # -- user -> window ---------------------------------------------------------------------------
     def apply_row(self, row: int) -> None:
@@ -173,7 +220,8 @@ class AdvicePanel(QWidget):
             return
         chosen = self._rows[row]
         try:
-            pane = Pane(chosen.method, chosen.range, options=chosen.options).validated()
+            pane = Pane(chosen.method, chosen.range if chosen.range is not None else 2, radius=chosen.radius,
+                        knn=chosen.knn, options=chosen.options).validated()
         except (EstimatorError, KeyError) as exc:  # an estimator of the study this curv does not register
             self.status.setText(f"<span style='color:{ERROR_COLOUR}'>Cannot apply {escape(chosen.label)}: "
                                 f"{escape(str(exc))}</span>")
@@ -205,8 +253,10 @@ class AdvicePanel(QWidget):
         if self._running:
             lines.append(f"<i>Advising on {shown_label}…</i>")
         self.status.setText("<br>".join(lines))
+        self._running_row.setVisible(self._running)
 
         self.why.setVisible(has_advice)
+        self.check.setVisible(has_advice)
         self.features_box.setVisible(has_advice)
         self.ranking_box.setVisible(has_advice)
         if not has_advice:
@@ -216,9 +266,13 @@ class AdvicePanel(QWidget):
         if record is not self._shown_record:
             self._fill(record)
         current = doc.advice_current
-        for w in (self.why, self.features_box, self.table):
+        for w in (self.why, self.check, self.features_box, self.table):
             w.setEnabled(current)
-        self.features_box.setTitle("Measured on the mesh" if current else "Measured on the earlier mesh (stale)")
+        what = "point cloud" if record.advice.is_cloud else "mesh"
+        self.features_box.setTitle(f"Measured on the {what}" if current else f"Measured on the earlier {what} (stale)")
+        checked = record.advice.checked
+        self.ranking_box.setTitle("Ranking by measured error (checked calls first), best first" if checked
+                                  else "Ranking by predicted error, best first")
         self._update_apply()
 
     def _fill(self, record) -> None:
@@ -233,10 +287,15 @@ class AdvicePanel(QWidget):
             return
         advice = record.advice
         self.why.setText(advice.why)
+        self.check.setText(escape(check_text(advice)))
+        shown = set()
         for row in feature_rows(advice.features):
             self.feature_values[row.label].setText(row.text)
             self.feature_values[row.label].setToolTip(row.tooltip)
             self.feature_labels[row.label].setToolTip(row.tooltip)
+            shown.add(row.label)
+        for name, label in self.feature_labels.items():
+            self._features_form.setRowVisible(label, name in shown)
         self._rows = ranking_rows(advice)
         self.table.setRowCount(len(self._rows))
         bold = QFont(self.font())
@@ -244,9 +303,10 @@ class AdvicePanel(QWidget):
         tint = QBrush(QColor(RECOMMENDED_BACKGROUND))
         for r, row in enumerate(self._rows):
             spec = ESTIMATORS.get(row.method)
-            cells = (row.method, row.range_label, row.options_short, row.valid_text, row.erel_text)
+            measured = row.measured_text + (" ≈" if row.within_noise else "")
+            cells = (row.method, row.range_label, row.options_short, row.valid_text, row.erel_text, measured)
             tips = (estimator_tooltip(spec) if spec is not None else row.method, RANGE_TIP, OPTIONS_TIP, VALID_TIP,
-                    ERREL_TIP)
+                    ERREL_TIP, MEASURED_TIP)
             for c, (text, tip) in enumerate(zip(cells, tips)):
                 item = QTableWidgetItem(text)
                 item.setToolTip(("<b>Recommended</b><br>" if row.recommended else "") + f"<b>{escape(row.label)}</b><br>"

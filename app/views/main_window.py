@@ -176,6 +176,8 @@ class MainWindow(QMainWindow):
         ctl.message.connect(lambda text: self.show_status(text))
         ctl.failed.connect(self.show_error)
         ctl.advising.connect(self.advice_panel.set_running)
+        ctl.advice_progress.connect(self.advice_panel.set_progress)
+        self.advice_panel.cancel_requested.connect(ctl.cancel_advice)
         doc.advice_changed.connect(lambda record: self.show_dock("advice"))
         self.advice_panel.apply_requested.connect(self.apply_pane)
         self.cancel_button.clicked.connect(ctl.cancel)

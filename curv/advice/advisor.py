@@ -32,11 +32,13 @@ import numpy as np
 
 from ..core.errors import MeshError
 from ..core.mesh import Mesh
+from .answer import Advice, Candidate
 
-__all__ = ["Advice", "Candidate", "MeshFeatures", "advise", "measure_features", "load_table", "valid_shares",
+__all__ = ["Advice", "Candidate", "MeshFeatures", "advise", "measure_features", "load_table", "valid_shares", "valid_masks",
            "TABLE_RESOURCE", "FIT_METHOD", "FIT_RANGE", "VALID_SHARE_SLACK", "VALID_SAMPLE", "SHAPE_MEASURES",
            "RESIDUAL_MEASURES", "residual_measures",
-           "BASE_COLUMNS", "kernel_axes", "table_coordinates", "feature_values", "shape_measures"]
+           "BASE_COLUMNS", "kernel_axes", "table_coordinates", "feature_values", "shape_measures", "table_ranking",
+           "describe_mesh"]
 
 TABLE_RESOURCE = "data/advisor_table.json"
 """The table inside the ``curv`` package (see :mod:`curv.advice.table`)."""
@@ -161,139 +163,6 @@ class MeshFeatures:
     @property
     def triangular(self) -> bool:
         return set(self.polygon_kinds) <= {3}
-
-
-@dataclass(frozen=True)
-class Candidate:
-    """One ranked candidate: a whole :func:`curv.estimate` call and what the advisor expects of it.
-
-    Attributes
-    ----------
-    method : str
-        Registry name.
-    range : int
-        k of Rk.
-    options : dict
-        The other keyword arguments of the call: an estimator option (``{"degree": 4}``) or the
-        fitted normals (``{"normals": "fit", "fit_range": 4}``); empty for the defaults.
-    expected_erel : float
-        Predicted median e_rel on the vertices it estimates.
-    valid_share : float
-        Share of the mesh's vertices it gives a value at (:func:`valid_shares`).
-    """
-
-    method: str
-    range: int
-    options: dict
-    expected_erel: float
-    valid_share: float = 1.0
-
-    @property
-    def variant(self):
-        """The :class:`curv.variants.Variant` of this call."""
-        from ..variants import Variant
-
-        return Variant(self.method, self.range, options=self.options)
-
-    @property
-    def kwargs(self) -> dict:
-        """``curv.estimate(mesh, **candidate.kwargs)``."""
-        return self.variant.kwargs
-
-    @property
-    def label(self) -> str:
-        """``jet R4 degree 4``, ``mru R3 normals fit R4``, ``qs R2``: the call for a person."""
-        extra = self.variant.options_label
-        return f"{self.method} R{self.range}" + (f" {extra}" if extra else "")
-
-    @property
-    def call(self) -> str:
-        """The call as Python text: ``curv.estimate(mesh, method='jet', range=4, degree=4)``."""
-        return "curv.estimate(mesh, " + ", ".join(f"{k}={v!r}" for k, v in self.kwargs.items()) + ")"
-
-    def as_dict(self) -> dict:
-        return {"method": self.method, "range": self.range, "options": dict(self.options),
-                "expected_erel": self.expected_erel, "valid_share": self.valid_share, "label": self.label,
-                "kwargs": self.kwargs}
-
-
-@dataclass(frozen=True)
-class Advice:
-    """The advisor's answer for one mesh.
-
-    Attributes
-    ----------
-    features : MeshFeatures
-    ranking : list of Candidate
-        Every candidate, best first: those that leave at most :data:`VALID_SHARE_SLACK` more of the
-        mesh invalid than the best-covering one by predicted median e_rel, then the others by
-        predicted median e_rel.
-    method : str
-        Recommended estimator (registry name).
-    range : int
-        Its range k of Rk.
-    expected_erel : float
-        Predicted median e_rel of the recommendation.
-    why : str
-        One line for a person.
-    suggested_features : float or None
-        When the mesh has many sharp edges (:func:`curv.core.features.has_many_sharp_edges`), a
-        ``features`` angle that separates its creases from its smooth edges
-        (:func:`curv.core.features.suggest_threshold`); the study's meshes are smooth, so the ranking
-        assumes the creases are handled that way.
-    options : dict
-        The recommendation's other keyword arguments (see :class:`Candidate`).
-    valid_share : float
-        Share of the vertices the recommendation estimates.
-    """
-
-    features: MeshFeatures
-    ranking: list
-    method: str
-    range: int
-    expected_erel: float
-    why: str
-    suggested_features: float | None = None
-    options: dict = field(default_factory=dict)
-    valid_share: float = 1.0
-
-    @property
-    def best(self) -> Candidate:
-        """The recommendation (the first of :attr:`ranking`)."""
-        return self.ranking[0]
-
-    @property
-    def kwargs(self) -> dict:
-        """The whole recommended call: ``curv.estimate(mesh, **advice.kwargs)`` (method, range,
-        options, and ``features=`` when the mesh has many sharp edges)."""
-        out = dict(self.best.kwargs)
-        if self.suggested_features is not None:
-            out["features"] = self.suggested_features
-        return out
-
-    @property
-    def call(self) -> str:
-        """The recommended call as Python text (see :attr:`kwargs`)."""
-        return "curv.estimate(mesh, " + ", ".join(f"{k}={v!r}" for k, v in self.kwargs.items()) + ")"
-
-    @property
-    def label(self) -> str:
-        """The recommendation for a person: ``jet R4 degree 4``."""
-        return self.best.label
-
-    def as_dict(self) -> dict:
-        """A JSON-ready dict (``features``, ``ranking`` as a list of dicts, the recommendation and its
-        whole call as ``kwargs``)."""
-        f = asdict(self.features)
-        f["polygon_kinds"] = {str(k): v for k, v in self.features.polygon_kinds.items()}
-        f["noise_level"] = self.features.noise_level
-        return {
-            "method": self.method, "range": self.range, "options": dict(self.options), "kwargs": self.kwargs,
-            "call": self.call, "label": self.label, "expected_erel": self.expected_erel,
-            "valid_share": self.valid_share, "why": self.why, "suggested_features": self.suggested_features,
-            "features": f,
-            "ranking": [c.as_dict() for c in self.ranking],
-        }
 
 
 # ---------------------------------------------------------------------------- features
@@ -623,11 +492,34 @@ class _FaceKinds:
         self.is_triangular = set(kinds) <= {3}
 
 
-def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE) -> dict:
+def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE, within=None) -> dict:
     """Share of the vertices each variant can estimate on ``mesh``, from the supports' sizes.
 
     Counted on the same vertices for every variant (all of them up to ``sample``, else a fixed random
-    sample of that many, seed 0) with one support search per distinct ball
+    sample of that many, seed 0) by :func:`valid_masks`.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    variant_ids : iterable of str
+    sample : int
+    within : (m,) int array_like, optional
+        Count among these vertices only (default all).
+
+    Returns
+    -------
+    dict
+        ``{variant id: share in [0, 1]}``.
+    """
+    centres, masks = valid_masks(mesh, variant_ids, sample=sample, within=within)
+    return {vid: float(ok.mean()) if ok.size else 0.0 for vid, ok in masks.items()}
+
+
+def valid_masks(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE, within=None) -> tuple[np.ndarray, dict]:
+    """Which of some vertices each variant can estimate on ``mesh``, from the supports' sizes.
+
+    The vertices are all of them up to ``sample``, else a fixed random sample of that many (seed 0),
+    with one support search per distinct ball
     (:func:`curv.geometry.neighbourhood.support_sizes`, the radius from :func:`curv.core.ranges.ball_radii`), by the
     registry's facts: a vertex is lost when it is on a border or has no usable normal (every
     estimator), when its support holds fewer vertices than the fit needs
@@ -643,11 +535,15 @@ def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE) -> dict
     mesh : Mesh
     variant_ids : iterable of str
     sample : int
+    within : (m,) int array_like, optional
+        Count among these vertices only (default all).
 
     Returns
     -------
-    dict
-        ``{variant id: share in [0, 1]}``.
+    centres : (c,) int64
+        The vertices counted on.
+    masks : dict
+        ``{variant id: (c,) bool}``.
     """
     from ..estimators import get_spec
     from ..estimators.registry import refusal
@@ -656,8 +552,8 @@ def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE) -> dict
     from ..core.ranges import ball_radii, resolve
     from ..variants import Variant
 
-    n = mesh.n_vertices
-    centres = np.arange(n) if n <= sample else np.sort(np.random.default_rng(0).choice(n, size=sample, replace=False))
+    pool = np.arange(mesh.n_vertices) if within is None else np.unique(np.asarray(within, np.int64))
+    centres = pool if pool.size <= sample else np.sort(np.random.default_rng(0).choice(pool, size=sample, replace=False))
     border = mesh.border_vertices
     base = ~border[centres] & ~unusable_normal_vertices(mesh)[centres]
     balls: dict = {}
@@ -690,8 +586,8 @@ def valid_shares(mesh: Mesh, variant_ids, *, sample: int = VALID_SAMPLE) -> dict
         ok = can(get_spec(v.method), v.range, opts)
         if fit:
             ok = ok & can(get_spec("jet"), fit_range, {})
-        out[vid] = float(ok.mean()) if ok.size else 0.0
-    return out
+        out[vid] = ok
+    return centres, out
 
 
 def rank(pred: dict, shares: dict) -> list[str]:
@@ -704,29 +600,83 @@ def rank(pred: dict, shares: dict) -> list[str]:
     return sorted(ids, key=lambda v: (shares.get(v, 1.0) < top - VALID_SHARE_SLACK, pred[v]))
 
 
-def _why(features: MeshFeatures, best: Candidate) -> str:
+def describe_mesh(features: MeshFeatures) -> str:
+    """What was measured on a mesh, in words: ``noise about 0.3 of the paper's level, irregular (22
+    degrees), density 0.093, polygons, 13 % border``."""
     level = features.noise_level
     noise = "no measurable noise" if level < 0.05 else f"noise about {level:.2g} of the paper's level"
     irr = features.irregularity_deg
     shape = "regular" if irr < 5 else ("mildly irregular" if irr < 12 else "irregular")
     polys = "" if features.triangular else ", polygons"
     border = f", {100 * features.border_share:.0f} % border" if features.border_share >= 0.05 else ""
-    cover = "" if best.valid_share >= 0.995 else f", valid at {100 * best.valid_share:.0f} % of the vertices"
-    return (f"{noise}, {shape} ({irr:.0f} degrees), density {features.density:.2g}{polys}{border}: "
-            f"{best.label}, expected median e_rel {best.expected_erel:.2g}{cover}")
+    return f"{noise}, {shape} ({irr:.0f} degrees), density {features.density:.2g}{polys}{border}"
 
 
-def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
-    """Recommend an estimator and range for ``mesh`` from the study's results.
+def table_ranking(mesh: Mesh, *, normals=None, table: dict | None = None, vertices=None) -> tuple:
+    """The table's advice for a mesh: its features and every candidate in the table's order.
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
-        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`.
+    mesh : Mesh
     normals : (n, 3) array_like, optional
         Vertex normals for the measuring fit; default Max-weighted (the study's).
     table : dict, optional
         A table from :func:`load_table`; default the packaged one.
+    vertices : (c,) int64, optional
+        Count the valid shares on these vertices (the ones the estimate is wanted at).
+
+    Returns
+    -------
+    features : MeshFeatures
+    ranking : list of Candidate
+        By :func:`rank`: coverage first, then the predicted error.
+    sharp : float or None
+        The ``features`` angle to suggest when the mesh has many sharp edges.
+
+    Raises
+    ------
+    MeshError
+        When the features cannot be measured (no valid fit anywhere) or no candidate applies.
+    """
+    from ..variants import Variant
+
+    table = load_table() if table is None else table
+    features = measure_features(mesh, normals=normals, table=table)
+    pred = predict(table, features)
+    ids = [v for v in candidates(table, features) if np.isfinite(pred[v])]
+    shares = valid_shares(mesh, ids, within=vertices)
+    ranking = []
+    for vid in rank({v: pred[v] for v in ids}, shares):
+        v = Variant.from_id(vid)
+        ranking.append(Candidate(v.method, v.range, dict(v.options), float(pred[vid]), shares[vid]))
+    if not ranking:
+        raise MeshError("cannot advise: no estimator of the table applies to this mesh")
+    return features, ranking, _sharp_edge_angle(mesh)
+
+
+def advise(shape, *, normals=None, table: dict | None = None, check: bool | None = None, vertices=None,
+           seed: int = 0) -> Advice:
+    """Recommend a whole estimate call for a mesh or point cloud, checked on the input itself.
+
+    See :func:`curv.advice.advising.iter_advise` (the same, step by step with progress and cancel).
+
+    Parameters
+    ----------
+    shape : Mesh, PointCloud, trimesh.Trimesh, pyvista.PolyData or meshio.Mesh
+        Other libraries' meshes are converted by :func:`curv.convert.as_mesh`.
+    normals : (n, 3) array_like, optional
+        A mesh's vertex normals for the measuring fit; default Max-weighted (the study's).
+    table : dict, optional
+        A table from :func:`load_table`; default the packaged one.
+    check : bool, optional
+        Run the self-check (:mod:`curv.advice.check`): True, False (the table's ranking alone), or
+        None (default): check unless the input is larger than
+        :data:`curv.advice.advising.CHECK_MAX_VERTICES`.
+    vertices : (c,) int array_like, optional
+        The vertices (points) the estimate is wanted at: the valid shares are counted and the
+        check's centres drawn there. Default all.
+    seed : int
+        Seed of the check's centres and noise.
 
     Returns
     -------
@@ -737,30 +687,10 @@ def advise(mesh: Mesh, *, normals=None, table: dict | None = None) -> Advice:
     MeshError
         When the features cannot be measured (no valid fit anywhere).
     """
-    from ..variants import Variant
+    from ..core.jit import run_to_end
+    from .advising import iter_advise
 
-    from ..convert import as_mesh
-
-    mesh = as_mesh(mesh)
-    table = load_table() if table is None else table
-    features = measure_features(mesh, normals=normals, table=table)
-    pred = predict(table, features)
-    ids = [v for v in candidates(table, features) if np.isfinite(pred[v])]
-    shares = valid_shares(mesh, ids)
-    ranking = []
-    for vid in rank({v: pred[v] for v in ids}, shares):
-        v = Variant.from_id(vid)
-        ranking.append(Candidate(v.method, v.range, dict(v.options), float(pred[vid]), shares[vid]))
-    if not ranking:
-        raise MeshError("cannot advise: no estimator of the table applies to this mesh")
-    best = ranking[0]
-    angle = _sharp_edge_angle(mesh)
-    why = _why(features, best)
-    if angle is not None:
-        why += f"; many sharp edges: estimate with features={angle:g} so the creases are not smoothed over"
-    return Advice(features=features, ranking=ranking, method=best.method, range=best.range,
-                  expected_erel=best.expected_erel, why=why, suggested_features=angle, options=dict(best.options),
-                  valid_share=best.valid_share)
+    return run_to_end(iter_advise(shape, normals=normals, table=table, check=check, vertices=vertices, seed=seed))
 
 
 def _sharp_edge_angle(mesh: Mesh) -> float | None:

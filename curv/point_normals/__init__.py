@@ -4,7 +4,9 @@
    ``k`` spacings through the neighbour graph, :mod:`curv.core.ranges`), the eigenvector of the
    smallest eigenvalue of the covariance about the centroid is the unoriented normal. The same
    pass measures the largest **angular gap** between the support's offsets projected on that
-   plane: about pi on the rim of an open scan, small inside (:func:`border_points`).
+   plane: about pi on the rim of an open scan, small inside (:func:`border_points`; a point a
+   fraction of a spacing inside the rim, whose gap the points between it and the rim hide, is found
+   by its one-sided support instead, :mod:`.rim`).
 2. **Orientation** (:func:`orient_normals`), by one of four rules (:data:`ORIENTATIONS`):
 
    - ``"up"``: every normal with nz >= 0, point by point (the convention of PDAL's
@@ -61,8 +63,9 @@
 Modules: :mod:`.frames` (the local frame of one support: moments, PCA, gap, spread),
 :mod:`.one_pass` (the pass over every point: :func:`local_frames`, :func:`support_spread`),
 :mod:`.orientation` (:func:`orient_normals`, :func:`default_orientation`), :mod:`.normals`
-(:func:`point_normals`, :func:`border_points`, :func:`border_radii`), :mod:`.grid_order`
-(:func:`grid_ordered`), :mod:`.quantised` (:func:`support_floor`, :func:`quantised_supports`).
+(:func:`point_normals`, :func:`border_points`, :func:`border_radii`), :mod:`.rim` (one-sided supports
+on the rim), :mod:`.grid_order` (:func:`grid_ordered`), :mod:`.quantised` (:func:`support_floor`,
+:func:`quantised_supports`).
 """
 
 from __future__ import annotations

@@ -74,8 +74,10 @@ class PointNormals:
         Widest angular gap of the projected support (radians); exact whenever at least
         :data:`EXACT_GAP` (below it an upper bound below :data:`EXACT_GAP`).
     border : (n,) bool
-        ``gap > BORDER_GAP``: on the border of an open scan.
-    (``gap`` and ``border`` are measured at :data:`BORDER_RANGE` whatever the normals' range.)
+        On the border of an open scan (:func:`border_points`: ``gap > BORDER_GAP``, or a one-sided
+        support).
+    (``gap`` is measured at :data:`BORDER_RANGE`, ``border`` there and over twice that ball, whatever
+    the normals' range.)
     method, label : str
         ``"pca"`` or ``"jet"``; the range label, e.g. ``"R2"``.
     orient : str or (3,) float64
@@ -233,10 +235,10 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
             normals[~np.isfinite(pca).all(axis=1)] = np.nan
         oriented, ambiguous = orient_normals(cloud, normals, orient="up")
         if method == "jet":
-            one_sided = (found.gap_b > ONE_SIDED_GAP) & ~(gap > BORDER_GAP) & np.isfinite(oriented).all(axis=1)
+            one_sided = (found.gap_b > ONE_SIDED_GAP) & ~border_points(cloud) & np.isfinite(oriented).all(axis=1)
             oriented[one_sided] = np.nan
         return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
-                            border=gap > BORDER_GAP, method=method, label=rng.label, orient=orient,
+                            border=border_points(cloud), method=method, label=rng.label, orient=orient,
                             widened=widened)
     oriented, ambiguous = orient_normals(cloud, pca, orient=orient)
     if method == "jet":
@@ -245,14 +247,24 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         fitted[np.einsum("ij,ij->i", fitted, oriented) < 0] *= -1.0
         fitted[~np.isfinite(oriented).all(axis=1)] = np.nan
         # on the border of the scan every fit is one-sided: those points are BORDER, and keep their normal
-        one_sided = (found.gap_b > ONE_SIDED_GAP) & ~(gap > BORDER_GAP) & np.isfinite(fitted).all(axis=1)
+        one_sided = (found.gap_b > ONE_SIDED_GAP) & ~border_points(cloud) & np.isfinite(fitted).all(axis=1)
         fitted[one_sided] = np.nan
         oriented = fitted
     return PointNormals(normals=oriented, ambiguous=ambiguous, one_sided=one_sided, gap=gap,
-                        border=gap > BORDER_GAP, method=method, label=rng.label, orient=orient, widened=widened)
+                        border=border_points(cloud), method=method, label=rng.label, orient=orient, widened=widened)
 
 
 def border_points(cloud: PointCloud) -> np.ndarray:
-    """(n,) bool: points on the border of an open scan: angular gap above :data:`BORDER_GAP` at
-    :data:`BORDER_RANGE` (the border belongs to the cloud, not to an estimate)."""
-    return _frames(cloud)[1] > BORDER_GAP
+    """(n,) bool: points on the border of an open scan (the border belongs to the cloud, not to an
+    estimate), computed once per cloud (read-only): an angular gap above :data:`BORDER_GAP` at
+    :data:`BORDER_RANGE`, or a one-sided support (:func:`.rim.one_sided_points`: a point a fraction
+    of a spacing inside the rim, whose gap the points between it and the rim hide)."""
+    def build():
+        from .rim import one_sided_points
+
+        normals, gap = _frames(cloud)
+        border = (gap > BORDER_GAP) | one_sided_points(cloud, normals, gap, border_radii(cloud))
+        border.setflags(write=False)
+        return border
+
+    return cached_with_mesh(cloud, "border", build)

@@ -73,8 +73,9 @@ def test_advise_runs_in_the_background_and_fills_the_panel(qtbot, window, ui):
     assert values["Valence spread"] == f"{f.valence_sd:.2f}" and values["Curvature spread"] == f"{f.curvature_spread:.2f}"
     assert values["Anisotropy"] == f"{f.anisotropy:.2f}"
     assert values["Model residual"].startswith(f"{f.residual_ratio:.2g} ") and 0.2 < f.residual_ratio < 1.5  # noisy
-    assert all(label.toolTip() for label in panel.feature_values.values())
-    assert all(label.toolTip() for label in panel.feature_labels.values())
+    shown = [name for name, label in panel.feature_values.items() if label.text()]   # a mesh's, not a cloud's
+    assert all(panel.feature_values[name].toolTip() for name in shown)
+    assert all(panel.feature_labels[name].toolTip() for name in shown)
 
     table = panel.table
     assert table.rowCount() == len(expected.ranking) > 5
@@ -86,8 +87,17 @@ def test_advise_runs_in_the_background_and_fills_the_panel(qtbot, window, ui):
     errors = [float(s[4]) for s in shown]
     shares = [float(s[3].rstrip(" %")) / 100 for s in shown]
     np.testing.assert_allclose(shares, [c.valid_share for c in expected.ranking], atol=0.006)
-    first = [e for e, share in zip(errors, shares) if share >= max(shares) - 0.02 - 0.006]
-    assert first == sorted(first) and errors[: len(first)] == first               # best first among the fullest
+    # checked: the measured calls first, by their measured error (shown with its spread over the copies)
+    assert expected.checked and panel.check.text().startswith("checked ")
+    measured = [c for c in expected.ranking if c.measured is not None and c.measured.ok]
+    assert len(measured) >= 3 and expected.ranking[: len(measured)] == measured
+    # by measured error, the table's first choice kept first where the copies cannot tell them apart
+    assert [c.measured.erel for c in measured[1:]] == sorted(c.measured.erel for c in measured[1:])
+    assert measured[0].measured.erel == min(c.measured.erel for c in measured) or measured[1].within_noise
+    shown_measured = [table.item(r, 5).text() for r in range(len(measured))]
+    assert [t.split()[0] for t in shown_measured] == [f"{c.measured.erel:.3g}" for c in measured]
+    assert all(f"×{c.measured.spread:.2f}" in t for c, t in zip(measured, shown_measured))
+    assert all(table.item(r, 5).text() == "" for r in range(len(measured), table.rowCount()))
     np.testing.assert_allclose(errors, [c.expected_erel for c in expected.ranking], rtol=5e-3)
     assert shown[0][:2] == (expected.method, f"R{expected.range}")               # the recommendation on top
     assert table.item(0, 0).font().bold() and not table.item(1, 0).font().bold()
@@ -316,7 +326,9 @@ def test_ranking_rows_mark_exactly_the_recommendation():
     from app.model import FEATURE_LABELS, feature_rows, ranking_rows
 
     sampled = curv.surfaces.make_surface("saddle", n_vertices=217)
-    advice = curv.advise(sampled.mesh)
+    checked = ranking_rows(curv.advise(sampled.mesh))
+    assert [r.recommended for r in checked] == [True] + [False] * (len(checked) - 1) and checked[0].measured_text
+    advice = curv.advise(sampled.mesh, check=False)   # the table's order: by predicted error
     rows = ranking_rows(advice)
     assert [r.recommended for r in rows] == [True] + [False] * (len(rows) - 1)
     assert (rows[0].method, rows[0].range, rows[0].range_label) == (advice.method, advice.range, f"R{advice.range}")

@@ -1,0 +1,317 @@
+"""The self-check: every short-listed call run on noisy copies of the input's smooth twin.
+
+A copy is a smooth twin (:mod:`curv.advice.twin`) around a fresh random set of centres, each twin
+vertex moved along the twin's normal by Gaussian noise of the level measured on the input
+(:mod:`curv.advice.copies`). Each call runs on the copy at its centres only (``vertices=``: the cost
+follows the centres, not the input) and is scored by the median e_rel over the centres it gives a
+value at, against the twin's exact curvature. Over the copies a call's measured error is the
+geometric mean of its medians and its spread their geometric standard deviation; the copies are
+independent (new centres, new noise), so the spread is an honest standard error of the measure.
+"""
+
+from __future__ import annotations
+
+import inspect
+import time
+from collections.abc import Generator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.errors import CurvError
+from ..core.jit import Progress, rescaled
+from ..core.pointcloud import PointCloud
+
+__all__ = ["Measured", "CheckReport", "iter_check", "call_reach", "CHECK_COPIES", "CHECK_CENTRES",
+           "REACH_MARGIN", "MIN_MEASURED"]
+
+CHECK_COPIES = 3
+"""Noisy copies of the twin per check: each its own centres and noise draw."""
+
+CHECK_CENTRES = 64
+"""Centres per copy (fewer where the input has fewer eligible vertices)."""
+
+REACH_MARGIN = 1.5
+"""Range units added to a patch's radius beyond the farthest any call reads."""
+
+MIN_MEASURED = 0.5
+"""A call measured at fewer than this share of the centres (over all copies) is not ranked by
+its measured error (its twin patches cannot hold its support: a coarse closed surface's cap)."""
+
+
+@dataclass(frozen=True)
+class Measured:
+    """One call's measured error on the copies.
+
+    Attributes
+    ----------
+    erel : float
+        Geometric mean over the copies of the median e_rel over each copy's centres.
+    copies : tuple of float
+        The median e_rel on each copy (NaN where the call gave no value at any centre).
+    spread : float
+        Geometric standard deviation of :attr:`copies` (a factor, 1 when they agree; NaN with one copy).
+    measured : float
+        Share of the centres (over all copies) the call gave a value at.
+    seconds : float
+        Time the call took over all copies.
+    """
+
+    erel: float
+    copies: tuple
+    spread: float
+    measured: float
+    seconds: float
+
+    @property
+    def ok(self) -> bool:
+        """Whether the measure is complete enough to rank by (:data:`MIN_MEASURED`)."""
+        return bool(np.isfinite(self.erel) and self.measured >= MIN_MEASURED)
+
+    def as_dict(self) -> dict:
+        return {"erel": self.erel, "copies": list(self.copies), "spread": self.spread,
+                "measured": self.measured, "seconds": self.seconds}
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """What the self-check did and found.
+
+    Attributes
+    ----------
+    measured : dict
+        Call key -> :class:`Measured`.
+    noise : float
+        Noise along the normal the copies were given, in input units (0 where the input's noise
+        is below what the twin's fits resolve).
+    noise_bound : float
+        The twin's median residual spread: the input's noise is at most about this.
+    noise_resolved : bool
+        Whether most patches' residuals reached a noise floor (then :attr:`noise` is measured).
+    copies : int
+    centres : int
+        Centres scored per copy (the smallest over the copies).
+    degrees : dict
+        Polynomial degree -> number of twin patches fitted at it.
+    seconds : float
+        Wall time of the whole check.
+    """
+
+    measured: dict
+    noise: float
+    noise_bound: float
+    noise_resolved: bool
+    copies: int
+    centres: int
+    degrees: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+    def as_dict(self) -> dict:
+        return {"measured": {k: m.as_dict() for k, m in self.measured.items()}, "noise": self.noise,
+                "noise_bound": self.noise_bound, "noise_resolved": self.noise_resolved, "copies": self.copies,
+                "centres": self.centres, "degrees": {str(k): v for k, v in self.degrees.items()},
+                "seconds": self.seconds}
+
+
+def call_reach(shape, kwargs: dict, units: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """(c,) float64 how far a call reads around each centre, in input units: its support (range in
+    each centre's units, an absolute radius, or the knn-th neighbour's distance on the input), and the
+    normals it reads there (their own fit's range, or one ring for the default normals).
+
+    Parameters
+    ----------
+    shape : Mesh or PointCloud
+        The input.
+    kwargs : dict
+        The call's keyword arguments of :func:`curv.estimate` (``range``, ``radius`` or ``knn``).
+    units : (c,) float64
+        The centres' range units (:func:`curv.advice.twin.range_units`).
+    centres : (c,) int64
+    """
+    if kwargs.get("normals") in ("fit", "pca") or (isinstance(shape, PointCloud) and kwargs.get("normals") is None
+                                                    and shape.normals is None):
+        extra = float(kwargs.get("fit_range", 2))
+    else:
+        extra = 1.0
+    if kwargs.get("radius") is not None:
+        support = np.full(units.size, float(kwargs["radius"]))
+    elif kwargs.get("knn") is not None:
+        from scipy.spatial import cKDTree
+
+        k = int(kwargs["knn"])
+        d, _ = cKDTree(shape.vertices).query(shape.vertices[centres], k=k + 1)
+        support = d[:, -1] * 1.05
+    else:
+        support = float(kwargs.get("range", 2)) * units
+    return support + (extra + REACH_MARGIN) * units
+
+
+def _centre_sets(pool: np.ndarray, copies: int, per_copy: int, rng) -> list[np.ndarray]:
+    """``copies`` sets of centres from ``pool``: disjoint while the pool lasts, then drawn afresh."""
+    out, order = [], rng.permutation(pool)
+    take = min(per_copy, pool.size)
+    for _ in range(copies):
+        if order.size < take:
+            order = np.concatenate([order, rng.permutation(pool)])
+        out.append(np.sort(order[:take]))
+        order = order[take:]
+    return out
+
+
+def _estimate_keywords():
+    from .. import iter_estimate
+
+    accepts = "standard_errors" in inspect.signature(iter_estimate).parameters
+    return iter_estimate, ({"standard_errors": False} if accepts else {})
+
+
+def _normals_group(copy, kwargs: dict):
+    """Which fitted normals a call reads (calls of one group share them on a copy), or None where its
+    normals cost nothing to make (a mesh's default ones, a cloud's own)."""
+    normals = kwargs.get("normals")
+    if isinstance(normals, str):
+        return (normals, float(kwargs.get("fit_range", 2)), str(kwargs.get("orient", "up")))
+    if normals is None and isinstance(copy, PointCloud) and copy.normals is None:
+        return ("fit", float(kwargs.get("fit_range", 2)), str(kwargs.get("orient", "up")))
+    return None
+
+
+def _score(twin, res, flip: bool) -> np.ndarray:
+    """(c,) e_rel of a result at the twin's centres against the twin's curvature (NaN where invalid)."""
+    from ..metrics import relative_error
+
+    k1, k2 = res.k1[twin.centres], res.k2[twin.centres]
+    t1, t2 = twin.k1, twin.k2
+    if flip:  # a cloud's normals are oriented by the call: compare on its side of the surface
+        side = np.einsum("ij,ij->i", res.normals[twin.centres], twin.normals) < 0
+        t1, t2 = np.where(side, -twin.k2, t1), np.where(side, -twin.k1, t2)
+    return relative_error(t1, t2, k1, k2)
+
+
+def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres: int = CHECK_CENTRES, seed: int = 0,
+               noise: float | None = None, twin_options: dict | None = None,
+               noise_policy: str = "share") -> Generator[Progress, None, CheckReport]:
+    """Run ``calls`` on noisy copies of ``shape``'s smooth twin; yields progress, returns the report.
+
+    Parameters
+    ----------
+    shape : Mesh or PointCloud
+        The input.
+    calls : dict
+        Key -> keyword arguments of :func:`curv.estimate` (no ``vertices``).
+    pool : (p,) int array_like
+        The vertices (points) the centres are drawn from: where every call gives a value on the input.
+    copies, centres : int
+        Copies, and centres per copy.
+    seed : int
+        Seed of the centres and the noise.
+    noise : float, optional
+        The copies' noise along the normal in input units; default measured on the twin (the
+        median of the patches' :attr:`~curv.advice.twin.Twin.sigma` where most patches resolve it,
+        else 0).
+    twin_options : dict, optional
+        Keyword arguments of :func:`curv.advice.twin.build_twin` (the fairness study of
+        docs/ADVISOR.md builds twins with each candidate's own model).
+
+    Yields
+    ------
+    curv.core.jit.Progress
+        Fraction done; every yield is a point where the caller may stop.
+
+    Returns
+    -------
+    CheckReport
+    """
+    # the fractions below are sums of shares: rounding may put one a few ulps below the one before
+    return (yield from _monotone(_check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
+                                              noise_policy)))
+
+
+def _monotone(gen: Generator) -> Generator[Progress, None, object]:
+    """``yield from gen`` with every fraction at least the one before; returns ``gen``'s value."""
+    last = 0.0
+    try:
+        while True:
+            try:
+                done = next(gen)
+            except StopIteration as stop:
+                return stop.value
+            last = min(1.0, max(last, float(done)))  # never back, never past the end
+            yield Progress(last, getattr(done, "message", ""), getattr(done, "phase", ""))
+    finally:
+        gen.close()
+
+
+def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options, noise_policy):
+    """:func:`iter_check`'s work (its parameters in order)."""
+    from .copies import noisy_copy
+    from .twin import build_twin, range_units
+
+    t0 = time.perf_counter()
+    pool = np.asarray(pool, np.int64)
+    if pool.size == 0:
+        raise CurvError("cannot check: no vertex where every candidate gives a value")
+    rng = np.random.default_rng([seed, 35])
+    sets = _centre_sets(pool, copies, centres, rng)
+    twins = []
+    for j, chosen in enumerate(sets):
+        units = range_units(shape, chosen)
+        radii = np.max([call_reach(shape, kw, units, chosen) for kw in calls.values()], axis=0)
+        twins.append(build_twin(shape, chosen, radii, **(twin_options or {})))
+        yield Progress(0.2 * (j + 1) / len(sets), "building the smooth twin")
+    sigma = np.concatenate([t.sigma for t in twins])
+    resolved = np.concatenate([t.resolved for t in twins])
+    finite = np.isfinite(sigma)
+    noise_resolved = bool(2 * np.sum(resolved & finite) > sigma.size)
+    if noise is None and noise_policy == "share":
+        noise = float(np.median(np.concatenate([t.noise for t in twins])[finite])) if finite.any() else 0.0
+    elif noise is None and noise_policy == "residual":
+        noise = float(np.median(sigma[finite])) if finite.any() else 0.0
+    elif noise is None:
+        noise = float(np.median(sigma[resolved & finite])) if noise_resolved else 0.0
+    bound = float(np.median(sigma[finite])) if finite.any() else float("nan")
+    estimate, quiet = _estimate_keywords()
+    scores = {key: [] for key in calls}
+    seconds = {key: 0.0 for key in calls}
+    steps = len(twins) * len(calls)
+    step = 0
+    for j, twin in enumerate(twins):
+        copy = noisy_copy(shape, twin, noise, rng)
+        shared: dict = {}  # normals fitted once per copy for every call that fits the same ones
+        for key, kwargs in calls.items():
+            start = 0.2 + 0.8 * step / steps
+            t1 = time.perf_counter()
+            group = _normals_group(copy, kwargs)
+            run = dict(kwargs)
+            if group in shared:
+                run.pop("fit_range", None)
+                run["normals"] = shared[group]
+            try:
+                res = yield from rescaled(estimate(copy, vertices=twin.centres, **quiet, **run), start,
+                                          start + 0.8 / steps)
+                if group is not None and group not in shared:
+                    shared[group] = res.normals
+                scores[key].append(_score(twin, res, flip=not twin.oriented))
+            except CurvError:
+                scores[key].append(np.full(twin.centres.size, np.nan))
+            seconds[key] += time.perf_counter() - t1
+            step += 1
+            yield Progress(0.2 + 0.8 * step / steps, "checking the candidates on noisy copies")
+    measured = {key: _measure(scores[key], seconds[key]) for key in calls}
+    degrees = np.concatenate([t.degree for t in twins])
+    return CheckReport(measured=measured, noise=float(noise), noise_bound=bound, noise_resolved=noise_resolved,
+                       copies=len(twins), centres=int(min(t.centres.size for t in twins)),
+                       degrees={int(d): int(n) for d, n in zip(*np.unique(degrees, return_counts=True))},
+                       seconds=time.perf_counter() - t0)
+
+
+def _measure(per_copy: list, seconds: float) -> Measured:
+    """A call's :class:`Measured` from its per-centre e_rel on each copy."""
+    medians = np.array([np.nanmedian(e) if np.isfinite(e).any() else np.nan for e in per_copy])
+    share = float(np.mean(np.concatenate([np.isfinite(e) for e in per_copy]))) if per_copy else 0.0
+    ok = np.isfinite(medians) & (medians > 0)
+    logs = np.log(medians[ok])
+    erel = float(np.exp(logs.mean())) if ok.any() else (0.0 if np.any(medians == 0) else float("nan"))
+    spread = float(np.exp(logs.std(ddof=1))) if ok.sum() > 1 else float("nan")
+    return Measured(erel=erel, copies=tuple(float(m) for m in medians), spread=spread, measured=share,
+                    seconds=seconds)

@@ -1,0 +1,354 @@
+"""The smooth twin: the input's own sampling around a few centres, its noise removed, its curvature exact.
+
+Around each centre vertex (or point) p the twin is a patch of the input (every vertex within a
+radius of p, reached through the mesh, or every point of the ball on a cloud) moved onto one smooth
+surface: heights ``g(s, t)`` over a base (p's tangent plane, or a sphere fitted to the patch where
+it is curved: :mod:`curv.advice.twin_base`), ``g`` a polynomial fitted to the patch by weighted
+least squares (Gaussian weights, :data:`WEIGHT_WIDTH` of the patch radius) with the terms its
+points cannot tell from noise dropped (:mod:`curv.advice.twin_fit`). Each patch vertex keeps its
+coordinates ``(s, t)`` over the base and takes the height ``g(s, t)``, so the twin has the input's
+connectivity (its faces) or sampling and the fit's shape.
+
+Because the twin *is* that surface around p, its curvature at p is exact (the fundamental forms of
+the parametrisation): no estimator computes it, and none of the candidates fits this model (the jet
+fits at most degree 4 over its own ball, unweighted, in the frame of its own normal; the twin's
+heights go to degree :data:`~curv.advice.twin_fit.MAX_DEGREE` over a sphere or plane fitted to a
+wider patch; docs/ADVISOR.md argues the judge's fairness and measures it).
+
+The patches of different centres are copied apart (a vertex in two patches is in the twin twice,
+and a cloud's patches are set apart in space), so they may overlap on the input: :class:`Twin` is
+their disjoint union, a :class:`~curv.Mesh` or :class:`~curv.PointCloud` of its own. The weighted
+residuals of the fits measure the input's noise along the normal (:attr:`Twin.sigma`,
+leverage-corrected: unbiased for Gaussian noise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.mesh import Mesh
+from ..core.pointcloud import PointCloud
+from .twin_base import choose_bases
+from .twin_fit import MAX_DEGREE, evaluate, fit_heights
+
+__all__ = ["Twin", "build_twin", "CAP_COSINE", "WEIGHT_WIDTH", "patch_radii", "range_units"]
+
+CAP_COSINE = 0.34
+"""A mesh patch keeps the vertices whose normal is within 70 degrees of the centre's (and are joined
+to the centre through them): on a coarse closed surface the patch is a cap, never wrapped around."""
+
+SPHERE_SLACK = 1.1
+"""A patch is measured from its sphere unless the sphere-based fit leaves more than this times the
+plane-based fit's mean squared residual."""
+
+WEIGHT_WIDTH = 0.35
+"""Standard deviation of the fit's Gaussian weights, as a share of the patch radius."""
+
+
+@dataclass(frozen=True)
+class Twin:
+    """A smooth twin around some centres (see the module's docstring).
+
+    Attributes
+    ----------
+    shape : Mesh or PointCloud
+        The twin: the disjoint union of the moved patches (m vertices or points).
+    centres : (c,) int64
+        Each centre's row in :attr:`shape`.
+    source : (c,) int64
+        Each centre's vertex (or point) in the input.
+    k1, k2 : (c,) float64
+        The twin's exact principal curvatures at its centres, ``k1 >= k2``, for the normal
+        :attr:`normals`.
+    normals : (c, 3) float64
+        The twin's unit normal at each centre, on the side of the input's normal there (a mesh:
+        its faces' orientation; a cloud: the side of the patch's own frame, see :attr:`oriented`).
+    surface_normals : (m, 3) float64
+        The twin's unit normal at every one of its vertices (the direction the noisy copies move
+        them in).
+    sigma : (c,) float64
+        The spread of the input about each patch's fit along the normal (leverage-corrected root
+        mean square weighted residual), in input units: the noise where the residual is noise.
+    noise : (c,) float64
+        The part of :attr:`sigma` that is noise, in input units (:meth:`Fits.noise_share
+        <curv.advice.twin_fit.Fits.noise_share>`: what did not fall over the fits' last two degrees).
+    degree : (c,) int64
+        The polynomial degree chosen for each patch.
+    resolved : (c,) bool
+        Whether the patch's residuals reached their noise floor below the highest degree its
+        points allow (the criterion stopped before it): :attr:`sigma` is then the noise; elsewhere
+        the residuals are still the surface's own terms beyond the fit, and the noise is below them.
+    origin : (m,) int64
+        The input vertex (point) each twin vertex was moved from.
+    patch : (m,) int64
+        The centre (0..c-1) each twin vertex belongs to.
+    radius : (c,) float64
+        Each patch's radius.
+    oriented : bool
+        Whether :attr:`normals` follow the input's own orientation (a mesh's faces); on a cloud
+        they follow the fit's frame, and a candidate's normal decides the sign of the comparison.
+    """
+
+    shape: Mesh | PointCloud
+    centres: np.ndarray
+    source: np.ndarray
+    k1: np.ndarray
+    k2: np.ndarray
+    normals: np.ndarray
+    surface_normals: np.ndarray
+    sigma: np.ndarray
+    noise: np.ndarray
+    degree: np.ndarray
+    resolved: np.ndarray
+    origin: np.ndarray
+    patch: np.ndarray
+    radius: np.ndarray
+    oriented: bool
+
+
+def range_units(shape, centres: np.ndarray) -> np.ndarray:
+    """(c,) float64 each centre's range unit: a mesh vertex's longest 1-ring edge, a point's spacing
+    (:func:`curv.core.ranges.unit_lengths`)."""
+    if isinstance(shape, PointCloud):
+        from ..core.ranges import SPACING_NEIGHBOUR
+
+        return np.asarray(shape.kth_distance(SPACING_NEIGHBOUR)[centres], float)
+    return np.asarray(shape.longest_edge[centres], float)
+
+
+def patch_radii(shape, centres: np.ndarray, reach: float) -> np.ndarray:
+    """(c,) float64 patch radius of each centre: ``reach`` times its range unit (:func:`range_units`)."""
+    return reach * range_units(shape, centres)
+
+
+# ---------------------------------------------------------------------------- patches
+def _mesh_patches(mesh: Mesh, centres: np.ndarray, radii: np.ndarray) -> list[np.ndarray]:
+    """Each centre's patch: the centre first, then the vertices its ball reaches through the mesh."""
+    from ..geometry.neighbourhood import supports
+
+    full = np.full(mesh.n_vertices, np.nan)
+    full[centres] = radii
+    indptr, indices = supports(mesh, full, centres)
+    return [np.concatenate(([c], indices[indptr[i]:indptr[i + 1]])) for i, c in enumerate(centres)]
+
+
+def _cloud_patches(cloud: PointCloud, centres: np.ndarray, radii: np.ndarray) -> list[np.ndarray]:
+    """Each centre's patch: the centre first, then the other points of its ball."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(cloud.points)
+    out = []
+    for c, found in zip(centres, tree.query_ball_point(cloud.points[centres], radii)):
+        found = np.asarray(found, np.int64)
+        out.append(np.concatenate(([c], found[found != c])))
+    return out
+
+
+def _frames(points: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
+    """(3, 3) rows e1, e2, n: the weighted principal axes of the patch's inner half (n: least spread)."""
+    d = points - centre
+    w = np.exp(-0.5 * np.sum(d * d, axis=1) / (0.25 * radius) ** 2)
+    cov = (d * w[:, None]).T @ d
+    _, vecs = np.linalg.eigh(cov)
+    n = vecs[:, 0]
+    e1 = vecs[:, 2]
+    return np.stack([e1, np.cross(n, e1), n])
+
+
+def _mesh_cap(mesh: Mesh, patch: np.ndarray, normals: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """The patch's vertices within :data:`CAP_COSINE` of ``axis`` joined to its centre through such
+    vertices' faces (the centre first)."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    keep = normals[patch] @ axis >= CAP_COSINE
+    keep[0] = True
+    if keep.all():
+        return patch
+    kept = patch[keep]
+    local = np.full(mesh.n_vertices, -1, np.int64)
+    local[kept] = np.arange(kept.size)
+    adj = mesh.adjacency[kept][:, kept].tocoo()
+    graph = sp.coo_matrix((np.ones(adj.nnz), (adj.row, adj.col)), shape=(kept.size, kept.size))
+    _, label = connected_components(graph, directed=False)
+    return kept[label == label[0]]
+
+
+def _mesh_faces(mesh: Mesh, members: np.ndarray) -> np.ndarray:
+    """(f, k) int64 the faces whose corners are all in ``members``, in local numbering (-1 padded)."""
+    inside = np.full(mesh.n_vertices, -1, np.int64)
+    inside[members] = np.arange(members.size)
+    vf = mesh.vertex_faces
+    starts, stops = vf.indptr[members], vf.indptr[members + 1]
+    faces = np.unique(vf.indices[np.repeat(stops - (stops - starts).cumsum(), stops - starts)
+                                 + np.arange((stops - starts).sum())])
+    rows = mesh.faces[faces]
+    local = np.where(rows >= 0, inside[np.maximum(rows, 0)], -1)
+    whole = np.all((local >= 0) | (rows < 0), axis=1)
+    return local[whole]
+
+
+# ---------------------------------------------------------------------------- the twin
+def build_twin(shape: Mesh | PointCloud, centres, radii, *, max_degree: int = MAX_DEGREE,
+               input_normals: np.ndarray | None = None, fixed_degree: int | None = None,
+               weight_width: float = WEIGHT_WIDTH, base: bool = True) -> Twin:
+    """The smooth twin of ``shape`` around ``centres`` (see the module's docstring).
+
+    Parameters
+    ----------
+    shape : Mesh or PointCloud
+    centres : (c,) int array_like
+        Vertices (points) to build patches around; a centre whose patch cannot be fitted (too few
+        vertices for a quadric) is left out of the twin.
+    radii : (c,) float64 or float
+        Each patch's radius in input units (a float: that many of each centre's range units,
+        :func:`patch_radii`): at least the farthest any candidate's support and the normals it
+        reads reach, with a margin.
+    max_degree : int
+        Highest polynomial degree of the heights.
+    input_normals : (n, 3) float64, optional
+        The input's vertex normals (a mesh's Max-weighted ones by default): they orient each
+        patch's frame and cut a mesh patch to its cap (:data:`CAP_COSINE`).
+    fixed_degree : int, optional
+        Fit every patch at exactly this degree, every term kept, over the plane (for the fairness
+        study of docs/ADVISOR.md: a twin built with a candidate's own model).
+    weight_width : float
+        The weights' width as a share of the patch radius (``inf``: uniform weights).
+    base : bool
+        Measure curved patches from a sphere (:mod:`curv.advice.twin_base`); False: always the plane.
+
+    Returns
+    -------
+    Twin
+    """
+    centres = np.asarray(centres, np.int64)
+    if np.ndim(radii) == 0:
+        radii = patch_radii(shape, centres, float(radii))
+    radii = np.asarray(radii, float)
+    is_mesh = isinstance(shape, Mesh)
+    if is_mesh and input_normals is None:
+        from ..geometry.normals import vertex_normals
+
+        input_normals = vertex_normals(shape)
+    patches = (_mesh_patches if is_mesh else _cloud_patches)(shape, centres, radii)
+    x = shape.vertices
+    frames, members = [], []
+    for patch, r in zip(patches, radii):
+        frame = _frames(x[patch], x[patch[0]], r)
+        if input_normals is not None and np.all(np.isfinite(input_normals[patch[0]])):
+            if frame[2] @ input_normals[patch[0]] < 0:
+                frame = np.stack([frame[1], frame[0], -frame[2]])  # keep it right-handed
+        if is_mesh:
+            patch = _mesh_cap(shape, patch, input_normals, frame[2])
+        frames.append(frame)
+        members.append(patch)
+    frames = np.array(frames).reshape(-1, 3, 3)
+    origin = x[centres]
+    weight = (lambda d2: np.exp(-0.5 * d2 / weight_width**2)) if np.isfinite(weight_width) else np.ones_like
+    plane = _plane_bases(origin, frames, radii)
+    s, t, z, w, count, members = _pack(plane, x, members, weight)
+    if fixed_degree is not None:
+        bases, fits = plane, fit_heights(s, t, z, w, count, fixed_degree, threshold=0.0, points_per_unknown=1.0)
+    else:
+        fits = fit_heights(s, t, z, w, count, max_degree)
+        sphere = choose_bases(origin, frames, radii, s, t, z, w) if base else None
+        bases = plane
+        if sphere is not None and sphere.sphere.any():
+            packed = _pack(sphere, x, members, weight)
+            sphere_fits = fit_heights(*packed[:5], max_degree)
+            # a sphere helps where it is close to the patch (a cap, an ellipsoid): fewer terms, so fewer
+            # noisy ones; a tube or a saddle may be better measured from its plane. Where both leave
+            # the noise (within SPHERE_SLACK), the sphere
+            better = sphere.sphere & (_residual_share(sphere_fits, packed[3])
+                                      <= SPHERE_SLACK * _residual_share(fits, w))
+            if better.any():
+                bases = sphere.restricted(better)
+                s, t, z, w, count, members = _pack(bases, x, members, weight)
+                fits = fit_heights(s, t, z, w, count, max_degree)
+    height, gs, gt = evaluate(fits, s, t)
+    k1, k2, centre_normals = bases.centre_curvature(fits)
+    return _assemble(shape, centres, members, bases, (s, t, height, gs, gt), fits, w, k1, k2, centre_normals)
+
+
+def _residual_share(fits, w) -> np.ndarray:
+    """(c,) the weighted mean squared residual of each patch's fit (inf where it could not be fitted)."""
+    out = np.sum(w * fits.residual**2, axis=1) / np.maximum(w.sum(axis=1), 1e-300)
+    return np.where(fits.degree >= 2, out, np.inf)
+
+
+def _plane_bases(origin, frames, radii):
+    """Every patch measured from its tangent plane."""
+    from .twin_base import Bases
+
+    c = len(radii)
+    return Bases(origin=origin, frame=frames, radius=radii, sphere=np.zeros(c, bool),
+                 centre=np.full_like(origin, np.nan), big=np.full(c, np.inf), side=np.ones(c), plane_frame=frames)
+
+
+def _pack(bases, x, members, weight):
+    """Every patch's points in its base, padded to one width: ``s, t, z, w`` (c, N), the counts (c,)
+    and the members (the points the base cannot hold left out; the centre stays first)."""
+    kept, coords = [], []
+    for i, patch in enumerate(members):
+        s, t, z, ok = bases.coordinates(i, x[patch])
+        ok[0] = True
+        kept.append(patch[ok])
+        coords.append((s[ok], t[ok], z[ok]))
+    count = np.array([m.size for m in kept], np.int64)
+    width = int(count.max()) if count.size else 0
+    out = np.zeros((4, len(kept), width))
+    for i, (s, t, z) in enumerate(coords):
+        n = s.size
+        out[0, i, :n], out[1, i, :n], out[2, i, :n] = s, t, z
+        out[3, i, :n] = weight(s * s + t * t)
+    return out[0], out[1], out[2], out[3], count, kept
+
+
+def _assemble(shape, centres, members, bases, surface, fits, w, k1, k2, centre_normals) -> Twin:
+    """The union of the moved patches (those whose fit succeeded) as a :class:`Twin`, and each
+    patch's noise along the twin's normal (leverage-corrected weighted residual distances)."""
+    s, t, height, gs, gt = surface
+    is_mesh = isinstance(shape, Mesh)
+    keep = np.flatnonzero(fits.degree >= 2)
+    if not keep.size:
+        raise ValueError("no patch of the twin could be fitted")
+    points, normals, patch_of, faces, starts = [], [], [], [], []
+    sigma = np.full(len(members), np.nan)
+    height_sigma2 = np.sum(w * fits.residual**2, axis=1) / np.maximum(fits.dof, 1e-300)
+    share = fits.noise_share(height_sigma2)
+    offset = 0
+    for out, c in enumerate(keep):
+        n = members[c].size
+        position, normal, cosine = bases.surface(c, s[c, :n], t[c, :n], height[c, :n], gs[c, :n], gt[c, :n])
+        # a height residual on a slope is longer than the distance along the normal, where the copies
+        # put the noise back
+        distance = fits.residual[c, :n] * cosine * bases.radius[c]
+        sigma[c] = np.sqrt(np.sum(w[c, :n] * distance**2) / max(fits.dof[c], 1e-300))
+        points.append(position)
+        normals.append(normal)
+        patch_of.append(np.full(n, out, np.int64))
+        if is_mesh:
+            f = _mesh_faces(shape, members[c])
+            faces.append(np.where(f >= 0, f + offset, -1))
+        starts.append(offset)
+        offset += n
+    if not is_mesh:
+        # a cloud's patches are set apart in space (a mesh's by its faces): a ball or the nearest
+        # points of one patch's points must never reach another's
+        gap = 3.0 * float(np.max(bases.radius[keep]))
+        points = [p + np.array([gap * i, 0.0, 0.0]) for i, p in enumerate(points)]
+    vertices = np.concatenate(points)
+    if is_mesh:
+        width = max(f.shape[1] for f in faces)
+        faces = np.concatenate([np.pad(f, ((0, 0), (0, width - f.shape[1])), constant_values=-1) for f in faces])
+        twin_shape = Mesh(vertices, faces)
+    else:
+        twin_shape = PointCloud(vertices)
+    return Twin(shape=twin_shape, centres=np.array(starts, np.int64), source=centres[keep], k1=k1[keep],
+                k2=k2[keep], normals=centre_normals[keep], surface_normals=np.concatenate(normals),
+                sigma=sigma[keep], noise=sigma[keep] * np.sqrt(share[keep]), degree=fits.degree[keep],
+                resolved=fits.resolved[keep],
+                origin=np.concatenate([members[c] for c in keep]), patch=np.concatenate(patch_of),
+                radius=bases.radius[keep], oriented=is_mesh)

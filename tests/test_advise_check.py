@@ -1,0 +1,231 @@
+"""The advisor's self-check: the smooth twin, its exact curvature, the noisy copies, the ranking by measured error."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import curv
+from curv.advice.check import iter_check
+from curv.advice.copies import noisy_copy
+from curv.advice.ranking import ERROR_FLOOR, rank_candidates
+from curv.advice.twin import build_twin
+from curv.advice.twin_base import principal_from_derivatives
+from curv.advice.twin_fit import fit_heights, monomial_powers
+from curv.core.jit import Progress, run_to_end
+from curv.metrics import relative_error
+from curv.study.protocol import Task
+from curv.study.testmesh import build_test_mesh
+from curv.surfaces import Sphere, make_surface, sample_points
+from curv.surfaces.geometry import monge_principal
+
+
+# ------------------------------------------------------------------ the twin's surface and curvature
+def test_forms_give_the_monge_curvature_of_a_graph():
+    rng = np.random.default_rng(3)
+    fx, fy, fxx, fxy, fyy = rng.normal(size=(5, 50))
+    k1, k2, _, _, normals = monge_principal((fx, fy), (fxx, fxy, fyy))
+    xs = np.c_[np.ones(50), np.zeros(50), fx]
+    xt = np.c_[np.zeros(50), np.ones(50), fy]
+    z = np.zeros(50)
+    a1, a2 = principal_from_derivatives(xs, xt, np.c_[z, z, fxx], np.c_[z, z, fxy], np.c_[z, z, fyy], normals)
+    np.testing.assert_allclose(a1, k1, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(a2, k2, rtol=1e-10, atol=1e-12)
+
+
+def test_a_polynomial_is_fitted_exactly_and_noise_free_keeps_every_term():
+    rng = np.random.default_rng(0)
+    s, t = rng.uniform(-1, 1, (2, 3, 200))
+    powers = monomial_powers(4)
+    coef = rng.normal(size=(3, powers.shape[0]))
+    z = np.einsum("cnp,cp->cn", s[..., None] ** powers[:, 0] * t[..., None] ** powers[:, 1], coef)
+    fits = fit_heights(s, t, z, np.ones_like(s), np.full(3, 200), 4)
+    np.testing.assert_allclose(fits.coef[:, : powers.shape[0]], coef, atol=1e-8)
+    assert (fits.degree == 4).all() and np.abs(fits.residual).max() < 1e-9
+
+
+def test_pure_noise_terms_are_dropped():
+    rng = np.random.default_rng(1)
+    s, t = rng.uniform(-1, 1, (2, 40, 300))
+    z = 0.3 * s**2 - 0.2 * t**2 + rng.normal(scale=1e-3, size=s.shape)   # a quadric and noise
+    fits = fit_heights(s, t, z, np.ones_like(s), np.full(40, 300), 6)
+    # a few pure-noise terms pass 3 standard errors by chance (0.27 % each of the 25 beyond the quadric)
+    assert np.mean(fits.degree == 2) > 0.8
+    assert fits.resolved.mean() > 0.9
+
+
+def test_a_noise_free_sphere_twin_is_the_sphere():
+    """Measured from a fitted sphere, a spherical patch needs no term: the twin is the sphere, its
+    curvature exact (1 / r) and its vertices on it."""
+    s = make_surface("sphere", n_vertices=642, radius=1.5)
+    twin = build_twin(s.mesh, np.arange(0, 600, 30), 9.5)
+    np.testing.assert_allclose(twin.k1, 1 / 1.5, rtol=1e-7)
+    np.testing.assert_allclose(twin.k2, 1 / 1.5, rtol=1e-7)
+    np.testing.assert_allclose(np.linalg.norm(twin.shape.vertices, axis=1), 1.5, rtol=1e-7)
+    assert (np.einsum("ij,ij->i", twin.normals, s.mesh.vertices[twin.source]) > 0).all()  # the input's side
+
+
+@pytest.mark.parametrize("function", ["quadratic", "trigonometric"])
+def test_a_noise_free_patch_twin_has_the_surfaces_curvature(function):
+    tm = build_test_mesh(Task(3, function, 3169, 10.0, 0.0, 0))
+    centres = np.flatnonzero(tm.evaluated)[::40]
+    twin = build_twin(tm.mesh, centres, 7.0)
+    e = relative_error(tm.truth.k1[twin.source], tm.truth.k2[twin.source], twin.k1, twin.k2)
+    # a hundred times below the best estimator's error on such a mesh (about 1e-2)
+    assert np.median(e) < 2e-4
+    moved = np.linalg.norm(twin.shape.vertices - tm.mesh.vertices[twin.origin], axis=1)
+    # a thousandth of the paper's noise level (0.1 of an edge): nothing an estimator can tell
+    assert np.median(moved) < 1e-4 * tm.mesh.mean_edge_length
+
+
+def test_the_twin_measures_the_noise_along_the_normal():
+    tm = build_test_mesh(Task(5, "ellipsoid_patch", 3169, 5.0, 0.6, 0))
+    twin = build_twin(tm.mesh, np.flatnonzero(tm.evaluated)[::25], 9.5)
+    assert np.median(twin.noise) == pytest.approx(tm.noise_sigma, rel=0.1)
+    clean = build_twin(build_test_mesh(Task(5, "ellipsoid_patch", 3169, 5.0, 0.0, 0)).mesh,
+                       np.flatnonzero(tm.evaluated)[::25], 9.5)
+    assert np.median(clean.noise) < 1e-3 * tm.noise_sigma
+
+
+def test_patches_are_copied_apart():
+    s = make_surface("sphere", n_vertices=642)
+    twin = build_twin(s.mesh, [0, 1, 2], 6.0)   # neighbouring centres: overlapping patches
+    assert twin.shape.n_vertices == sum(np.bincount(twin.patch))
+    assert np.bincount(twin.origin).max() == 3   # the shared vertices are in the twin three times
+    cloud = sample_points(Sphere(), 3000, rng=2).cloud
+    twin = build_twin(cloud, [0, 1, 2], 6.0)
+    gaps = [np.linalg.norm(twin.shape.vertices[twin.patch == i].mean(0) - twin.shape.vertices[twin.patch == j].mean(0))
+            for i, j in ((0, 1), (1, 2))]
+    assert min(gaps) > 2 * twin.radius.max()          # a cloud's patches are set apart in space
+
+
+def test_a_noisy_copy_moves_the_twin_along_its_normals():
+    s = make_surface("sphere", n_vertices=642)
+    twin = build_twin(s.mesh, np.arange(0, 600, 60), 6.0)
+    copy = noisy_copy(s.mesh, twin, 0.01, np.random.default_rng(0))
+    moved = copy.vertices - twin.shape.vertices
+    along = np.einsum("ij,ij->i", moved, twin.surface_normals)
+    np.testing.assert_allclose(np.linalg.norm(moved, axis=1), np.abs(along), rtol=1e-9)
+    assert np.std(along) == pytest.approx(0.01, rel=0.1)
+
+
+# ------------------------------------------------------------------ the check
+def test_the_check_measures_what_the_calls_do_on_the_input():
+    """On a noisy analytic patch the measured error of every call is near its true error there."""
+    tm = build_test_mesh(Task(19001, "trigonometric", 3169, 10.0, 0.3, 0))
+    calls = {"qs:R2": dict(method="qs", range=2), "mru:R3": dict(method="mru", range=3),
+             "jet:R4": dict(method="jet", range=4), "jet:R2;degree=4": dict(method="jet", range=2, degree=4)}
+    pool = np.flatnonzero(tm.evaluated)
+    steps = []
+    gen = iter_check(tm.mesh, calls, pool)
+    while True:
+        try:
+            steps.append(next(gen))
+        except StopIteration as stop:
+            report = stop.value
+            break
+    assert all(isinstance(p, Progress) for p in steps) and steps == sorted(steps) and steps[-1] == 1.0
+    assert report.noise == pytest.approx(tm.noise_sigma, rel=0.1) and report.noise_resolved
+    ev = tm.evaluated
+    for key, kwargs in calls.items():
+        res = curv.estimate(tm.mesh, **kwargs)
+        true = np.nanmedian(relative_error(tm.truth.k1[ev], tm.truth.k2[ev], res.k1[ev], res.k2[ev]))
+        m = report.measured[key]
+        assert m.ok and len(m.copies) == 3 and m.spread >= 1
+        assert m.erel == pytest.approx(true, rel=0.3), key
+
+
+def test_the_check_stops_at_its_next_step():
+    s = make_surface("sphere", n_vertices=642, noise=0.01, seed=1)
+    gen = iter_check(s.mesh, {"qs": dict(method="qs", range=2)}, np.arange(642))
+    first = next(gen)
+    gen.close()                       # a cancel: the generator ends there, nothing raised
+    assert 0 <= first <= 1
+    with pytest.raises(StopIteration):
+        next(gen)
+
+
+def test_the_ranking_is_by_measured_error_and_says_what_is_within_noise():
+    from curv.advice.answer import Candidate
+    from curv.advice.check import Measured
+
+    def measured(*copies):
+        logs = np.log(copies)
+        return Measured(float(np.exp(logs.mean())), copies, float(np.exp(logs.std(ddof=1))), 1.0, 0.0)
+
+    cands = [Candidate("a", 2, {}, 0.01), Candidate("b", 2, {}, 0.02), Candidate("c", 2, {}, 0.03),
+             Candidate("d", 2, {}, 0.005, valid_share=0.5), Candidate("e", 2, {}, 0.04)]
+    keys = [c.key for c in cands]
+    report = {keys[0]: measured(0.30, 0.31, 0.29), keys[1]: measured(0.10, 0.12, 0.11),
+              keys[2]: measured(0.13, 0.09, 0.12), keys[3]: measured(0.01, 0.01, 0.01)}
+    ranked = rank_candidates(cands, report, 0.02)
+    assert [c.method for c in ranked] == ["b", "c", "a", "e", "d"]   # measured first, then predicted, coverage above
+    assert [c.within_noise for c in ranked] == [False, True, False, False, False]   # c beat b on one copy
+    # the prior's first stays first where the copies cannot tell the measured best from it
+    close = {**report, keys[0]: measured(0.12, 0.10, 0.13)}
+    ranked = rank_candidates(cands, close, 0.02)
+    assert [c.method for c in ranked] == ["a", "b", "c", "e", "d"] and ranked[1].within_noise
+    floor = rank_candidates(cands[:2], {keys[0]: measured(1e-9, 1e-9, 1e-9), keys[1]: measured(1e-8, 1e-8, 1e-8)},
+                            0.02)
+    assert [c.method for c in floor] == ["a", "b"] and floor[1].within_noise   # both at the floor: the table decides
+    assert ERROR_FLOOR == 1e-6
+
+
+# ------------------------------------------------------------------ the advice
+def test_the_check_corrects_the_tables_first_choice():
+    """A 547-vertex quadratic patch at a third of the paper's noise: the table's first choice is 1.3x the
+    best error there, the checked advice is the best call of the six checked."""
+    from curv.advice.table import evaluated_for_table, variant_errors
+
+    tm = build_test_mesh(Task(19007, "quadratic", 547, 9.27, 0.337, 0))
+    table = curv.advise(tm.mesh, check=False)
+    checked = curv.advise(tm.mesh)
+    assert checked.checked and not table.checked
+    shortlist = [c.key for c in checked.ranking if c.measured is not None]
+    assert table.best.key in shortlist and len(shortlist) == 6
+    errors = variant_errors(tm.mesh, tm.truth, evaluated_for_table(tm.mesh), shortlist)
+    assert errors[checked.best.key] == min(errors.values())
+    assert errors[table.best.key] > 1.2 * errors[checked.best.key]
+
+
+def test_advice_on_a_point_cloud_is_checked_and_runs():
+    sampled = sample_points(make_surface("trigonometric", n_vertices=817, seed=4).surface, 2500, sampling="blue",
+                            rng=3)
+    rng = np.random.default_rng(4)
+    cloud = curv.PointCloud(sampled.cloud.points + rng.normal(scale=0.004, size=sampled.cloud.points.shape))
+    adv = curv.advise(cloud)
+    assert adv.is_cloud and adv.checked and np.isnan(adv.expected_erel)
+    assert adv.features.noise > 0 and adv.features.n_points == cloud.n_points > 2000
+    measured = [c for c in adv.ranking if c.measured is not None and c.measured.ok]
+    assert len(measured) >= 10 and adv.best is measured[0]
+    # by measured error, the prior's first kept first where the copies cannot tell them apart
+    assert [c.measured.erel for c in measured[1:]] == sorted(c.measured.erel for c in measured[1:])
+    assert measured[0].measured.erel == min(c.measured.erel for c in measured) or measured[1].within_noise
+    res = curv.estimate(cloud, **adv.kwargs)
+    assert res.valid_fraction > 0.8
+    data = json.loads(json.dumps(adv.as_dict(), default=float))
+    assert data["checked"] and data["check"]["copies"] == 3 and data["ranking"][0]["measured"]["copies"]
+    assert adv.call.startswith("curv.estimate(cloud, method=")
+    table_free = curv.advise(cloud, check=False)
+    assert not table_free.checked and "check=False" in table_free.note and "check=False" in table_free.why
+
+
+def test_iter_advise_reports_progress_and_can_be_cancelled():
+    s = make_surface("ellipsoid", n_vertices=642, noise=0.02, seed=2)
+    gen = curv.iter_advise(s.mesh)
+    seen = [next(gen) for _ in range(3)]
+    assert all(isinstance(p, Progress) for p in seen) and seen == sorted(seen)
+    gen.close()
+
+
+def test_large_inputs_fall_back_to_the_table(monkeypatch):
+    import curv.advice.advising as advising
+
+    monkeypatch.setattr(advising, "CHECK_MAX_VERTICES", 100)
+    s = make_surface("sphere", n_vertices=642, noise=0.02, seed=2)
+    adv = curv.advise(s.mesh)
+    assert not adv.checked and "the check was skipped: 642 vertices, more than 100" in adv.note
+    assert adv.note in adv.why
+    assert curv.advise(s.mesh, check=True).checked
