@@ -25,9 +25,8 @@ import math
 
 import numpy as np
 
-from ..core.jit import jit_parallel, launch, prange, run_to_end, iter_chunks, threads
+from ..core.jit import iter_chunks, jit_parallel, launch, prange, run_to_end, slice_bounds, threads
 from ..core.pointcloud import PointCloud
-from ..estimators._local_fit import slice_bounds
 from ..geometry.neighbourhood import ball_support, coordinate_columns, expansion_adjacency, new_queues, new_scratch
 
 __all__ = ["one_sided_points", "RIM_SCALE", "RIM_OFFSET"]
