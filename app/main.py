@@ -137,6 +137,7 @@ def configure(window, args) -> object:
 
     checked, explicit = requested_panes(args)
     doc = window.doc
+    doc.panes_asked = explicit
     if explicit or args.screenshot:  # otherwise the panes remembered from the last session stay
         doc.set_pane_count(len(checked))
         for i, pane in enumerate(checked):

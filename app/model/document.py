@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from psygnal import Signal
 from curv.core import ranges
-from curv.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, polygon_estimators, refusal
+from curv.estimators import DEFAULT_ESTIMATOR, DEFAULT_ESTIMATORS, ESTIMATORS, polygon_estimators, refusal
 from curv.core.errors import EstimatorError
 from curv.core.features import check_angle
 from curv.variants import Variant
@@ -224,6 +224,9 @@ class Document:
         self.failures: dict[tuple, str] = {}
         self.panes: list[Pane] = [default_panes[0]]
         self.default_panes = tuple(default_panes)
+        self.panes_asked = False
+        """Panes named on the command line: kept as they are on every input (else a pane left at the
+        default estimator of one input kind follows the default of the next input's kind)."""
         self.difference = False
         self.active = 0
         self.picked: int | None = None
@@ -244,6 +247,7 @@ class Document:
         ``report=None``: the report follows (:meth:`set_report`). Manual colour limits go back to
         percentiles unless ``display.lock_limits`` is set.
         """
+        previous = self.mesh
         self.source, self.mesh, self.truth = source, mesh, truth
         self.mesh_serial += 1  # the advice, if any, now belongs to an earlier mesh
         self.report, self.repairs = None if report is None else tuple(report), tuple(repairs)
@@ -252,7 +256,7 @@ class Document:
         self.edges = {}
         self._last_good.clear()
         self._rest.clear()
-        self.panes = self._panes_for(mesh)
+        self.panes = self._panes_for(mesh, previous)
         self.picked = None
         changes = {}
         if truth is None and self.display.layer.needs_truth:
@@ -273,11 +277,18 @@ class Document:
         self.report = tuple(lines)
         self.report_changed.emit()
 
-    def _panes_for(self, mesh) -> list[Pane]:
+    def _panes_for(self, mesh, previous=None) -> list[Pane]:
         """The panes on a new input: regions dropped (they name the old input's vertices), knn dropped
-        on a mesh, and an estimator the input rules out (:func:`curv.estimators.refusal`: a face-based
-        one on a point cloud) replaced by the first default pane that runs on it and is not shown yet."""
+        on a mesh, a pane left at the default of the ``previous`` input's kind (a mesh before any
+        input) moved to the default of this one's (:data:`curv.estimators.DEFAULT_ESTIMATORS`) unless
+        :attr:`panes_asked`, and an estimator the input rules out (:func:`curv.estimators.refusal`: a
+        face-based one on a point cloud) replaced by the first default pane that runs on it and is not
+        shown yet."""
         panes = [replace(p.whole, knn=p.knn if is_points(mesh) else None) for p in self.panes]
+        if not self.panes_asked and mesh is not None and is_points(previous) != is_points(mesh):
+            before = Pane.default(DEFAULT_ESTIMATORS["points" if is_points(previous) else "mesh"])
+            now = Pane.default(DEFAULT_ESTIMATORS["points" if is_points(mesh) else "mesh"])
+            panes = [now if p == before and now not in panes else p for p in panes]
         runs = self._runnable_defaults(mesh)
         for i, p in enumerate(panes):
             if refusal(ESTIMATORS[p.method], mesh) is not None:

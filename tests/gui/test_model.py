@@ -75,3 +75,24 @@ def test_failure_reverts_pane_to_last_good_and_events_fire():
     assert fields[1][1] == (lo, hi) and 1.0 <= lo < hi <= 3.0      # shared scale over A and B (H = 1, 3)
     assert fields[0][2].kind == "sequential"                       # one sign: the whole sequential map
     np.testing.assert_allclose(fields[2][0], -2.0)               # A - B
+
+
+def test_a_pane_left_at_the_default_follows_the_input_kind():
+    """The default estimator is one registry fact per input kind (issue 36, item 11): the viewer asks
+    it when the input kind changes, and keeps what was chosen or asked for on the command line."""
+    from curv.estimators import DEFAULT_ESTIMATORS
+
+    mesh = curv.make_surface("sphere", n_vertices=200, seed=0).mesh
+    cloud = curv.PointCloud(mesh.vertices)
+    doc = Document()
+    doc.set_mesh("cloud", cloud)  # the first input: a pane at the mesh default moves to the cloud default
+    assert doc.panes[0] == Pane.default(DEFAULT_ESTIMATORS["points"]) != Pane.default(DEFAULT_ESTIMATORS["mesh"])
+    doc.set_mesh("mesh", mesh)
+    assert doc.panes[0] == Pane.default(DEFAULT_ESTIMATORS["mesh"])
+    doc.set_pane(0, method="qs")  # a choice stays
+    doc.set_mesh("cloud", cloud)
+    assert doc.panes[0].method == "qs"
+    asked = Document()
+    asked.panes_asked = True  # curvlab --method mru scan.laz
+    asked.set_mesh("cloud", cloud)
+    assert asked.panes[0] == Pane.default(DEFAULT_ESTIMATORS["mesh"])
