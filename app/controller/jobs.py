@@ -1,16 +1,12 @@
 """The job controller: one source job, one estimate job per (method, range), the mesh report and one
-advisor job, all off the GUI thread.
-
-A new source supersedes everything running; a pane switching estimator stops the estimate nobody
-shows any more. Stale results are recognised by a generation number (the advisor's by its worker)
-and dropped.
-"""
+advisor job, all off the GUI thread. A new source supersedes everything running; a pane switching
+estimator stops the estimate nobody shows any more. Stale results are recognised by a generation
+number (the advisor's by its worker) and dropped."""
 
 from __future__ import annotations
 
 import time
 
-import numpy as np
 from curv import iter_estimate
 from PySide6.QtCore import QObject, QThreadPool, Signal
 from superqt.utils import create_worker
@@ -24,6 +20,7 @@ from .advice import advice_compile_note, advise_steps
 from .large import WholeFileJob
 from .outputs import overlay_edges, write_export
 from .sources import mesh_report, prepare_source
+from .worker_calls import counted, one_line
 
 __all__ = ["Controller", "JOB_THREADS"]
 
@@ -179,7 +176,7 @@ class Controller(QObject):
         self._source_job = None
         self._advise_after_load = False  # the advice was asked for the mesh that did not come
         self._update_busy()
-        self.failed.emit(f"Could not open {source.label}: {_one_line(exc)}")
+        self.failed.emit(f"Could not open {source.label}: {one_line(exc)}")
 
     # -- estimates ------------------------------------------------------------------------------
     def request_missing(self) -> None:
@@ -205,7 +202,7 @@ class Controller(QObject):
         box = []
         worker = create_worker(mesh_report, self.doc.mesh, _start_thread=False, _connect={
             "returned": lambda lines: self._report_done(box[0], gen, lines),
-            "errored": lambda exc: self._report_done(box[0], gen, [f"no report: {_one_line(exc)}"])})
+            "errored": lambda exc: self._report_done(box[0], gen, [f"no report: {one_line(exc)}"])})
         box.append(worker)
         self._report_job = worker
         worker.start()
@@ -248,7 +245,7 @@ class Controller(QObject):
             call, args, kwargs = self._early.follow, (), {}  # started with the file's read: follow it
             self._early = None
         box = []  # the worker, for the callbacks (they must exist before it does)
-        worker = create_worker(_counted, call, *args,
+        worker = create_worker(counted, call, *args,
                                **kwargs,
                                _start_thread=False, _connect={
             "yielded": lambda f: self._estimate_progress(box[0], key, f),
@@ -290,7 +287,7 @@ class Controller(QObject):
         if not self._current(worker, gen, key):
             return
         self._forget(key)
-        msg = f"{key[0]} {key[1]} failed: {_one_line(exc)}"
+        msg = f"{key[0]} {key[1]} failed: {one_line(exc)}"
         if key in self.doc.results:  # a recompute: the earlier result stays shown
             msg += "; the earlier result stays"
         else:
@@ -370,7 +367,7 @@ class Controller(QObject):
         if self._closed or self._advice_job is not worker:
             return
         self._forget_advice()
-        reason = _one_line(exc)
+        reason = one_line(exc)
         # curv's messages already begin "cannot advise ..."; say only which mesh
         msg = f"{label}: {reason}" if reason.lower().startswith("cannot advise") else \
             f"Could not advise on {label}: {reason}"
@@ -398,7 +395,7 @@ class Controller(QObject):
         name = getattr(path, "name", None) or str(path).rsplit("/", 1)[-1]
         self._start_side(("export", str(path)), f"Writing {name}", write_export, path, self.doc.mesh,
                          scene_of(self.doc), pane, colours, done=lambda out: self.message.emit(f"Wrote {out}"),
-                         failed=lambda exc: self.failed.emit(f"Export failed: {_one_line(exc)}"))
+                         failed=lambda exc: self.failed.emit(f"Export failed: {one_line(exc)}"))
 
     def request_edges(self, key) -> None:
         """Find the overlay edges ``key`` (``"borders"`` or a feature angle) of the shown mesh in a
@@ -414,7 +411,7 @@ class Controller(QObject):
                 doc.set_edges(key, edges)
 
         self._start_side(("edges", key), what, overlay_edges, doc.mesh, key, done=done,
-                         failed=lambda exc: self.failed.emit(f"{what} failed: {_one_line(exc)}"))
+                         failed=lambda exc: self.failed.emit(f"{what} failed: {one_line(exc)}"))
 
     def _start_side(self, key, label, fn, *args, done, failed) -> None:
         box = []
@@ -499,14 +496,3 @@ class Controller(QObject):
         self.whole_file.cancel()
         return QThreadPool.globalInstance().waitForDone(timeout_ms)
 
-
-def _counted(call, *args, **kwargs):
-    """Run the estimate generator ``call(*args, **kwargs)`` (yielding its progress) and return its
-    result with its count of invalid vertices, counted here in the worker (O(n): 5M points)."""
-    result = yield from call(*args, **kwargs)
-    return result, int(np.count_nonzero(~np.asarray(result.valid)))
-
-
-def _one_line(exc: Exception) -> str:
-    text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__

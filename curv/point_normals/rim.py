@@ -46,7 +46,11 @@ patch's rim."""
 
 
 @jit_parallel
-def _offset_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, normals, stamps, queues, share):
+def _offset_kernel(centres, lo, hi, radius, support, normals, scratch, share):
+    """``share[p]`` for ``centres[lo:hi]`` (:func:`offset_shares`); ``support`` is ``(adj_ptr, adj, x,
+    y, z)``, the expansion graph and coordinate columns, ``scratch`` is ``(stamps, queues)`` per part."""
+    adj_ptr, adj, x, y, z = support
+    stamps, queues = scratch
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -94,7 +98,7 @@ def offset_shares(cloud: PointCloud, normals: np.ndarray, radii: np.ndarray, cen
     normals = np.ascontiguousarray(normals, dtype=np.float64)
 
     def run(lo: int, hi: int) -> None:
-        launch(_offset_kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, normals, stamps, queues, share)
+        launch(_offset_kernel, centres, lo, hi, radius, (adj_ptr, adj, x, y, z), normals, (stamps, queues), share)
 
     yield from iter_chunks(centres.size, run)
     return share

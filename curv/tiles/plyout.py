@@ -69,7 +69,9 @@ def iter_write_ply(path, n: int, coordinates, open_rows, *, n_faces: int = 0, fa
     """
     from plyfile import PlyData, PlyElement
 
-    from ..io import _DIR_PROPS, _FLOAT_PROPS, describe_colours
+    from ..io import _DIR_PROPS, _float_props, describe_colours
+
+    float_props = _float_props(label)  # the standard errors only when the tiles computed them
 
     if clim is None:
         cmap, lim = colour_limits(n, open_rows().block, quantity, cmap, None)
@@ -78,7 +80,7 @@ def iter_write_ply(path, n: int, coordinates, open_rows, *, n_faces: int = 0, fa
     reader = open_rows()
     comment = describe_colours(label, quantity, cmap, lim) + "; property 'shown' holds it"
     fields = [(c, "f8") for c in "xyz"] + [(c, "u1") for c in ("red", "green", "blue", "alpha")]
-    fields += [(c, "f4") for c in _FLOAT_PROPS + _DIR_PROPS] + [("valid", "u1"), ("reason", "u1"), ("shown", "f4")]
+    fields += [(c, "f4") for c in float_props + _DIR_PROPS] + [("valid", "u1"), ("reason", "u1"), ("shown", "f4")]
     if points:
         fields += [(f"n{c}", "f4") for c in "xyz"]
     face_kind = PlyElement.describe(np.empty(0, dtype=[("vertex_indices", "i4", (3,))]), "face",
@@ -107,7 +109,7 @@ def iter_write_ply(path, n: int, coordinates, open_rows, *, n_faces: int = 0, fa
                 colors = map_colors(values, cmap=cmap, clim=lim, valid=cols["valid"])
                 for i, c in enumerate(("red", "green", "blue", "alpha")):
                     rows[c] = colors[:, i]
-                for name in _FLOAT_PROPS:
+                for name in float_props:
                     rows[name] = compute(name, cols["k1"], cols["k2"]) if name in ("mean", "gaussian") else cols[name]
                 for i, c in enumerate("xyz"):
                     rows[f"d1{c}"] = cols["d1"][:, i]

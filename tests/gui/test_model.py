@@ -81,8 +81,9 @@ def test_a_pane_left_at_the_default_follows_the_input_kind():
     """The default estimator is one registry fact per input kind (issue 36, item 11): the viewer asks
     it when the input kind changes, and keeps what was chosen or asked for on the command line."""
     from curv.estimators import DEFAULT_ESTIMATORS
+    from curv.surfaces import make_surface
 
-    mesh = curv.make_surface("sphere", n_vertices=200, seed=0).mesh
+    mesh = make_surface("sphere", n_vertices=200).mesh
     cloud = curv.PointCloud(mesh.vertices)
     doc = Document()
     doc.set_mesh("cloud", cloud)  # the first input: a pane at the mesh default moves to the cloud default
