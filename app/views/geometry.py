@@ -83,9 +83,11 @@ class Geometry:
 
     @cached_property
     def georeferenced(self) -> bool:
-        """Whether a point cloud looks like a scan in map coordinates
-        (:func:`app.model.camera.is_georeferenced`; False for a mesh): it is first seen from above."""
-        return self.points_only and is_georeferenced(np.asarray(self.base.points))
+        """Whether a point cloud is a scan in map coordinates: the reader said so
+        (``PointCloud.georeferenced``, LAS/LAZ) or it looks like one
+        (:func:`app.model.camera.is_georeferenced`); False for a mesh. It is first seen from above."""
+        return self.points_only and (bool(getattr(self.mesh, "georeferenced", False))
+                                     or is_georeferenced(np.asarray(self.base.points)))
 
     @cached_property
     def edge_length(self) -> float:
