@@ -22,6 +22,7 @@ from .core.paths import check_readable as _check_path
 from .core.paths import read_with
 from .core.pointcloud import PointCloud
 from .core.quantities import EXPORTED, STANDARD_ERRORS
+from .formats.atomic import plain_mode
 from .formats.guards import check_header, check_off_header, check_ply_header, read_ply_header
 from .geometry.repair import repair
 from .core.result import Curvature
@@ -419,16 +420,6 @@ def describe_colours(curvature: Curvature, field: str, cmap: str, clim: tuple[fl
             f"limits {clim[0]:.4g} .. {clim[1]:.4g})")
 
 
-def _normal_mode(path: Path) -> int:
-    """The permission bits ``open(path, "w")`` would leave: the old file's, else 0666 minus the umask."""
-    try:
-        return path.stat().st_mode & 0o7777
-    except OSError:
-        mask = os.umask(0)
-        os.umask(mask)
-        return 0o666 & ~mask
-
-
 def _atomic_write(path: Path, write) -> Path:
     """Write through ``write(fh)`` into a temporary file beside ``path``, then rename it over ``path``.
 
@@ -436,7 +427,7 @@ def _atomic_write(path: Path, write) -> Path:
     (``mkstemp`` creates 0600 files).
     """
     folder = path.parent if str(path.parent) else Path(".")
-    mode = _normal_mode(path)
+    mode = plain_mode(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     try:
         with os.fdopen(fd, "wb") as fh:
