@@ -207,3 +207,20 @@ def test_an_ascii_ply_on_tiles_writes_the_whole_calls_file(tmp_path, kind):
             assert np.array_equal(va[name], vb[name], equal_nan=True), name  # a mesh: bit for bit
     if kind == "mesh":
         assert np.array_equal(np.stack(a["face"].data["vertex_indices"]), np.stack(b["face"].data["vertex_indices"]))
+
+
+def test_a_mesh_of_triangles_and_quads_on_tiles_equals_the_whole_call():
+    """A tile keeps the padding of its shorter polygons (-1), not a vertex of the tile in its place."""
+    from curv.tiles import estimate_tiled
+
+    from meshes import torus_grid
+
+    quads = torus_grid(40, 20, quads=True)[0]
+    faces = quads.faces
+    polygons = [f for i, f in enumerate(faces) if i % 2 == 0]
+    polygons += [t for f in faces[1::2] for t in (f[[0, 1, 2]], f[[0, 2, 3]])]
+    mesh = curv.Mesh(quads.vertices, polygons)
+    whole = curv.estimate(mesh, "mru", 2)
+    tiled = estimate_tiled(mesh, "mru", 2, tile_size=200)
+    assert tiled.info["tiles"] > 2 and whole.valid.all()
+    assert np.array_equal(whole.reason, tiled.reason) and np.array_equal(whole.k1, tiled.k1)

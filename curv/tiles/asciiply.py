@@ -186,10 +186,8 @@ class AsciiPlySource(Source):
                 if lines + found < self.n:
                     lines, offset = lines + found, offset + len(block)
                     continue
-                at = -1
-                for _ in range(self.n - lines):
-                    at = block.index(b"\n", at + 1)
-                offset += at + 1
+                ends = np.flatnonzero(np.frombuffer(block, np.uint8) == ord("\n"))
+                offset += int(ends[self.n - lines - 1]) + 1
                 lines = self.n
         numbers = _Numbers(self.path, offset)
         try:
