@@ -3,8 +3,9 @@
 :func:`write_copc` lays points on an octree as the COPC specification asks (copc.io): each point
 in one node of some level (a node's cube holds it), each node one variable-size LAZ chunk
 (lazrs), the COPC info VLR first, the hierarchy in an EVLR. Good enough for readers
-(laspy's ``CopcReader`` and chunked reader, :mod:`curv.tiles.copc`), not a writer for users: its
-levels are drawn at random, not thinned by spacing.
+(laspy's ``CopcReader`` and chunked reader, :mod:`curv.tiles.copc`), not a writer for users: a
+point's level is drawn at random (each level four times as likely as the one above), not thinned
+by spacing.
 """
 
 from __future__ import annotations
@@ -29,7 +30,9 @@ def write_copc(path, points: np.ndarray, normals: np.ndarray | None = None, *, s
     lo, hi = points.min(axis=0), points.max(axis=0)
     half = float((hi - lo).max()) / 2.0 * 1.01 + scale
     centre = (lo + hi) / 2.0
-    level = levels - np.minimum(levels, rng.geometric(0.45, n) - 1)  # most points in the deepest level
+    # a surface: each level holds about four times the points of the one above (as a spacing halved)
+    share = 4.0 ** np.arange(levels + 1)
+    level = rng.choice(levels + 1, size=n, p=share / share.sum())
     side = 2.0 * half / 2.0 ** level
     key = np.floor((points - (centre - half)) / side[:, None]).astype(np.int64)
     key = np.clip(key, 0, (2 ** level - 1)[:, None])
