@@ -241,3 +241,19 @@ def test_a_mesh_of_triangles_and_quads_on_tiles_equals_the_whole_call():
     tiled = estimate_tiled(mesh, "mru", 2, tile_size=200)
     assert tiled.info["tiles"] > 2 and whole.valid.all()
     assert np.array_equal(whole.reason, tiled.reason) and np.array_equal(whole.k1, tiled.k1)
+
+
+def test_a_preview_of_an_ascii_ply_mesh_reads_its_text_a_chunk_at_a_time(tmp_path):
+    from curv.tiles.preview import read_preview
+    from curv.tiles.sources import open_source
+
+    from meshes import torus_grid
+
+    mesh = torus_grid(90, 40)[0]
+    _write_ascii_ply(tmp_path / "in.ply", mesh.vertices, mesh.face_indices.reshape(-1, 3))
+    source = open_source(tmp_path / "in.ply")  # no scratch copy: faces and vertices from the text
+    assert np.array_equal(source.faces_at([7, 2]), mesh.face_indices.reshape(-1, 3)[[7, 2]])
+    assert np.array_equal(source.vertices_at([9, 1]), curv.load(tmp_path / "in.ply").vertices[[9, 1]])
+    preview = read_preview(tmp_path / "in.ply", 1500)
+    assert isinstance(preview.shape, curv.Mesh) and 800 < preview.shown <= 1.25 * 1500
+    assert preview.shape.report().components == 1

@@ -255,16 +255,35 @@ class AsciiPlySource(Source):
             rows = np.array(block[start:start + size])
             yield start, rows[:, :3], (rows[:, 3:] if self._width == 6 else None)
 
+    def _rows_at(self, chunks, ids: np.ndarray, width: int, dtype) -> np.ndarray:
+        """Rows ``ids`` gathered from ``chunks`` (``(start, rows)``) in one pass (no copy to read)."""
+        out = np.empty((ids.size, width), dtype)
+        for start, rows in chunks:
+            mine = np.flatnonzero((ids >= start) & (ids < start + rows.shape[0]))
+            out[mine] = rows[ids[mine] - start]
+        return out
+
     def vertices_at(self, ids: np.ndarray) -> np.ndarray:
-        return np.array(self._coordinates()[np.asarray(ids, np.int64), :3])
+        ids = np.asarray(ids, np.int64)
+        if self._copy is None:
+            return self._rows_at(((s, p) for s, p, _ in self.chunks()), ids, 3, np.float64)
+        return np.array(self._coordinates()[ids, :3])
 
     def face_chunks(self, size: int = CHUNK):
+        if self._faces is None:  # no scan into a scratch folder (a preview): from the text
+            for kind, start, faces, _ in self._text_pass(size):
+                if kind == "f":
+                    yield start, faces
+            return
         triangles = self._triangles()
         for start in range(0, self.n_faces, size):
             yield start, np.array(triangles[start:start + size])
 
     def faces_at(self, ids: np.ndarray) -> np.ndarray:
-        return np.array(self._triangles()[np.asarray(ids, np.int64)])
+        ids = np.asarray(ids, np.int64)
+        if self._faces is None:
+            return self._rows_at(self.face_chunks(), ids, 3, np.int64)
+        return np.array(self._triangles()[ids])
 
 
 def ascii_source(path, *, folder: Path | None = None) -> AsciiPlySource | None:
