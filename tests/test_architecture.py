@@ -83,10 +83,10 @@ def _shape():
     return module
 
 
-WIDE_LEFT = {"curv/geometry/neighbourhood.py", "curv/core/knn.py", "curv/point_normals/one_pass.py"}
+WIDE_LEFT = {"curv/geometry/neighbourhood.py", "curv/core/knn.py"}
 """Modules whose numba functions may still take more than 10 positional parameters (one each: the
-support widening shared by the fits and the point normals, the grid search, the normals' one pass:
-work under way). Take a module out when it is done."""
+support widening shared by the fits and the point normals, the grid search: work under way). Take a
+module out when it is done."""
 
 LONG_LEFT = {
     "curv/advice/table.py", "curv/advice/advisor.py", "curv/core/knn.py", "curv/core/mesh.py", "curv/io.py",

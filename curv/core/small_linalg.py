@@ -1,5 +1,6 @@
 """Small dense linear algebra for per-vertex kernels: the one 2x2 eigen step, symmetric 3x3 systems,
-the one Jacobi-scaled Cholesky, and the 3x3 symmetric eigen-decomposition.
+the one Jacobi-scaled Cholesky, and the 3x3 symmetric eigen-decomposition (by Jacobi rotations, and
+in closed form).
 
 Everything here is a serial ``@jit`` helper working on scalars or in caller-owned scratch, so a
 parallel kernel can call it once per vertex without allocating. Conventions:
@@ -21,7 +22,7 @@ from .jit import jit
 
 __all__ = ["RCOND", "sym2_eigen", "sym3_cofactors", "solve_sym3", "sym3_inverse", "sym3_bilinear", "cholesky_scaled",
            "factor_solve", "cholesky_solve_scaled", "scaled_determinant", "factor_whiten", "row_dot",
-           "scaled_norm_bound", "reciprocal_condition", "sym3_eigen"]
+           "scaled_norm_bound", "reciprocal_condition", "sym3_eigen", "sym3_eigen_closed"]
 
 RCOND = 1e-10
 """A 3x3 system is singular when its determinant is at most this times the cube of its largest
@@ -303,10 +304,158 @@ def sym3_eigen(a, vecs):
                 _rotate_columns(vecs, p, q, c, s)
     for i in range(3):
         vecs[3, i] = a[i, i]
-    # insertion sort of three eigenpairs, ascending
+    _sort_pairs(vecs)
+
+
+@jit
+def _sort_pairs(vecs):
+    """Insertion sort of the three eigenpairs of ``vecs`` (:func:`sym3_eigen`), ascending."""
     for i in range(1, 3):
         j = i
         while j > 0 and vecs[3, j - 1] > vecs[3, j]:
             for k in range(4):
                 vecs[k, j - 1], vecs[k, j] = vecs[k, j], vecs[k, j - 1]
             j -= 1
+
+
+@jit
+def _null_vector(a, lam, vecs, col):
+    """``vecs[:3, col]``: the unit vector that ``a - lam I`` maps nearest to zero, from the longest
+    cross product of two of its rows (``a`` symmetric 3x3). Returns False when every cross product
+    vanishes (``lam`` is at least a double eigenvalue: any vector of a plane would do)."""
+    r00, r01, r02 = a[0, 0] - lam, a[0, 1], a[0, 2]
+    r11, r12 = a[1, 1] - lam, a[1, 2]
+    r22 = a[2, 2] - lam
+    # the three cross products of the rows (r00 r01 r02), (r01 r11 r12), (r02 r12 r22)
+    c0x, c0y, c0z = r01 * r12 - r02 * r11, r02 * r01 - r00 * r12, r00 * r11 - r01 * r01
+    c1x, c1y, c1z = r01 * r22 - r02 * r12, r02 * r02 - r00 * r22, r00 * r12 - r01 * r02
+    c2x, c2y, c2z = r11 * r22 - r12 * r12, r12 * r02 - r01 * r22, r01 * r12 - r11 * r02
+    d0 = c0x * c0x + c0y * c0y + c0z * c0z
+    d1 = c1x * c1x + c1y * c1y + c1z * c1z
+    d2 = c2x * c2x + c2y * c2y + c2z * c2z
+    if d0 >= d1 and d0 >= d2:
+        cx, cy, cz, d = c0x, c0y, c0z, d0
+    elif d1 >= d2:
+        cx, cy, cz, d = c1x, c1y, c1z, d1
+    else:
+        cx, cy, cz, d = c2x, c2y, c2z, d2
+    if not d > 0.0:
+        return False
+    inv = 1.0 / math.sqrt(d)
+    vecs[0, col], vecs[1, col], vecs[2, col] = cx * inv, cy * inv, cz * inv
+    return True
+
+
+@jit
+def _plane_pairs(a, vecs, known, lo, hi):
+    """The two eigenpairs of ``a`` in the plane orthogonal to the eigenvector ``vecs[:3, known]``:
+    the smaller into column ``lo``, the larger into ``hi``, from the 2x2 restriction of ``a`` to
+    that plane (its eigenvector by the larger of two cancellation-free forms; the plane's first
+    basis vector when the restriction is a multiple of the identity)."""
+    wx, wy, wz = vecs[0, known], vecs[1, known], vecs[2, known]
+    # an orthonormal basis (u, v) of the plane orthogonal to w, u from w's two largest components
+    if abs(wx) > abs(wy):
+        inv = 1.0 / math.sqrt(wx * wx + wz * wz)
+        ux, uy, uz = -wz * inv, 0.0, wx * inv
+    else:
+        inv = 1.0 / math.sqrt(wy * wy + wz * wz)
+        ux, uy, uz = 0.0, wz * inv, -wy * inv
+    vx, vy, vz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
+    aux = a[0, 0] * ux + a[0, 1] * uy + a[0, 2] * uz
+    auy = a[0, 1] * ux + a[1, 1] * uy + a[1, 2] * uz
+    auz = a[0, 2] * ux + a[1, 2] * uy + a[2, 2] * uz
+    avx = a[0, 0] * vx + a[0, 1] * vy + a[0, 2] * vz
+    avy = a[0, 1] * vx + a[1, 1] * vy + a[1, 2] * vz
+    avz = a[0, 2] * vx + a[1, 2] * vy + a[2, 2] * vz
+    m00 = ux * aux + uy * auy + uz * auz
+    m01 = ux * avx + uy * avy + uz * avz
+    m11 = vx * avx + vy * avy + vz * avz
+    half = 0.5 * (m00 - m11)
+    rad = math.sqrt(half * half + m01 * m01)
+    mean = 0.5 * (m00 + m11)
+    # the larger eigenvalue's vector (s, t) in (u, v): (half + rad, m01) or (m01, rad - half), whichever adds
+    if half >= 0.0:
+        s, t = half + rad, m01
+    else:
+        s, t = m01, rad - half
+    norm = s * s + t * t
+    if norm > 0.0:
+        inv = 1.0 / math.sqrt(norm)
+        s *= inv
+        t *= inv
+    else:
+        s, t = 1.0, 0.0
+    vecs[0, hi], vecs[1, hi], vecs[2, hi] = s * ux + t * vx, s * uy + t * vy, s * uz + t * vz
+    vecs[0, lo], vecs[1, lo], vecs[2, lo] = -t * ux + s * vx, -t * uy + s * vy, -t * uz + s * vz
+    vecs[3, hi] = mean + rad
+    vecs[3, lo] = mean - rad
+
+
+@jit
+def _outer_root(h):
+    """The largest root of ``b^3 - 3 b - 2 h`` for ``h`` in [0, 1] (in [sqrt 3, 2], a simple root):
+    Newton's steps from 2, which fall monotonically onto it (the cubic is convex there)."""
+    b = 2.0
+    for _ in range(8):
+        step = ((b * b - 3.0) * b - 2.0 * h) / (3.0 * (b * b - 1.0))
+        b -= step
+        if not step > 1e-16 * b:
+            break
+    return b
+
+
+@jit
+def sym3_eigen_closed(a, vecs):
+    """Eigen-decomposition of a symmetric 3x3 matrix without iterating rotations: the best separated
+    eigenvalue from the characteristic cubic, its vector from cross products of the rows of
+    ``A - lambda I``, the other two from the 2x2 restriction of A to the plane orthogonal to it.
+    The same arrays and conventions as :func:`sym3_eigen` (``a`` is not changed here).
+
+    The best separated eigenvalue is the smallest when the other two are closer together (a plane's
+    covariance) and the largest otherwise (a line's); it is a simple root of the cubic, found by a
+    few Newton steps (:func:`_outer_root`), no trigonometric call. The other two pairs come from a
+    2x2 eigen-problem (:func:`_plane_pairs`), so the three vectors are orthonormal even for repeated
+    eigenvalues (any orthonormal pair of a double eigenvalue's plane). The first eigenvalue is the
+    Rayleigh quotient of its vector. Cases: a multiple of the identity (the zero matrix included) gives the
+    identity's columns as :func:`sym3_eigen` does; a matrix with a NaN or infinite entry gives NaN.
+    The vectors agree with :func:`sym3_eigen`'s to rounding up to sign wherever the eigenvalue is
+    simple (to about ``eps * |A| / gap`` radians).
+    """
+    a00, a01, a02, a11, a12, a22 = a[0, 0], a[0, 1], a[0, 2], a[1, 1], a[1, 2], a[2, 2]
+    scale = max(abs(a00), abs(a01), abs(a02), abs(a11), abs(a12), abs(a22))
+    if not (math.isfinite(a00) and math.isfinite(a01) and math.isfinite(a02) and math.isfinite(a11)
+            and math.isfinite(a12) and math.isfinite(a22)):
+        for i in range(4):
+            for j in range(3):
+                vecs[i, j] = math.nan
+        return
+    q = (a00 + a11 + a22) / 3.0
+    off = a01 * a01 + a02 * a02 + a12 * a12
+    b00, b11, b22 = a00 - q, a11 - q, a22 - q
+    p2 = (b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0
+    if not p2 > 1e-30 * scale * scale:
+        # a multiple of the identity (to rounding): every vector is an eigenvector
+        for i in range(3):
+            for j in range(3):
+                vecs[i, j] = 1.0 if i == j else 0.0
+            vecs[3, i] = a[i, i]
+        _sort_pairs(vecs)
+        return
+    p = math.sqrt(p2)
+    # B = (A - q I) / p has trace 0 and eigenvalues b with b^3 - 3 b = det(B): the outer root on the
+    # side of det(B)'s sign is simple (the best separated eigenvalue), found by Newton's steps
+    inv = 1.0 / p
+    c00, c01, c02, c11, c12, c22 = b00 * inv, a01 * inv, a02 * inv, b11 * inv, a12 * inv, b22 * inv
+    half_det = 0.5 * (c00 * (c11 * c22 - c12 * c12) - c01 * (c01 * c22 - c12 * c02) + c02 * (c01 * c12 - c11 * c02))
+    half_det = min(max(half_det, -1.0), 1.0)
+    root = _outer_root(abs(half_det))
+    # the smallest eigenvalue's vector first when det(B) < 0 (the other two closer: a plane's covariance)
+    first, lo, hi = (0, 1, 2) if half_det < 0.0 else (2, 0, 1)
+    lam = q - p * root if half_det < 0.0 else q + p * root
+    if not _null_vector(a, lam, vecs, first):
+        vecs[0, first], vecs[1, first], vecs[2, first] = (1.0, 0.0, 0.0) if first == 0 else (0.0, 0.0, 1.0)
+    _plane_pairs(a, vecs, first, lo, hi)
+    x, y, z = vecs[0, first], vecs[1, first], vecs[2, first]
+    vecs[3, first] = (x * (a00 * x + a01 * y + a02 * z) + y * (a01 * x + a11 * y + a12 * z)
+                      + z * (a02 * x + a12 * y + a22 * z))
+    _sort_pairs(vecs)  # rounding may leave two nearly equal Rayleigh quotients out of order

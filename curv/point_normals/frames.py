@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..core.jit import jit
-from ..core.small_linalg import sym3_eigen
+from ..core.small_linalg import sym3_eigen_closed
 
 __all__ = ["offset_moments", "MIN_SPREAD", "GAP_BINS"]
 
@@ -227,7 +227,7 @@ def _frame(i, sub, count, x, y, z, cov, vecs, scratch, screen):
     if count < 3:
         return -1.0
     offset_moments(i, sub, count, x, y, z, True, cov)
-    sym3_eigen(cov, vecs)
+    sym3_eigen_closed(cov, vecs)
     return _widest_gap(i, sub, count, x, y, z, vecs, scratch, screen)
 
 
@@ -243,7 +243,7 @@ def _spread(i, sub, count, x, y, z, cov, vecs):
     patch v does not depend on u and the spread stays the square root of the eigenvalues' ratio.
     """
     offset_moments(i, sub, count, x, y, z, False, cov)
-    sym3_eigen(cov, vecs)
+    sym3_eigen_closed(cov, vecs)
     if not vecs[3, 2] > 0.0:
         return 0.0
     scale = 1.0 / math.sqrt(vecs[3, 2])  # u in units of its RMS: the sums below stay of order 1

@@ -21,7 +21,7 @@ from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mes
                                       new_queues, new_scratch)
 from .frames import _frame, _spread, _widest_gap, _within, gap_scratch
 
-__all__ = ["local_frames", "support_spread"]
+__all__ = ["local_frames", "support_spread", "ball_walk_inputs"]
 
 
 @jit_parallel
@@ -73,15 +73,18 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out):
             p = order[i]
             count = block_gather(i, outer2[p], runs, n_runs, coords, queue, dist2)
             if wanted[0]:
-                c_a = _within(queue, dist2, count, radii2[0, p], sub)
+                # frame A's ball is usually the outer one: the ball search's queue itself, not a copy
+                whole = radii2[0, p] == outer2[p]
+                c_a = count if whole else _within(queue, dist2, count, radii2[0, p], sub)
                 count_a[p] = c_a - 1
-                g = _frame(i, sub, c_a, x, y, z, cov, vecs, gaps, screens[0])
+                g = _frame(i, queue if whole else sub, c_a, x, y, z, cov, vecs, gaps, screens[0])
                 if g < 0.0:
                     normal_a[i, 0] = normal_a[i, 1] = normal_a[i, 2] = math.nan
                     gap_a[p] = 2.0 * math.pi
                 else:
                     normal_a[i, 0], normal_a[i, 1], normal_a[i, 2] = vecs[0, 0], vecs[1, 0], vecs[2, 0]
                     gap_a[p] = g
+            c_b = 0
             if wanted[1]:
                 c_b = _within(queue, dist2, count, radii2[1, p], sub)
                 g = -2.0
@@ -106,7 +109,9 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out):
                 gap_b[p] = 2.0 * math.pi if g < 0.0 else g
             for r in range(2):
                 if wanted[3 + r]:
-                    c_s = _within(queue, dist2, count, radii2[2 + r, p], sub)
+                    # the line check at the fits' own radius reads their support, still in sub
+                    same = r == 0 and wanted[1] and radii2[2, p] == radii2[1, p]
+                    c_s = c_b if same else _within(queue, dist2, count, radii2[2 + r, p], sub)
                     spread[r, p] = _spread(i, sub, c_s, x, y, z, cov, vecs)
 
 
@@ -189,7 +194,11 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
 
 
 @jit_parallel
-def _spread_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, usable, stamps, queues, spread):
+def _spread_kernel(centres, lo, hi, radius, support, usable, scratch, spread):
+    """``spread[p]`` for ``centres[lo:hi]`` (:func:`support_spread`) over the usable points of each
+    ball; ``support`` and ``scratch`` as :func:`ball_walk_inputs` makes them."""
+    adj_ptr, adj, x, y, z = support
+    stamps, queues = scratch
     parts = stamps.shape[0]
     for t in prange(parts):
         queue = queues[t]
@@ -207,6 +216,29 @@ def _spread_kernel(centres, lo, hi, radius, adj_ptr, adj, x, y, z, usable, stamp
                     queue[kept] = q
                     kept += 1
             spread[p] = _spread(p, queue, kept, x, y, z, cov, vecs)
+
+
+def ball_walk_inputs(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | None):
+    """What a kernel over the balls of some centres reads (:func:`curv.geometry.neighbourhood.ball_support`).
+
+    Returns
+    -------
+    centres : (c,) int64
+        ``centres``, or every point when None.
+    radius : (n,) float64
+        The balls' radii.
+    support : tuple
+        ``(adj_ptr, adj, x, y, z)``: the cloud's search grid and its coordinate columns.
+    scratch : tuple
+        ``(stamps, queues)``, (parts, n) int64 each, a row per thread slice.
+    """
+    n = cloud.n_points
+    centres = all_centres(n, centres)
+    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
+    x, y, z = coordinate_columns(cloud)
+    parts = max(1, min(threads(), centres.size))
+    return (centres, np.ascontiguousarray(radii, dtype=np.float64), (adj_ptr, adj, x, y, z),
+            (new_scratch(n, parts), new_queues(n, parts)))
 
 
 def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | None = None,
@@ -232,17 +264,11 @@ def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | N
         return found.spreads[0]
     # a region (or points left out): its own centres through the ball search, at the cost of the region
     usable = np.ones(n, np.bool_) if every else np.ascontiguousarray(usable, dtype=np.bool_)
-    centres = all_centres(n, centres)
-    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
-    x, y, z = coordinate_columns(cloud)
-    radius = np.ascontiguousarray(radii, dtype=np.float64)
-    parts = max(1, min(threads(), centres.size))
-    stamps = new_scratch(n, parts)
-    queues = new_queues(n, parts)
+    centres, radius, support, scratch = ball_walk_inputs(cloud, radii, centres)
     spread = np.empty(n)
 
     def run(lo: int, hi: int) -> None:
-        launch(_spread_kernel, centres, lo, hi, radius, adj_ptr, adj, x, y, z, usable, stamps, queues, spread)
+        launch(_spread_kernel, centres, lo, hi, radius, support, usable, scratch, spread)
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return spread

@@ -25,9 +25,10 @@ import math
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit_parallel, launch, prange, run_to_end, slice_bounds, threads
+from ..core.jit import iter_chunks, jit_parallel, launch, prange, run_to_end, slice_bounds
 from ..core.pointcloud import PointCloud
-from ..geometry.neighbourhood import ball_support, coordinate_columns, expansion_adjacency, new_queues, new_scratch
+from ..geometry.neighbourhood import ball_support
+from .one_pass import ball_walk_inputs
 
 __all__ = ["one_sided_points", "RIM_SCALE", "RIM_OFFSET"]
 
@@ -47,8 +48,8 @@ patch's rim."""
 
 @jit_parallel
 def _offset_kernel(centres, lo, hi, radius, support, normals, scratch, share):
-    """``share[p]`` for ``centres[lo:hi]`` (:func:`offset_shares`); ``support`` is ``(adj_ptr, adj, x,
-    y, z)``, the expansion graph and coordinate columns, ``scratch`` is ``(stamps, queues)`` per part."""
+    """``share[p]`` for ``centres[lo:hi]`` (:func:`offset_shares`); ``support`` and ``scratch`` as
+    :func:`.one_pass.ball_walk_inputs` makes them."""
     adj_ptr, adj, x, y, z = support
     stamps, queues = scratch
     parts = stamps.shape[0]
@@ -86,19 +87,12 @@ def _offset_kernel(centres, lo, hi, radius, support, normals, scratch, share):
 def offset_shares(cloud: PointCloud, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray):
     """(n,) float64, a generator: each centre's mean tangent offset over the RMS tangent distance of its
     ball's points (NaN under 3 points or without a normal; rows outside ``centres`` unset)."""
-    n = cloud.n_points
-    centres = np.ascontiguousarray(centres, np.int64)
-    adj_ptr, adj = expansion_adjacency(cloud, radii=radii)
-    x, y, z = coordinate_columns(cloud)
-    radius = np.ascontiguousarray(radii, dtype=np.float64)
-    parts = max(1, min(threads(), centres.size))
-    stamps = new_scratch(n, parts)
-    queues = new_queues(n, parts)
-    share = np.full(n, np.nan)
+    centres, radius, support, scratch = ball_walk_inputs(cloud, radii, centres)
+    share = np.full(cloud.n_points, np.nan)
     normals = np.ascontiguousarray(normals, dtype=np.float64)
 
     def run(lo: int, hi: int) -> None:
-        launch(_offset_kernel, centres, lo, hi, radius, (adj_ptr, adj, x, y, z), normals, (stamps, queues), share)
+        launch(_offset_kernel, centres, lo, hi, radius, support, normals, scratch, share)
 
     yield from iter_chunks(centres.size, run)
     return share
