@@ -108,6 +108,13 @@ def collect() -> dict:
             out[f"{case}:support_sizes"] = support_sizes(shape, radii)[0]
         if not isinstance(shape, curv.PointCloud) and "vertices" not in keywords:
             out[f"{case}:report"] = np.array(repr(shape.report()))
+    # kNN where the first ring of cells does not settle it: clumps, a sparse spread, far outliers
+    rng = np.random.default_rng(7)
+    points = np.concatenate([rng.normal(scale=0.01, size=(2000, 3)), rng.uniform(-1, 1, size=(300, 3)),
+                             rng.uniform(-50, 50, size=(5, 3))])
+    for k in (1, 10, 40):
+        indices, distances = nearest_neighbours(points, k)
+        out[f"outliers:knn{k}:indices"], out[f"outliers:knn{k}:distances"] = indices, distances
     return out
 
 
