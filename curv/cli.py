@@ -87,8 +87,16 @@ def _check_memory(args, n_vertices: int, n_faces: int, method: str, rng, *, poin
         size = f"{n_vertices:,} points" if points else f"{n_vertices:,} vertices and {n_faces:,} faces"
         raise CurvMemoryError(
             f"{args.input}: {method} {rng.label} on {size} "
-            f"{est.describe()}; refusing to start ({'give -o OUT to run it on tiles, or ' if tiles else ''}"
+            f"{est.describe()}; refusing to start ({_tiles_hint(args, tiles)}"
             f"use a smaller range, another estimator, a bigger machine, or --no-memory-check)")
+
+
+def _tiles_hint(args, tiles: bool) -> str:
+    """How to run an estimate too large for the memory free now on tiles (whether it tiles by itself
+    depends on --memory and the machine's total memory only: curv.tiles.budget)."""
+    if tiles:
+        return "give -o OUT to run it on tiles, or "
+    return "run it on tiles with --tile-size N or a --memory below what is free, or " if args.output else ""
 
 
 def _cmd_estimate(args) -> int:

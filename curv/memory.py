@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["estimate_peak_bytes", "available_bytes", "format_bytes", "MemoryEstimate", "check_memory"]
+__all__ = ["estimate_peak_bytes", "available_bytes", "total_bytes", "format_bytes", "MemoryEstimate", "check_memory"]
 
 BASE_BYTES = 170 * 2**20
 """Interpreter, numpy, scipy and plyfile loaded, before any mesh data."""
@@ -108,6 +108,31 @@ def available_bytes() -> int | None:
     if cg is not None:
         free = cg if free is None else min(free, cg)
     return free
+
+
+def total_bytes() -> int | None:
+    """The memory this machine gives a process at most, whatever others use now: the physical
+    memory (psutil or /proc/meminfo's MemTotal), capped by a cgroup limit. ``None`` when unknown."""
+    total = None
+    try:
+        import psutil
+    except ImportError:
+        try:
+            for line in Path("/proc/meminfo").read_text().splitlines():
+                if line.startswith("MemTotal:"):
+                    total = int(line.split()[1]) * 1024
+                    break
+        except (OSError, ValueError, IndexError):
+            total = None
+    else:
+        total = int(psutil.virtual_memory().total)
+    try:
+        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        if limit != "max":
+            total = int(limit) if total is None else min(total, int(limit))
+    except (OSError, ValueError):
+        pass
+    return total
 
 
 def format_bytes(n: float) -> str:

@@ -9,6 +9,13 @@ of the tile's points and its halo (one kernel thread a worker). So a tile holds
 
 less the halo's share (:data:`HALO_SHARE`). More workers share the budget; a worker needs at
 least :data:`MIN_TILE` points' room, which caps their number.
+
+The default budget (:func:`default_budget`) is a share of the machine's **total** memory, not of
+the memory free at the moment: whether a command runs on tiles, and the tiles it cuts (which a
+resumed run must find again), then depend on the input and the machine only, never on what other
+processes hold when it starts. A machine too busy for the run's whole estimate is told so in one
+line before any work (``curv estimate``'s memory check, against the memory free now), and
+``--memory`` or ``--tile-size`` runs it on tiles.
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ import re
 from ..core.errors import CurvError
 
 __all__ = ["parse_memory", "Budget", "BudgetError", "plan_budget", "DRIVER_BYTES", "MIN_TILE", "HALO_SHARE",
-           "MESH_TILE_FACTOR", "needs_tiles"]
+           "MESH_TILE_FACTOR", "needs_tiles", "default_budget", "DEFAULT_SHARE", "UNKNOWN_TOTAL"]
 
 
 class BudgetError(CurvError, ValueError):
@@ -122,6 +129,23 @@ def plan_budget(total: int, method: str, *, points: bool, faces_per_vertex: floa
             return Budget(total, w, tile_size or fits, int(share))
     raise BudgetError(f"a memory budget of {format_bytes(total)} leaves no room for one worker estimating "
                      f"{need:,} points with {method} (give more --memory, or a smaller --tile-size)")
+
+
+DEFAULT_SHARE = 0.5
+"""The default budget's share of the machine's total memory (:func:`curv.memory.total_bytes`): half,
+leaving the other half to the system and the programs a user keeps open beside a long run."""
+
+UNKNOWN_TOTAL = 8 * 2**30
+"""The machine's memory where it cannot be read (neither psutil nor /proc/meminfo): 8 GiB."""
+
+
+def default_budget() -> int:
+    """Bytes for a run given no ``--memory``: :data:`DEFAULT_SHARE` of the machine's total memory (a
+    cgroup limit when lower), the same whatever the machine holds free now (module notes)."""
+    from ..memory import total_bytes
+
+    total = total_bytes()
+    return int(DEFAULT_SHARE * (total if total else UNKNOWN_TOTAL))
 
 
 def needs_tiles(n_points: int, n_faces: int, method: str, total: int, *, points: bool) -> bool:

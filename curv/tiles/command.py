@@ -2,8 +2,9 @@
 
 ``curv estimate IN -o OUT [--tile-size N] [--memory 4GB] [--scheduler ADDRESS]`` runs tile by tile
 (:func:`curv.tiles.estimate_file`) when asked (``--tile-size``, ``--scheduler``) or when the whole
-input's estimate would not fit in the memory budget (``--memory``, default 80 % of the memory
-available now, :func:`curv.tiles.budget.needs_tiles`); otherwise the command runs as it always did.
+input's estimate would not fit in the memory budget (``--memory``, default half the machine's total
+memory, :func:`curv.tiles.budget.default_budget`: the same answer whatever other processes hold now;
+:func:`curv.tiles.budget.needs_tiles`); otherwise the command runs as it always did.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ def add_arguments(parser) -> None:
                             "the result equals the whole estimate's (docs/LARGE_SCANS.md)")
     group.add_argument("--memory", metavar="SIZE",
                        help="memory budget of the whole run, every process (e.g. 4GB); an input whose estimate "
-                            "would not fit is tiled. Default 80 %% of the memory available now")
+                            "would not fit is tiled. Default half the machine's total memory")
     group.add_argument("--scheduler", metavar="ADDRESS",
                        help="run the tiles on the Dask cluster at ADDRESS (tcp://host:8786); its workers must see "
                             "the input and the scratch folder")
@@ -49,14 +50,14 @@ def las_output(path) -> bool:
 def wants_tiles(args, counts, *, points: bool) -> bool:
     """Whether this ``curv estimate`` runs on tiles (module notes). ``counts`` is ``(points, faces)``
     from the file's header, or None when the header does not say (then only when asked)."""
-    from .budget import needs_tiles, parse_memory
+    from .budget import default_budget, needs_tiles, parse_memory
 
     if args.tile_size is not None or args.scheduler is not None:
         return True
     if counts is None or (args.memory is None and not args.memory_check):
         return False
     try:
-        total = parse_memory(args.memory) if args.memory is not None else _available()
+        total = parse_memory(args.memory) if args.memory is not None else default_budget()
     except ValueError as exc:
         raise CurvError(str(exc)) from None
     return needs_tiles(counts[0], counts[1], args.method, total, points=points)
@@ -73,12 +74,6 @@ def check_las_output(args) -> None:
     if "errors" in args.las_extra and not args.standard_errors:
         raise CurvError("--las-extra errors writes the standard errors k1_se and k2_se: add --standard-errors "
                         "(they are computed only when asked)")
-
-
-def _available() -> int:
-    from .files import _available as available
-
-    return available()
 
 
 def _refuse_for_tiles(args, points: bool) -> None:

@@ -32,7 +32,7 @@ from ..core.errors import CurvError
 from ..core.jit import Progress, run_to_end
 from ..core.result import Curvature
 from ..core.validity import Reason, describe_reasons
-from .budget import Budget, parse_memory, plan_budget
+from .budget import Budget, default_budget, parse_memory, plan_budget
 from .driver import Runner
 from .engine import Job, step_redo, whole_step
 from .merge import Rows
@@ -225,7 +225,7 @@ def iter_estimate_file(input, output, method: str | None = None, range=None, *, 
     if source is not None:
         job = job.for_input(points=not source.is_mesh, georeferenced=georeferenced)
     check_output(input_path, output, streamed=source is not None)
-    total = parse_memory(memory) if memory is not None else _available()
+    total = parse_memory(memory) if memory is not None else default_budget()
     if source is None:
         return (yield from _whole(input_path, output, job, tile_size, client, quantity, cmap, clim, las_extra, t0))
     points = not source.is_mesh
@@ -366,13 +366,6 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.0f} s"
 
 
-def _available() -> int:
-    from ..memory import available_bytes
-
-    have = available_bytes()
-    return int(0.8 * have) if have else 4 * 2**30
-
-
 def _whole(input_path, output, job, tile_size, client, quantity, cmap, clim, las_extra, t0):
     """An input read whole (module notes): estimated in memory, tiled when asked."""
     from ..io import load, save_result
@@ -418,8 +411,8 @@ def estimate_file(input, output, method: str | None = None, range=None, **keywor
     tile_size : int, optional
         Points a tile holds at most; default what the memory budget allows each worker.
     memory : str or int, optional
-        The budget of the whole run (every process): ``"4GB"``, ``"500MB"`` or bytes; default 80 %
-        of the memory available now.
+        The budget of the whole run (every process): ``"4GB"``, ``"500MB"`` or bytes; default half
+        the machine's total memory (:func:`curv.tiles.budget.default_budget`).
     workers : int, optional
         Processes estimating tiles at once on a local cluster; default the cores the budget can feed.
     scheduler : str, optional

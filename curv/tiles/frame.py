@@ -117,5 +117,9 @@ def tile_mesh(vertices: np.ndarray, faces, ids: np.ndarray, frame: GridFrame | N
     order = np.argsort(ids, kind="stable") if frame is None else grid_order(vertices, ids, frame)
     rank = np.empty(order.size, np.int64)
     rank[order] = np.arange(order.size)
-    faces = rank[np.asarray(faces, np.int64)] if not isinstance(faces, list) else [rank[f] for f in faces]
+    if isinstance(faces, list):
+        faces = [rank[f] for f in faces]
+    else:
+        faces = np.asarray(faces, np.int64)
+        faces = np.where(faces >= 0, rank[np.maximum(faces, 0)], -1)  # -1 pads a shorter polygon
     return TileMesh(vertices[order], faces), order

@@ -116,9 +116,9 @@ class FileInput:
 
     def _vertices_at(self, ids: np.ndarray) -> np.ndarray:
         if self._source is None:
-            from .sources import open_source
+            from .sources import reopen
 
-            self._source = open_source(self.source_path)
+            self._source = reopen(self.source_path, self.folder)
         return self._source.vertices_at(ids)
 
 

@@ -7,6 +7,10 @@ of a point (the **ball**) and around them a halo as wide as the estimates asked 
 that piece with ``vertices=`` the ball's points gives the whole file's values there
 (:mod:`curv.tiles.engine`). The viewer opens such a piece when a preview's region is asked for
 at full resolution.
+
+A COPC file is not sorted into tiles: its octree is queried by the region's bounds
+(:class:`curv.tiles.copc.CopcInput`), after one pass over its coordinates for the whole file's grid
+(:func:`curv.tiles.copc.iter_whole_frame`); any other LAS/LAZ file or binary PLY is.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from typing import Generator
 import numpy as np
 
 from ..core.jit import Progress
+from .copc import CopcInput, is_copc, iter_whole_frame
 from .engine import Job, shape_of
 from .plan import Region
 from .prepare import FileInput, iter_prepare
@@ -61,7 +66,7 @@ class FileRegions:
     Parameters
     ----------
     path : str or Path
-        LAS/LAZ or a binary PLY of points or triangles.
+        LAS/LAZ (COPC read by bounds) or a binary PLY of points or triangles.
     scratch : str or Path, optional
         Where the tiles are kept; default a folder per file in the system's temporary folder.
     """
@@ -74,7 +79,8 @@ class FileRegions:
             scratch = Path(tempfile.gettempdir()) / f"curvlab-regions-{os.getuid()}" / key.hexdigest()
         self.scratch = Scratch(scratch)
         self._input = None
-        self._prepared = None
+        self._bounds = self._frame = None
+        self._is_mesh = False
 
     @property
     def ready(self) -> bool:
@@ -84,6 +90,11 @@ class FileRegions:
         """Sort the file's points into tiles, once (a generator of the fraction done)."""
         if self._input is not None:
             return
+        if is_copc(self.path):
+            copc = CopcInput(self.path)
+            self._bounds, self._frame = yield from iter_whole_frame(self.path, copc.n)
+            self._input = copc
+            return
         source = open_source(self.path)
         if source is None:
             raise ValueError(f"{self.path}: is read whole (not LAS/LAZ or a binary PLY of points or triangles)")
@@ -92,7 +103,7 @@ class FileRegions:
             prepared = self.scratch.load_plan()
         else:
             prepared = yield from iter_prepare(source, self.scratch, REGION_TILE)
-        self._prepared = prepared
+        self._bounds, self._frame, self._is_mesh = prepared.plan.bounds, prepared.frame, prepared.is_mesh
         self._input = FileInput(self.scratch, prepared, self.path)
 
     def iter_around(self, centre, radius: float, jobs) -> Generator[float, None, Around]:
@@ -100,20 +111,20 @@ class FileRegions:
         (:class:`curv.tiles.engine.Job`, or ``(method, range, keywords)``) read there (module notes)."""
         if self._input is None:
             yield from self.iter_prepare()
-        points = not self._prepared.is_mesh
+        points = not self._is_mesh
         georeferenced = self.path.suffix.lower() in (".las", ".laz")  # as the LAS reader says (curv.PointCloud)
         jobs = [(j if isinstance(j, Job) else Job.checked(j[0], j[1], **dict(j[2])))
                 .for_input(points=points, georeferenced=georeferenced) for j in jobs]
         centre = np.asarray(centre, np.float64).reshape(3)
         radius = float(radius)
-        bounds = self._prepared.plan.bounds
+        bounds = self._bounds
         lo, hi = centre - radius, centre + radius
         h = radius
         while True:
             yield Progress(0.5, "reading the region")
             region = Region.around(lo, hi, h, bounds)
             piece = self._input.fetch(region)
-            shape, order = shape_of(piece, self._prepared.frame, points=points, georeferenced=georeferenced)
+            shape, order = shape_of(piece, self._frame, points=points, georeferenced=georeferenced)
             inside = np.linalg.norm(shape.vertices - centre, axis=1) <= radius
             if not piece.ids.size or (not points and (piece.faces is None or not piece.faces.size)):
                 return Around(shape, np.flatnonzero(inside), piece.ids[order], h)

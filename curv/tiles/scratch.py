@@ -145,7 +145,7 @@ class Scratch:
 
     def clear(self) -> None:
         """Remove the run's files (and the folder, when nothing else is in it)."""
-        for name in ("run.json", "coordinates.f8", "plan.pkl"):
+        for name in ("run.json", "coordinates.f8", "triangles.i8", "plan.pkl"):
             (self.folder / name).unlink(missing_ok=True)
         for sub in ("points", "faces", "rows", "overlap"):
             shutil.rmtree(self.folder / sub, ignore_errors=True)

@@ -8,8 +8,10 @@ coordinates: a LAS file's scaled and offset, a PLY file's as stored; the file's 
   so the first pass (:meth:`Source.scan`) also copies the coordinates (and normals) into the run's
   scratch folder as plain float64 columns, which every later pass reads instead.
 * **Binary PLY** through plyfile's memory map of the vertex element (and of the faces, when every
-  face is a triangle): nothing is copied. An ASCII PLY, a polygon mesh or any other format is read
-  whole (:func:`open_source` returns None for them).
+  face is a triangle): nothing is copied.
+* **ASCII PLY** of points or triangles a block of text at a time (:mod:`curv.tiles.asciiply`),
+  copied as plain columns in the first pass as LAS/LAZ. A polygon mesh (kept as polygons by the
+  in-memory reader) or any other format is read whole (:func:`open_source` returns None for them).
 
 Every pass checks what the in-memory readers check (a NaN coordinate, a count the data does not
 hold) with the same one-line :class:`curv.LoadError`.
@@ -26,7 +28,7 @@ import numpy as np
 from ..core.errors import LoadError
 from ..core.paths import check_readable, one_line
 
-__all__ = ["Source", "LasSource", "PlySource", "open_source", "CHUNK", "Scan"]
+__all__ = ["Source", "LasSource", "PlySource", "open_source", "reopen", "CHUNK", "Scan"]
 
 CHUNK = 1 << 20
 """Points per chunk of a pass (about 50 MB of coordinates and normals)."""
@@ -153,18 +155,19 @@ class PlySource(Source):
 class LasSource(Source):
     """A LAS/LAZ file through laspy's chunked reader; later passes read the scan's plain copy."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, *, coordinates_only: bool = False):
         import laspy
 
         from ..formats.lasheader import check_las_header
 
         self.path = path
+        self._coordinates_only = coordinates_only  # decompress the x, y, z layers only (LAZ 1.4)
         check_las_header(path)  # the header's promises against the file, before laspy reads it
         try:
             with laspy.open(path) as reader:
                 header = reader.header
                 self.n = int(header.point_count)
-                self._normals = _normal_names(header.point_format.extra_dimension_names)
+                self._normals = None if coordinates_only else _normal_names(header.point_format.extra_dimension_names)
         except LoadError:
             raise
         except Exception as exc:  # noqa: BLE001 - laspy's and lazrs's errors, in one line
@@ -176,7 +179,10 @@ class LasSource(Source):
         import laspy
 
         done = 0
-        with laspy.open(self.path) as reader:
+        selection = laspy.DecompressionSelection.all()
+        if self._coordinates_only:
+            selection = laspy.DecompressionSelection.XY_RETURNS_CHANNEL | laspy.DecompressionSelection.Z
+        with laspy.open(self.path, decompression_selection=laspy.DecompressionSelection(selection)) as reader:
             try:
                 for points in reader.chunk_iterator(size):
                     m = len(points)
@@ -238,8 +244,8 @@ class LasSource(Source):
 
 
 def open_source(path) -> Source | None:
-    """A :class:`Source` for ``path`` when it can be read a chunk at a time (LAS/LAZ; a binary PLY of
-    points or triangles), else None (read it whole). Raises :class:`LoadError` for an unreadable file."""
+    """A :class:`Source` for ``path`` when it can be read a chunk at a time (LAS/LAZ; a PLY of points
+    or triangles, binary or ASCII), else None (read it whole). Raises :class:`LoadError` for an unreadable file."""
     path = Path(path)
     check_readable(path)
     suffix = path.suffix.lower()
@@ -258,6 +264,10 @@ def open_source(path) -> Source | None:
             if fh.readline().strip() != b"ply":
                 raise LoadError(f"{path}: not a PLY file (no 'ply' line)")
             fmt, counts, lists = _ply_header(fh)
+        if fmt == "ascii":
+            from .asciiply import ascii_source
+
+            return ascii_source(path)
         if not fmt.startswith("binary"):
             return None
         known = {}
@@ -280,6 +290,19 @@ def open_source(path) -> Source | None:
         _check_size(path, data)
         return PlySource(path, data)
     return None
+
+
+def reopen(path, folder: Path) -> Source | None:
+    """:func:`open_source` for a run's worker: a source whose first pass left plain copies in the
+    scratch ``folder`` reads them (an ASCII PLY is not parsed again)."""
+    path = Path(path)
+    if path.suffix.lower() == ".ply":
+        from .asciiply import ascii_source
+
+        source = ascii_source(path, folder=folder)
+        if source is not None:
+            return source
+    return open_source(path)
 
 
 def _check_size(path: Path, data) -> None:
