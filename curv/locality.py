@@ -32,14 +32,14 @@ def cloud_twin(mesh):
 def locality_ordered(mesh: Mesh, centres, features):
     """A whole-mesh estimate of a mesh numbered too scattered for the caches
     (:meth:`curv.Mesh.scattered_order`) runs on its twin in grid order (the point clouds' order,
-    :func:`curv.core.knn.build_grid`): ``(twin, order)``, kept with the mesh; None otherwise (a
+    :func:`curv.core.grid.build_grid`): ``(twin, order)``, kept with the mesh; None otherwise (a
     region costs what the region costs, and a caller's feature mask is in the mesh's own numbering).
     """
     if centres is not None or (features is not None and np.ndim(features) != 0) or not mesh.scattered_order():
         return None
 
     def build():
-        from .core.knn import build_grid
+        from .core.grid import build_grid
 
         order = np.ascontiguousarray(build_grid(mesh.vertices)[0][3], dtype=np.int64)
         order.setflags(write=False)

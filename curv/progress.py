@@ -52,6 +52,8 @@ import threading
 import time
 from typing import Generator
 
+from .core.jit import forwarded, run_to_end
+
 __all__ = ["PhaseProgress", "LINE_SECONDS", "MODES", "duration"]
 
 LINE_SECONDS = 5.0
@@ -203,12 +205,7 @@ class PhaseProgress:
         An exception (a Ctrl-C included) closes ``gen`` before it propagates.
         """
         try:
-            while True:
-                try:
-                    step = next(gen)
-                except StopIteration as stop:
-                    return stop.value
-                self.update(step)
+            return run_to_end(forwarded(gen, self.update))
         finally:
             gen.close()
 

@@ -37,6 +37,7 @@ from numba import njit
 
 __all__ = [
     "jit", "jit_parallel", "jit_inlined", "JIT_OPTIONS", "prange", "threads", "launch", "iter_chunks", "run_to_end",
+    "forwarded",
     "rescaled", "thread_slices", "slice_bounds", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
     "source_fingerprint", "iter_watched", "announce", "POLL_SECONDS",
 ]
@@ -257,21 +258,31 @@ def run_to_end(gen: Generator):
             return stop.value
 
 
+def forwarded(gen: Generator, each: Callable[[object], object]) -> Generator:
+    """``yield from gen`` with every step passed through ``each`` (what it returns is yielded);
+    returns ``gen``'s value. Closing this (or an exception) closes ``gen``."""
+    try:
+        while True:
+            try:
+                step = next(gen)
+            except StopIteration as stop:
+                return stop.value
+            yield each(step)
+    finally:
+        gen.close()
+
+
 def rescaled(gen: Generator, start: float, end: float, *, phase: str | None = None) -> Generator[Progress, None, object]:
     """``yield from gen`` with its fractions mapped to ``start .. end`` (a part of a larger piece of
     work), messages kept, and phases kept or, with ``phase``, all named so; returns ``gen``'s value.
     Closing this closes ``gen``."""
     span = end - start
-    try:
-        while True:
-            try:
-                done = next(gen)
-            except StopIteration as stop:
-                return stop.value
-            yield Progress(start + span * float(done), getattr(done, "message", ""),
-                           getattr(done, "phase", "") if phase is None else phase)
-    finally:
-        gen.close()
+
+    def moved(done) -> Progress:
+        return Progress(start + span * float(done), getattr(done, "message", ""),
+                        getattr(done, "phase", "") if phase is None else phase)
+
+    return (yield from forwarded(gen, moved))
 
 
 POLL_SECONDS = 0.1

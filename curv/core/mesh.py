@@ -7,16 +7,16 @@ stored flat (``face_indices`` with ``face_offsets``) so mixed meshes cost nothin
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
 from . import connectivity as _kernels
 from .errors import MeshError
+from .face_input import flat_faces
 from .jit import launch
+from .mesh_report import MeshReport, mesh_report
 from .pointcloud import PointSet, as_positions
-from .wording import count_text
 
 __all__ = ["Mesh", "MeshReport", "scatter_sample", "scattered_corners"]
 
@@ -24,126 +24,6 @@ SCATTERED_SPAN = 65536
 """A face whose vertex indices span more than this many vertices (median over a sample of faces)
 marks a numbering too scattered for the caches (:meth:`Mesh.scattered_order`): the coordinates of
 that many vertices (1.5 MB) no longer stay in a core's cache between neighbouring vertices."""
-
-
-@dataclass(frozen=True)
-class MeshReport:
-    """Counts of what a mesh contains, for a one-screen summary.
-
-    Every field is a plain int, or a dict ``{polygon size: face count}`` for ``polygon_kinds``.
-    """
-
-    vertices: int
-    faces: int
-    edges: int
-    polygon_kinds: dict
-    components: int
-    border_edges: int
-    border_loops: int
-    nonmanifold_edges: int
-    nonmanifold_vertices: int
-    degenerate_faces: int
-    isolated_vertices: int
-    inconsistent_edges: int = 0
-    duplicate_vertices: int = 0
-    sharp_edges: int = 0
-    """Interior edges with a dihedral angle above :data:`curv.core.features.SHARP_DEGREES`."""
-    suggested_features: float | None = None
-    """A ``features`` angle that separates the creases from the smooth edges, when many are sharp."""
-
-    def lines(self) -> list[str]:
-        """Human-readable lines, one fact each."""
-        names = {k: _POLY_NAMES.get(k, f"{k}-gons") for k in self.polygon_kinds}
-        kinds = ", ".join(count_text(n, names[k][:-1], names[k]) for k, n in sorted(self.polygon_kinds.items()))
-        out = [
-            f"{count_text(self.vertices, 'vertex', 'vertices')}, {count_text(self.faces, 'face', 'faces')} "
-            f"({kinds or 'none'}), {count_text(self.edges, 'edge', 'edges')}",
-            f"{count_text(self.components, 'connected component', 'connected components')}",
-            f"{count_text(self.border_edges, 'border edge', 'border edges')} in "
-            f"{count_text(self.border_loops, 'loop', 'loops')}" if self.border_edges else "closed (no border)",
-        ]
-        for count, one, many in [
-            (self.nonmanifold_edges, "non-manifold edge", "non-manifold edges"),
-            (self.nonmanifold_vertices, "non-manifold vertex", "non-manifold vertices"),
-            (self.degenerate_faces, "degenerate face", "degenerate faces"),
-            (self.isolated_vertices, "isolated vertex", "isolated vertices"),
-            (self.inconsistent_edges, "edge between faces of opposite orientation",
-             "edges between faces of opposite orientation"),
-            (self.duplicate_vertices, "vertex at the same position as another",
-             "vertices at the same position as another"),
-        ]:
-            if count:
-                out.append(count_text(count, one, many))
-        if self.sharp_edges:
-            from .features import SHARP_DEGREES
-
-            line = (f"{count_text(self.sharp_edges, 'sharp edge', 'sharp edges')} "
-                    f"(dihedral angle above {SHARP_DEGREES:g} degrees)")
-            if self.suggested_features is not None:
-                line += f": creases? try features={self.suggested_features:g}"
-            out.append(line)
-        return out
-
-
-_POLY_NAMES = {3: "triangles", 4: "quads", 5: "pentagons", 6: "hexagons"}
-
-
-def _as_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
-    """Flatten ``faces`` into ``(indices, offsets)``; validate sizes and index range."""
-    if isinstance(faces, np.ndarray) and faces.dtype != object:
-        f = faces
-        if f.ndim != 2:
-            raise MeshError(f"faces must be a 2-D array (m, k) or a list of polygons, got shape {f.shape}")
-        if f.size and not np.issubdtype(f.dtype, np.integer):
-            if not np.all(np.mod(f, 1) == 0):
-                raise MeshError("face indices must be integers")
-        low = f.min() if f.size else -1
-        if low >= 0 and f.shape[1] >= 3 and f.max() < n_vertices:
-            # the usual input, a plain (m, k) array of valid indices: no padding mask, no sizes to add up
-            # and one pass for each bound, read from the caller's (often int32) array before the copy
-            m, k = f.shape
-            return f.astype(np.int64).reshape(-1), np.arange(0, m * k + 1, k, dtype=np.int64)
-        f = f.astype(np.int64)
-        if f.size and low >= 0:  # no padding: every row is a whole polygon (no mask to build)
-            sizes = np.full(f.shape[0], f.shape[1], np.int64)
-            indices = f.reshape(-1)
-        else:
-            # A padded array marks unused trailing slots with -1.
-            pad = f == -1
-            trailing = np.flip(np.cumprod(np.flip(pad, axis=1), axis=1), axis=1).astype(bool)
-            sizes = (~trailing).sum(axis=1)
-            indices = f[~trailing]
-    else:
-        try:
-            polys = [np.asarray(p).reshape(-1) for p in faces]
-        except (TypeError, ValueError) as exc:
-            raise MeshError(f"faces are not index lists: {exc}") from None
-        for i, p in enumerate(polys):
-            if p.size and not np.issubdtype(p.dtype, np.integer):
-                if not (np.issubdtype(p.dtype, np.number) and np.all(np.mod(p, 1) == 0)):
-                    raise MeshError(f"face {i} has non-integer indices")
-        sizes = np.array([p.size for p in polys], dtype=np.int64)
-        indices = np.concatenate(polys).astype(np.int64) if polys else np.zeros(0, np.int64)
-    if sizes.size == 0:
-        raise MeshError("mesh has no faces")
-    small = np.flatnonzero(sizes < 3)
-    if small.size:
-        raise MeshError(f"face {small[0]} has {sizes[small[0]]} vertices; a face needs at least 3")
-    offsets = np.zeros(sizes.size + 1, dtype=np.int64)
-    np.cumsum(sizes, out=offsets[1:])
-    if indices.size and (indices.min() < 0 or indices.max() >= n_vertices):
-        def face_of(corner: int) -> int:
-            return int(np.searchsorted(offsets, corner, side="right")) - 1
-
-        neg = np.flatnonzero(indices < 0)
-        if neg.size:
-            raise MeshError(f"face {face_of(neg[0])} has a negative vertex index {indices[neg[0]]}")
-        high = np.flatnonzero(indices >= n_vertices)
-        raise MeshError(
-            f"face {face_of(high[0])} refers to vertex {indices[high[0]]}, "
-            f"but the mesh has only {n_vertices} vertices"
-        )
-    return indices, offsets
 
 
 def _part(of: str, index: int, doc: str) -> property:
@@ -186,7 +66,7 @@ class Mesh(PointSet):
 
     def __init__(self, vertices, faces):
         v = as_positions(vertices, "vertex", "vertices", "mesh")
-        indices, offsets = _as_faces(faces, v.shape[0])
+        indices, offsets = flat_faces(faces, v.shape[0])
         indices.setflags(write=False)
         offsets.setflags(write=False)
         self._vertices = v
@@ -570,43 +450,9 @@ class Mesh(PointSet):
         return int(count), labels
 
     def report(self) -> MeshReport:
-        """Summarise the mesh: sizes, polygon kinds, components, borders and defects."""
-        sizes, face_counts = np.unique(self.face_sizes, return_counts=True)
-        iso = self.isolated_vertices
-        ncomp, labels = self.components
-        ncomp_faces = int(np.count_nonzero(np.bincount(labels[~iso], minlength=ncomp)))
-        from .features import SHARP_DEGREES
-
-        indptr, corners = self.vertex_corners
-        corner_face = None if self.is_triangular else self.corner_face
-        counts = _kernels.edge_counts(indptr, corners, self._indices, *self.corner_steps, corner_face,
-                                      self.face_vector_areas, self.face_areas, self.degenerate_faces, SHARP_DEGREES)
-        loops = 0
-        if counts["border"]:
-            be = self.edges[self.border_edges]
-            verts = np.unique(be)
-            remap = np.searchsorted(verts, be)
-            g = sp.csr_matrix((np.ones(len(be)), (remap[:, 0], remap[:, 1])), shape=(verts.size,) * 2)
-            loops = int(sp.csgraph.connected_components(g, directed=False)[0])
-        # the crease rule (its threshold suggestion) needs every dihedral angle, so the edge table:
-        # only when there is a sharp edge at all
-        sharp = _sharp_edge_facts(self) if counts["sharp"] else {"sharp_edges": 0, "suggested_features": None}
-        return MeshReport(
-            vertices=self.n_vertices,
-            faces=self.n_faces,
-            edges=counts["edges"],
-            polygon_kinds={int(s): int(c) for s, c in zip(sizes, face_counts)},
-            components=ncomp_faces,
-            border_edges=counts["border"],
-            border_loops=loops,
-            nonmanifold_edges=counts["nonmanifold"],
-            nonmanifold_vertices=int(self.nonmanifold_vertices.sum()),
-            degenerate_faces=int(self.degenerate_faces.sum()),
-            isolated_vertices=int(iso.sum()),
-            inconsistent_edges=counts["inconsistent"],
-            duplicate_vertices=int(self.duplicate_vertices.sum()),
-            **sharp,
-        )
+        """Summarise the mesh: sizes, polygon kinds, components, borders and defects
+        (:func:`curv.core.mesh_report.mesh_report`)."""
+        return mesh_report(self)
 
     # ------------------------------------------------------------------ derived meshes
     @classmethod
@@ -635,14 +481,6 @@ class Mesh(PointSet):
     def __repr__(self) -> str:
         kinds = "triangles" if self.is_triangular else "polygons"
         return f"Mesh({self.n_vertices} vertices, {self.n_faces} {kinds})"
-
-
-def _sharp_edge_facts(mesh: Mesh) -> dict:
-    """The report's sharp-edge count and, when there are many, the features angle to suggest."""
-    from .features import has_many_sharp_edges, sharp_edge_count, suggest_threshold
-
-    count = sharp_edge_count(mesh)
-    return {"sharp_edges": count, "suggested_features": suggest_threshold(mesh) if has_many_sharp_edges(mesh) else None}
 
 
 def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple[int, int]) -> sp.csr_matrix:

@@ -2,7 +2,7 @@
 
 A point cloud offers the estimators what a mesh offers them, so that one kernel per estimator
 serves both: positions (``vertices``), an ``adjacency`` (here the
-symmetric graph of each point's :data:`curv.core.knn.GRAPH_NEIGHBOURS` nearest, along which normals are
+symmetric graph of each point's :data:`curv.core.neighbour_graph.GRAPH_NEIGHBOURS` nearest, along which normals are
 oriented), a ``grid`` that gives every support exactly (the ball around the point, as the mesh's
 search gives the ball's connected vertices), and the per-vertex flags the API reads (``isolated_vertices``, ``nonmanifold_vertices``,
 ``coincident_points``). What a point's range unit is (its spacing) is :mod:`curv.core.ranges`' rule.
@@ -16,7 +16,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import MeshError
-from .knn import GRAPH_NEIGHBOURS, build_grid, nearest_neighbours, neighbour_steps, symmetric_graph
+from .grid import build_grid
+from .knn import nearest_neighbours
+from .neighbour_graph import GRAPH_NEIGHBOURS, neighbour_steps, symmetric_graph
 
 __all__ = ["PointCloud", "PointSet", "as_positions"]
 
@@ -132,7 +134,7 @@ class PointCloud(PointSet):
 
     @cached_property
     def grid(self):
-        """The uniform grid over the points (:func:`curv.core.knn.build_grid`), made once: it answers the
+        """The uniform grid over the points (:func:`curv.core.grid.build_grid`), made once: it answers the
         nearest-neighbour queries and every ball support of an estimate."""
         if self.grid_frame is not None:
             origin, cell = self.grid_frame
@@ -160,7 +162,7 @@ class PointCloud(PointSet):
 
     @cached_property
     def nearest(self) -> tuple[np.ndarray, np.ndarray]:
-        """The :data:`~curv.core.knn.GRAPH_NEIGHBOURS` nearest other points of every point (computed once).
+        """The :data:`~curv.core.neighbour_graph.GRAPH_NEIGHBOURS` nearest other points of every point (computed once).
 
         Returns
         -------
@@ -176,7 +178,7 @@ class PointCloud(PointSet):
 
     def adopt_grid(self, grid) -> None:
         """Take ``grid`` as :attr:`grid`: a grid of these same points in this order, made elsewhere
-        (:func:`curv.core.knn.in_sorted_order` of the grid of the cloud this one is the grid-ordered
+        (:func:`curv.core.grid.in_sorted_order` of the grid of the cloud this one is the grid-ordered
         twin of: the grid this cloud would build in its :attr:`grid_frame`, without sorting again)."""
         cells, coords = grid
         if cells[3].size != self.n_points or not all(np.array_equal(coords[1 + a], self._vertices[:, a])
@@ -194,7 +196,7 @@ class PointCloud(PointSet):
     def kth_distance(self, k: int) -> np.ndarray:
         """(n,) float64 distance from every point to its k-th nearest other point (inf if none).
 
-        Cached per k (read-only); k up to :data:`~curv.core.knn.GRAPH_NEIGHBOURS` reads :attr:`nearest`,
+        Cached per k (read-only); k up to :data:`~curv.core.neighbour_graph.GRAPH_NEIGHBOURS` reads :attr:`nearest`,
         or the twin's distances after :meth:`same_points_as`.
         """
         k = int(k)
@@ -220,7 +222,7 @@ class PointCloud(PointSet):
         full precision.
 
         Per axis, the smallest non-zero coordinate difference between a point and its nearest
-        points (:func:`curv.core.knn.neighbour_steps`); the step is the finest of the three (an
+        points (:func:`curv.core.neighbour_graph.neighbour_steps`); the step is the finest of the three (an
         axis that never varies is exact: 0.0, and rounding along the others only moves points
         within the surface). E.g. 0.01 for a LAS file whose points lie on a
         1 cm grid, about 1e-6 of the spacing for full-precision floats. An axis whose step is
@@ -236,7 +238,7 @@ class PointCloud(PointSet):
     @cached_property
     def adjacency(self) -> sp.csr_matrix:
         """(n, n) int8 CSR neighbour graph: p and q are joined if either is among the other's
-        :data:`~curv.core.knn.GRAPH_NEIGHBOURS` nearest (symmetric, sorted indices).
+        :data:`~curv.core.neighbour_graph.GRAPH_NEIGHBOURS` nearest (symmetric, sorted indices).
 
         Normals are oriented along it (:mod:`curv.point_normals`); supports come from the grid.
         """

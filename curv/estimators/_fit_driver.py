@@ -97,8 +97,8 @@ def register_fit(marker: type, functions: FitFunctions) -> None:
     _FITS[marker] = functions
 
 
-def register_level_sums(marker: type, sums: LevelSums) -> FitFunctions:
-    """The :class:`FitFunctions` ``levels_at`` and ``level_thread`` of a fit whose rows do not depend
+def register_level_sums(marker: type, sums: LevelSums) -> tuple:
+    """``(levels_at, level_thread)`` of the :class:`FitFunctions` of a fit whose rows do not depend
     on the radius: :func:`sums_levels_at` with ``sums`` (:class:`LevelSums`)."""
     _LEVEL_SUMS[marker] = sums
     return sums_levels_at, no_scratch
@@ -224,11 +224,10 @@ def walk_level(p, level, walk, geometry, walker, state):
     ``walker = (stamp, queue, waiting, waiting_d2)`` are the slice's rows. Returns the new
     ``(count, head, pending)``: ``queue[:count]`` is the support at this level, the rows from the
     last count on are new."""
-    count, head, pending = state
     r = walk.radii[level, p]
     stamp, queue, waiting, waiting_d2 = walker
-    return widen_ball_support(p, r ** 2, level + 1 < walk.radii.shape[0], walk.indptr, walk.indices, geometry.x,
-                              geometry.y, geometry.z, stamp, queue, count, head, waiting, waiting_d2, pending)
+    return widen_ball_support(p, r ** 2, level + 1 < walk.radii.shape[0], (walk.indptr, walk.indices),
+                              (geometry.x, geometry.y, geometry.z), stamp, queue, state, (waiting, waiting_d2))
 
 
 @jit

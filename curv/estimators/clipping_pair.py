@@ -107,9 +107,9 @@ def _clip_chunk(centres, lo, hi, radii, mesh, walk, scratch, normals, csm_pass, 
             i_acc[:] = 0.0
             for level in range(levels):
                 r = radii[level, p]
-                count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, walk.indptr, walk.indices,
-                                                          mesh.x, mesh.y, mesh.z, vstamp, queue, count, head, waiting,
-                                                          waiting_d2, pending)
+                count, head, pending = widen_ball_support(p, r ** 2, level + 1 < levels, (walk.indptr, walk.indices),
+                                                          (mesh.x, mesh.y, mesh.z), vstamp, queue,
+                                                          (count, head, pending), (waiting, waiting_d2))
                 hit = support_bits(mesh, queue, done, count, hit)  # the flags are the vertices', the same for both
                 if csm_pass is not None:
                     c_exact = add_star_rows(queue, done, count, csm_pass.star, csm_pass.clean, c_exact, c_acc)

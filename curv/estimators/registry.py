@@ -1,7 +1,9 @@
 """The estimator registry: every estimator family registers its spec here.
 
-The CLI, the viewer and the study list estimators from :data:`ESTIMATORS`; adding an estimator is
-one module with one ``register(EstimatorSpec(...))`` call.
+The CLI, the viewer, the study and the warm-up list estimators from :data:`ESTIMATORS`; adding an
+estimator is one module ending in one ``register(EstimatorSpec(...))`` call (a fit's: ``register(fit_spec(...))``),
+imported by :mod:`curv.estimators` (docs/ARCHITECTURE.md, "A new estimator is one module plus one
+registry entry").
 """
 
 from __future__ import annotations

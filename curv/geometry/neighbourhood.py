@@ -11,8 +11,8 @@ The search expands along :func:`expansion_adjacency`: a support may contain a no
 (a bow tie, the end of a fin) but does not continue through it onto another sheet.
 
 **The support provider.** On a :class:`curv.PointCloud`, :func:`expansion_adjacency` returns the
-cloud's grid (:func:`curv.core.knn.build_grid`, two tuples of arrays) instead of the CSR edges, and
-:func:`ball_support` answers with the exact ball through the grid (:func:`curv.core.knn.grid_ball`):
+cloud's grid (:func:`curv.core.grid.build_grid`, two tuples of arrays) instead of the CSR edges, and
+:func:`ball_support` answers with the exact ball through the grid (:func:`curv.core.grid_balls.grid_ball`):
 numba picks the implementation by the argument types when it compiles a kernel, so every
 estimator kernel runs unchanged on meshes and points.
 """
@@ -30,7 +30,7 @@ from numba.core import types
 from numba.extending import overload
 
 from ..core.jit import jit, jit_parallel, launch, prange, thread_slices, threads
-from ..core.knn import grid_ball
+from ..core.grid_balls import grid_ball
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii
@@ -99,7 +99,7 @@ def mesh_ball_support(p, radius2, indptr, indices, x, y, z, stamp, queue):
     """
     # the levelled walk with one level (the range rule has one owner); nothing waits beyond it
     count = start_ball_support(p, stamp, queue)
-    count, _, _ = widen_ball_support(p, radius2, False, indptr, indices, x, y, z, stamp, queue, count, 0, None, None, 0)
+    count, _, _ = widen_ball_support(p, radius2, False, (indptr, indices), (x, y, z), stamp, queue, (count, 0, 0), None)
     return count, queue
 
 
@@ -113,47 +113,47 @@ def start_ball_support(p, stamp, queue):
 
 
 @jit
-def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp, queue, count, head, outside,
-                       outside_d2, pending):
+def widen_ball_support(p, radius2, keep_outside, adjacency, coords, stamp, queue, state, waiting):
     """Widen the support of ``p`` to the ball of squared radius ``radius2`` (not smaller than the
     last call's): one walk serves a whole series of radii.
 
-    The support at each radius is the vertices connected to p through vertices within that radius
-    (the range rule; :func:`mesh_ball_support` is this walk with one level): the search goes on
-    from where the last radius stopped, and a vertex it met beyond the last radius (kept in
-    ``outside`` with its squared distance) joins the queue at the first radius that holds it.
-    Every vertex of the queue has been expanded once, so each of their neighbours is in the queue
-    or in ``outside``: nothing connected is missed. The order within the queue is the walk's (for
-    one level, breadth-first from p).
+    The support at each radius is the vertices connected to p through vertices within that radius (the range
+    rule; :func:`mesh_ball_support` is this walk with one level): the search goes on from where the last
+    radius stopped, and a vertex it met beyond the last radius (kept in ``waiting`` with its squared distance)
+    joins the queue at the first radius that holds it. Every vertex of the queue has been expanded once, so
+    each of their neighbours is in the queue or waits: nothing connected is missed. The order within the queue
+    is the walk's (for one level, breadth-first from p).
 
     Parameters
     ----------
     p : int
-        Centre vertex (start with :func:`start_ball_support`: ``count = 1``, ``head = pending = 0``).
+        Centre vertex (start with :func:`start_ball_support`: ``state = (1, 0, 0)``).
     radius2 : float
         Squared radius of this level.
     keep_outside : bool
         Keep the vertices met beyond ``radius2`` for a later, larger radius (False on the last).
-    indptr, indices, x, y, z, stamp :
+    adjacency, coords : tuples ``(indptr, indices)``, ``(x, y, z)``
+        As in :func:`mesh_ball_support`.
+    stamp, queue : (n,) int64
         As in :func:`mesh_ball_support` (the same ``stamp`` mark ``p + 1`` across the levels).
-    queue : (n,) int64
-        ``queue[:count]`` the support so far.
-    count, head, pending : int
-        The state the last call returned: support size, the vertices already expanded, and how
-        many of ``outside`` wait.
-    outside : (n,) int64, outside_d2 : (n,) float64, or both None
-        The waiting vertices and their squared distances to p (None for a single level: then
-        ``keep_outside`` is False and nothing waits).
+    state : tuple ``(count, head, pending)`` of int
+        What the last call returned: support size, vertices expanded, vertices waiting.
+    waiting : tuple ``(outside (n,) int64, outside_d2 (n,) float64)`` or None
+        The vertices met beyond the last radius and their squared distances to p (None: one level,
+        ``keep_outside`` False; numba compiles that case without their code).
 
     Returns
     -------
     count, head, pending : int
-        ``queue[:count]`` is the support at ``radius2`` (p first); the rows added by this call
-        are those from the previous count on.
+        ``queue[:count]`` is the support at ``radius2`` (p first), this call's rows from the last count on.
     """
+    indptr, indices = adjacency
+    x, y, z = coords
+    count, head, pending = state
     px, py, pz = x[p], y[p], z[p]
     mark = p + 1
-    if outside is not None:  # (None: one level; numba drops the branch at compile time)
+    if waiting is not None:
+        outside, outside_d2 = waiting
         kept = 0
         for i in range(pending):
             if outside_d2[i] <= radius2:
@@ -180,9 +180,9 @@ def widen_ball_support(p, radius2, keep_outside, indptr, indices, x, y, z, stamp
                 queue[count] = q
                 count += 1
             elif keep_outside:
-                if outside is not None:
-                    outside[pending] = q
-                    outside_d2[pending] = d2
+                if waiting is not None:
+                    waiting[0][pending] = q
+                    waiting[1][pending] = d2
                     pending += 1
     return count, head, pending
 
@@ -223,7 +223,7 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np
     The plain form (no ``blocked``) is cached with the mesh, and the form for the latest
     ``blocked`` array (the same object again: a cached feature set's vertices), so that an estimate
     over a small region does no O(n) work to build it again. On a point cloud: a grid, ``(cells,
-    coords)`` (:func:`curv.core.knn.build_grid`), which :func:`ball_support` searches instead of edges;
+    coords)`` (:func:`curv.core.grid.build_grid`), which :func:`ball_support` searches instead of edges;
     its cells suit the balls of ``radii`` (:meth:`curv.PointCloud.ball_grid`) when they are given.
     """
     if isinstance(mesh, PointCloud):

@@ -35,7 +35,7 @@
    (|cos| >= :data:`AGREE_COSINE`) with fewer graph neighbours than disagree with it, or with
    none, cannot be oriented by its neighbourhood (a thin sheet, a fold, a sparse spot). With
    ``"up"``, where the side comes from the vertical and not from the neighbours, a point that
-   as many of its :data:`curv.core.knn.GRAPH_NEIGHBOURS` nearest clearly oppose as agree with
+   as many of its :data:`curv.core.neighbour_graph.GRAPH_NEIGHBOURS` nearest clearly oppose as agree with
    (and at least one) is undecided: only normals within 60 degrees of horizontal can oppose
    each other once both are up, so these are the sides of a wall or a fence whose normals
    wobble across the horizontal. With ``"up"`` or a viewpoint, a normal seen edge-on (``|cos| <``
@@ -46,7 +46,7 @@
 5. **One pass.** Steps 1 and 4 and the line check of an estimate (:func:`support_spread`) read
    nested supports of the same point (R2 inside R3), so one kernel (:func:`.one_pass._one_pass`) searches
    each point's ball once, at the largest radius, and takes every support from it. It walks the
-   points in the grid's cell order and reads their coordinates there (:func:`curv.core.knn.grid_gather`),
+   points in the grid's cell order and reads their coordinates there (:func:`curv.core.grid_balls.grid_gather`),
    so that neighbours are near in memory; in the cloud's own order (random for a scan saved
    unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
    as its reference: a fit turned the other way is the same fit with its sign changed exactly,

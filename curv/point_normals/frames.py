@@ -114,10 +114,12 @@ GAP_MARGIN = 1e-9
 
 
 @jit
-def _gap_bound(i, queue, count, x, y, z, vecs, edges):
-    """An upper bound of :func:`_widest_gap` from the occupied bins alone (one bit each, nothing
-    else kept): between consecutive occupied bins a and b the gap is at most the angle from a's
-    start to b's end. Returns ``(bound, used)``, ``used`` the offsets with a tangent part."""
+def _binned_offsets(i, queue, count, x, y, z, vecs, bins):
+    """The gap bins (:func:`_gap_bin`) the offsets ``q - i`` of ``queue[1:count]`` fall in, projected on
+    the plane of ``vecs``'s last two eigenvectors: ``(mask, used)``, a bit per occupied bin and how
+    many offsets have a tangent part. With ``bins`` (6, GAP_BINS) (not None) each occupied bin's
+    rows also get its least key and that offset's u, v, then its greatest key and u, v (the bins
+    the mask leaves out are not cleared)."""
     e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
     e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
     px, py, pz = x[i], y[i], z[i]
@@ -130,9 +132,29 @@ def _gap_bound(i, queue, count, x, y, z, vecs, edges):
         u = dx * e1x + dy * e1y + dz * e1z
         v = dx * e2x + dy * e2y + dz * e2z
         if u * u + v * v > 0.0:
-            b, _ = _gap_bin(u, v)
-            mask |= one << np.uint64(b)
+            b, key = _gap_bin(u, v)
+            bit = one << np.uint64(b)
+            if bins is not None:
+                if mask & bit:
+                    if key < bins[0, b]:
+                        bins[0, b], bins[1, b], bins[2, b] = key, u, v
+                    if key > bins[3, b]:
+                        bins[3, b], bins[4, b], bins[5, b] = key, u, v
+                else:
+                    bins[0, b], bins[1, b], bins[2, b] = key, u, v
+                    bins[3, b], bins[4, b], bins[5, b] = key, u, v
+            mask |= bit
             used += 1
+    return mask, used
+
+
+@jit
+def _gap_bound(i, queue, count, x, y, z, vecs, edges):
+    """An upper bound of :func:`_widest_gap` from the occupied bins alone (one bit each, nothing
+    else kept): between consecutive occupied bins a and b the gap is at most the angle from a's
+    start to b's end. Returns ``(bound, used)``, ``used`` the offsets with a tangent part."""
+    mask, used = _binned_offsets(i, queue, count, x, y, z, vecs, None)
+    one = np.uint64(1)
     if used < 2:
         return 2.0 * math.pi, used
     first = last = -1
@@ -168,31 +190,8 @@ def _widest_gap(i, queue, count, x, y, z, vecs, scratch, screen):
         bound, used = _gap_bound(i, queue, count, x, y, z, vecs, edges)
         if used < 2 or bound < screen:
             return bound
-    e1x, e1y, e1z = vecs[0, 2], vecs[1, 2], vecs[2, 2]
-    e2x, e2y, e2z = vecs[0, 1], vecs[1, 1], vecs[2, 1]
-    px, py, pz = x[i], y[i], z[i]
-    # rows: least key, its u, v; greatest key, its u, v
-    mask = np.uint64(0)
+    mask, used = _binned_offsets(i, queue, count, x, y, z, vecs, bins)
     one = np.uint64(1)
-    used = 0
-    for j in range(1, count):
-        q = queue[j]
-        dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
-        u = dx * e1x + dy * e1y + dz * e1z
-        v = dx * e2x + dy * e2y + dz * e2z
-        if u * u + v * v > 0.0:
-            b, key = _gap_bin(u, v)
-            bit = one << np.uint64(b)
-            if mask & bit:
-                if key < bins[0, b]:
-                    bins[0, b], bins[1, b], bins[2, b] = key, u, v
-                if key > bins[3, b]:
-                    bins[3, b], bins[4, b], bins[5, b] = key, u, v
-            else:
-                mask |= bit
-                bins[0, b], bins[1, b], bins[2, b] = key, u, v
-                bins[3, b], bins[4, b], bins[5, b] = key, u, v
-            used += 1
     if used < 2:
         return 2.0 * math.pi
     # the occupied bins in order, without a branch per bin

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.knn import GRAPH_NEIGHBOURS, build_grid, in_sorted_order
+from ..core.grid import build_grid, in_sorted_order
+from ..core.neighbour_graph import GRAPH_NEIGHBOURS
 from ..core.pointcloud import PointCloud
 from ..geometry.neighbourhood import cached_with_mesh
 

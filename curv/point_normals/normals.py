@@ -134,7 +134,7 @@ def border_radii(cloud: PointCloud) -> np.ndarray:
     """(n,) float64 radius of the border test (and of the PCA that orients the fits) at each point.
 
     :data:`BORDER_RANGE` times the larger of the point's spacing and the median spacing of its
-    :data:`curv.core.knn.GRAPH_NEIGHBOURS` nearest. A point whose own six nearest sit in a tight clump
+    :data:`curv.core.neighbour_graph.GRAPH_NEIGHBOURS` nearest. A point whose own six nearest sit in a tight clump
     has a spacing far below its surroundings'; at R3 of its own spacing its ball held only the
     clump (15 points against 51, median), all on one side, and read as a border: 62 of 200,000
     uniform random points of a closed sphere (0.03 %, the false borders of closed scans). With the

@@ -180,41 +180,39 @@ def _propagate(ptr, adj, part, key, root_sign, normal):
                 tail += 1
 
 
+@jit
+def _votes(p, indptr, neighbours, normal, cosine):
+    """How many of p's neighbours ``neighbours[indptr[p]:indptr[p + 1]]`` (-1 entries skipped) agree
+    with its normal (cos >= ``cosine``) and how many oppose it (cos <= -``cosine``)."""
+    agree = 0
+    oppose = 0
+    for j in range(indptr[p], indptr[p + 1]):
+        q = neighbours[j]
+        if q < 0:
+            continue
+        c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+        if c >= cosine:
+            agree += 1
+        elif c <= -cosine:
+            oppose += 1
+    return agree, oppose
+
+
 @jit_parallel
 def _agreement(indptr, neighbours, normal, cosine, ambiguous):
-    """``ambiguous[p]``: p's normal agrees (cos >= ``cosine``) with none of its neighbours
-    ``neighbours[indptr[p]:indptr[p + 1]]``, or with no more of them than disagree (cos <= -``cosine``)."""
-    n = indptr.size - 1
-    for p in prange(n):
-        agree = 0
-        oppose = 0
-        for j in range(indptr[p], indptr[p + 1]):
-            q = neighbours[j]
-            c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-            if c >= cosine:
-                agree += 1
-            elif c <= -cosine:
-                oppose += 1
+    """``ambiguous[p]``: p's normal agrees with none of its neighbours (:func:`_votes`), or with no
+    more of them than disagree."""
+    for p in prange(indptr.size - 1):
+        agree, oppose = _votes(p, indptr, neighbours, normal, cosine)
         ambiguous[p] = agree == 0 or oppose >= agree
 
 
 @jit_parallel
 def _opposed(indptr, neighbours, normal, cosine, ambiguous):
-    """``ambiguous[p]``: as many of p's neighbours (-1 entries skipped) disagree with its normal
-    (cos <= -``cosine``) as agree with it (cos >= ``cosine``), and at least one does."""
-    n = indptr.size - 1
-    for p in prange(n):
-        agree = 0
-        oppose = 0
-        for j in range(indptr[p], indptr[p + 1]):
-            q = neighbours[j]
-            if q < 0:
-                continue
-            c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-            if c >= cosine:
-                agree += 1
-            elif c <= -cosine:
-                oppose += 1
+    """``ambiguous[p]``: as many of p's neighbours disagree with its normal as agree with it
+    (:func:`_votes`), and at least one does."""
+    for p in prange(indptr.size - 1):
+        agree, oppose = _votes(p, indptr, neighbours, normal, cosine)
         ambiguous[p] = oppose > 0 and oppose >= agree
 
 

@@ -23,6 +23,7 @@ import time
 from typing import Callable, Generator, Sequence
 
 from ..core.errors import CurvError
+from ..core.jit import forwarded
 
 __all__ = ["Runner", "RETRIES", "TileFailed", "QUIET_CLUSTER"]
 
@@ -138,12 +139,7 @@ class Runner:
 
         gen = steps(*args)
         try:
-            while True:
-                try:
-                    step = next(gen)
-                except StopIteration as stop:
-                    return stop.value
-                yield None, float(step)
+            return (yield from forwarded(gen, lambda step: (None, float(step))))
         except (CurvError, OSError):
             raise
         except Exception:  # noqa: BLE001 - run again, as a cluster would

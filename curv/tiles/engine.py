@@ -167,7 +167,7 @@ def _steps(shape, job: Job, kept_rows: np.ndarray) -> tuple:
     the step measured over the kept points' nearest (their neighbours are the whole call's, so the
     smallest over every tile is the whole cloud's :attr:`curv.PointCloud.coordinate_step`), and the
     narrowest radius the quantisation checks compare with the support floor."""
-    from ..core.knn import neighbour_steps
+    from ..core.neighbour_graph import neighbour_steps
     from .reach import floored_radii
 
     nearest = np.full_like(shape.nearest[0], -1)

@@ -3,7 +3,7 @@
 An estimate of a whole point cloud runs on the cloud's twin in grid order
 (:func:`curv.point_normals.grid_ordered`): the points sorted by the cell of a uniform grid (its
 lower corner the cloud's least coordinates, its cell edge chosen from a sample of the cloud,
-:func:`curv.core.knn.build_grid`), ties in their file order. The nearest-neighbour search scans
+:func:`curv.core.grid.build_grid`), ties in their file order. The nearest-neighbour search scans
 that grid too, and breaks ties in distance by its scan order. A tile that laid its own grid over
 its own points would order them differently and, where two neighbours lie at exactly the same
 distance (common on scans quantised to a millimetre or a centimetre), keep another one: another
@@ -32,7 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.knn import GRAPH_NEIGHBOURS, cell_sample_step, sample_cell_size
+from ..core.grid import cell_sample_step, sample_cell_size
+from ..core.neighbour_graph import GRAPH_NEIGHBOURS
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 
@@ -41,7 +42,7 @@ __all__ = ["GridFrame", "frame_of", "frame_from_sample", "grid_order", "TileMesh
 
 @dataclass(frozen=True)
 class GridFrame:
-    """The whole input's grid: its lower corner and cell edge (:func:`curv.core.knn.build_grid`).
+    """The whole input's grid: its lower corner and cell edge (:func:`curv.core.grid.build_grid`).
 
     Attributes
     ----------
@@ -70,7 +71,7 @@ def frame_of(points: np.ndarray, k: int = GRAPH_NEIGHBOURS) -> GridFrame:
 
 def frame_from_sample(sample: np.ndarray, n: int, lo, hi, k: int = GRAPH_NEIGHBOURS) -> GridFrame:
     """The frame of ``n`` points with bounds ``lo``, ``hi`` from every
-    :func:`curv.core.knn.cell_sample_step`-th of them in their order (a file read a chunk at a time)."""
+    :func:`curv.core.grid.cell_sample_step`-th of them in their order (a file read a chunk at a time)."""
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
     extent = float((hi - lo).max())
     cell = sample_cell_size(np.asarray(sample, np.float64), int(n), extent, k)

@@ -22,7 +22,8 @@ from typing import Generator
 import numpy as np
 
 from ..core.jit import Progress
-from ..core.knn import GRAPH_NEIGHBOURS, cell_sample_step
+from ..core.grid import cell_sample_step
+from ..core.neighbour_graph import GRAPH_NEIGHBOURS
 from ..core.mesh import scatter_sample, scattered_corners
 from .engine import Piece
 from .frame import GridFrame, frame_from_sample

@@ -17,7 +17,7 @@ the room proves each of them exact. Where it is larger the point is redone on a 
 
 The rule per input:
 
-* **Points** (``spacing`` = distance to the 6th nearest, ``G`` = :data:`curv.core.knn.GRAPH_NEIGHBOURS`):
+* **Points** (``spacing`` = distance to the 6th nearest, ``G`` = :data:`curv.core.neighbour_graph.GRAPH_NEIGHBOURS`):
   ``knn(q)`` = distance to q's G-th nearest (spacing, neighbours, coincidence);
   ``calm(q)`` = the largest ``|j - q| + knn(j)`` over q and its G nearest (the border test's unit
   reads the neighbours' spacings, :func:`curv.point_normals.border_radii`);
@@ -50,7 +50,9 @@ import math
 import numpy as np
 
 from ..core.jit import jit_parallel, launch, prange, slice_bounds, threads
-from ..core.knn import GRAPH_NEIGHBOURS, build_grid, grid_ball
+from ..core.grid import build_grid
+from ..core.grid_balls import grid_ball
+from ..core.neighbour_graph import GRAPH_NEIGHBOURS
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii, resolve

@@ -51,7 +51,7 @@ class Scan:
     n : int
     lo, hi : (3,) float64
     sample : (s,) int64 and (s, 3) float64
-        Every ``step``-th point's coordinates, in the file's order (:func:`curv.core.knn.cell_sample_step`).
+        Every ``step``-th point's coordinates, in the file's order (:func:`curv.core.grid.cell_sample_step`).
     """
 
     n: int

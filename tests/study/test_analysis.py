@@ -147,7 +147,7 @@ def test_a_study_without_results_reports_no_noise_level():
     highest level reads 0, nothing noisy is claimed, and the report is still written."""
     an = Analysis(Table.from_rows([]), settings(2, tuple(VARIANTS)))
     assert an.noise_levels == [] and an.noise_max == 0.0
-    noisy = [v for c, v in check_all(an) if c.check.__name__ in {"_noise_csm_then_mru", "_mru_vs_csm"}]
+    noisy = [v for c, v in check_all(an) if c.id in {"noise-csm-mru", "mru-vs-csm"}]
     assert len(noisy) == 2 and all(v.status is Status.NOT_TESTED and v.measured == "needs noisy meshes" for v in noisy)
     text = report_markdown(Table.from_rows([]), settings(2, tuple(VARIANTS)))
     assert text.startswith("# curvlab study report") and "@ noise 100%" not in text
