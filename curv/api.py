@@ -17,9 +17,9 @@ from .convert import as_input
 from .core.errors import EstimatorError, MeshError, RadiusWarning, warn
 from .core.jit import COMPILE_MESSAGE, Progress, compile_pending, iter_watched, rescaled, run_to_end
 from .core.mesh import Mesh
-from .core.pointcloud import PointCloud
 from .core.ranges import ball_radii, parse_range, resolve
 from .core.result import Curvature
+from .core.support import support_of
 from .core.validity import mark_ok_rows
 from .estimate_finish import finish, radius_note, settle
 from .estimate_setup import (Smoothing, cached_feature_set, check_vertices, mesh_normals_label, mesh_setup, point_setup,
@@ -36,26 +36,7 @@ __all__ = ["estimate", "iter_estimate", "estimate_ranges", "iter_estimate_ranges
 builtins_range = builtins.range  # the keyword ``range`` shadows it in the functions below
 
 
-def iter_estimate(
-    mesh: Mesh,
-    method: str | None = None,
-    range=None,
-    *,
-    radius: float | None = None,
-    normals: np.ndarray | None = None,
-    normal_weighting: NormalWeighting | str = NormalWeighting.MAX,
-    smooth: Smoothing | str | None = None,
-    smooth_iterations: int = 1,
-    smooth_strength: float = 0.5,
-    fit_range=2,
-    block_size: int | None = None,
-    features=None,
-    vertices=None,
-    knn: int | None = None,
-    orient=None,
-    standard_errors: bool = False,
-    **options,
-) -> Generator[float, None, Curvature]:
+def iter_estimate(mesh: Mesh, method: str | None = None, range=None, **keywords) -> Generator[float, None, Curvature]:
     """Estimate curvature step by step: yields the fraction done, returns the :class:`Curvature`.
 
     Every ``yield`` is a point where a caller may stop (cancel); the yielded values are
@@ -65,13 +46,9 @@ def iter_estimate(
     ``"orientation"`` on a point cloud), ``"estimate"`` (the estimator's kernels) and ``"checks"``
     (the supports' checks and the validity pass). The set-up reports through
     :func:`curv.core.jit.iter_watched`, so it is measured and a cancel reaches it too.
-    Parameters as in :func:`estimate`.
+    Parameters as in :func:`estimate` (the keywords are ``_iter_estimates``', its signature shows them).
     """
-    results = yield from _iter_estimates(
-        mesh, (method,), (range,), radius=radius, normals=normals, normal_weighting=normal_weighting, smooth=smooth,
-        smooth_iterations=smooth_iterations, smooth_strength=smooth_strength, fit_range=fit_range,
-        block_size=block_size, features=features, vertices=vertices, knn=knn, orient=orient,
-        standard_errors=standard_errors, **options)
+    results = yield from _iter_estimates(mesh, (method,), (range,), **keywords)
     return next(iter(results.values()))[0]
 
 
@@ -230,6 +207,7 @@ def _iter_estimates(
     ``None`` in ``methods`` is the input's default estimator (:func:`curv.estimators.default_estimator`).
     """
     mesh = as_input(mesh)
+    support = support_of(mesh)  # what the input's kind answers (a twin below is of the same kind)
     methods = tuple(default_estimator(mesh) if m is None else m for m in methods)
     specs = [get_spec(m) for m in methods]
     spec = specs[0]  # the estimators of one pass take the same normals, ranges and supports
@@ -248,13 +226,11 @@ def _iter_estimates(
     centres = check_vertices(vertices, mesh.n_vertices)
     if centres is not None and smooth is Smoothing.VALUES:
         raise EstimatorError("vertices= cannot be combined with smooth='values': smoothing needs the neighbours' values")
-    if isinstance(mesh, PointCloud) and (features is not None or smooth is not Smoothing.NONE):
+    if not support.has_faces and (features is not None or smooth is not Smoothing.NONE):
         raise EstimatorError("features= and smooth= need a mesh's edges and faces; a point cloud takes neither")
     # before the connectivity and normals: on a first run their kernels compile too
     kernels = tuple(k for s in specs for k in s.kernels)
-    fits_normals = (isinstance(mesh, PointCloud) and normals is None and mesh.normals is None) or (
-        isinstance(normals, str))
-    first_phase = "normals" if fits_normals else "setup"
+    first_phase = "normals" if support.fits_normals(normals) else "setup"
     yield Progress(0.0, COMPILE_MESSAGE if compile_pending((*kernels, settle, mark_ok_rows)) else "", first_phase)
     called_with = mesh, centres
 
@@ -263,7 +239,7 @@ def _iter_estimates(
         the creases, the normals and flags, the support radii (a large cloud's normals take longer
         than its estimate)."""
         mesh, centres, given = called_with[0], called_with[1], normals
-        twin = cloud_twin(mesh) if isinstance(mesh, PointCloud) else locality_ordered(mesh, centres, features)
+        twin = cloud_twin(mesh) if support.grid_twin else locality_ordered(mesh, centres, features)
         if twin is not None:
             # a point cloud runs in its grid's order (curv.point_normals, notes 6), and so does a whole mesh
             # numbered too scattered for the caches (locality_ordered); the rows go back at the end
@@ -272,7 +248,7 @@ def _iter_estimates(
             centres = None if centres is None else rank(rows)[centres]
         feats = None if features is None else cached_feature_set(mesh, features)
         t0 = time.perf_counter()
-        if isinstance(mesh, PointCloud):
+        if support.kind == "points":  # its normals fitted and oriented, its borders found
             work_mesh = mesh
             used_normals, flags, normals_label = point_setup(mesh, given, orient=orient, fit_range=fit_range)
             fused = False
@@ -282,7 +258,7 @@ def _iter_estimates(
             normals_label = mesh_normals_label(given, normal_weighting, fit_range)
         # a region's fits also run at its neighbours, whose residuals its standard errors pool
         fitted = (pool_members(work_mesh, centres) if spec.pools_errors and standard_errors and centres is not None
-                  and not isinstance(work_mesh, PointCloud) else centres)
+                  and support.has_faces else centres)
         radii_of = [ball_radii(work_mesh, rng, uses_normals=spec.uses_normals, at=fitted) if spec.has_support
                     else None for rng in rngs]
         return (mesh, twin, centres, feats, t0, work_mesh, used_normals, flags, normals_label, fused, fitted,
@@ -300,7 +276,7 @@ def _iter_estimates(
         # its sector's normal instead, curv.core.features.sector_corner_normals; ru leaves its faces out)
         kernel_normals = latest_with_mesh(work_mesh, "crease normals", (used_normals, feats.vertices),
                                           lambda: without_rows(used_normals, feats.vertices))
-    shared = len(rngs) > 1 and spec.takes_levels and not isinstance(work_mesh, PointCloud) and all(
+    shared = len(rngs) > 1 and spec.takes_levels and support.has_faces and all(
         rng.radius is None and rng.knn is None for rng in rngs)
     if len(specs) > 1 or shared:
         # one call for every range, narrowest first (radius = factor(k) * unit is ascending in k)
@@ -323,12 +299,8 @@ def _iter_estimates(
     else:
         raws = []
         for i, radii in enumerate(radii_of):
-            order = centres
-            if centres is None and isinstance(work_mesh, PointCloud) and radii is not None:
-                # a whole cloud in its grid's cell order: neighbouring points are estimated one after
-                # another and share what is in the cache (a random-order cloud's kernel ran about 3x
-                # slower); every point writes its own rows, so the result is the same
-                order = work_mesh.ball_grid(radii)[0][3]
+            # a whole input in the order its provider visits it (a cloud's grid cells); every row is its own
+            order = support_of(work_mesh).visit_order(radii) if centres is None and radii is not None else centres
             raws.append((yield from rescaled(
                 spec.function(work_mesh, kernel_normals, radii, chunk=block_size, centres=order,
                               features=feats if on_crease else None, **kernel_options[spec.name]),
@@ -452,5 +424,16 @@ def estimate(mesh: Mesh, method: str | None = None, range=None, **keywords) -> C
     return run_to_end(iter_estimate(mesh, method, range, **keywords))
 
 
-# the keywords and their defaults are iter_estimate's, written once; help() and editors show them here too
-estimate.__signature__ = inspect.signature(iter_estimate).replace(return_annotation="Curvature")
+def _signature_of_one(return_annotation: str) -> inspect.Signature:
+    """``_iter_estimates``' signature for one method at one range: the keywords and their defaults are
+    written once, there; help() and editors show them on :func:`iter_estimate` and :func:`estimate` too."""
+    one = {"methods": inspect.Parameter("method", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None,
+                                        annotation="str | None"),
+           "ranges": inspect.Parameter("range", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None)}
+    own = inspect.signature(_iter_estimates)
+    return own.replace(parameters=[one.get(name, p) for name, p in own.parameters.items()],
+                       return_annotation=return_annotation)
+
+
+iter_estimate.__signature__ = _signature_of_one("Generator[float, None, Curvature]")
+estimate.__signature__ = _signature_of_one("Curvature")

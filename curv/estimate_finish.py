@@ -16,7 +16,7 @@ import numpy as np
 
 from .core.filled import filled
 from .core.jit import jit_parallel, launch, prange
-from .core.pointcloud import PointCloud
+from .core.support import support_of
 from .core.ranges import unit_lengths
 from .core.result import Curvature
 from .core.validity import OK, PRECEDENCE, SINGULAR, TOO_FEW, Reason, mark_ok_rows
@@ -135,9 +135,8 @@ def radius_note(mesh, radius: float, reason: np.ndarray, centres: np.ndarray | N
     short = float(np.isin(rows, (TOO_FEW, SINGULAR)).mean()) if rows.size else 0.0
     if radius >= spacing and short <= SHORT_SHARE:
         return None
-    points = isinstance(mesh, PointCloud)
-    items = "points" if points else "vertices"
-    unit_words = "the distance to the 6th nearest point" if points else "the longest 1-ring edge"
+    support = support_of(mesh)
+    items, unit_words = support.items, support.unit_words
     if radius < spacing:
         head = f"radius={radius:g} is below the median spacing {spacing:.4g} ({unit_words})"
     else:

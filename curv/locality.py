@@ -12,8 +12,8 @@ from dataclasses import replace
 import numpy as np
 
 from .core.mesh import Mesh
-from .core.pointcloud import PointCloud
 from .core.result import Curvature
+from .core.support import support_of
 from .geometry.neighbourhood import cached_with_mesh
 
 __all__ = ["cloud_twin", "locality_ordered", "rank", "rows_of", "rows_back"]
@@ -21,8 +21,9 @@ __all__ = ["cloud_twin", "locality_ordered", "rank", "rows_of", "rows_back"]
 
 def cloud_twin(mesh):
     """A point cloud's twin in grid order and that order (:func:`curv.point_normals.grid_ordered`);
-    None for a mesh or a twin."""
-    if not isinstance(mesh, PointCloud):
+    None for a mesh (an input whose provider runs it in its own order,
+    :attr:`curv.core.support.Support.grid_twin`) or a twin."""
+    if not support_of(mesh).grid_twin:
         return None
     from .point_normals import grid_ordered
 

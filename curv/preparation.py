@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .core.pointcloud import PointCloud
+from .core.support import support_of
 
 __all__ = ["prepare"]
 
@@ -27,7 +27,7 @@ def prepare(data) -> np.ndarray | None:
         A mesh's default vertex normals (Max's weights, read-only; the ones ``curv.estimate`` uses
         without ``normals=``; NaN where a vertex has none); None for a point cloud.
     """
-    if isinstance(data, PointCloud):
+    if support_of(data).grid_twin:  # a cloud: its estimates run on its twin in grid order
         from .point_normals import grid_ordered
 
         grid_ordered(data)

@@ -69,7 +69,7 @@ def test_bad_file_gives_one_line_error_naming_file(name, monkeypatch):
     case = CASES[name]
     if not case.as_root and as_root():
         # root reads any file: pretend the permission check fails the way it does for users
-        monkeypatch.setattr("curv.io.os.access", lambda *a, **k: False)
+        monkeypatch.setattr("os.access", lambda *a, **k: False)
     expected = curv.LoadError if case.outcome == LOAD_ERROR else curv.MeshError
     with pytest.raises(expected) as err:
         _load.__wrapped__(name)

@@ -9,6 +9,7 @@ import trimesh
 from plyfile import PlyData
 
 import curv
+from curv.formats import plywrite
 from curv.io import peek_counts, save_ply
 from curv.geometry.repair import repair
 from tests.corpus import _torus_polygons, _write_obj, _write_off, _write_ply
@@ -90,7 +91,7 @@ def test_save_ply_is_atomic_on_failure(tmp_path, sphere_result, monkeypatch):
         # by now the header and the vertex records are in the temporary file
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(curv.io, "_write_face_lists", fail_after_header_and_vertices)
+    monkeypatch.setattr(plywrite, "_write_face_lists", fail_after_header_and_vertices)
     with pytest.raises(KeyboardInterrupt):
         save_ply(target, mesh, res)
     assert target.read_bytes() == b"old"
@@ -140,7 +141,7 @@ def test_save_ply_written_in_blocks_is_the_same_file(tmp_path, sphere_result, mo
     for m in (mesh, polygons):
         r = curv.estimate(m, "mru", 2)
         whole = save_ply(tmp_path / "whole.ply", m, r, extra={"e": np.arange(m.n_vertices) * 0.5})
-        monkeypatch.setattr(curv.io, "_WRITE_BLOCK", 7)  # many blocks, the last one short
+        monkeypatch.setattr(plywrite, "_WRITE_BLOCK", 7)  # many blocks, the last one short
         blocks = save_ply(tmp_path / "blocks.ply", m, r, extra={"e": np.arange(m.n_vertices) * 0.5})
         monkeypatch.undo()
         assert blocks.read_bytes() == whole.read_bytes()

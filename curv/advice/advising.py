@@ -21,6 +21,7 @@ import numpy as np
 from ..core.errors import MeshError
 from ..core.jit import Progress, rescaled
 from ..core.pointcloud import PointCloud
+from ..core.support import support_of
 from .answer import Advice
 
 __all__ = ["iter_advise", "SHORT_LIST", "CHECK_MAX_VERTICES"]
@@ -52,7 +53,7 @@ def iter_advise(shape, *, normals=None, table: dict | None = None, check: bool |
     from ..convert import as_mesh
     from .check import CHECK_CENTRES, CHECK_COPIES, iter_check
 
-    cloud = isinstance(shape, PointCloud)
+    cloud = support_of(shape).kind == "points"
     shape = shape if cloud else as_mesh(shape)
     n = shape.n_vertices
     region = None if vertices is None else np.unique(np.asarray(vertices, np.int64).reshape(-1))
@@ -121,7 +122,7 @@ def _answer(shape, features, ranking, sharp, report, note) -> Advice:
     from .clouds import describe_cloud
     from .ranking import rank_candidates
 
-    cloud = isinstance(shape, PointCloud)
+    cloud = support_of(shape).kind == "points"
     if cloud and report is not None:
         features = dataclasses.replace(features, noise=report.noise / features.spacing)
     ranking = rank_candidates(ranking, None if report is None else report.measured, VALID_SHARE_SLACK)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..core.errors import CurvError
 from ..core.jit import Progress, rescaled
-from ..core.pointcloud import PointCloud
+from ..core.support import support_of
 
 __all__ = ["Measured", "CheckReport", "iter_check", "call_reach", "CHECK_COPIES", "CHECK_CENTRES",
            "REACH_MARGIN", "MIN_MEASURED"]
@@ -128,8 +128,8 @@ def call_reach(shape, kwargs: dict, units: np.ndarray, centres: np.ndarray) -> n
         The centres' range units (:func:`curv.advice.twin.range_units`).
     centres : (c,) int64
     """
-    if kwargs.get("normals") in ("fit", "pca") or (isinstance(shape, PointCloud) and kwargs.get("normals") is None
-                                                    and shape.normals is None):
+    if kwargs.get("normals") in ("fit", "pca") or (kwargs.get("normals") is None
+                                                    and support_of(shape).fits_normals(None)):
         extra = float(kwargs.get("fit_range", 2))
     else:
         extra = 1.0
@@ -171,7 +171,7 @@ def _normals_group(copy, kwargs: dict):
     normals = kwargs.get("normals")
     if isinstance(normals, str):
         return (normals, float(kwargs.get("fit_range", 2)), str(kwargs.get("orient", "up")))
-    if normals is None and isinstance(copy, PointCloud) and copy.normals is None:
+    if normals is None and support_of(copy).fits_normals(None):
         return ("fit", float(kwargs.get("fit_range", 2)), str(kwargs.get("orient", "up")))
     return None
 

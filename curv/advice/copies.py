@@ -13,6 +13,7 @@ import numpy as np
 
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
+from ..core.support import support_of
 
 __all__ = ["noisy_copy"]
 
@@ -37,7 +38,7 @@ def noisy_copy(shape: Mesh | PointCloud, twin, noise: float, rng: np.random.Gene
     positions = twin.shape.vertices
     if noise > 0:
         positions = positions + twin.surface_normals * rng.normal(scale=noise, size=(positions.shape[0], 1))
-    if isinstance(twin.shape, Mesh):
+    if support_of(twin.shape).has_faces:
         return twin.shape.with_vertices(positions)
     normals = None if shape.normals is None else shape.normals[twin.origin]
     return PointCloud(positions, normals=normals)

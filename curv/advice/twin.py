@@ -30,6 +30,7 @@ import numpy as np
 
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
+from ..core.support import support_of
 from .twin_base import choose_bases
 from .twin_fit import MAX_DEGREE, evaluate, fit_heights
 
@@ -111,11 +112,7 @@ class Twin:
 def range_units(shape, centres: np.ndarray) -> np.ndarray:
     """(c,) float64 each centre's range unit: a mesh vertex's longest 1-ring edge, a point's spacing
     (:func:`curv.core.ranges.unit_lengths`)."""
-    if isinstance(shape, PointCloud):
-        from ..core.ranges import SPACING_NEIGHBOUR
-
-        return np.asarray(shape.kth_distance(SPACING_NEIGHBOUR)[centres], float)
-    return np.asarray(shape.longest_edge[centres], float)
+    return np.asarray(support_of(shape).unit_lengths()[centres], float)
 
 
 def patch_radii(shape, centres: np.ndarray, reach: float) -> np.ndarray:
@@ -227,7 +224,7 @@ def build_twin(shape: Mesh | PointCloud, centres, radii, *, max_degree: int = MA
     if np.ndim(radii) == 0:
         radii = patch_radii(shape, centres, float(radii))
     radii = np.asarray(radii, float)
-    is_mesh = isinstance(shape, Mesh)
+    is_mesh = support_of(shape).has_faces
     if is_mesh and input_normals is None:
         from ..geometry.normals import vertex_normals
 
@@ -310,7 +307,7 @@ def _assemble(shape, centres, members, bases, surface, fits, w, k1, k2, centre_n
     """The union of the moved patches (those whose fit succeeded) as a :class:`Twin`, and each
     patch's noise along the twin's normal (leverage-corrected weighted residual distances)."""
     s, t, height, gs, gt = surface
-    is_mesh = isinstance(shape, Mesh)
+    is_mesh = support_of(shape).has_faces
     keep = np.flatnonzero(fits.degree >= 2)
     if not keep.size:
         raise ValueError("no patch of the twin could be fitted")

@@ -31,14 +31,12 @@ import numpy as np
 from .errors import EstimatorError
 from .filled import filled
 from .pointcloud import PointCloud
+from .support import SPACING_NEIGHBOUR, support_of
 
 __all__ = ["describe_spacing", "Range", "parse_range", "resolve", "range_label", "support_factor", "ball_radii",
            "default_range", "takes_any_range", "canonical_k", "nearest_allowed",
            "allowed_paper_ranges", "describe_ranges", "unit_lengths", "point_spacing", "TIE_TOLERANCE",
            "PAPER_RANGES", "FORMS", "SPACING_NEIGHBOUR", "MIN_KNN"]
-
-SPACING_NEIGHBOUR = 6
-"""A point's spacing (its range unit) is the distance to its 6th nearest other point (module notes)."""
 
 MIN_KNN = 3
 """The smallest ``knn=K``: the fits have three curvature unknowns."""
@@ -249,9 +247,7 @@ def describe_spacing(cloud: PointCloud) -> str:
 
 def unit_lengths(shape) -> np.ndarray:
     """(n,) float64 range unit of every vertex: the longest 1-ring edge of a mesh, a point's spacing."""
-    if isinstance(shape, PointCloud):
-        return point_spacing(shape)
-    return shape.longest_edge
+    return support_of(shape).unit_lengths()
 
 
 def ball_radii(mesh, rng: Range, *, uses_normals: bool, at: np.ndarray | None = None) -> np.ndarray:
@@ -264,28 +260,26 @@ def ball_radii(mesh, rng: Range, *, uses_normals: bool, at: np.ndarray | None = 
     uses_normals : bool
         Whether the estimator also uses its neighbours' normals (support ``k - 1``; not for knn).
     at : (c,) int64, optional
-        Only these vertices of a mesh need a radius (an estimate over a region): the other rows are
-        NaN, and the cost follows ``at``, not the mesh (:func:`curv.core.filled.filled`).
+        Only these vertices need a radius (an estimate over a region): the other rows are NaN, and
+        the cost follows ``at``, not the mesh (:func:`curv.core.filled.filled`); where the input's
+        search reads every radius (a cloud, :attr:`curv.core.support.Support.whole_radii`) all rows get one.
 
     Raises
     ------
     EstimatorError
         ``knn`` on a mesh (its supports follow the mesh edges; use a range or a radius).
     """
-    if at is not None and rng.knn is None and not isinstance(mesh, PointCloud):
+    support = support_of(mesh)
+    if at is not None and rng.knn is None and not support.whole_radii:
         out = filled(mesh.n_vertices, np.nan)
         if rng.radius is not None:
             out[at] = rng.radius * (1.0 + TIE_TOLERANCE)
         else:
-            out[at] = (support_factor(rng.k, uses_normals=uses_normals) * (1.0 + TIE_TOLERANCE)) * mesh.longest_edge[at]
+            out[at] = (support_factor(rng.k, uses_normals=uses_normals) * (1.0 + TIE_TOLERANCE)) * support.unit_lengths()[at]
         return out
     if rng.radius is not None:
         return np.full(mesh.n_vertices, rng.radius * (1.0 + TIE_TOLERANCE))
     if rng.knn is not None:
-        if not isinstance(mesh, PointCloud):
-            raise EstimatorError("knn= is for point clouds; on a mesh give range= or radius=")
-        if rng.knn >= mesh.n_points:
-            raise EstimatorError(f"knn={rng.knn} needs more than {rng.knn} points; the cloud has {mesh.n_points}")
-        return (1.0 + TIE_TOLERANCE) * mesh.kth_distance(rng.knn)
+        return (1.0 + TIE_TOLERANCE) * support.knn_distances(rng.knn)
     factor = support_factor(rng.k, uses_normals=uses_normals)
-    return (factor * (1.0 + TIE_TOLERANCE)) * unit_lengths(mesh)
+    return (factor * (1.0 + TIE_TOLERANCE)) * support.unit_lengths()

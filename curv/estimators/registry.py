@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable, Generator
 
 from ..core.errors import EstimatorError
-from ..core.pointcloud import PointCloud
+from ..core.support import support_of
 from ..core.result import Principal
 
 __all__ = ["EstimatorSpec", "ESTIMATORS", "DEFAULT_ESTIMATOR", "DEFAULT_ESTIMATORS", "default_estimator", "input_kind",
@@ -215,7 +215,7 @@ def get_spec(name: str) -> EstimatorSpec:
 
 def input_kind(mesh) -> str:
     """``"points"`` for a :class:`curv.PointCloud`, else ``"mesh"``: the keys of :data:`DEFAULT_ESTIMATORS`."""
-    return "points" if isinstance(mesh, PointCloud) else "mesh"
+    return support_of(mesh).kind
 
 
 def default_estimator(mesh) -> str:
@@ -239,16 +239,11 @@ def refusal(spec: EstimatorSpec, mesh) -> str | None:
     The one place that decides which estimators an input rules out: the API raises it, the viewer
     greys the estimator out with it as the tooltip.
     """
-    if isinstance(mesh, PointCloud):
-        if spec.takes_points:
-            return None
-        return (f"estimator {spec.name!r} needs a mesh's faces and does not run on point clouds; "
-                f"use one of: {', '.join(point_estimators())}")
-    if spec.triangles_only and not mesh.is_triangular:
-        kinds = sorted(set(mesh.face_sizes.tolist()) - {3})
-        return (f"estimator {spec.name!r} needs a triangle mesh, but the mesh has faces with {kinds} vertices; "
-                f"use one of: {', '.join(polygon_estimators())}")
-    return None
+    support = support_of(mesh)
+    if support.runs(spec):
+        return None
+    others = [name for name, other in ESTIMATORS.items() if support.runs(other)]
+    return f"estimator {spec.name!r} {support.why_not(spec)}; use one of: {', '.join(others)}"
 
 
 def all_variants() -> list[tuple[str, int]]:

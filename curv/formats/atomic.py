@@ -11,7 +11,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "plain_mode"]
+__all__ = ["atomic_path", "atomic_write", "plain_mode"]
 
 
 def plain_mode(path: Path) -> int:
@@ -53,3 +53,25 @@ def atomic_path(path):
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+def atomic_write(path: Path, write) -> Path:
+    """Write through ``write(fh)`` into a temporary file beside ``path``, then rename it over ``path``.
+
+    A failure never leaves a partial file; the result has the permissions of a plain write
+    (``mkstemp`` creates 0600 files).
+    """
+    folder = path.parent if str(path.parent) else Path(".")
+    mode = plain_mode(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
+            fh.flush()
+            os.fchmod(fh.fileno(), mode)
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path

@@ -10,11 +10,11 @@ stamp per vertex, a queue), allocated once per kernel call and reused for every 
 The search expands along :func:`expansion_adjacency`: a support may contain a non-manifold vertex
 (a bow tie, the end of a fin) but does not continue through it onto another sheet.
 
-**The support provider.** On a :class:`curv.PointCloud`, :func:`expansion_adjacency` returns the
-cloud's grid (:func:`curv.core.grid.build_grid`, two tuples of arrays) instead of the CSR edges, and
-:func:`ball_support` answers with the exact ball through the grid (:func:`curv.core.grid_balls.grid_ball`):
-numba picks the implementation by the argument types when it compiles a kernel, so every
-estimator kernel runs unchanged on meshes and points.
+**What a search walks.** :func:`expansion_adjacency` returns a typed bundle that says which
+(:mod:`curv.core.support`): an ``EdgeSearch`` (CSR edges), or a ``GridSearch`` (a point cloud's
+grid). Kernels take its halves as :func:`ball_support`'s ``indptr, indices``; numba picks the walk
+along edges or the exact ball through the grid (:func:`curv.core.grid_balls.grid_ball`) by the type of the
+first half (a CSR's array, a grid's tuple), so every estimator kernel runs on meshes and points.
 """
 
 from __future__ import annotations
@@ -32,8 +32,8 @@ from numba.extending import overload
 from ..core.jit import jit, jit_parallel, launch, prange, thread_slices, threads
 from ..core.grid_balls import grid_ball
 from ..core.mesh import Mesh
-from ..core.pointcloud import PointCloud
 from ..core.ranges import Range, ball_radii
+from ..core.support import EdgeSearch, GridSearch, support_of
 
 __all__ = ["ball_support", "mesh_ball_support", "start_ball_support", "widen_ball_support", "new_scratch", "new_queues",
            "expansion_adjacency", "coordinate_columns", "all_centres", "blocked_vertices", "cached_with_mesh",
@@ -205,8 +205,8 @@ def new_queues(n_vertices: int, parts: int) -> np.ndarray:
 
 
 def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np.ndarray | None = None
-                        ) -> tuple[np.ndarray, np.ndarray]:
-    """The edges a support search expands along, as CSR ``(indptr (n+1,), indices (a,))`` int64.
+                        ) -> EdgeSearch | GridSearch:
+    """The edges a support search expands along, as CSR ``EdgeSearch(indptr (n+1,), indices (a,))`` int64.
 
     The mesh adjacency with the rows of non-manifold vertices (and of ``blocked`` ones) emptied: a
     support may reach such a vertex but must not continue through it onto another sheet, or across
@@ -222,16 +222,16 @@ def expansion_adjacency(mesh: Mesh, blocked: np.ndarray | None = None, radii: np
     -----
     The plain form (no ``blocked``) is cached with the mesh, and the form for the latest
     ``blocked`` array (the same object again: a cached feature set's vertices), so that an estimate
-    over a small region does no O(n) work to build it again. On a point cloud: a grid, ``(cells,
-    coords)`` (:func:`curv.core.grid.build_grid`), which :func:`ball_support` searches instead of edges;
-    its cells suit the balls of ``radii`` (:meth:`curv.PointCloud.ball_grid`) when they are given.
+    over a small region does no O(n) work to build it again. Where the input's provider gives a
+    grid (a cloud, :meth:`curv.core.support.Support.search_grid`, its cells suited to ``radii``):
+    that ``GridSearch``, which :func:`ball_support` searches instead of edges.
     """
-    if isinstance(mesh, PointCloud):
-        return mesh.grid if radii is None else mesh.ball_grid(radii)
+    if (grid := support_of(mesh).search_grid(radii)) is not None:
+        return grid
     if blocked is None or not blocked.any():
-        return cached_with_mesh(mesh, "expansion", lambda: _expansion(mesh, mesh.nonmanifold_vertices))
-    return latest_with_mesh(mesh, "blocked expansion", (blocked,),
-                            lambda: _expansion(mesh, mesh.nonmanifold_vertices | blocked))
+        return EdgeSearch(*cached_with_mesh(mesh, "expansion", lambda: _expansion(mesh, mesh.nonmanifold_vertices)))
+    return EdgeSearch(*latest_with_mesh(mesh, "blocked expansion", (blocked,),
+                                        lambda: _expansion(mesh, mesh.nonmanifold_vertices | blocked)))
 
 
 def _expansion(mesh: Mesh, bad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -17,8 +17,8 @@ import numpy as np
 
 from ..core.jit import Progress, run_to_end
 from ..core.mesh import Mesh
-from ..core.pointcloud import PointCloud
 from ..core.result import Curvature
+from ..core.support import support_of
 from .engine import ROW_FIELDS, Job, Piece, TileRows, iter_run_tile, step_redo, whole_step
 from .orient import Overlap, disagreeing, root_choice, spans_tiles, tile_signs, turned, undecided
 from .frame import GridFrame, frame_of
@@ -33,15 +33,15 @@ class InMemoryInput:
     def __init__(self, shape, normals: np.ndarray | None = None):
         self.shape = shape
         self.points = np.asarray(shape.vertices)
-        self.is_points = isinstance(shape, PointCloud)
-        own = shape.normals if self.is_points else None
+        self.cloud = support_of(shape).kind == "points"  # a tile of it is a cloud of its own (curv.tiles.frame)
+        own = shape.normals if self.cloud else None
         self.normals = own if normals is None else np.asarray(normals, np.float64)
-        if not self.is_points:
+        if not self.cloud:
             self.faces = shape.faces if not shape.is_triangular else shape.face_indices.reshape(-1, 3)
 
     def fetch(self, region: Region) -> Piece:
         inside = region.contains(self.points)
-        if self.is_points:
+        if self.cloud:
             ids = np.flatnonzero(inside)
             return Piece(ids, self.points[ids], None if self.normals is None else self.normals[ids])
         faces = self.faces
@@ -74,12 +74,12 @@ def halo_for(shape, job: Job, sample: int = 20000) -> float:
     else:
         centre = np.median(points[:: max(1, n // 4096)], axis=0)
         near = np.argpartition(np.linalg.norm(points - centre, axis=1), sample)[:sample]
-        window = InMemoryInput(shape).fetch(Region.around(points[near].min(axis=0), points[near].max(axis=0), 0.0,
-                                                          (points.min(axis=0), points.max(axis=0))))
         from .engine import shape_of
 
-        frame = frame_of(points) if isinstance(shape, PointCloud) else None
-        part, _ = shape_of(window, frame, points=isinstance(shape, PointCloud))
+        source = InMemoryInput(shape)
+        window = source.fetch(Region.around(points[near].min(axis=0), points[near].max(axis=0), 0.0,
+                                            (points.min(axis=0), points.max(axis=0))))
+        part, _ = shape_of(window, frame_of(points) if source.cloud else None, points=source.cloud)
         reach = job.reach(part, None)
     finite = reach[np.isfinite(reach)]
     return 2.0 * float(np.percentile(finite, 99)) if finite.size else 0.0
@@ -104,17 +104,17 @@ def iter_estimate_tiled(shape, method: str | None = None, range=None, *, tile_si
             raise MeshError(f"normals must have shape ({shape.n_vertices}, 3), got {array_normals.shape}")
     job = Job.checked(method, range, **({} if array_normals is not None else {"normals": normals}), **keywords)
     source = InMemoryInput(shape, array_normals)
-    if array_normals is not None and not source.is_points:
+    if array_normals is not None and not source.cloud:
         from ..core.errors import EstimatorError
 
         raise EstimatorError("a tiled estimate of a mesh takes normals= as 'fit' (or its own Max normals)")
     points = source.points
     plan = plan_for(points, tile_size)
     tile_of = plan.tile_of(points)
-    is_points = source.is_points
+    cloud = source.cloud
     georeferenced = bool(getattr(shape, "georeferenced", False))
-    job = job.for_input(points=is_points, georeferenced=georeferenced)
-    frame = frame_of(points) if is_points else _mesh_frame(shape)
+    job = job.for_input(points=cloud, georeferenced=georeferenced)
+    frame = frame_of(points) if cloud else _mesh_frame(shape)
     if halo is None:
         halo = halo_for(shape, job)
     n = points.shape[0]
@@ -122,10 +122,10 @@ def iter_estimate_tiled(shape, method: str | None = None, range=None, *, tile_si
     t0 = time.perf_counter()
     yield Progress(0.0)
     tasks = [(t.index, np.flatnonzero(tile_of == t.index), (t.lo, t.hi)) for t in plan.tiles]
-    overlap = is_points and spans_tiles(job, has_normals=source.normals is not None)
-    settings = dict(halo=halo, points=is_points, overlap=overlap, georeferenced=georeferenced)
-    yield from _run_tiles(tasks, plan, source, job, frame, settings, client, out, None, 0.0, 0.95 if is_points else 1.0)
-    if is_points:
+    overlap = cloud and spans_tiles(job, has_normals=source.normals is not None)
+    settings = dict(halo=halo, points=cloud, overlap=overlap, georeferenced=georeferenced)
+    yield from _run_tiles(tasks, plan, source, job, frame, settings, client, out, None, 0.0, 0.95 if cloud else 1.0)
+    if cloud:
         # the whole cloud's coordinate step is known once every tile has run: a tile that used
         # another one where it matters runs again with it (curv.tiles.engine.step_redo)
         step = whole_step(out.infos)

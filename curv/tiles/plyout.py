@@ -69,7 +69,7 @@ def iter_write_ply(path, n: int, coordinates, open_rows, *, n_faces: int = 0, fa
     """
     from plyfile import PlyData, PlyElement
 
-    from ..io import _DIR_PROPS, _float_props, describe_colours
+    from ..formats.plywrite import DIR_PROPS as _DIR_PROPS, describe_colours, float_props as _float_props
 
     float_props = _float_props(label)  # the standard errors only when the tiles computed them
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
+from ..core.support import support_of
 from .sources import open_source
 
 __all__ = ["Preview", "read_preview", "file_size", "PREVIEW_POINTS"]
@@ -58,7 +59,7 @@ class Preview:
     @property
     def words(self) -> str:
         """``1,000,000 of 100,000,000 points shown (every 100th)``."""
-        if isinstance(self.shape, PointCloud):
+        if not support_of(self.shape).has_faces:  # a cloud: every k-th point, not clusters
             how = f"every {_ordinal(self.stride)}" if self.stride > 1 else "all"
             return f"{self.shown:,} of {self.total:,} points shown ({how})"
         return f"{self.shown:,} of {self.total:,} vertices shown (clustered)"

@@ -55,6 +55,7 @@ from ..core.grid_balls import grid_ball
 from ..core.neighbour_graph import GRAPH_NEIGHBOURS
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
+from ..core.support import support_of
 from ..core.ranges import Range, ball_radii, resolve
 from ..estimators import get_spec
 from ..geometry.neighbourhood import new_queues
@@ -263,7 +264,7 @@ def support_reach(shape, method: str, range=None, *, radius=None, knn=None, norm
     """
     spec = get_spec(method)
     rng = resolve(spec, range, radius, knn)
-    if isinstance(shape, PointCloud):
+    if support_of(shape).kind == "points":
         if orient is None:
             from ..point_normals import default_orientation
 

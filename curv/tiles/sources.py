@@ -258,7 +258,7 @@ def open_source(path) -> Source | None:
     if suffix == ".ply":
         from plyfile import PlyData
 
-        from ..io import _ply_header
+        from ..formats.meshread import _ply_header
 
         with open(path, "rb") as fh:
             if fh.readline().strip() != b"ply":

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from ..core.jit import jit_parallel, launch, prange
-from ..core.mesh import Mesh
+from ..core.support import support_of
 from ..core.validity import OK
 from .parts import Errors
 from .propagation import rad_bias
@@ -36,7 +36,7 @@ __all__ = ["pool_rings", "pool_members", "pool_standard_errors", "POOL_KERNEL"]
 def pool_rings(mesh) -> tuple[np.ndarray, np.ndarray]:
     """The neighbours each vertex pools its noise level with, as CSR ``(indptr (n+1,), indices)``
     int64: a mesh's edge neighbours; none on a point cloud."""
-    if isinstance(mesh, Mesh):
+    if support_of(mesh).has_faces:
         return mesh.neighbour_lists
     return np.zeros(mesh.n_vertices + 1, np.int64), np.zeros(0, np.int64)
 
