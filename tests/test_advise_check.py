@@ -177,7 +177,7 @@ def test_the_ranking_is_by_measured_error_and_says_what_is_within_noise():
 def test_the_check_corrects_the_tables_first_choice():
     """A 547-vertex quadratic patch at a third of the paper's noise: the table's first choice is 1.3x the
     best error there, the checked advice is the best call of the six checked."""
-    from curv.advice.table import evaluated_for_table, variant_errors
+    from tools.advice_table.extend import evaluated_for_table, variant_errors
 
     tm = build_test_mesh(Task(19007, "quadratic", 547, 9.27, 0.337, 0))
     table = curv.advise(tm.mesh, check=False)

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import CurvError
-from ..core.jit import Progress, rescaled
+from ..core.jit import Progress, monotone, rescaled
 from ..core.pointcloud import PointCloud
 
 __all__ = ["Measured", "CheckReport", "iter_check", "call_reach", "CHECK_COPIES", "CHECK_CENTRES",
@@ -223,23 +223,8 @@ def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres:
     CheckReport
     """
     # the fractions below are sums of shares: rounding may put one a few ulps below the one before
-    return (yield from _monotone(_check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
+    return (yield from monotone(_check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
                                               noise_policy)))
-
-
-def _monotone(gen: Generator) -> Generator[Progress, None, object]:
-    """``yield from gen`` with every fraction at least the one before; returns ``gen``'s value."""
-    last = 0.0
-    try:
-        while True:
-            try:
-                done = next(gen)
-            except StopIteration as stop:
-                return stop.value
-            last = min(1.0, max(last, float(done)))  # never back, never past the end
-            yield Progress(last, getattr(done, "message", ""), getattr(done, "phase", ""))
-    finally:
-        gen.close()
 
 
 def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options, noise_policy):

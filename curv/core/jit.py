@@ -37,7 +37,7 @@ from numba import njit
 
 __all__ = [
     "jit", "jit_parallel", "jit_inlined", "JIT_OPTIONS", "prange", "threads", "launch", "iter_chunks", "run_to_end",
-    "rescaled", "thread_slices", "slice_bounds", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
+    "rescaled", "monotone", "thread_slices", "slice_bounds", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
     "source_fingerprint", "iter_watched", "announce", "POLL_SECONDS",
 ]
 
@@ -257,21 +257,41 @@ def run_to_end(gen: Generator):
             return stop.value
 
 
-def rescaled(gen: Generator, start: float, end: float, *, phase: str | None = None) -> Generator[Progress, None, object]:
-    """``yield from gen`` with its fractions mapped to ``start .. end`` (a part of a larger piece of
-    work), messages kept, and phases kept or, with ``phase``, all named so; returns ``gen``'s value.
-    Closing this closes ``gen``."""
-    span = end - start
+def _relayed(gen: Generator, fraction: Callable) -> Generator[Progress, None, object]:
+    """``yield from gen`` with each of its progress values passed through ``fraction``; returns
+    ``gen``'s value. Closing this closes ``gen``."""
     try:
         while True:
             try:
                 done = next(gen)
             except StopIteration as stop:
                 return stop.value
-            yield Progress(start + span * float(done), getattr(done, "message", ""),
-                           getattr(done, "phase", "") if phase is None else phase)
+            yield fraction(done)
     finally:
         gen.close()
+
+
+def rescaled(gen: Generator, start: float, end: float, *, phase: str | None = None) -> Generator[Progress, None, object]:
+    """``yield from gen`` with its fractions mapped to ``start .. end`` (a part of a larger piece of
+    work), messages kept, and phases kept or, with ``phase``, all named so; returns ``gen``'s value.
+    Closing this closes ``gen``."""
+    span = end - start
+    return (yield from _relayed(gen, lambda done: Progress(
+        start + span * float(done), getattr(done, "message", ""),
+        getattr(done, "phase", "") if phase is None else phase)))
+
+
+def monotone(gen: Generator) -> Generator[Progress, None, object]:
+    """``yield from gen`` with every fraction at least the one before and at most 1 (for work whose
+    fractions are sums of shares, which rounding may put a few ulps back); returns ``gen``'s value."""
+    last = 0.0
+
+    def forward(done) -> Progress:
+        nonlocal last
+        last = min(1.0, max(last, float(done)))
+        return Progress(last, getattr(done, "message", ""), getattr(done, "phase", ""))
+
+    return (yield from _relayed(gen, forward))
 
 
 POLL_SECONDS = 0.1
