@@ -87,6 +87,20 @@ def run_cloud(job) -> dict:
             "ties": [c.key for c in adv.ranking if c.within_noise]}
 
 
+def call_name(key: str) -> str:
+    """A candidate's key with its absolute radius (a multiple of each cloud's own spacing, so a
+    different number on every cloud) written ``radius=*``: the same call on every cloud."""
+    import re
+
+    return re.sub(r"radius=[^;]+", "radius=*", key)
+
+
+def _same_calls(rows: list) -> list:
+    """The rows with their candidates' keys by :func:`call_name`."""
+    return [{**r, "advised": call_name(r["advised"]), "errors": {call_name(k): v for k, v in r["errors"].items()}}
+            for r in rows]
+
+
 def _median(pooled: list) -> float:
     e = np.concatenate([p["e_rel"] for p in pooled])
     e = e[np.isfinite(e)]
@@ -97,6 +111,7 @@ def report(rows: list) -> str:
     lines = ["| cell | clouds | advised (pooled median e_rel) | APSS best scale | APSS median | advised / APSS | "
              "20 % ahead? | best single candidate | its median | advisor regret per cloud: median / max |",
              "|---|---|---|---|---|---|---|---|---|---|"]
+    rows = _same_calls(rows)
     for cell in sorted({r["cell"] for r in rows}):
         rs = [r for r in rows if r["cell"] == cell]
         ours = _median([r["advised_errors"] for r in rs])
@@ -112,7 +127,7 @@ def report(rows: list) -> str:
         lines.append(f"| {pa.cell_name(cell)} | {len(rs)} | {ours:.4g} | {best_apss} | {apss[best_apss]:.4g} | "
                      f"{ratio:.2f} | {'yes' if ratio <= 0.8 else 'no'} | {best_cand} | {cands[best_cand]:.4g} | "
                      f"{np.median(regrets):.2f} / {np.max(regrets):.2f} |")
-    lines += ["", "Advised calls per cell: "]
+    lines += ["", "Advised calls per cell (radius=*: the call's multiple of each cloud's spacing): "]
     for cell in sorted({r["cell"] for r in rows}):
         picks = [r["advised"] for r in rows if r["cell"] == cell]
         counts = {p: picks.count(p) for p in dict.fromkeys(picks)}
@@ -133,7 +148,17 @@ def main(argv=None) -> int:
     parser.add_argument("--first", type=int, default=0, help="first surface (0: the tables' ones)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--runs", help="also write every cloud's numbers here (JSON)")
+    parser.add_argument("--report", help="only the report, from a --runs file")
     args = parser.parse_args(argv)
+    if args.report:
+        rows = json.loads(Path(args.report).read_text())
+        for r in rows:
+            r["cell"] = tuple(r["cell"])
+            r["errors"] = {k: {m: np.asarray(v, float) for m, v in e.items()} for k, e in r["errors"].items()}
+            r["advised_errors"] = {m: np.asarray(v, float) for m, v in r["advised_errors"].items()}
+        print(report(rows) + f"\n\nFrom `{args.report}`; advice {np.median([r['advise_seconds'] for r in rows]):.1f} s "
+              "per cloud (median).")
+        return 0
     t0 = time.perf_counter()
     jobs = [(fn, noise, s, si) for noise in pa.NOISES for fn in pa.FUNCTIONS
             for s in range(args.first, args.first + args.samples) for si in range(len(pa.SAMPLINGS))]

@@ -42,7 +42,7 @@ MODELS = {"default": {}, "quadric": {"fixed_degree": 2, "weight_width": np.inf, 
 
 def meshes():
     """(label, mesh, truth, evaluated) of the analytic meshes."""
-    from curv.advice.table import evaluated_for_table
+    from tools.advice_table.extend import evaluated_for_table
     from curv.study.protocol import Task
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import make_surface
@@ -58,7 +58,7 @@ def meshes():
 
 def main(argv=None) -> int:
     import curv
-    from curv.advice.advisor import valid_masks
+    from curv.advice.shares import valid_masks
     from curv.advice.check import iter_check
     from curv.core.jit import run_to_end
     from curv.metrics import relative_error

@@ -16,18 +16,18 @@ uses seed 0) and at settings between and beyond the table's grid points: noise l
 irregularity (0 to 30 degrees), hexagon densities 3 s (s + 1) + 1 with the vertex count
 log-uniform over s = 8..81 (217 to 19,927 vertices), three quarters Monge patches of eq. 5.1 (the
 study's meshes, :func:`curv.study.testmesh.build_test_mesh`, evaluated away from the border by
-:func:`curv.advice.table.evaluated_for_table`, the study's R4 rule where it leaves 30 vertices),
+:func:`tools.advice_table.extend.evaluated_for_table`, the study's R4 rule where it leaves 30 vertices),
 one quarter closed analytic surfaces of random shape
-(:func:`curv.advice.table.random_closed_params`: sphere radius, ellipsoid semi-axes, torus tube
+(:func:`tools.advice_table.base.random_closed_params`: sphere radius, ellipsoid semi-axes, torus tube
 radius) at the same vertex counts (a geodesic sphere or ellipsoid snaps to the nearest
 10 f^2 + 2, so sizes between the table's 642, 2562 and 10242 too; every vertex evaluated; no
 irregularity option). Truth is exact (:mod:`curv.surfaces`). Per mesh every candidate call (the
-table's and :func:`curv.advice.table.option_variants`) is run and scored by the median e_rel over
+table's and :func:`tools.advice_table.extend.option_variants`) is run and scored by the median e_rel over
 the evaluated vertices it gives a value for (the study's ``median_erel``), and each call's valid
-share on the mesh is stored (:func:`curv.advice.advisor.valid_shares`).
+share on the mesh is stored (:func:`curv.advice.shares.valid_shares`).
 
 Reported: regret = median e_rel of the advised call / the best median e_rel over the calls the
-ranking admits first (within :data:`curv.advice.advisor.VALID_SHARE_SLACK` of the best valid share;
+ranking admits first (within :data:`curv.advice.shares.VALID_SHARE_SLACK` of the best valid share;
 errors below the table's ``erel_floor``, 1e-6, count as the floor: rounding, as in the advisor)
 (median, 90th percentile, share within 1.05), overall and for subsets (patches, closed surfaces,
 settings inside or beyond the table's grid, nearly noise-free); the advisor's mean error against
@@ -68,7 +68,7 @@ MONGE = ("quadratic", "ellipsoid_patch", "trigonometric")
 def draw_settings(n: int, seed: int, *, s_range=(8, 81)) -> list[dict]:
     """``n`` held-out mesh settings from one random stream (the shapes of closed surfaces too); the
     vertex count log-uniform over the hexagons of ``s_range`` (s = 8, 81: 217 to 19,927 vertices)."""
-    from curv.advice.table import random_closed_params
+    from tools.advice_table.base import random_closed_params
 
     rng = np.random.default_rng([seed, 42])
     lo, hi = (np.log(3 * s * (s + 1) + 1) for s in s_range)
@@ -95,7 +95,7 @@ def _mesh(setting: dict, noise_level: float):
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import make_surface
 
-    from curv.advice.table import evaluated_for_table
+    from tools.advice_table.extend import evaluated_for_table
 
     if setting["closed"]:
         s = make_surface(setting["function"], n_vertices=setting["n_vertices"],
@@ -110,9 +110,10 @@ def evaluate(setting: dict) -> dict:
     """Every candidate's median e_rel on one held-out mesh, the advisor's answer (self-checked) and the
     table's first choice alone (``check=False``)."""
     from curv import advise
-    from curv.advice.advisor import (RESIDUAL_MEASURES, SHAPE_MEASURES, angle_deviation_deg, fan_triangles, load_table,
-                                     valid_shares)
-    from curv.advice.table import option_variants, variant_errors
+    from curv.advice.features import RESIDUAL_MEASURES, SHAPE_MEASURES, angle_deviation_deg, fan_triangles
+    from curv.advice.prediction import load_table
+    from curv.advice.shares import valid_shares
+    from tools.advice_table.extend import option_variants, variant_errors
 
     mesh, truth, evaluated, irr_true = _mesh(setting, setting["noise_level"])
     clean = _mesh(setting, 0.0)[0]
@@ -152,8 +153,8 @@ def beyond_grid(runs: list[dict], table: dict) -> np.ndarray:
 
 def admissible(runs: list[dict], variants: list[str]) -> np.ndarray:
     """(m, v) bool: the candidates the ranking puts first on each mesh, those within
-    :data:`curv.advice.advisor.VALID_SHARE_SLACK` of the best valid share (what regret compares against)."""
-    from curv.advice.advisor import VALID_SHARE_SLACK
+    :data:`curv.advice.shares.VALID_SHARE_SLACK` of the best valid share (what regret compares against)."""
+    from curv.advice.shares import VALID_SHARE_SLACK
 
     S = np.array([[r.get("shares", {}).get(v, 1.0) for v in variants] for r in runs], float)
     return S >= S.max(axis=1, keepdims=True) - VALID_SHARE_SLACK
@@ -169,7 +170,7 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
     table : dict, optional
         The advisor table validated (for the grid's bounds); default the packaged one.
     """
-    from curv.advice.advisor import load_table
+    from curv.advice.prediction import load_table
     from curv.study.protocol import NOISE_FRACTION
 
     table = load_table() if table is None else table
@@ -257,7 +258,7 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
         "Irregularity: median |estimate - 3D irregularity of the noise-free mesh| "
         f"{numbers['irr_median_abs_diff_clean']:.1f} degrees (p90 {numbers['irr_p90_abs_diff_clean']:.1f}); Monge patches against the planar target the mesh "
         f"was made with: median {numbers['irr_median_abs_diff']:.1f} degrees (the 3D measure includes the lift's "
-        "distortion, see curv.advice.advisor.MeshFeatures).",
+        "distortion, see curv.advice.features.MeshFeatures).",
     ]
     return "\n".join(lines), numbers
 
@@ -265,7 +266,7 @@ def summarize_runs(runs: list[dict], table: dict | None = None) -> tuple[str, di
 def setting_twins(keys) -> list[np.ndarray]:
     """The table's meshes grouped by setting: one index array per (surface kind, vertex count,
     irregularity, noise level), its meshes the different random surfaces (a key's seed and sample)
-    made at that setting (keys as in :func:`curv.advice.table.table_mesh`)."""
+    made at that setting (keys as in :func:`tools.advice_table.extend.table_mesh`)."""
     groups: dict = {}
     for i, k in enumerate(keys):
         groups.setdefault((k[1], int(k[2]), float(k[3]), float(k[4])), []).append(i)
@@ -324,9 +325,9 @@ def twin_regrets(groups, log_values: np.ndarray) -> dict:
 def twin_bound_report(table: dict) -> str:
     """Markdown: the regret of :func:`twin_regrets` on ``table``, overall and per cell family, beside
     the advisor's own leave-one-out regret with each mesh's random surface left out (its kernel and
-    features, :func:`curv.advice.table.loo_regret` by :func:`curv.advice.table.surface_groups`)."""
-    from curv.advice.advisor import log_erel, table_coordinates
-    from curv.advice.table import loo_regret, surface_groups
+    features, :func:`tools.advice_table.kernel.loo_regret` by :func:`tools.advice_table.kernel.surface_groups`)."""
+    from curv.advice.prediction import log_erel, table_coordinates
+    from tools.advice_table.kernel import loo_regret, surface_groups
 
     keys = table["truth"]["key"]
     log_values = log_erel(table)
@@ -374,11 +375,11 @@ def noise_draw_errors(args: tuple) -> dict:
     Parameters
     ----------
     args : (key, draw, variants)
-        A table key (:func:`curv.advice.table.table_mesh`), the draw's seed and the candidates: the
+        A table key (:func:`tools.advice_table.extend.table_mesh`), the draw's seed and the candidates: the
         same surface, tessellation and noise level as the table mesh, the noise drawn from
         ``[key's seed, 91, draw]`` (evaluated as the held-out meshes are).
     """
-    from curv.advice.table import evaluated_for_table, table_mesh, variant_errors
+    from tools.advice_table.extend import evaluated_for_table, table_mesh, variant_errors
     from curv.study.protocol import NOISE_FRACTION
 
     key, draw, variants = args
@@ -395,7 +396,7 @@ def noise_draw_report(table: dict, n_meshes: int, draws: int, pool, *, seed: int
     table meshes drawn at random (a third of them below 817 vertices, the rest 817-3169; patches and
     closed surfaces as the table holds them). Two draws differ in nothing a feature of the setting or
     the surface can see, so their regret is what no advice from such features avoids; and the rows."""
-    from curv.advice.table import option_variants
+    from tools.advice_table.extend import option_variants
 
     variants = list(dict.fromkeys([*table["variants"], *option_variants()]))
     keys = [k for k in table["truth"]["key"] if k[4] > 0 and k[2] <= 3169]
@@ -430,9 +431,9 @@ def noise_draw_report(table: dict, n_meshes: int, draws: int, pool, *, seed: int
 
 
 def residual_row(setting: dict) -> dict:
-    """The residual measures (:func:`curv.advice.advisor.residual_measures`) of a run's mesh, rebuilt
+    """The residual measures (:func:`curv.advice.features.residual_measures`) of a run's mesh, rebuilt
     from its setting (no estimator runs, no score is read)."""
-    from curv.advice.advisor import residual_measures
+    from curv.advice.features import residual_measures
 
     return residual_measures(_mesh(setting, setting["noise_level"])[0])
 
@@ -448,8 +449,10 @@ def refeature_runs(runs: list[dict], pool) -> list[dict]:
 def readvise(runs: list[dict], table: dict) -> list[dict]:
     """The runs with the advice of another table, from their stored raw measures (no estimator runs
     again): the same calibration, prediction and candidates as :func:`curv.advise`."""
-    from curv.advice.advisor import (RESIDUAL_MEASURES, SHAPE_MEASURES, MeshFeatures, calibrate_irregularity,
-                                     calibrate_noise, candidates, predict, rank)
+    from curv.advice.features import (RESIDUAL_MEASURES, SHAPE_MEASURES, MeshFeatures, calibrate_irregularity,
+                                      calibrate_noise)
+    from curv.advice.prediction import predict
+    from curv.advice.shares import candidates, rank
 
     cal = table["calibration"]
     out = []
@@ -468,7 +471,7 @@ def readvise(runs: list[dict], table: dict) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    from curv.advice.advisor import load_table
+    from curv.advice.prediction import load_table
     from curv.study.executors import open_executor
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -111,6 +111,39 @@ def test_a_noisy_copy_moves_the_twin_along_its_normals():
     assert np.std(along) == pytest.approx(0.01, rel=0.1)
 
 
+
+@pytest.mark.parametrize("kind", ["mesh", "cloud"])
+def test_a_call_runs_on_the_part_of_the_copy_within_its_reach(kind):
+    """A short-reach call's part of a copy holds every copy vertex within its reach of its centre and
+    nothing farther; the centres map to the same positions; a mesh part keeps the faces inside it;
+    an estimate at the centres gives the same curvature on the part as on the whole copy (a cloud's
+    normals may face the other way on a part: its orientation is the call's, as the check's score
+    allows)."""
+    from curv.advice.copies import within_reach
+
+    s = make_surface("sphere", n_vertices=2562)
+    shape = s.mesh if kind == "mesh" else curv.PointCloud(s.mesh.vertices)
+    twin = build_twin(shape, np.arange(0, 2500, 250), 8.0)
+    copy = noisy_copy(shape, twin, 0.0, np.random.default_rng(0))
+    whole, rows, centres = within_reach(copy, twin, np.full(twin.centres.size, np.inf))
+    assert whole is copy and centres is twin.centres and rows.size == copy.n_vertices
+    reach = 0.5 * twin.radius
+    part, rows, centres = within_reach(copy, twin, reach)
+    x = twin.shape.vertices
+    near = np.linalg.norm(x - x[twin.centres][twin.patch], axis=1) <= reach[twin.patch]
+    assert 0 < part.n_vertices == near.sum() < copy.n_vertices and np.array_equal(rows, np.flatnonzero(near))
+    np.testing.assert_array_equal(part.vertices[centres], copy.vertices[twin.centres])
+    if kind == "mesh":
+        assert part.n_faces > 0 and np.all(part.faces < part.n_vertices)
+    full = curv.estimate(copy, method="qs", range=2, vertices=twin.centres)
+    cut = curv.estimate(part, method="qs", range=2, vertices=centres)
+    for a, b in ((cut, centres), (full, twin.centres)):
+        assert np.isfinite(a.k1[b]).all()
+    np.testing.assert_allclose(np.abs(cut.k1[centres] + cut.k2[centres]),
+                               np.abs(full.k1[twin.centres] + full.k2[twin.centres]), rtol=1e-9)
+    np.testing.assert_allclose(cut.k1[centres] * cut.k2[centres], full.k1[twin.centres] * full.k2[twin.centres],
+                               rtol=1e-9)
+
 # ------------------------------------------------------------------ the check
 def test_the_check_measures_what_the_calls_do_on_the_input():
     """On a noisy analytic patch the measured error of every call is near its true error there."""
@@ -177,7 +210,7 @@ def test_the_ranking_is_by_measured_error_and_says_what_is_within_noise():
 def test_the_check_corrects_the_tables_first_choice():
     """A 547-vertex quadratic patch at a third of the paper's noise: the table's first choice is 1.3x the
     best error there, the checked advice is the best call of the six checked."""
-    from curv.advice.table import evaluated_for_table, variant_errors
+    from tools.advice_table.extend import evaluated_for_table, variant_errors
 
     tm = build_test_mesh(Task(19007, "quadratic", 547, 9.27, 0.337, 0))
     table = curv.advise(tm.mesh, check=False)

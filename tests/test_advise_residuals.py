@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import curv
-from curv.advice.advisor import RESIDUAL_MEASURES, measure_features, residual_measures
+from curv.advice.features import RESIDUAL_MEASURES, measure_features, residual_measures
 from curv.advice.residuals import fit_residual_spreads
 from curv.study.protocol import NOISE_FRACTION, Task
 from curv.study.testmesh import build_test_mesh

@@ -54,7 +54,7 @@ def test_twin_regret_admits_the_calls_every_mesh_of_the_setting_has():
 
 
 def test_noise_draws_change_the_noise_of_the_table_mesh_and_nothing_else():
-    from curv.advice.table import evaluated_for_table, table_mesh, variant_errors
+    from tools.advice_table.extend import evaluated_for_table, table_mesh, variant_errors
 
     bench = _bench()
     calls = ["nc:R1", "jet:R2"]

@@ -76,7 +76,7 @@ def iter_advise(shape, *, normals=None, table: dict | None = None, check: bool |
     yield Progress(0.1, "measuring the input")
     report = None
     if run_check:
-        from .advisor import VALID_SHARE_SLACK
+        from .shares import VALID_SHARE_SLACK
 
         top = max(c.valid_share for c in ranking)
         admitted = [c for c in ranking if c.valid_share >= top - VALID_SHARE_SLACK]
@@ -93,7 +93,7 @@ def iter_advise(shape, *, normals=None, table: dict | None = None, check: bool |
 
 def _mesh_pool(mesh, proposed: list, region) -> np.ndarray:
     """The vertices (of a sample) where every proposed call gives a value: the check's centres."""
-    from .advisor import valid_masks
+    from .shares import valid_masks
 
     counted, masks = valid_masks(mesh, [c.key for c in proposed], within=region)
     return counted[np.all([masks[c.key] for c in proposed], axis=0)] if proposed else counted[:0]
@@ -118,9 +118,10 @@ def _answer(shape, features, ranking, sharp, report, note) -> Advice:
     """The :class:`Advice`: the ranking with the check's measures, and the words for a person."""
     import dataclasses
 
-    from .advisor import VALID_SHARE_SLACK, describe_mesh
     from .clouds import describe_cloud
+    from .features import describe_mesh
     from .ranking import rank_candidates
+    from .shares import VALID_SHARE_SLACK
 
     cloud = support_of(shape).kind == "points"
     if cloud and report is not None:

@@ -136,7 +136,7 @@ class Advice:
         What was measured on the input.
     ranking : list of Candidate
         Every candidate, best first: those that leave at most
-        :data:`curv.advice.advisor.VALID_SHARE_SLACK` more of the input invalid than the
+        :data:`curv.advice.shares.VALID_SHARE_SLACK` more of the input invalid than the
         best-covering one, then the others; within each, the checked calls by their measured error
         (:mod:`curv.advice.ranking`), then the others by predicted error.
     method : str

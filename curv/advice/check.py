@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import CurvError
-from ..core.jit import Progress, rescaled
+from ..core.jit import Progress, monotone, rescaled
 from ..core.support import support_of
 
 __all__ = ["Measured", "CheckReport", "iter_check", "call_reach", "CHECK_COPIES", "CHECK_CENTRES",
@@ -176,14 +176,15 @@ def _normals_group(copy, kwargs: dict):
     return None
 
 
-def _score(twin, res, flip: bool) -> np.ndarray:
-    """(c,) e_rel of a result at the twin's centres against the twin's curvature (NaN where invalid)."""
+def _score(twin, res, centres: np.ndarray, flip: bool) -> np.ndarray:
+    """(c,) e_rel of a result at the twin's centres (their rows ``centres`` in the result) against the
+    twin's curvature (NaN where invalid)."""
     from ..metrics import relative_error
 
-    k1, k2 = res.k1[twin.centres], res.k2[twin.centres]
+    k1, k2 = res.k1[centres], res.k2[centres]
     t1, t2 = twin.k1, twin.k2
     if flip:  # a cloud's normals are oriented by the call: compare on its side of the surface
-        side = np.einsum("ij,ij->i", res.normals[twin.centres], twin.normals) < 0
+        side = np.einsum("ij,ij->i", res.normals[centres], twin.normals) < 0
         t1, t2 = np.where(side, -twin.k2, t1), np.where(side, -twin.k1, t2)
     return relative_error(t1, t2, k1, k2)
 
@@ -223,28 +224,13 @@ def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres:
     CheckReport
     """
     # the fractions below are sums of shares: rounding may put one a few ulps below the one before
-    return (yield from _monotone(_check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
+    return (yield from monotone(_check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
                                               noise_policy)))
-
-
-def _monotone(gen: Generator) -> Generator[Progress, None, object]:
-    """``yield from gen`` with every fraction at least the one before; returns ``gen``'s value."""
-    last = 0.0
-    try:
-        while True:
-            try:
-                done = next(gen)
-            except StopIteration as stop:
-                return stop.value
-            last = min(1.0, max(last, float(done)))  # never back, never past the end
-            yield Progress(last, getattr(done, "message", ""), getattr(done, "phase", ""))
-    finally:
-        gen.close()
 
 
 def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options, noise_policy):
     """:func:`iter_check`'s work (its parameters in order)."""
-    from .copies import noisy_copy
+    from .copies import noisy_copy, within_reach
     from .twin import build_twin, range_units
 
     t0 = time.perf_counter()
@@ -253,11 +239,13 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
         raise CurvError("cannot check: no vertex where every candidate gives a value")
     rng = np.random.default_rng([seed, 35])
     sets = _centre_sets(pool, copies, centres, rng)
-    twins = []
+    twins, reaches = [], []
     for j, chosen in enumerate(sets):
         units = range_units(shape, chosen)
-        radii = np.max([call_reach(shape, kw, units, chosen) for kw in calls.values()], axis=0)
-        twins.append(build_twin(shape, chosen, radii, **(twin_options or {})))
+        reach = {key: call_reach(shape, kw, units, chosen) for key, kw in calls.items()}
+        twins.append(build_twin(shape, chosen, np.max(list(reach.values()), axis=0), **(twin_options or {})))
+        # each kept centre's reach per call (a centre whose patch could not be fitted is not in the twin)
+        reaches.append({key: r[np.searchsorted(chosen, twins[-1].source)] for key, r in reach.items()})
         yield Progress(0.2 * (j + 1) / len(sets), "building the smooth twin")
     sigma = np.concatenate([t.sigma for t in twins])
     resolved = np.concatenate([t.resolved for t in twins])
@@ -277,21 +265,34 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
     step = 0
     for j, twin in enumerate(twins):
         copy = noisy_copy(shape, twin, noise, rng)
-        shared: dict = {}  # normals fitted once per copy for every call that fits the same ones
-        for key, kwargs in calls.items():
+        # the calls that read the same normals share them and one part of the copy (what the widest of
+        # them reads), so what an estimate caches on its input is made once per part; a knn call finds
+        # its neighbours over all of its input and gets a part of its own reach
+        group = {key: _normals_group(copy, kw) for key, kw in calls.items()}
+        widest = {g: np.max([reaches[j][k] for k in calls if group[k] == g], axis=0) for g in set(group.values())}
+        parts: dict = {}
+        shared: dict = {}
+        for key in sorted(calls, key=lambda k: (str(group[k]), "knn" in calls[k])):
             start = 0.2 + 0.8 * step / steps
             t1 = time.perf_counter()
-            group = _normals_group(copy, kwargs)
-            run = dict(kwargs)
-            if group in shared:
+            own = calls[key].get("knn") is not None
+            where = key if own else group[key]
+            if where not in parts:
+                parts[where] = within_reach(copy, twin, reaches[j][key] if own else widest[group[key]])
+            part, rows, centres_in_part = parts[where]
+            run = dict(calls[key])
+            if group[key] in shared and shared[group[key]][1][rows].all():
                 run.pop("fit_range", None)
-                run["normals"] = shared[group]
+                run["normals"] = shared[group[key]][0][rows]
             try:
-                res = yield from rescaled(estimate(copy, vertices=twin.centres, **quiet, **run), start,
+                res = yield from rescaled(estimate(part, vertices=centres_in_part, **quiet, **run), start,
                                           start + 0.8 / steps)
-                if group is not None and group not in shared:
-                    shared[group] = res.normals
-                scores[key].append(_score(twin, res, flip=not twin.oriented))
+                if group[key] is not None and group[key] not in shared:
+                    full = np.full((copy.n_vertices, 3), np.nan)
+                    have = np.zeros(copy.n_vertices, bool)
+                    full[rows], have[rows] = res.normals, True
+                    shared[group[key]] = (full, have)
+                scores[key].append(_score(twin, res, centres_in_part, flip=not twin.oriented))
             except CurvError:
                 scores[key].append(np.full(twin.centres.size, np.nan))
             seconds[key] += time.perf_counter() - t1

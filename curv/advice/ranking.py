@@ -2,7 +2,7 @@
 
 The order is:
 
-1. coverage: the candidates that leave at most :data:`~curv.advice.advisor.VALID_SHARE_SLACK` more
+1. coverage: the candidates that leave at most :data:`~curv.advice.shares.VALID_SHARE_SLACK` more
    of the input invalid than the best-covering one come first (a call that leaves most of the
    input without a value is no answer, whatever its error);
 2. within each group, the calls the check measured (:attr:`curv.advice.check.Measured.ok`), by
@@ -49,7 +49,7 @@ def rank_candidates(candidates: list, measured: dict | None, slack: float) -> li
     measured : dict or None
         :attr:`Candidate.key` -> :class:`curv.advice.check.Measured` of the checked calls.
     slack : float
-        Coverage slack (:data:`curv.advice.advisor.VALID_SHARE_SLACK`).
+        Coverage slack (:data:`curv.advice.shares.VALID_SHARE_SLACK`).
 
     Returns
     -------

@@ -6,7 +6,7 @@ A quartic over the same support absorbs most of the first and none of the second
 residual standard deviations (the residual sum of squares over the degrees of freedom left) of the
 two fits are about equal where noise dominates and the quartic's is a small part of the quadric's
 where the surface's own shape does. :func:`fit_residual_spreads` measures both on a fixed sample of
-vertices; :func:`curv.advice.advisor.raw_measures` turns them into the ``noise_raw4`` and
+vertices; :func:`curv.advice.features.raw_measures` turns them into the ``noise_raw4`` and
 ``residual_ratio`` features.
 """
 

@@ -37,7 +37,7 @@ from numba import njit
 
 __all__ = [
     "jit", "jit_parallel", "jit_inlined", "JIT_OPTIONS", "prange", "threads", "launch", "iter_chunks", "run_to_end",
-    "forwarded",
+    "forwarded", "monotone",
     "rescaled", "thread_slices", "slice_bounds", "compile_pending", "COMPILE_MESSAGE", "Progress", "TARGET_SECONDS", "LAUNCH_LOCK",
     "source_fingerprint", "iter_watched", "announce", "POLL_SECONDS",
 ]
@@ -277,12 +277,22 @@ def rescaled(gen: Generator, start: float, end: float, *, phase: str | None = No
     work), messages kept, and phases kept or, with ``phase``, all named so; returns ``gen``'s value.
     Closing this closes ``gen``."""
     span = end - start
+    return (yield from forwarded(gen, lambda done: Progress(
+        start + span * float(done), getattr(done, "message", ""),
+        getattr(done, "phase", "") if phase is None else phase)))
 
-    def moved(done) -> Progress:
-        return Progress(start + span * float(done), getattr(done, "message", ""),
-                        getattr(done, "phase", "") if phase is None else phase)
 
-    return (yield from forwarded(gen, moved))
+def monotone(gen: Generator) -> Generator[Progress, None, object]:
+    """``yield from gen`` with every fraction at least the one before and at most 1 (for work whose
+    fractions are sums of shares, which rounding may put a few ulps back); returns ``gen``'s value."""
+    last = 0.0
+
+    def forward(done) -> Progress:
+        nonlocal last
+        last = min(1.0, max(last, float(done)))
+        return Progress(last, getattr(done, "message", ""), getattr(done, "phase", ""))
+
+    return (yield from forwarded(gen, forward))
 
 
 POLL_SECONDS = 0.1
