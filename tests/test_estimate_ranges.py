@@ -81,6 +81,19 @@ def test_one_range_is_estimate():
     assert [r.range for r in pair] == [2, 1] and np.array_equal(pair[1].k1, curv.estimate(mesh, "qs", 1).k1)
 
 
+def test_flat_rows_are_the_levels_one_after_another():
+    """The clipping pass writes row ``level * n + p`` of its flat outputs (no row view per centre):
+    they must be views of the (levels, n) outputs in that order, for icc's extra outputs too."""
+    from curv.estimators._output_rows import LevelOutputs
+    from curv.estimators.icc import IccOutputs
+
+    for out in (LevelOutputs(3, 5), IccOutputs(3, 5)):
+        for full, flat in zip(out.rows, out.flat_rows):
+            assert flat.shape == (15, *full.shape[2:]) and np.shares_memory(flat, full)
+            flat[2 * 5 + 4] = 7  # level 2, vertex 4
+            assert np.all(full[2, 4] == 7)
+
+
 def test_sphere_sign_and_value():
     mesh = icosphere(4, radius=2.0)
     for res in estimate_ranges(mesh, "icc", (1, 2, 4)):

@@ -277,8 +277,14 @@ def _one_inside(i, qi, j, qj, k, plane, radius2, tp, tk):
 @jit
 def _face_plane(vector_area, area, f, a):
     """The plane of face f as :func:`_arc3` takes it, ``(unit normal, h2)``, from a corner's offset a."""
-    inv = 1.0 / area[f]
-    n = (vector_area[f, 0] * inv, vector_area[f, 1] * inv, vector_area[f, 2] * inv)
+    return _plane((vector_area[f, 0], vector_area[f, 1], vector_area[f, 2]), area[f], a)
+
+
+@jit
+def _plane(vector_area, area, a):
+    """:func:`_face_plane` of a face's vector area (3-tuple) and area."""
+    inv = 1.0 / area
+    n = (vector_area[0] * inv, vector_area[1] * inv, vector_area[2] * inv)
     h = a[0] * n[0] + a[1] * n[1] + a[2] * n[2]
     return n, h * h
 
@@ -352,15 +358,14 @@ def face_in_ball_area(mesh, f, centre, radius2):
 
 
 @jit
-def crossing_area(vector_area, area, f, v, w, u, tp, tu, radius2):
-    """Exact area inside the ball of a triangle f = (v, w, u) whose corner v is inside and w outside.
+def crossing_area(face, v, w, u, tp, tu, radius2):
+    """Exact area inside the ball of a triangle (v, w, u) whose corner v is inside and w outside.
 
     Parameters
     ----------
-    vector_area, area : (m, 3), (m,) float64
-        :attr:`curv.Mesh.face_vector_areas`, :attr:`curv.Mesh.face_areas`.
-    f : int
-        The triangle, counter-clockwise (v, w, u): w follows v in it.
+    face : (vector area 3-tuple, area)
+        The triangle's row of :attr:`curv.Mesh.face_vector_areas` and its area
+        (:attr:`curv.Mesh.face_areas`); counter-clockwise (v, w, u): w follows v in it.
     v, w, u : (offset 3-tuple, squared length)
         The corners' offsets from the ball's centre and their squared lengths (v's at most
         ``radius2``, w's above it).
@@ -374,11 +379,12 @@ def crossing_area(vector_area, area, f, v, w, u, tp, tu, radius2):
     without its three-way test of which corners are in: u decides it.
     """
     (a, qv), (b, qw), (c, qu) = v, w, u
-    plane = _face_plane(vector_area, area, f, a)
+    vector_area, area = face
+    plane = _plane(vector_area, area, a)
     if not radius2 - plane[1] > 0.0:
         return 0.0
     if qu <= radius2:
-        part = _two_inside(c, qu, a, b, plane, radius2, 2.0 * area[f], tp)
+        part = _two_inside(c, qu, a, b, plane, radius2, 2.0 * area, tp)
     else:
         part = _one_inside(a, qv, b, qw, c, plane, radius2, tp, tu)
     part *= 0.5

@@ -217,7 +217,8 @@ def crossing_faces(mesh, v, centre, radius, crossings):
         out_h[leaving] = h
         out_w[leaving] = mesh.after[j]
         out_t[leaving] = tp
-        out_area[leaving] = crossing_area(mesh.vector_area, mesh.area, f, (a, qv), (b, qw), (c, qu), tp, tu, radius2)
+        face = ((mesh.vector_area[f, 0], mesh.vector_area[f, 1], mesh.vector_area[f, 2]), mesh.area[f])
+        out_area[leaving] = crossing_area(face, (a, qv), (b, qw), (c, qu), tp, tu, radius2)
         out_in[leaving] = 2 if qu <= radius2 else 1
         leaving += 1
     return leaving

@@ -34,7 +34,8 @@ from typing import Generator
 import numpy as np
 from numba.extending import overload
 
-from ..core.jit import JIT_OPTIONS, iter_chunks, jit, jit_parallel, launch, prange, rescaled, slice_bounds, threads
+from ..core.jit import (JIT_OPTIONS, iter_chunks, jit, jit_inlined, jit_parallel, launch, prange, rescaled, slice_bounds,
+                        threads)
 from ..core.mesh import Mesh
 from ..core.result import Principal
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns,
@@ -128,7 +129,9 @@ def fit_level_thread(fit, t):
     raise NotImplementedError("called from numba code only")
 
 
-@overload(fit_at, jit_options=JIT_OPTIONS)
+# inlined: the kernel calls the fit's own function, not a wrapper that would take every array of the
+# bundles again (a call's array arguments are reference-counted on entry and exit, per vertex)
+@overload(fit_at, jit_options=JIT_OPTIONS, inline="always")
 def _fit_at(fit, p, queue, count, r, geometry, out, errors, noise, thread):
     at = _functions(fit).at
     return lambda fit, p, queue, count, r, geometry, out, errors, noise, thread: at(
@@ -141,7 +144,7 @@ def _fit_thread(fit, t):
     return lambda fit, t: make(fit, t)
 
 
-@overload(fit_levels_at, jit_options=JIT_OPTIONS)
+@overload(fit_levels_at, jit_options=JIT_OPTIONS, inline="always")
 def _fit_levels_at(fit, p, walk, geometry, out, errors, walker, thread):
     levels_at = _functions(fit).levels_at
     return lambda fit, p, walk, geometry, out, errors, walker, thread: levels_at(
@@ -187,7 +190,7 @@ def _level_sums_solve(fit, sums):
     return lambda fit, sums: solve(fit, sums)
 
 
-@jit
+@jit_inlined
 def support_of(p, search, geometry, stamp, queue):
     """Vertex p's support in the ball of ``search.radius[p]`` (:func:`~curv.geometry.neighbourhood.ball_support`):
     ``queue[:count]``, p first. Returns ``(count, queue)``."""

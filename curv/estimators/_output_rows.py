@@ -16,7 +16,7 @@ import numpy as np
 from ..core.jit import jit
 from ..core.result import Principal
 
-__all__ = ["nan_row", "unset_principal", "LevelOutputs"]
+__all__ = ["nan_row", "flat_levels", "unset_principal", "LevelOutputs"]
 
 
 @jit
@@ -34,6 +34,11 @@ def nan_row(p, k1, k2, d1, d2):
     for c in range(3):
         d1[p, c] = math.nan
         d2[p, c] = math.nan
+
+
+def flat_levels(rows) -> tuple:
+    """Each (levels, n, ...) array of ``rows`` as a (levels n, ...) view."""
+    return tuple(a.reshape(a.shape[0] * a.shape[1], *a.shape[2:]) for a in rows)
 
 
 def unset_principal(n: int) -> Principal:
@@ -61,6 +66,12 @@ class LevelOutputs:
     def rows(self) -> tuple:
         """``(k1, k2, d1, d2, reason)``."""
         return self.k1, self.k2, self.d1, self.d2, self.reason
+
+    @property
+    def flat_rows(self) -> tuple:
+        """:attr:`rows` with the levels' rows one after another, (levels n,) and (levels n, 3) views:
+        row ``level * n + p`` is vertex p's at ``level``, written without a view per level."""
+        return flat_levels(self.rows)
 
     def principal(self, level: int) -> Principal:
         return Principal(k1=self.k1[level], k2=self.k2[level], d1=self.d1[level], d2=self.d2[level],

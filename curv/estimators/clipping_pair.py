@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit_parallel, launch, prange, slice_bounds, threads
+from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, slice_bounds, threads
 from ..core.mesh import Mesh
 from ..geometry.neighbourhood import new_queues, new_scratch, start_ball_support, widen_ball_support
 from . import csm, icc
@@ -70,12 +70,29 @@ def _flat_bundle(name: str, terms: type, *fields: str) -> type:
 CsmPass = _flat_bundle("CsmPass", csm.CsmTerms, "fstamps", "estamps", "k1", "k2", "d1", "d2", "reason")
 """csm in the pass: :class:`~curv.estimators.csm.CsmTerms`' fields; ``fstamps`` (parts, m) and ``estamps``
 (parts, e), zeroed face and edge stamps of :func:`curv.estimators.csm.walk_sums` (int32 or int64, a row per
-thread); the outputs ``k1``, ``k2``, ``d1``, ``d2``, ``reason`` (levels, ...:
-:class:`~curv.estimators._output_rows.LevelOutputs`)."""
+thread); the outputs ``k1``, ``k2``, ``d1``, ``d2``, ``reason`` with the levels' rows one after another
+((levels n,) and (levels n, 3): :attr:`~curv.estimators._output_rows.LevelOutputs.flat_rows`; row
+``level * n + p``)."""
 
 IccPass = _flat_bundle("IccPass", icc.IccTerms, "fstamps", "k1", "k2", "d1", "d2", "mean", "gaussian", "reason")
 """icc in the pass: :class:`~curv.estimators.icc.IccTerms`' fields, ``fstamps`` (parts, m) as csm's, and the
-outputs of :class:`~curv.estimators.icc.IccOutputs`."""
+outputs of :class:`~curv.estimators.icc.IccOutputs` (its ``flat_rows``, as csm's)."""
+
+
+@jit
+def _csm_rows(csm_pass):
+    """csm's outputs ``(k1, k2, d1, d2, reason)`` from its bundle (None when not asked for)."""
+    if csm_pass is None:
+        return None
+    return csm_pass.k1, csm_pass.k2, csm_pass.d1, csm_pass.d2, csm_pass.reason
+
+
+@jit
+def _icc_rows(icc_pass):
+    """icc's outputs ``(k1, k2, d1, d2, mean, gaussian, reason)`` from its bundle (None when not asked for)."""
+    if icc_pass is None:
+        return None
+    return icc_pass.k1, icc_pass.k2, icc_pass.d1, icc_pass.d2, icc_pass.mean, icc_pass.gaussian, icc_pass.reason
 
 
 @jit_parallel
@@ -83,8 +100,20 @@ def _clip_chunk(centres, lo, hi, radii, mesh, walk, scratch, normals, csm_pass, 
     """csm and icc (:class:`CsmPass`, :class:`IccPass`, or
     None when not asked for) at every level of ``radii`` (levels, n) around ``centres[lo:hi]``."""
     parts = scratch.vstamps.shape[0]
-    levels = radii.shape[0]
+    levels, n = radii.shape
     for t in prange(parts):
+        # what the centres read of the estimators' bundles, taken out once per thread: an array taken
+        # out of a bundle for a call (or a row view made) per centre costs an atomic reference
+        # count on a record every thread shares
+        c_rows, i_rows = _csm_rows(csm_pass), _icc_rows(icc_pass)
+        if csm_pass is not None:
+            c_star = csm_pass.star
+            c_clean = csm_pass.clean
+            c_half = csm_pass.half_scale
+        if icc_pass is not None:
+            i_star = icc_pass.star
+            i_clean = icc_pass.clean
+            i_measures = icc_pass.measures
         work = (np.empty((3, 3)), np.empty((4, 3)), np.empty(8))  # csm's tensor and its eigenpairs
         c_acc = np.empty(csm.SUMS)  # csm: the support's star sums so far
         c_sums = np.empty(csm.SUMS)  # T = sum_e beta(e) |e ∩ B| ê êᵀ (upper triangle), area(B ∩ mesh)
@@ -112,9 +141,9 @@ def _clip_chunk(centres, lo, hi, radii, mesh, walk, scratch, normals, csm_pass, 
                                                           (count, head, pending), (waiting, waiting_d2))
                 hit = support_bits(mesh, queue, done, count, hit)  # the flags are the vertices', the same for both
                 if csm_pass is not None:
-                    c_exact = add_star_rows(queue, done, count, csm_pass.star, csm_pass.clean, c_exact, c_acc)
+                    c_exact = add_star_rows(queue, done, count, c_star, c_clean, c_exact, c_acc)
                 if icc_pass is not None:
-                    i_exact = add_star_rows(queue, done, count, icc_pass.star, icc_pass.clean, i_exact, i_acc)
+                    i_exact = add_star_rows(queue, done, count, i_star, i_clean, i_exact, i_acc)
                 if c_exact or i_exact:
                     # every element inside the ball whole is in the star sums; only the last level's rim
                     # and the new vertices may have edges leaving it: their crossing faces are clipped
@@ -130,30 +159,26 @@ def _clip_chunk(centres, lo, hi, radii, mesh, walk, scratch, normals, csm_pass, 
                         kept += 1
                         leaving = crossing_faces(mesh, v, at, r, crossings)
                         if csm_pass is not None and c_exact:
-                            csm.add_crossings(c_sums, v, at, crossings, leaving, mesh, csm_pass.half_scale)
+                            csm.add_crossings(c_sums, v, at, crossings, leaving, mesh, c_half)
                         if icc_pass is not None and i_exact:
-                            icc.add_crossings(i_sums, crossings, leaving, mesh, icc_pass.measures)
+                            icc.add_crossings(i_sums, crossings, leaving, mesh, i_measures)
                     rim_count = kept
                 centre = (p, r ** 2, level_mark(p, level, levels))
+                row = level * n + p  # the outputs' row of (level, p)
                 if csm_pass is not None:
                     level_hit = hit
                     if not c_exact:
                         c_sums[:] = 0.0
                         level_hit |= csm.walk_sums(centre, (queue, count), mesh, walk, csm_pass,
                                                    (csm_pass.estamps[t], csm_pass.fstamps[t]), c_sums)
-                    cp = csm_pass
-                    csm.finish(p, c_sums, level_hit, normals, work,
-                               (cp.k1[level], cp.k2[level], cp.d1[level], cp.d2[level], cp.reason[level]))
+                    csm.finish((p, row), c_sums, level_hit, normals, work, c_rows)
                 if icc_pass is not None:
                     level_hit = hit
                     if not i_exact:
                         i_sums[:] = 0.0
                         level_hit |= icc.walk_sums(centre, (queue, count), mesh, walk, icc_pass.measures,
                                                    icc_pass.fstamps[t], i_sums)
-                    ip = icc_pass
-                    icc.finish(p, i_sums, level_hit, normals, ip.from_measures,
-                               (ip.k1[level], ip.k2[level], ip.d1[level], ip.d2[level], ip.mean[level],
-                                ip.gaussian[level], ip.reason[level]))
+                    icc.finish((p, row), i_sums, level_hit, normals, icc_pass.from_measures, i_rows)
                 done = count
 
 
@@ -180,11 +205,11 @@ def _run(mesh: Mesh, centres: np.ndarray, radii: np.ndarray, walk, touched: np.n
     if csm_terms is not None:
         outputs["csm"] = LevelOutputs(levels, n)
         csm_pass = CsmPass(*csm_terms, _stamps(parts, mesh.n_faces if csm_terms.walk else 0, levels, n),
-                               _stamps(parts, csm_terms.beta_scale.size, levels, n), *outputs["csm"].rows)
+                           _stamps(parts, csm_terms.beta_scale.size, levels, n), *outputs["csm"].flat_rows)
     if icc_terms is not None:
         outputs["icc"] = icc.IccOutputs(levels, n)
         icc_pass = IccPass(*icc_terms, _stamps(parts, mesh.n_faces if icc_terms.walk else 0, levels, n),
-                               *outputs["icc"].rows)
+                           *outputs["icc"].flat_rows)
     yield 0.0
 
     def run(lo: int, hi: int) -> None:

@@ -408,11 +408,13 @@ def principal_from_tensor(tensor, normal, vectors, out):
 
 
 @jit
-def finish(p, sums, hit, normals, work, rows):
-    """Centre p's principal curvatures from its sums (7,: T's upper triangle, the area) into row p of
-    ``rows = (k1, k2, d1, d2, reason)`` (one level's outputs); ``hit`` the support's flags
+def finish(at, sums, hit, normals, work, rows):
+    """Centre p's principal curvatures from its sums (7,: T's upper triangle, the area) into row
+    ``row`` of ``rows = (k1, k2, d1, d2, reason)``, ``at = (p, row)`` (the pass's outputs hold every
+    level's rows: :class:`~curv.estimators.clipping_pair.CsmPass`); ``hit`` the support's flags
     (:func:`~curv.estimators._ball_sums.support_reason`), ``work = (tensor (3, 3), vectors (4, 3),
     res (8,))`` the thread's scratch."""
+    p, row = at
     k1, k2, d1, d2, reason = rows
     tensor, vectors, res = work
     nx, ny, nz, normal_ok = vertex_normal(normals, p)
@@ -425,15 +427,15 @@ def finish(p, sums, hit, normals, work, rows):
         tensor[0, 2] = tensor[2, 0] = sums[2] * inv
         tensor[1, 2] = tensor[2, 1] = sums[4] * inv
         principal_from_tensor(tensor, (nx, ny, nz), vectors, res)
-        k1[p], k2[p] = res[0], res[1]
+        k1[row], k2[row] = res[0], res[1]
         for c in range(3):
-            d1[p, c] = res[2 + c]
-            d2[p, c] = res[5 + c]
+            d1[row, c] = res[2 + c]
+            d2[row, c] = res[5 + c]
         if not (math.isfinite(res[2]) and math.isfinite(res[3]) and math.isfinite(res[4])):
             singular = True
     else:
-        nan_row(p, k1, k2, d1, d2)
-    reason[p] = support_reason(singular, hit, normal_ok)
+        nan_row(row, k1, k2, d1, d2)
+    reason[row] = support_reason(singular, hit, normal_ok)
 
 
 # ---------------------------------------------------------------------------- the estimator

@@ -81,7 +81,7 @@ from ._ball_sums import CLIPPING_PASS, DEGENERATE_BIT, add_row, support_reason, 
 from ..core.small_linalg import sym3_bilinear
 from ._frames import tangent_frame
 from ._principal import store_principal
-from ._output_rows import LevelOutputs, nan_row
+from ._output_rows import LevelOutputs, flat_levels, nan_row
 from .registry import SHARED_PASSES, EstimatorSpec, register
 
 __all__ = ["iter_icc", "icc_terms", "IccTerms", "icc_mean_gaussian", "face_measures", "star_measures", "walk_sums",
@@ -328,12 +328,14 @@ def add_crossings(sums, crossings, leaving, mesh, measures):
 
 # ---------------------------------------------------------------------------- 4. measures to curvatures
 @jit
-def finish(p, sums, hit, normals, from_measures, rows):
-    """Centre p's curvatures from its nine sums, into row p of ``rows``.
+def finish(at, sums, hit, normals, from_measures, rows):
+    """Centre p's curvatures from its nine sums, into row ``row`` of ``rows``.
 
     Parameters
     ----------
-    p : int
+    at : (p, row)
+        The centre and its row in ``rows`` (the pass's outputs hold every level's rows:
+        :class:`~curv.estimators.clipping_pair.IccPass`).
     sums : (9,) float64
         mu0, mu1, mu2 and M's upper triangle, summed over the ball.
     hit : int
@@ -342,26 +344,27 @@ def finish(p, sums, hit, normals, from_measures, rows):
     from_measures : bool
         k1, k2 from H and K (else M's eigenvalues).
     rows : (k1, k2, d1, d2, mean, gaussian, reason)
-        One level's outputs (:class:`IccOutputs`).
+        The outputs (:attr:`IccOutputs.flat_rows`).
     """
+    p, row = at
     k1, k2, d1, d2, mean, gaussian, reason = rows
     nx, ny, nz, normal_ok = vertex_normal(normals, p)
-    mean[p] = gaussian[p] = math.nan
+    mean[row] = gaussian[row] = math.nan
     mu0, s1, s2 = sums[0], sums[1], sums[2]
     total = 0.0
     for c in range(MEASURES):
         total += sums[c]
     singular = not (mu0 > 0.0 and math.isfinite(total))
     if not singular and normal_ok:
-        h = mean[p] = 0.5 * s1 / mu0
-        kk = gaussian[p] = s2 / mu0
+        h = mean[row] = 0.5 * s1 / mu0
+        kk = gaussian[row] = s2 / mu0
         # W = M / mu0 in the tangent frame (U, V) of the vertex normal
         ux, uy, uz, vx, vy, vz = tangent_frame(nx, ny, nz)
         m = (sums[3], sums[4], sums[5], sums[6], sums[7], sums[8])  # M's upper triangle
         e = sym3_bilinear(m, (ux, uy, uz), (ux, uy, uz)) / mu0
         f_ = sym3_bilinear(m, (ux, uy, uz), (vx, vy, vz)) / mu0
         g = sym3_bilinear(m, (vx, vy, vz), (vx, vy, vz)) / mu0
-        store_principal(p, (e, f_, g), (ux, uy, uz, vx, vy, vz), k1, k2, d1, d2)
+        store_principal(row, (e, f_, g), (ux, uy, uz, vx, vy, vz), k1, k2, d1, d2)
         if from_measures:
             # k = H ± sqrt(H² - K); the directions stay those of M. A discriminant within
             # rounding of H² and K is an umbilic: its square root would turn 1e-16 into 1e-8.
@@ -370,13 +373,13 @@ def finish(p, sums, hit, normals, from_measures, rows):
             if disc <= 64.0 * EPS * (h * h + abs(kk)):
                 disc = 0.0
             rad = math.sqrt(disc)
-            k1[p] = h + rad
-            k2[p] = h - rad
-        if not (math.isfinite(k1[p]) and math.isfinite(k2[p])):
+            k1[row] = h + rad
+            k2[row] = h - rad
+        if not (math.isfinite(k1[row]) and math.isfinite(k2[row])):
             singular = True
     else:
-        nan_row(p, k1, k2, d1, d2)
-    reason[p] = support_reason(singular, hit, normal_ok)
+        nan_row(row, k1, k2, d1, d2)
+    reason[row] = support_reason(singular, hit, normal_ok)
 
 
 @dataclass
@@ -400,6 +403,11 @@ class IccOutputs(LevelOutputs):
     def rows(self) -> tuple:
         """``(k1, k2, d1, d2, mean, gaussian, reason)``."""
         return self.k1, self.k2, self.d1, self.d2, self.mean, self.gaussian, self.reason
+
+    @property
+    def flat_rows(self) -> tuple:
+        """:attr:`rows` with the levels' rows one after another (views)."""
+        return flat_levels(self.rows)
 
     def principal(self, level: int) -> IccPrincipal:
         return IccPrincipal(k1=self.k1[level], k2=self.k2[level], d1=self.d1[level], d2=self.d2[level],

@@ -45,7 +45,7 @@ import numpy as np
 
 from ..core.errors import EstimatorError
 from ..core.filled import filled
-from ..core.jit import iter_chunks, jit, launch, threads
+from ..core.jit import iter_chunks, jit, jit_inlined, launch, threads
 from ..core.mesh import Mesh
 from ..core.result import Principal
 from ..core.validity import OK
@@ -84,21 +84,25 @@ def unknowns(degree: int) -> int:
     return (degree + 1) * (degree + 2) // 2
 
 
-@jit
+@jit_inlined
 def _jet_fit_at(fit, p, level, queue, count, r2, points, out, errors, scratch):
     """The jet at vertex p over its support ``queue[:count]`` in the ball of squared radius ``r2``:
     row p of ``out`` (:class:`~curv.estimators._principal.Rows`) and, with ``errors``, of row
     ``level`` of the standard errors; ``fit = JetFit(degree, smooth)``, ``scratch = (the fit's,
-    grads (2, K))``."""
-    fitted, grads = scratch
-    code, h, ww = fit_jet(p, count, queue, points, fit.degree, fitted, r2 if fit.smooth else 0.0)
+    grads (2, K))``.
+
+    Inlined, as :func:`_jet_at` is, so that the per-vertex path calls the fit's steps directly: a
+    wrapper between them took every array of the bundles as arguments, reference-counted at each
+    call. The scratch is read by index, not unpacked (docs/ARCHITECTURE.md, performance conventions)."""
+    code, h, ww = fit_jet(p, count, queue, points, fit.degree, scratch[0], r2 if fit.smooth else 0.0)
     if code == OK:
-        code = jet_principal(fitted, h, points.normals, out, p)
-        jet_errors(p, level, errors, fitted, (h, count, fit.degree, ww), grads)
+        code = jet_principal(scratch[0], h, points.normals, out, p)
+        if errors is not None:
+            jet_errors(p, level, errors, scratch[0], (h, count, fit.degree, ww), scratch[1])
     out.reason[p] = code
 
 
-@jit
+@jit_inlined
 def _jet_at(fit, p, queue, count, r, points, out, errors, noise, thread):
     """The jet at vertex p (:func:`~curv.estimators._fit_driver.fit_kernel`; ``errors`` (1, n) each
     or None; ``noise`` is not read)."""
