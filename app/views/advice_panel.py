@@ -49,10 +49,14 @@ VALID_TIP = ("Share of this mesh's vertices the call gives a value at: border ve
              "are lost. Calls that lose more than 2 % more of the mesh than the best one rank after the rest.")
 COLUMNS = (("Estimator", "Registry name of the estimator (hover a row for its method)"),
            ("Range", RANGE_TIP),
-           ("Options", OPTIONS_TIP),
+           ("Measured", MEASURED_TIP),
            ("Valid", VALID_TIP),
            ("Predicted", ERREL_TIP),
-           ("Measured", MEASURED_TIP))
+           ("Options", OPTIONS_TIP))
+"""The ranking's columns, in order: what the ranking goes by (the measured error with its spread) comes
+right after the call, where a dock as narrow as 360 px still shows it; the options' words last."""
+COLUMN = {title: c for c, (title, _) in enumerate(COLUMNS)}
+"""Column index by title."""
 
 
 class AdvicePanel(QWidget):
@@ -95,6 +99,7 @@ class AdvicePanel(QWidget):
         self.cancel_button.clicked.connect(self.cancel_requested)
         self.check = QLabel()
         self.check.setWordWrap(True)
+        self.check.setTextFormat(Qt.TextFormat.PlainText)
         self.check.setObjectName("advice_check")
         self.check.setToolTip("What the self-check did: how many calls it measured on how many noisy copies, "
                               "and the noise it measured on the input")
@@ -118,7 +123,7 @@ class AdvicePanel(QWidget):
             self._features_form.addRow(label, value)
             self.feature_labels[name], self.feature_values[name] = label, value
 
-        self.ranking_box = QGroupBox("Ranking by predicted error, best first")
+        self.ranking_box = QGroupBox("Ranking by predicted error")
         self.table = QTableWidget(0, len(COLUMNS))
         for col, (title, tip) in enumerate(COLUMNS):
             item = QTableWidgetItem(title)
@@ -132,13 +137,11 @@ class AdvicePanel(QWidget):
         self.table.verticalHeader().setDefaultSectionSize(self.fontMetrics().height() + 6)
         self.table.verticalHeader().setToolTip("Rank; ★ marks the recommendation")
         header = self.table.horizontalHeader()
-        header.setSectionResizeMode(0, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(1, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(2, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(3, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(4, QHeaderView.ResizeMode.ResizeToContents)
-        header.setSectionResizeMode(5, QHeaderView.ResizeMode.Stretch)
-        self.table.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        for c in range(len(COLUMNS) - 1):
+            header.setSectionResizeMode(c, QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(len(COLUMNS) - 1, QHeaderView.ResizeMode.Stretch)
+        # in a narrow dock the options' words scroll into view rather than being cut off unseen
+        self.table.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAsNeeded)
         self.table.setMinimumHeight(5 * (self.fontMetrics().height() + 6))  # the header and four rows
         # the table takes the height left over (its own scroll bar), never asks for more: the dock's
         # scroll area would otherwise add a second scroll bar around the whole panel
@@ -163,8 +166,10 @@ class AdvicePanel(QWidget):
         lay.addWidget(self._running_row)
         lay.addWidget(self.why)
         lay.addWidget(self.check)
-        lay.addWidget(self.features_box)
+        # the ranking and its Apply before the measurements: on a 768 px screen the dock shows the
+        # choice without scrolling, the measured features below it are what a person reads next
         lay.addWidget(self.ranking_box, 1)
+        lay.addWidget(self.features_box)
         lay.addStretch(0)  # takes the height only while the ranking is hidden: the text stays on top
 
         self.table.itemSelectionChanged.connect(self._update_apply)
@@ -271,8 +276,11 @@ class AdvicePanel(QWidget):
         what = "point cloud" if record.advice.is_cloud else "mesh"
         self.features_box.setTitle(f"Measured on the {what}" if current else f"Measured on the earlier {what} (stale)")
         checked = record.advice.checked
-        self.ranking_box.setTitle("Ranking by measured error (checked calls first), best first" if checked
-                                  else "Ranking by predicted error, best first")
+        # a short title: a group box never wraps its title, and its width is the dock's minimum
+        self.ranking_box.setTitle("Ranking by measured error" if checked else "Ranking by predicted error")
+        self.ranking_box.setToolTip("Best first: the checked calls by the error measured on noisy copies of the "
+                                    "input's smooth twin, then the others by the table's prediction" if checked else
+                                    "Best first, by the error the study's table predicts for such an input")
         self._update_apply()
 
     def _fill(self, record) -> None:
@@ -287,7 +295,7 @@ class AdvicePanel(QWidget):
             return
         advice = record.advice
         self.why.setText(advice.why)
-        self.check.setText(escape(check_text(advice)))
+        self.check.setText(check_text(advice))
         shown = set()
         for row in feature_rows(advice.features):
             self.feature_values[row.label].setText(row.text)
@@ -304,14 +312,14 @@ class AdvicePanel(QWidget):
         for r, row in enumerate(self._rows):
             spec = ESTIMATORS.get(row.method)
             measured = row.measured_text + (" ≈" if row.within_noise else "")
-            cells = (row.method, row.range_label, row.options_short, row.valid_text, row.erel_text, measured)
-            tips = (estimator_tooltip(spec) if spec is not None else row.method, RANGE_TIP, OPTIONS_TIP, VALID_TIP,
-                    ERREL_TIP, MEASURED_TIP)
-            for c, (text, tip) in enumerate(zip(cells, tips)):
-                item = QTableWidgetItem(text)
+            cells = {"Estimator": row.method, "Range": row.range_label, "Measured": measured,
+                     "Valid": row.valid_text, "Predicted": row.erel_text, "Options": row.options_short}
+            tips = dict(COLUMNS, Estimator=estimator_tooltip(spec) if spec is not None else row.method)
+            for title, c in COLUMN.items():
+                item = QTableWidgetItem(cells[title])
                 item.setToolTip(("<b>Recommended</b><br>" if row.recommended else "") + f"<b>{escape(row.label)}</b><br>"
-                                + tip)
-                if c >= 3:
+                                + tips[title])
+                if title in ("Measured", "Valid", "Predicted"):
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 if row.recommended:
                     item.setFont(bold)

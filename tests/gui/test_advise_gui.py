@@ -12,7 +12,7 @@ from PySide6.QtGui import QColor, QKeySequence
 import curv
 
 from app.model import FileSource, Pane, SurfaceSource
-from app.views.advice_panel import RECOMMENDED_BACKGROUND
+from app.views.advice_panel import COLUMN, RECOMMENDED_BACKGROUND
 from tests.gui.conftest import TIMEOUT_MS
 
 pytestmark = pytest.mark.gui
@@ -79,27 +79,34 @@ def test_advise_runs_in_the_background_and_fills_the_panel(qtbot, window, ui):
 
     table = panel.table
     assert table.rowCount() == len(expected.ranking) > 5
-    shown = [tuple(table.item(r, c).text() for c in range(5)) for r in range(table.rowCount())]
-    assert [(c.method, f"R{c.range}") for c in expected.ranking] == [s[:2] for s in shown]
-    assert [row.options_short for row in panel.rows] == [s[2] for s in shown]
+    shown = [{title: table.item(r, c).text() for title, c in COLUMN.items()} for r in range(table.rowCount())]
+    assert [(c.method, f"R{c.range}") for c in expected.ranking] == [(s["Estimator"], s["Range"]) for s in shown]
+    assert [row.options_short for row in panel.rows] == [s["Options"] for s in shown]
     assert [dict(row.options) for row in panel.rows] == [c.options for c in expected.ranking]
-    assert {"deg 4", "fit R4", ""} <= {s[2] for s in shown}
-    errors = [float(s[4]) for s in shown]
-    shares = [float(s[3].rstrip(" %")) / 100 for s in shown]
+    assert {"deg 4", "fit R4", ""} <= {s["Options"] for s in shown}
+    errors = [float(s["Predicted"]) for s in shown]
+    shares = [float(s["Valid"].rstrip(" %")) / 100 for s in shown]
     np.testing.assert_allclose(shares, [c.valid_share for c in expected.ranking], atol=0.006)
     # checked: the measured calls first, by their measured error (shown with its spread over the copies)
     assert expected.checked and panel.check.text().startswith("checked ")
+    assert "mesh's smooth twin" in panel.check.text() and "&#" not in panel.check.text()
+    # the whole panel fits the dock at its narrowest: nothing cut off at the right (the ranking's title
+    # once made the panel 383 px wide in a 358 px dock); the measured error is a column a person sees
+    scroll = window.docks["advice"].widget()
+    assert panel.minimumSizeHint().width() <= 360 - 20
+    assert panel.width() <= scroll.viewport().width()
+    assert table.columnViewportPosition(COLUMN["Measured"]) < table.viewport().width() // 2
     measured = [c for c in expected.ranking if c.measured is not None and c.measured.ok]
     assert len(measured) >= 3 and expected.ranking[: len(measured)] == measured
     # by measured error, the table's first choice kept first where the copies cannot tell them apart
     assert [c.measured.erel for c in measured[1:]] == sorted(c.measured.erel for c in measured[1:])
     assert measured[0].measured.erel == min(c.measured.erel for c in measured) or measured[1].within_noise
-    shown_measured = [table.item(r, 5).text() for r in range(len(measured))]
+    shown_measured = [table.item(r, COLUMN["Measured"]).text() for r in range(len(measured))]
     assert [t.split()[0] for t in shown_measured] == [f"{c.measured.erel:.3g}" for c in measured]
     assert all(f"×{c.measured.spread:.2f}" in t for c, t in zip(measured, shown_measured))
-    assert all(table.item(r, 5).text() == "" for r in range(len(measured), table.rowCount()))
+    assert all(table.item(r, COLUMN["Measured"]).text() == "" for r in range(len(measured), table.rowCount()))
     np.testing.assert_allclose(errors, [c.expected_erel for c in expected.ranking], rtol=5e-3)
-    assert shown[0][:2] == (expected.method, f"R{expected.range}")               # the recommendation on top
+    assert (shown[0]["Estimator"], shown[0]["Range"]) == (expected.method, f"R{expected.range}")               # the recommendation on top
     assert table.item(0, 0).font().bold() and not table.item(1, 0).font().bold()
     assert table.item(0, 1).background().color() == QColor(RECOMMENDED_BACKGROUND)
     assert "★" in table.verticalHeaderItem(0).text() and "★" not in table.verticalHeaderItem(1).text()
