@@ -111,3 +111,22 @@ def test_cli_says_which_orientation_ran(tmp_path, capsys):
     assert (nz[np.isfinite(nz)] >= 0).all()
     code = main(["estimate", str(laspy_sample("vegetation_1_3.las")), "-m", "qs", "-q", "--orient-normals", "top"])
     assert code == 0 and "oriented by propagation from each part's top, turned up (Hoppe)" in capsys.readouterr().out
+
+
+def test_up_does_not_read_the_free_sign_of_grazing_normals():
+    """A grazing normal's sign is the fit's free choice: flipping every grazing normal changes no
+    point's verdict (it once did on simple1_4.las, whose 81 exactly horizontal normals voted on
+    their neighbours). Here a steep slope (nz = 0.31, decided) meets a band of horizontal normals."""
+    from curv.point_normals.orientation import _orient_up
+
+    rng = np.random.default_rng(5)
+    points = np.column_stack([rng.uniform(-1, 1, 4000), rng.uniform(-1, 1, 4000), np.zeros(4000)])
+    band = points[:, 0] > 0.0
+    normals = np.where(band[:, None], [1.0, 0.0, 0.0], [0.95, 0.0, 0.312])
+    cloud = curv.PointCloud(points, georeferenced=True)
+    finite = np.ones(4000, bool)
+    flipped = normals.copy()
+    flipped[band] *= -1.0
+    verdicts = [_orient_up(cloud, n.copy(), finite) for n in (normals, flipped)]
+    np.testing.assert_array_equal(verdicts[0], verdicts[1])
+    assert verdicts[0][band].all() and not verdicts[0][~band].any()

@@ -127,8 +127,9 @@ def _cloud_rows(f) -> list[FeatureRow]:
         FeatureRow("Noise", noise,
                    "Noise along the normal measured about the cloud's smooth twin (the leverage-corrected residual "
                    "of its wide polynomial fits), in spacings; the check's noisy copies are given this noise."),
-        FeatureRow("Normals", "from the file" if f.has_normals else "none (jet fits, oriented up)",
-                   "Where the normals come from: the file's, or fitted (jet at R2, oriented up). With the file's "
+        FeatureRow("Normals", "from the file" if f.has_normals else f"none (jet fits, oriented {f.orientation_words})",
+                   "Where the normals come from: the file's, or fitted (jet at R2, oriented up on a georeferenced "
+                   "scan, else from each part's top). With the file's "
                    "normals the candidates run with them and with fitted ones."),
         FeatureRow("Rim", f"{percent_text(f.border_share)} of the points",
                    "Share of the points on the rim of an open scan (or repeats of a point): no value there."),

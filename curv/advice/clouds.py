@@ -60,6 +60,9 @@ class CloudFeatures:
     noise : float
         Noise along the normal measured about the cloud's smooth twin, in spacings (NaN where the
         check did not run; 0 where it is below what the twin resolves).
+    orientation : str
+        The rule that orients the normals fitted to a cloud without its own
+        (:func:`curv.point_normals.default_orientation`: ``"up"`` on a georeferenced scan, else ``"top"``).
     """
 
     n_points: int
@@ -67,6 +70,14 @@ class CloudFeatures:
     border_share: float
     has_normals: bool
     noise: float = float("nan")
+    orientation: str = "top"
+
+    @property
+    def orientation_words(self) -> str:
+        """The orientation rule in the summaries' words."""
+        from ..point_normals.orientation import describe_orientation
+
+        return describe_orientation(self.orientation)
 
     @property
     def n_vertices(self) -> int:
@@ -84,12 +95,13 @@ def usable_points(cloud: PointCloud) -> np.ndarray:
 def cloud_features(cloud: PointCloud, usable: np.ndarray) -> CloudFeatures:
     """:class:`CloudFeatures` without the noise (the check measures it)."""
     from ..core.ranges import point_spacing
+    from ..point_normals.orientation import default_orientation
 
     spacing = point_spacing(cloud)
     finite = spacing[np.isfinite(spacing)]
     return CloudFeatures(n_points=cloud.n_points, spacing=float(np.median(finite)) if finite.size else float("nan"),
                          border_share=float(np.mean(~usable)) if usable.size else 0.0,
-                         has_normals=cloud.normals is not None)
+                         has_normals=cloud.normals is not None, orientation=default_orientation(cloud))
 
 
 def cloud_candidates(cloud: PointCloud, features: CloudFeatures, share: float) -> list:

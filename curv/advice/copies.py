@@ -77,7 +77,7 @@ def within_reach(copy: Mesh | PointCloud, twin, reach: np.ndarray) -> tuple[Mesh
         return copy, rows, twin.centres
     new = np.full(x.shape[0], -1, np.int64)
     new[rows] = np.arange(rows.size)
-    if isinstance(copy, Mesh):
+    if support_of(copy).has_faces:
         faces = copy.faces
         local = np.where(faces >= 0, new[np.maximum(faces, 0)], -1)
         whole = np.all((local >= 0) | (faces < 0), axis=1)

@@ -11,7 +11,7 @@ def feature_lines(name: str, adv) -> list[str]:
     f = adv.features
     if adv.is_cloud:
         out.append(f"{name}: {f.n_points:,} points; spacing {f.spacing:.4g} (median); "
-                   f"{'normals from the file' if f.has_normals else 'no normals (fitted, oriented up)'}; "
+                   f"{'normals from the file' if f.has_normals else 'no normals (fitted, oriented ' + f.orientation_words + ')'}; "
                    f"{100 * f.border_share:.1f} % on the rim")
         if f.noise == f.noise:
             out.append(f"  noise        {f.noise:.3g} spacings along the normal (about the smooth twin)")

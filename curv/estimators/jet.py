@@ -47,6 +47,7 @@ from ..core.errors import EstimatorError
 from ..core.filled import filled
 from ..core.jit import iter_chunks, jit, jit_inlined, launch, threads
 from ..core.mesh import Mesh
+from ..core.support import support_of
 from ..core.result import Principal
 from ..core.validity import OK
 from ..geometry.neighbourhood import (all_centres, blocked_vertices, coordinate_columns, expansion_adjacency, new_scratch,
@@ -250,7 +251,7 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     degree = check_degree(degree)
     smooth = check_weights(weights)
     levels = np.ndim(radii) == 2
-    if levels and (check_width(width) or not isinstance(mesh, Mesh)):
+    if levels and (check_width(width) or not support_of(mesh).has_faces):
         # the adaptive width, and a point cloud's grid: a fit per level
         out = []
         for level in range(len(radii)):

@@ -239,8 +239,12 @@ def _orient_up(cloud: PointCloud, out: np.ndarray, finite: np.ndarray) -> np.nda
     k = nearest.shape[1]
     indptr = np.arange(0, k * nearest.shape[0] + 1, k, dtype=np.int64)
     ambiguous = np.zeros(out.shape[0], bool)
-    launch(_opposed, indptr, nearest.reshape(-1), np.where(finite[:, None], out, 0.0), AGREE_COSINE, ambiguous)
-    ambiguous |= ~(np.abs(out[:, 2]) >= GRAZING_COSINE)
+    # a grazing normal's sign is the fit's free choice, not a decision: it does not vote on its
+    # neighbours (a zero vector agrees and opposes nobody), so no point's verdict depends on it
+    grazing = ~(np.abs(out[:, 2]) >= GRAZING_COSINE)
+    voters = finite & ~grazing
+    launch(_opposed, indptr, nearest.reshape(-1), np.where(voters[:, None], out, 0.0), AGREE_COSINE, ambiguous)
+    ambiguous |= grazing
     ambiguous &= finite
     out[ambiguous] = np.nan
     return ambiguous
