@@ -37,7 +37,7 @@ from numba.extending import overload
 from ..core.jit import (JIT_OPTIONS, iter_chunks, jit, jit_inlined, jit_parallel, launch, prange, rescaled, slice_bounds,
                         threads)
 from ..core.mesh import Mesh
-from ..core.support import support_of
+from ..core.support import support_of as input_support  # not this module's support_of (a walk)
 from ..core.result import Principal
 from ..geometry.neighbourhood import (all_centres, ball_support, blocked_vertices, coordinate_columns,
                                       expansion_adjacency, new_queues, new_scratch, start_ball_support,
@@ -384,7 +384,7 @@ def run_fit(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, fit, *, chunk: i
     search = Search(radius, indptr, indices, new_scratch(n, slices), new_queues(n, slices))
     out = new_rows(n)
     errors = new_errors(n, most_written=whole) if standard_errors else None
-    on_mesh = standard_errors and support_of(mesh).has_faces  # pooling reads edge neighbours
+    on_mesh = standard_errors and input_support(mesh).has_faces  # pooling reads edge neighbours
     model = NoiseModel(*rings, new_scratch(n, slices)) if on_mesh and noise_model == "normals" else None
     mesh_errors = ON_MESH if on_mesh else None
 
@@ -443,7 +443,7 @@ def run_fit_levels(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, fit, *,
     """
     radii = np.ascontiguousarray(radii, dtype=np.float64)
     count = radii.shape[0]
-    if standard_errors or _FITS[type(fit)].levels_at is None or not support_of(mesh).has_faces:
+    if standard_errors or _FITS[type(fit)].levels_at is None or not input_support(mesh).has_faces:
         out = []
         for level in range(count):
             gen = run_fit(mesh, normals, radii[level], fit, chunk=chunk, centres=centres, features=features,
