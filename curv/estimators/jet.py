@@ -85,16 +85,16 @@ def unknowns(degree: int) -> int:
     return (degree + 1) * (degree + 2) // 2
 
 
-@jit_inlined
+@jit
 def _jet_fit_at(fit, p, level, queue, count, r2, points, out, errors, scratch):
     """The jet at vertex p over its support ``queue[:count]`` in the ball of squared radius ``r2``:
     row p of ``out`` (:class:`~curv.estimators._principal.Rows`) and, with ``errors``, of row
     ``level`` of the standard errors; ``fit = JetFit(degree, smooth)``, ``scratch = (the fit's,
     grads (2, K))``.
 
-    Inlined, as :func:`_jet_at` is, so that the per-vertex path calls the fit's steps directly: a
-    wrapper between them took every array of the bundles as arguments, reference-counted at each
-    call. The scratch is read by index, not unpacked (docs/ARCHITECTURE.md, performance conventions)."""
+    Not inlined: under numba 0.68 the inlined form lost its write of ``out.reason[p]`` (every
+    too-small support came out OK), the issue docs/ARCHITECTURE.md notes for csm's ``finish``. The
+    scratch is read by index, not unpacked (docs/ARCHITECTURE.md, performance conventions)."""
     code, h, ww = fit_jet(p, count, queue, points, fit.degree, scratch[0], r2 if fit.smooth else 0.0)
     if code == OK:
         code = jet_principal(scratch[0], h, points.normals, out, p)
