@@ -42,33 +42,14 @@ import points_wide_ranges as pw  # noqa: E402
 
 def run_cloud(job) -> dict:
     """The advice on one cloud, its error, every candidate's and APSS's at every scale."""
-    from scipy.spatial import cKDTree
-
     import curv
     from curv.advice.clouds import cloud_candidates, cloud_features, usable_points
-    from curv.core.pointcloud import PointCloud
-    from curv.core.ranges import ball_radii, resolve
-    from curv.point_normals import border_points, point_normals
-    from curv.study.protocol import Task
-    from curv.study.testmesh import build_test_mesh
-    from curv.surfaces import sample_points
+    from curv.point_normals import point_normals
 
     function, noise, sample, s_index = job
     sampling = pa.SAMPLINGS[s_index]
-    tm = build_test_mesh(Task(seed=0, function=function, density=pa.DENSITY, irregularity=0.0, noise=noise,
-                              sample=sample))
-    rng = np.random.default_rng([sample, pa.FUNCTIONS.index(function), s_index, 16])
-    sampled = sample_points(tm.sampled.surface, pa.DENSITY, sampling=sampling, rng=rng)
-    border = border_points(sampled.cloud)
-    points = sampled.cloud.points
-    if noise:
-        points = points + rng.normal(scale=tm.noise_sigma, size=points.shape)
-    cloud = PointCloud(points)
-    median_spacing = float(np.median(ball_radii(cloud, resolve(curv.ESTIMATORS["jet"], 1), uses_normals=False)))
-    reach = np.maximum(ball_radii(sampled.cloud, resolve(curv.ESTIMATORS["jet"], pw.REACH), uses_normals=False),
-                       pw.REACH * median_spacing)
-    ev = cKDTree(sampled.cloud.points[border]).query(sampled.cloud.points)[0] > reach
-    t1, t2 = sampled.truth.k1[ev], sampled.truth.k2[ev]
+    cloud, _, ev, t1, t2 = pw.protocol_cloud(function, noise, sample, s_index)
+    points = cloud.points
     t0 = time.perf_counter()
     adv = curv.advise(cloud, vertices=np.flatnonzero(ev))
     seconds = time.perf_counter() - t0

@@ -60,19 +60,31 @@ adaptive width."""
 SHORT_APSS_SCALES = (12.0, 14.0, 16.0)
 
 
-def run_cloud(job) -> tuple:
-    """``(cell, {label: errors}, apss radius ratio)`` for one cloud."""
+def protocol_cloud(function: str, noise: float, sample: int, s_index: int):
+    """One cloud of the paper's protocol (random Monge patch ``function``, sampling ``s_index`` of
+    :data:`points_accuracy.SAMPLINGS`, noise along z), no normals given, and the points evaluated.
+
+    Returns
+    -------
+    cloud : curv.PointCloud
+        The noisy points.
+    spacing : (n,) float64
+        Each point's spacing (the range unit).
+    ev : (n,) bool
+        Points with no border point of the patch within :data:`REACH` spacings.
+    t1, t2 : (ev.sum(),) float64
+        Their exact principal curvatures.
+    """
     from scipy.spatial import cKDTree
 
     import curv
-    from curv.point_normals import border_points, point_normals
     from curv.core.pointcloud import PointCloud
     from curv.core.ranges import ball_radii, resolve
+    from curv.point_normals import border_points
     from curv.study.protocol import Task
     from curv.study.testmesh import build_test_mesh
     from curv.surfaces import sample_points
 
-    function, noise, sample, s_index, short = job
     sampling = pa.SAMPLINGS[s_index]
     tm = build_test_mesh(Task(seed=0, function=function, density=pa.DENSITY, irregularity=0.0, noise=noise,
                               sample=sample))
@@ -83,13 +95,27 @@ def run_cloud(job) -> tuple:
     if noise:
         points = points + rng.normal(scale=tm.noise_sigma, size=points.shape)
     cloud = PointCloud(points)
-    spacing = ball_radii(cloud, resolve(curv.ESTIMATORS["jet"], 1), uses_normals=False)
-    median_spacing = float(np.median(spacing))
-    reach = np.maximum(ball_radii(sampled.cloud, resolve(curv.ESTIMATORS["jet"], REACH), uses_normals=False),
-                       REACH * median_spacing)
+    jet = curv.ESTIMATORS["jet"]
+    spacing = ball_radii(cloud, resolve(jet, 1), uses_normals=False)
+    reach = np.maximum(ball_radii(sampled.cloud, resolve(jet, REACH), uses_normals=False),
+                       REACH * float(np.median(spacing)))
     ev = cKDTree(sampled.cloud.points[border]).query(sampled.cloud.points)[0] > reach
+    return cloud, spacing, ev, sampled.truth.k1[ev], sampled.truth.k2[ev]
+
+
+def run_cloud(job) -> tuple:
+    """``(cell, {label: errors}, apss radius ratio)`` for one cloud."""
+    from scipy.spatial import cKDTree
+
+    import curv
+    from curv.point_normals import point_normals
+
+    function, noise, sample, s_index, short = job
+    sampling = pa.SAMPLINGS[s_index]
+    cloud, spacing, ev, t1, t2 = protocol_cloud(function, noise, sample, s_index)
+    points = cloud.points
+    median_spacing = float(np.median(spacing))
     ratio = float(np.median(cKDTree(points).query(points, 17)[0][:, 16] / 2.0 / spacing))
-    t1, t2 = sampled.truth.k1[ev], sampled.truth.k2[ev]
     normals = point_normals(cloud).normals
     out = {}
     jets = [(f"jet degree {degree} {weights} R{k}", dict(range=k), dict(degree=degree, weights=weights))
