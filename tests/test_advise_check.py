@@ -237,9 +237,12 @@ def test_the_tables_first_choice_is_kept_within_the_judges_bias():
 
 
 # ------------------------------------------------------------------ the advice
-def test_the_check_corrects_the_tables_first_choice():
-    """A 547-vertex quadratic patch at a third of the paper's noise: the table's first choice is 1.3x the
-    best error there, the checked advice is the best call of the six checked."""
+def test_the_check_finds_the_best_call_and_the_table_keeps_its_choice_within_the_judges_bias():
+    """A 547-vertex quadratic patch at a third of the paper's noise: the table's first choice is 1.6x the
+    best error there. The check measures the truly best of the six checked calls best, but by less than
+    the judge's bias (JUDGE_BIAS) on some copy: the table's choice stays the advice, the best call is the
+    next and within noise (the rule before 2026-12-05 advised it; on held-out meshes that rule lost
+    more often than it won, docs/ADVISOR.md)."""
     from tools.advice_table.extend import evaluated_for_table, variant_errors
 
     tm = build_test_mesh(Task(19007, "quadratic", 547, 9.27, 0.337, 0))
@@ -249,8 +252,12 @@ def test_the_check_corrects_the_tables_first_choice():
     shortlist = [c.key for c in checked.ranking if c.measured is not None]
     assert table.best.key in shortlist and len(shortlist) == 6
     errors = variant_errors(tm.mesh, tm.truth, evaluated_for_table(tm.mesh), shortlist)
-    assert errors[checked.best.key] == min(errors.values())
-    assert errors[table.best.key] > 1.2 * errors[checked.best.key]
+    measured_best = min((c for c in checked.ranking if c.measured is not None), key=lambda c: c.measured.erel)
+    assert errors[measured_best.key] == min(errors.values())
+    assert errors[table.best.key] > 1.5 * errors[measured_best.key]
+    assert checked.best.key == table.best.key and checked.ranking[1] is measured_best and measured_best.within_noise
+    first, best = np.array(checked.best.measured.copies), np.array(measured_best.measured.copies)
+    assert np.all(first > best) and not np.all(first > JUDGE_BIAS * best)
 
 
 def test_advice_on_a_point_cloud_is_checked_and_runs():
