@@ -7,6 +7,7 @@ candidate's true error on every held-out mesh)::
     python benchmarks/bench_advisor.py --quick --meshes 24 --seed 23000 --workers 1 --runs runs23000.json
     python benchmarks/bench_advise_judge.py runs23000.json --checks checks23000.json   # advise every mesh
     python benchmarks/bench_advise_judge.py runs23000.json --checks checks23000.json --report   # again from them
+    python benchmarks/bench_advise_judge.py runs23000.json --checks narrow.json --reach-margin 0.5   # another twin
 
 Every mesh of the runs is advised once (self-checked) and its ranking stored (``--checks``); the
 report needs only the stored rankings and the runs' true errors:
@@ -38,13 +39,25 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 FLOOR = 1e-6
 
 
-def advise_all(runs: list[dict]) -> list[dict]:
-    """Each run's mesh advised (self-checked): its index and ranking (``Candidate.as_dict``)."""
+def advise_all(runs: list[dict], reach_margin: float | None = None, weight_width: float | None = None) -> list[dict]:
+    """Each run's mesh advised (self-checked): its index and ranking (``Candidate.as_dict``).
+
+    ``reach_margin`` and ``weight_width`` change the twin for this process (what-if runs of a
+    different judge: :data:`curv.advice.check.REACH_MARGIN`, :data:`curv.advice.twin.WEIGHT_WIDTH`).
+    """
+    import functools
+
     from bench_advisor import _mesh
 
+    import curv.advice.check as check
+    import curv.advice.twin as twin
     from curv.advice.advising import iter_advise
     from curv.core.jit import run_to_end
 
+    if reach_margin is not None:
+        check.REACH_MARGIN = reach_margin
+    if weight_width is not None:
+        twin.build_twin = functools.partial(twin.build_twin, weight_width=weight_width)
     out = []
     for r in runs:
         adv = run_to_end(iter_advise(_mesh(r, r["noise_level"])[0]))
@@ -117,13 +130,15 @@ def main(argv=None) -> int:
     parser.add_argument("--checks", nargs="+", required=True, help="one stored-checks file per runs file")
     parser.add_argument("--report", action="store_true", help="report from the stored checks (no advising)")
     parser.add_argument("--bands", type=float, nargs="+", default=[1.0, 1.5, 2.0, 2.5, JUDGE_BIAS, math.inf])
+    parser.add_argument("--reach-margin", type=float, help="the twin's patch margin in range units (what-if)")
+    parser.add_argument("--weight-width", type=float, help="the twin's weights' width, share of the radius (what-if)")
     args = parser.parse_args(argv)
     if len(args.checks) != len(args.runs):
         parser.error("give one --checks file per runs file")
     for path, checks_path in zip(args.runs, args.checks):
         runs = json.loads(Path(path).read_text())
         if not args.report:
-            Path(checks_path).write_text(json.dumps(advise_all(runs)))
+            Path(checks_path).write_text(json.dumps(advise_all(runs, args.reach_margin, args.weight_width)))
         print(f"\n{path} ({len(runs)} meshes), checks {checks_path}:\n")
         print(report(runs, json.loads(Path(checks_path).read_text()), args.bands))
     return 0
