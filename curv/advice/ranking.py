@@ -38,8 +38,8 @@ ERROR_FLOOR = 1e-6
 JUDGE_BIAS = 3.0
 """How many times the table's first choice's measured error must exceed the measured best's, on
 every copy, for the check to override the table (meshes). The check's judge, the smooth twin, is
-biased per call: on the held-out meshes of seeds 23000 and 24000 (docs/ADVISOR.md, "Why the twin
-is a fair judge") two calls of one short list were measured a median 1.17x, a 90th percentile
+biased per call: on the held-out meshes of seeds 23000 and 24000 (docs/ADVISOR.md, "The judge's
+bias against the table") two calls of one short list were measured a median 1.17x, a 90th percentile
 2.0x and at most 7x off their true ratio, and where the check disagreed with the table it was
 right on 6 meshes and wrong on 11, with no separation telling the two apart. Above that 90th
 percentile, and at the advice's worst-regret bound (3): the check overrides only a first choice
