@@ -127,13 +127,22 @@ def _bad_files(tmp_path):
     negative = [list(f) for f in faces]
     negative[9][1] = -3
     out["negative"] = write_polygon_ply(tmp_path / "x.ply", vertices, negative).read_bytes()
+    short = [list(f) for f in faces]
+    short[40] = short[40][:2]
+    out["two corners"] = write_polygon_ply(tmp_path / "x.ply", vertices, short).read_bytes()
+    short[9][1] = -3  # a negative corner before it: the whole reader names the short face first
+    out["faults in order"] = write_polygon_ply(tmp_path / "x.ply", vertices, short).read_bytes()
     out["count low"] = write_polygon_ply(tmp_path / "x.ply", vertices, faces, face_count=len(faces) - 2).read_bytes()
     out["count high"] = write_polygon_ply(tmp_path / "x.ply", vertices, faces, face_count=len(faces) + 1).read_bytes()
     return out
 
 
-@pytest.mark.parametrize("case", ["truncated", "longer", "beyond", "negative", "count low", "count high"])
-def test_a_bad_polygon_ply_is_the_whole_readers_one_line_and_no_output(tmp_path, case):
+@pytest.mark.parametrize("case", ["truncated", "longer", "beyond", "negative", "two corners", "faults in order",
+                                  "count low", "count high"])
+def test_a_bad_polygon_ply_is_the_whole_readers_one_line_and_no_output(tmp_path, monkeypatch, case):
+    from curv.tiles import polyply
+
+    monkeypatch.setattr(polyply, "BLOCK_BYTES", 256)  # the faults in different blocks
     path = tmp_path / "bad.ply"
     path.write_bytes(_bad_files(tmp_path)[case])
     with pytest.raises(Exception) as whole:

@@ -17,8 +17,9 @@ properties, then a ``face`` element whose only property is its ``vertex_indices`
 
 The first walk over the faces (:meth:`PolygonPlySource.face_width`, on first need) checks what the
 in-memory reader checks, with the same one-line :class:`curv.LoadError`: a face block shorter than
-its count (``early end-of-file``), longer (``the element counts are wrong``), a corner that is
-negative or not a vertex; and it keeps the byte offset of every :data:`MARK_EVERY`-th face, so
+its count (``early end-of-file``), longer (``the element counts are wrong``), a face of fewer than
+3 corners, a corner that is negative or not a vertex (the first of each, in the whole reader's
+order of checks); and it keeps the byte offset of every :data:`MARK_EVERY`-th face, so
 that a few faces are read anywhere (:meth:`PolygonPlySource.faces_at`) without a copy of the faces.
 Memory stays one block's, whatever the face count.
 """
@@ -157,13 +158,15 @@ class PolygonPlySource(PlySource):
                         f"'{self._key}': early end-of-file)")
 
     def _blocks(self, first: int = 0, offset: int | None = None, count: int | None = None, size: int = CHUNK,
-                block: int = BLOCK_BYTES):
+                block: int | None = None):
         """``(face number, buf, starts, sizes, base)`` of whole records (``base`` the file offset of
         ``buf[0]``), from face ``first`` at byte ``offset`` (default the element's start), ``count``
-        faces (default to the end), at most ``size`` a time, reading ``block`` bytes at a time; a
+        faces (default to the end), at most ``size`` a time, reading ``block`` bytes at a time
+        (default :data:`BLOCK_BYTES`); a
         record the file ends inside is a :class:`LoadError`, and so (reading to the end) is a
         longer element than the header declares."""
         base = self._offset if offset is None else int(offset)
+        block = BLOCK_BYTES if block is None else block
         count = self.n_faces - first if count is None else count
         done, stop = first, first + count
         file_size = self.path.stat().st_size
@@ -199,40 +202,52 @@ class PolygonPlySource(PlySource):
         _decode(buf, starts, sizes, self._shifts, self._ranges, out)
         return out
 
-    def _check_corners(self, start: int, faces: np.ndarray, sizes: np.ndarray) -> None:
-        """What :class:`curv.Mesh` refuses, in its words: a negative corner, a corner past the vertices."""
+    def _faults(self, start: int, faces: np.ndarray, sizes: np.ndarray) -> list:
+        """The first face of a block with each fault :class:`curv.Mesh` refuses, as ``(face,
+        value)`` or None: fewer than 3 corners, a negative corner, a corner past the vertices."""
         real = np.arange(faces.shape[1]) < sizes[:, None]
-        negative = (faces < 0) & real
-        if negative.any():
-            row = int(np.flatnonzero(negative.any(axis=1))[0])
-            value = int(faces[row][negative[row]][0])
-            raise LoadError(f"{self.path}: face {start + row} has a negative vertex index {value}")
-        beyond = faces >= self.n
-        if beyond.any():
-            row = int(np.flatnonzero(beyond.any(axis=1))[0])
-            value = int(faces[row][beyond[row]][0])
-            raise LoadError(f"{self.path}: face {start + row} refers to vertex {value}, but the mesh has only "
+        out = []
+        for bad in (sizes < 3, ((faces < 0) & real).any(axis=1), (faces >= self.n).any(axis=1)):
+            rows = np.flatnonzero(bad)
+            out.append(None if rows.size == 0 else int(rows[0]))
+        small, negative, beyond = out
+        return [None if small is None else (start + small, int(sizes[small])),
+                None if negative is None else (start + negative, int(faces[negative][(faces[negative] < 0)
+                                                                                    & real[negative]][0])),
+                None if beyond is None else (start + beyond, int(faces[beyond][faces[beyond] >= self.n][0]))]
+
+    def _refuse(self, faults: list) -> None:
+        """The whole reader's error for the first fault of the first kind found (its order)."""
+        small, negative, beyond = faults
+        if small is not None:
+            raise LoadError(f"{self.path}: face {small[0]} has {small[1]} vertices; a face needs at least 3")
+        if negative is not None:
+            raise LoadError(f"{self.path}: face {negative[0]} has a negative vertex index {negative[1]}")
+        if beyond is not None:
+            raise LoadError(f"{self.path}: face {beyond[0]} refers to vertex {beyond[1]}, but the mesh has only "
                             f"{self.n} vertices")
 
-    def starts_with_triangles(self, count: int = 1024) -> bool:
-        """Whether the first ``count`` faces are all triangles (then plyfile's memory map of
-        triangles is tried first: :func:`curv.tiles.sources.open_source`)."""
-        count = min(count, self.n_faces)
-        record = self._shifts[0].size + 3 * self._shifts[1].size
-        for _, _, _, sizes, _ in self._blocks(count=count, block=count * record + 1):
-            if (sizes != 3).any():
-                return False
-        return True
+    def starts_with_triangle(self) -> bool:
+        """Whether the first face is a triangle (then plyfile's memory map of triangles is tried
+        first: :func:`curv.tiles.sources.open_source`). Read with numpy: no kernel is loaded."""
+        kind = self._header.elements[1].properties[0][2]
+        order = ">" if self._header.format == "binary_big_endian" else "<"
+        with open(self.path, "rb") as fh:
+            fh.seek(self._offset)
+            first = np.fromfile(fh, dtype=order + _TYPES[kind], count=1)
+        return first.size == 0 or int(first[0]) == 3
 
     def face_width(self) -> int:
         """The longest polygon's corners: the first call walks every face and checks them (module notes)."""
         if self._width is None:
-            widest, marks = 0, []
+            widest, marks, faults = 0, [], [None, None, None]
             for start, buf, starts, sizes, base in self._blocks():
                 width = int(sizes.max())
-                self._check_corners(start, self._decoded(buf, starts, sizes, width), sizes)
+                found = self._faults(start, self._decoded(buf, starts, sizes, width), sizes)
+                faults = [f if f is not None else g for f, g in zip(faults, found)]
                 widest = max(widest, width)
                 marks.append(starts[(-start) % MARK_EVERY::MARK_EVERY] + base)
+            self._refuse(faults)
             self._marks = np.concatenate(marks) if marks else np.empty(0, np.int64)
             self._width = widest
         return self._width

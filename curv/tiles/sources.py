@@ -287,7 +287,7 @@ def open_source(path) -> Source | None:
             from .polyply import polygon_source
 
             polygons = polygon_source(path, check_ply_header(path))
-            if polygons is not None and not polygons.starts_with_triangles():
+            if polygons is not None and not polygons.starts_with_triangle():
                 return polygons  # plyfile would map the faces as triangles, then read them all to find out
         try:
             data = PlyData.read(str(path), known_list_len=known) if known else PlyData.read(str(path))
