@@ -73,14 +73,14 @@ from __future__ import annotations
 from .frames import MIN_SPREAD
 from .grid_order import grid_ordered
 from .normals import (BORDER_GAP, BORDER_RANGE, NORMAL_METHODS, NORMAL_RANGE, ONE_SIDED_GAP, PointNormals, border_points,
-                      border_radii, point_normals)
+                      border_radii, border_test_radii, point_normals)
 from .one_pass import local_frames, support_spread
 from .orientation import (AGREE_COSINE, GRAZING_COSINE, ORIENTATIONS, default_orientation, describe_orientation,
                           orient_normals)
 from .quantised import MIN_SUPPORT_STEPS, quantised_supports, range_above_grid, support_floor
 
 __all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "default_orientation",
-           "describe_orientation", "border_points", "border_radii", "ORIENTATIONS",
+           "describe_orientation", "border_points", "border_radii", "border_test_radii", "ORIENTATIONS",
            "support_spread", "support_floor", "quantised_supports", "range_above_grid",
            "MIN_SPREAD", "MIN_SUPPORT_STEPS", "ONE_SIDED_GAP", "BORDER_RANGE",
            "NORMAL_RANGE", "BORDER_GAP", "AGREE_COSINE", "GRAZING_COSINE", "NORMAL_METHODS"]

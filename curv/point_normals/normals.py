@@ -21,7 +21,7 @@ from .one_pass import _one_pass, _Pass
 from .orientation import default_orientation, orient_normals
 from .quantised import support_floor
 
-__all__ = ["PointNormals", "point_normals", "border_points", "border_radii", "NORMAL_RANGE", "BORDER_RANGE",
+__all__ = ["PointNormals", "point_normals", "border_points", "border_radii", "border_test_radii", "NORMAL_RANGE", "BORDER_RANGE",
            "BORDER_GAP", "ONE_SIDED_GAP", "EXACT_GAP", "NORMAL_METHODS"]
 
 NORMAL_RANGE = 2
@@ -268,3 +268,13 @@ def border_points(cloud: PointCloud) -> np.ndarray:
         return border
 
     return cached_with_mesh(cloud, "border", build)
+
+
+def border_test_radii(cloud: PointCloud) -> np.ndarray:
+    """(n,) float64 radius of the widest ball a point's border flag (:func:`border_points`) reads:
+    the gap test's (:func:`border_radii`) or, where the gap sends the point to the one-sided test,
+    that test's wider ball (:func:`.rim.rim_radii`)."""
+    from .rim import rim_radii
+
+    radii = border_radii(cloud)
+    return np.maximum(radii, rim_radii(_frames(cloud)[1], radii))

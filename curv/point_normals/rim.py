@@ -30,7 +30,7 @@ from ..core.pointcloud import PointCloud
 from ..geometry.neighbourhood import ball_support
 from .one_pass import ball_walk_inputs
 
-__all__ = ["one_sided_points", "RIM_SCALE", "RIM_OFFSET"]
+__all__ = ["one_sided_points", "rim_radii", "RIM_SCALE", "RIM_OFFSET", "RIM_GAP"]
 
 RIM_SCALE = 2.0
 """The one-sidedness ball's radius over the border test's (:func:`.normals.border_radii`): R6."""
@@ -98,14 +98,22 @@ def offset_shares(cloud: PointCloud, normals: np.ndarray, radii: np.ndarray, cen
     return share
 
 
+def rim_radii(gap: np.ndarray, border_radii: np.ndarray) -> np.ndarray:
+    """(n,) float64 radius of the ball the one-sided test reads at each point: :data:`RIM_SCALE`
+    times the border test's radius where the angular gap exceeds :data:`RIM_GAP`, 0 where the test
+    does not run (what a point's border flag reads, :mod:`curv.tiles.reach`, asks this)."""
+    return np.where(np.asarray(gap) > RIM_GAP, RIM_SCALE * np.asarray(border_radii, float), 0.0)
+
+
 def one_sided_points(cloud: PointCloud, normals: np.ndarray, gap: np.ndarray, border_radii: np.ndarray) -> np.ndarray:
     """(n,) bool: points whose support is one-sided: of the points whose angular gap exceeds
     :data:`RIM_GAP`, those whose ball of :data:`RIM_SCALE` times the border test's radius has a mean
     tangent offset above :data:`RIM_OFFSET` (in the tangent plane of ``normals``, the border test's
     PCA normals)."""
     out = np.zeros(cloud.n_points, bool)
-    centres = np.flatnonzero(np.asarray(gap) > RIM_GAP)
+    radii = rim_radii(gap, border_radii)
+    centres = np.flatnonzero(radii > 0)
     if centres.size:
-        share = run_to_end(offset_shares(cloud, normals, RIM_SCALE * np.asarray(border_radii, float), centres))
+        share = run_to_end(offset_shares(cloud, normals, radii, centres))
         out[centres] = share[centres] > RIM_OFFSET
     return out

@@ -21,7 +21,9 @@ The rule per input:
   ``knn(q)`` = distance to q's G-th nearest (spacing, neighbours, coincidence);
   ``calm(q)`` = the largest ``|j - q| + knn(j)`` over q and its G nearest (the border test's unit
   reads the neighbours' spacings, :func:`curv.point_normals.border_radii`);
-  ``own(q)`` = the largest of ``calm(q)``, the border test's ball (:data:`~curv.point_normals.BORDER_RANGE`),
+  ``own(q)`` = the largest of ``calm(q)``, the border test's ball (:data:`~curv.point_normals.BORDER_RANGE`;
+  where q's angular gap sends it to the one-sided test, that test's ball, twice as wide:
+  :func:`curv.point_normals.border_test_radii`),
   the normals' fit ball (``fit_range``, at least :func:`curv.point_normals.support_floor`) and
   the line check's balls at
   :data:`~curv.point_normals.NORMAL_RANGE`: everything q's normal and flags read;
@@ -144,14 +146,15 @@ def _normal_ranges(fit_range) -> list:
 
 def _own_reach(cloud: PointCloud, fit_range) -> np.ndarray:
     """(n,) what a point's own normal, border test and line checks read (module notes, ``own``)."""
-    from ..point_normals import border_radii, support_floor
+    from ..point_normals import border_test_radii, support_floor
 
     knn = _knn_reach(cloud)
     own = _calm_reach(cloud, knn)
     # on coordinates stored on a coarse grid the normals are fitted over at least this radius
     np.maximum(own, support_floor(cloud), out=own)
-    # border_radii is BORDER_RANGE times the calm spacing; the plain R3 ball is below it
-    np.maximum(own, border_radii(cloud), out=own)
+    # the border flag's balls: the gap test's (BORDER_RANGE times the calm spacing; the plain R3
+    # ball is below it) and, where the gap is wide, the one-sided test's, twice as wide
+    np.maximum(own, border_test_radii(cloud), out=own)
     for rng, uses_normals in _normal_ranges(fit_range):
         np.maximum(own, ball_radii(cloud, rng, uses_normals=uses_normals), out=own)
     return own
