@@ -19,8 +19,9 @@ copies of the mesh's twin. The twin is built three ways:
 
 A twin that favoured the estimator sharing its model would make that estimator's measured error
 smaller against its true one than the other candidates'. Reported per twin model: the median of
-log(measured / true) per candidate (0: measured as it is; negative: flattered), the median
-|log(measured / true)| over all, and the regret of the check's pick against the true best.
+log(measured / true) per candidate and its range over the meshes (0: measured as it is; negative:
+flattered), the median |log(measured / true)| over all, and the regret of the check's pick against
+the true best.
 """
 
 from __future__ import annotations
@@ -56,6 +57,13 @@ def meshes():
         yield f"{name} {n} noise {noise}", s.mesh, s.truth, np.ones(s.mesh.n_vertices, bool)
 
 
+def _cell(logs: list) -> str:
+    """A table cell: the median of one candidate's log(measured / true), its range over the meshes, the count."""
+    if not logs:
+        return "-"
+    return f"{np.median(logs):+.2f} [{np.min(logs):+.2f}, {np.max(logs):+.2f}] ({len(logs)})"
+
+
 def main(argv=None) -> int:
     import curv
     from curv.advice.shares import valid_masks
@@ -88,11 +96,11 @@ def main(argv=None) -> int:
             regrets[model].append(true[pick] / min(true.values()))
             line.append(f"{model} picks {pick} (regret {regrets[model][-1]:.2f})")
         print("; ".join(line), flush=True)
-    print("\n| candidate | " + " | ".join(f"{m}: median log(measured / true)" for m in args.models) + " |")
+    print("\n| candidate | " + " | ".join(f"{m}: median log(measured / true) [min, max] (meshes)" for m in args.models)
+          + " |")
     print("|---|" + "---|" * len(args.models))
     for v in CANDIDATES:
-        print(f"| {v} | " + " | ".join(f"{np.median(ratios[m][v]):+.2f} ({len(ratios[m][v])})" if ratios[m][v]
-                                       else "-" for m in args.models) + " |")
+        print(f"| {v} | " + " | ".join(_cell(ratios[m][v]) for m in args.models) + " |")
     print("| all: median abs | " + " | ".join(
         f"{np.median(np.abs(np.concatenate([ratios[m][v] for v in CANDIDATES if ratios[m][v]]))):.2f}"
         for m in args.models) + " |")
