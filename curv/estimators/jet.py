@@ -35,6 +35,10 @@ the intersection of their confidence intervals (:mod:`curv.estimators.jet_width`
 ``"fixed"`` is the single fit above.
 
 Works on any polygon mesh and on borders (a one-sided fit there).
+
+On a point cloud whose jet normals were fitted over the same balls (the normals' range, degree 2,
+uniform weights: :mod:`curv.point_normals`), the fixed width without standard errors reads the fits
+their pass kept instead of fitting again (:mod:`curv.estimators._jet_handover`): one fit per point.
 """
 
 from __future__ import annotations
