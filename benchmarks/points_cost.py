@@ -60,8 +60,10 @@ def _run(tree: str | None, kind: str, method: str, rng: float, n: int, out: str)
     env = dict(os.environ)
     if tree is not None:
         env["PYTHONPATH"] = str(Path(tree).resolve())
+    # run in the tree itself: ``python -c`` puts the working directory first on sys.path, ahead of
+    # PYTHONPATH, so from another tree's root both "trees" would import that one
     proc = subprocess.run([sys.executable, "-c", _CHILD, kind, method, str(rng), str(n), out],
-                          capture_output=True, text=True, env=env)
+                          capture_output=True, text=True, env=env, cwd=None if tree is None else Path(tree).resolve())
     if proc.returncode:
         raise SystemExit(f"{kind} {method} in {tree}: {proc.stderr.strip().splitlines()[-1:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])

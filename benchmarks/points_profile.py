@@ -18,6 +18,7 @@ process's over all threads: on a shared machine they move much less with the loa
 
 from __future__ import annotations
 
+import inspect
 import sys
 import time
 
@@ -57,9 +58,11 @@ def main() -> None:
     phase("grid + 10 nearest", lambda: cloud.nearest)
     border = phase("border radii", lambda: pn.border_radii(cloud))
     r2, spreads = _radii(cloud, 2), _default_spreads(cloud)
+    # a jet estimate at R2 has the pass keep its fits (a tree without that keyword: nothing to keep)
+    keep = {"keep_fits": True} if method == "jet" and "keep_fits" in inspect.signature(_one_pass).parameters else {}
     found = phase("one pass (frames, jet, line checks)",
                   lambda: run_to_end(_one_pass(cloud, border, r2, jet=True, spreads=spreads,
-                                               screens=(EXACT_GAP, ONE_SIDED_GAP))))
+                                               screens=(EXACT_GAP, ONE_SIDED_GAP), **keep)))
     if orient != "up":
         phase("neighbour graph", lambda: cloud.adjacency)
     phase(f"orientation ({orient})", lambda: pn.orient_normals(cloud, found.normal_a, orient=orient))

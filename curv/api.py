@@ -250,7 +250,11 @@ def _iter_estimates(
         t0 = time.perf_counter()
         if support.kind == "points":  # its normals fitted and oriented, its borders found
             work_mesh = mesh
-            used_normals, flags, normals_label = point_setup(mesh, given, orient=orient, fit_range=fit_range)
+            # an estimator that reads the normals' own fits (the jet at their range) has them kept
+            reads = len(specs) == 1 and spec.reads_normal_fits is not None and spec.reads_normal_fits(
+                options_of[spec.name], bool(standard_errors))
+            used_normals, flags, normals_label = point_setup(mesh, given, orient=orient, fit_range=fit_range,
+                                                             keep_fits_at=rngs if reads else ())
             fused = False
         else:
             work_mesh, used_normals, flags, fused = mesh_setup(mesh, spec, given, normal_weighting, smooth,

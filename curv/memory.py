@@ -54,7 +54,8 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: b
     method : str
         Registry name.
     points : bool
-        A point cloud: :data:`PER_POINT_BYTES` per point in place of the mesh's per-unit bytes.
+        A point cloud: :data:`PER_POINT_BYTES` (and the estimator's ``extra_bytes_per_point``) per
+        point in place of the mesh's per-unit bytes.
     threads : int, optional
         Kernel threads (their stamps); default the process's (:func:`curv.core.jit.threads`).
 
@@ -68,7 +69,8 @@ def estimate_peak_bytes(n_vertices: int, n_faces: int, method: str, *, points: b
 
     from .estimators import get_spec
 
-    per_unit = PER_POINT_BYTES if points else PER_UNIT_BYTES + get_spec(method).extra_bytes_per_unit
+    spec = get_spec(method)
+    per_unit = PER_POINT_BYTES + spec.extra_bytes_per_point if points else PER_UNIT_BYTES + spec.extra_bytes_per_unit
     linear = BASE_BYTES + per_unit * units
     threads = kernel_threads() if threads is None else int(threads)
     return int(linear + STAMP_BYTES_PER_THREAD * threads * float(n_vertices))

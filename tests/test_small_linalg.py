@@ -76,3 +76,42 @@ def test_closed_form_nan_input_gives_nan():
     a = np.eye(3)
     a[0, 1] = a[1, 0] = np.nan
     assert np.isnan(_solve(sym3_eigen_closed, a)).all()
+
+
+def _factored(a):
+    """``a`` in the layout of :func:`curv.core.small_linalg.cholesky_scaled`, factored; its norm bound."""
+    from curv.core.small_linalg import cholesky_scaled, scaled_norm_bound
+
+    size = a.shape[0]
+    m = np.zeros((size + 1, size))
+    m[:size] = np.triu(a)
+    lam_max = scaled_norm_bound(m, size, size)
+    assert cholesky_scaled(m, size, size)
+    return m, lam_max
+
+
+@pytest.mark.parametrize("size", [6, 10, 15])
+def test_the_condition_estimate_does_not_follow_a_turned_axis(size):
+    """A jet fit in a frame turned over (e2 and e3 to their opposites) has the normal matrix S A S,
+    S the signs of its unknowns (V_SIGNS): its condition estimate, and so SINGULAR, is A's to the bit."""
+    from curv.core.small_linalg import reciprocal_condition
+    from curv.estimators._jet_fit import V_SIGNS
+
+    rng = np.random.default_rng(3)
+    signs = V_SIGNS[:size]
+    for k in range(200):
+        # ill-conditioned too: the smallest eigenvector on either side of the signs
+        q, _ = np.linalg.qr(rng.normal(size=(size, size)))
+        a = q @ np.diag(10.0 ** rng.uniform(-10 if k % 2 else -3, 0, size)) @ q.T
+        turned = a * np.outer(signs, signs)
+        m, lam = _factored(a)
+        mt, lam_t = _factored(turned)
+        assert lam == lam_t
+        vec = np.empty((3, size))
+        r = reciprocal_condition(m, size, lam, vec, 2, signs)
+        rt = reciprocal_condition(mt, size, lam_t, vec, 2, signs)
+        assert r == rt
+        # an estimate: at least the true reciprocal condition of D A D, within a modest factor
+        d = 1.0 / np.sqrt(np.diag(a))
+        eig = np.linalg.eigvalsh(a * np.outer(d, d))
+        assert r >= 0.999 * eig[0] / lam

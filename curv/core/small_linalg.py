@@ -227,16 +227,14 @@ def scaled_norm_bound(a, size, srow):
 
 
 @jit
-def reciprocal_condition(factor, size, lam_max, vec, row):
-    """The reciprocal condition number of ``D A D`` estimated from its factor: the smallest
-    eigenvalue by a few steps of inverse iteration (:data:`INVERSE_STEPS`) from a start vector with
-    no special symmetry, over ``lam_max`` (:func:`scaled_norm_bound`); ``vec[row]`` is scratch.
-    0 when the iteration breaks down."""
+def _inverse_iteration(factor, size, vec, row):
+    """``1 / |A⁻¹ v|`` after :data:`INVERSE_STEPS` steps of inverse iteration from ``v = vec[row]``
+    (normalised on the way; A from its factor): an upper bound of A's smallest eigenvalue, reached
+    when the start has a part along its eigenvector. 0 when the iteration breaks down."""
     norm = 0.0
     for i in range(size):
-        vec[row, i] = 1.0 + (0.37 * i if i % 2 == 0 else -0.37 * i)
         norm += vec[row, i] * vec[row, i]
-    lam_min = lam_max
+    lam_min = 0.0
     for _ in range(INVERSE_STEPS):
         norm = math.sqrt(norm)
         for i in range(size):
@@ -248,6 +246,30 @@ def reciprocal_condition(factor, size, lam_max, vec, row):
         if not norm > 0.0 or not math.isfinite(norm):
             return 0.0
         lam_min = 1.0 / math.sqrt(norm)  # |A^-1 v| with |v| = 1 bounds 1 / lambda_min from below
+    return lam_min
+
+
+@jit
+def reciprocal_condition(factor, size, lam_max, vec, row, signs):
+    """The reciprocal condition number of ``D A D`` estimated from its factor: the smallest
+    eigenvalue by a few steps of inverse iteration (:data:`INVERSE_STEPS`), over ``lam_max``
+    (:func:`scaled_norm_bound`); ``vec[row]`` is scratch. 0 when an iteration breaks down.
+
+    ``signs`` (at least ``size``,) of +1 and -1: the estimate is the same, bit for bit, for ``S A S``
+    with ``S = diag(signs)`` as for A (a fit whose frame has a free sign: turning an axis over turns
+    the unknowns odd in it, ``S``). Two starts, each on one side of ``signs`` (the entries of a
+    fixed vector with no other symmetry where ``signs`` is +1, then where it is -1; ``S`` maps each
+    onto plus or minus itself, and the factor of ``S A S`` is ``S L S`` to the bit), and the smaller
+    estimate: a start with parts on both sides would give ``S A S`` another estimate than A.
+    """
+    lam_min = lam_max
+    for side in (1.0, -1.0):
+        norm = 0.0
+        for i in range(size):
+            vec[row, i] = 1.0 + (0.37 * i if i % 2 == 0 else -0.37 * i) if signs[i] == side else 0.0
+            norm += vec[row, i] * vec[row, i]
+        if norm > 0.0:
+            lam_min = min(lam_min, _inverse_iteration(factor, size, vec, row))
     return lam_min / lam_max
 
 

@@ -39,6 +39,12 @@ MIN_NORMAL_COSINE = 0.2
 """The PCA normal and the jet's normal must be within about 78 degrees of the vertex normal, or the fit
 does not describe the surface at the vertex (``DEGENERATE``)."""
 
+V_SIGNS = np.array([(-1.0) ** j for t in range(5) for j in range(t + 1)])
+"""(:data:`MAX_UNKNOWNS`,) the sign each unknown takes when the frame's ``e2`` turns over (``v`` to
+``-v``, the monomial ``u^(t-j) v^j`` by ``(-1)^j``): a frame turned towards the other side of the
+reference normal (``e3``, and with it ``e2 = e3 x e1``) gives the same fit with these signs and the
+heights' (:func:`_solve`'s condition estimate is the same for both)."""
+
 
 
 @jit
@@ -211,12 +217,13 @@ def _solve(m, vec, nd):
     """Solve the normal equations (``m``'s upper triangle, right-hand side ``vec[0]``) into
     ``vec[1]`` by the Jacobi-scaled Cholesky factor (:func:`~curv.core.small_linalg.cholesky_scaled`,
     left in ``m``), and return the scaled matrix's estimated reciprocal condition number (0 when
-    the factorisation broke down)."""
+    the factorisation broke down): the same for either side of the frame (:data:`V_SIGNS`), so that
+    ``SINGULAR`` does not follow the reference normal's free sign."""
     lam_max = scaled_norm_bound(m, nd, MAX_UNKNOWNS)
     if not cholesky_scaled(m, nd, MAX_UNKNOWNS):
         return 0.0
     cholesky_solve_scaled(m, MAX_UNKNOWNS, nd, vec)
-    return reciprocal_condition(m, nd, lam_max, vec, 2)
+    return reciprocal_condition(m, nd, lam_max, vec, 2, V_SIGNS)
 
 
 @jit

@@ -35,6 +35,10 @@ the intersection of their confidence intervals (:mod:`curv.estimators.jet_width`
 ``"fixed"`` is the single fit above.
 
 Works on any polygon mesh and on borders (a one-sided fit there).
+
+On a point cloud whose jet normals were fitted over the same balls (the normals' range, degree 2,
+uniform weights: :mod:`curv.point_normals`), the fixed width without standard errors reads the fits
+their pass kept instead of fitting again (:mod:`curv.estimators._jet_handover`): one fit per point.
 """
 
 from __future__ import annotations
@@ -45,7 +49,7 @@ import numpy as np
 
 from ..core.errors import EstimatorError
 from ..core.filled import filled
-from ..core.jit import iter_chunks, jit, jit_inlined, launch, threads
+from ..core.jit import iter_chunks, jit, jit_inlined, launch, rescaled, threads
 from ..core.mesh import Mesh
 from ..core.support import support_of
 from ..core.result import Principal
@@ -56,6 +60,7 @@ from ._fit_driver import (KERNELS, FitFunctions, Search, Walk, fit_kernel, fit_l
                           walk_level)
 from ._jet_fit import (MAX_UNKNOWNS, RCOND, Points, fit_jet, jet_errors, jet_normal, jet_principal, jet_scratch,
                        smooth_weight)
+from ._jet_handover import BYTES_PER_POINT, iter_handed, kept_fits
 from ._principal import Rows, level_rows
 from .jet_width import DEFAULT_WIDTH, WIDTHS, iter_adaptive_jet
 from .registry import register
@@ -156,6 +161,20 @@ def _normal_thread(fit, t):
 JetNormalsFit = namedtuple("JetNormalsFit", ["degree", "smooth"])
 """The jet normals' marker for the fit kernels (:func:`jet_normals`)."""
 register_fit(JetNormalsFit, FitFunctions(_normal_at, _normal_thread, None, None))
+
+
+def _matches_normal_fits(degree: int, smooth: bool, adaptive: bool, standard_errors: bool) -> bool:
+    """Whether a jet with these options is the fit of a point cloud's jet normals (degree
+    :data:`DEFAULT_DEGREE`, uniform weights, :mod:`curv.point_normals`), finished as a fit would
+    finish it: the fixed width, no standard errors (they read the fit's normal matrix, not kept)."""
+    return degree == DEFAULT_DEGREE and not smooth and not adaptive and not standard_errors
+
+
+def _reads_normal_fits(options: dict, standard_errors: bool) -> bool:
+    """The registry's ``reads_normal_fits``: :func:`_matches_normal_fits` of these options."""
+    return _matches_normal_fits(check_degree(options.get("degree", DEFAULT_DEGREE)),
+                                check_weights(options.get("weights", DEFAULT_WEIGHTS)),
+                                check_width(options.get("width", DEFAULT_WIDTH)), bool(standard_errors))
 
 
 def check_degree(degree) -> int:
@@ -275,16 +294,24 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     # a leading axis of levels (one for a single range)
     errors = (filled((count, n), np.nan, most_written=whole),
               filled((count, n), np.nan, most_written=whole)) if standard_errors else None
-    points, search = _inputs(mesh, normals, radii, centres, features)
-    fit = JetFit(degree, smooth)
+    fitted = centres
+    kept = None
+    if not levels and features is None and _matches_normal_fits(degree, smooth, False, standard_errors):
+        # a cloud's jet normals fitted these balls already (their pass kept the fits): read them
+        kept = kept_fits(mesh, degree, smooth)
+    if kept is not None:
+        fitted = yield from rescaled(iter_handed(kept, normals, radii, centres, out, chunk=chunk), 0.0, 0.2)
+    if fitted.size:
+        points, search = _inputs(mesh, normals, radii, fitted, features)
+        fit = JetFit(degree, smooth)
 
-    def run(lo, hi):
-        if levels:
-            launch(fit_levels_kernel, fit, (centres, lo, hi), search, points, out, errors)
-        else:
-            launch(fit_kernel, fit, (centres, lo, hi), search, points, out, errors, None, None)
+        def run(lo, hi):
+            if levels:
+                launch(fit_levels_kernel, fit, (fitted, lo, hi), search, points, out, errors)
+            else:
+                launch(fit_kernel, fit, (fitted, lo, hi), search, points, out, errors, None, None)
 
-    yield from iter_chunks(centres.size, run, chunk=chunk)
+        yield from rescaled(iter_chunks(fitted.size, run, chunk=chunk), 0.0 if kept is None else 0.2, 1.0)
     results = []
     for level in range(count):
         at = level if levels else slice(None)
@@ -336,4 +363,5 @@ register(fit_spec(
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
     extra_bytes_per_unit=0.0, kernels=KERNELS[:2], pools_errors=False,
+    reads_normal_fits=_reads_normal_fits, extra_bytes_per_point=BYTES_PER_POINT,
 ))

@@ -97,6 +97,13 @@ class EstimatorSpec:
         Peak memory beyond the common per-vertex arrays, in bytes per size unit (vertices + faces / 2):
         whole-mesh per-edge and per-face arrays and stamps (``csm``, ``icc``); :mod:`curv.memory`
         adds it to its model.
+    reads_normal_fits : callable or None
+        ``(options, standard_errors) -> bool``: with these options its estimate at the point normals'
+        range reads the fits the normals' pass kept (the ``jet``, :mod:`curv.estimators._jet_handover`),
+        so that pass keeps them; None: it reads none.
+    extra_bytes_per_point : float
+        Peak memory of a point-cloud estimate beyond :data:`curv.memory.PER_POINT_BYTES`, bytes per
+        point (the kept fits of ``reads_normal_fits``).
     takes_points : bool
         Runs on a :class:`curv.PointCloud`: it needs only positions, normals and a support (no
         faces, no edges). The face-based estimators refuse point clouds (:func:`refusal`).
@@ -137,6 +144,8 @@ class EstimatorSpec:
     options: dict = field(default_factory=dict, compare=False)
     kernels: tuple = field(default=(), repr=False, compare=False)
     extra_bytes_per_unit: float = 0.0
+    reads_normal_fits: object = field(default=None, repr=False, compare=False)
+    extra_bytes_per_point: float = 0.0
     takes_points: bool = False
     takes_levels: bool = False
     skips_errors: bool = False

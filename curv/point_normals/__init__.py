@@ -50,7 +50,9 @@
    so that neighbours are near in memory; in the cloud's own order (random for a scan saved
    unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
    as its reference: a fit turned the other way is the same fit with its sign changed exactly,
-   so the normal is turned afterwards, once the orientation is known.
+   so the normal is turned afterwards, once the orientation is known. For a jet estimate at the
+   normals' range the pass keeps its fits (``keep_fits_at``), which the estimator reads instead of
+   fitting again (:mod:`curv.estimators._jet_handover`).
 6. **Grid order.** An estimate of a whole cloud runs on its twin in grid order
    (:func:`grid_ordered`) and maps the rows back: the neighbour graph, the orientation and the
    estimators' kernels then read neighbours that are near in memory too (a cloud saved in random

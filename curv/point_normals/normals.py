@@ -16,6 +16,8 @@ from ..core.jit import announce, jit_parallel, launch, prange, run_to_end, slice
 from ..core.pointcloud import PointCloud
 from ..core.ranges import TIE_TOLERANCE, ball_radii, point_spacing, resolve
 from ..estimators import get_spec
+from ..estimators._jet_handover import Kept, keep_for
+from ..estimators.jet import DEFAULT_DEGREE
 from ..geometry.neighbourhood import cached_with_mesh, latest_with_mesh
 from .one_pass import _one_pass, _Pass
 from .orientation import default_orientation, orient_normals
@@ -182,7 +184,7 @@ def _frames(cloud: PointCloud):
 
 
 def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE, radius: float | None = None,
-                  knn: int | None = None, orient=None) -> PointNormals:
+                  knn: int | None = None, orient=None, keep_fits_at=()) -> PointNormals:
     """Estimate and orient the normals of a point cloud (module notes).
 
     Parameters
@@ -196,6 +198,9 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
         The support of the fits, as for an estimate (:func:`curv.core.ranges.resolve`); default R2.
     orient : {"up", "top", "outward"} or (3,) array_like, optional
         See :func:`orient_normals`; default :func:`default_orientation`.
+    keep_fits_at : sequence of curv.core.ranges.Range
+        The ranges of a jet estimate that reads the fits (:mod:`curv.estimators._jet_handover`):
+        with ``method="jet"`` and the normals' range among them, the fits are kept with the cloud.
 
     Returns
     -------
@@ -216,10 +221,14 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     # one pass: the frames at BORDER_RANGE (borders; the PCA normals that orient), the frame and
     # the jet normals at the fits' range (module notes, "One pass"), the default line checks
     spread_radii = _default_spreads(cloud)
-    found = latest_with_mesh(cloud, "normals pass", (rng.label, method, floor),
+    keep_fits = method == "jet" and rng in tuple(keep_fits_at)
+    found = latest_with_mesh(cloud, "normals pass", (rng.label, method, floor, keep_fits),
                              lambda: run_to_end(_one_pass(cloud, border_radii(cloud), radii,
                                                     jet=method == "jet", normals_b=method == "pca",
-                                                    spreads=spread_radii, screens=(EXACT_GAP, ONE_SIDED_GAP))))
+                                                    spreads=spread_radii, screens=(EXACT_GAP, ONE_SIDED_GAP),
+                                                    keep_fits=keep_fits)))
+    if found.kept is not None:
+        keep_for(cloud, Kept(radii, *found.kept, degree=DEFAULT_DEGREE, smooth=False))
     _keep(cloud, found, spread_radii)
     pca, gap = _frames(cloud)
     if method == "pca" and (rng.label != resolve(get_spec("jet"), BORDER_RANGE).label or widened.any()):

@@ -16,6 +16,7 @@ from ..core.knn import block_gather, cell_block, cell_of, ring_of
 from ..core.pointcloud import PointCloud
 from ..core.validity import OK
 from ..estimators._jet_fit import fit_jet, jet_normal, jet_scratch
+from ..estimators._jet_handover import keep_fit, new_kept
 from ..estimators.jet import DEFAULT_DEGREE
 from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                                       new_queues, new_scratch)
@@ -25,7 +26,7 @@ __all__ = ["local_frames", "support_spread", "ball_walk_inputs"]
 
 
 @jit_parallel
-def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out):
+def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
     """One walk over the points in grid order (module notes, "One pass"): each point's ball at
     ``outer2``, and from it the supports at the radii of ``radii2``'s rows (nested in the ball).
 
@@ -35,7 +36,9 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out):
     exact from ``screens[1]`` on; and the jet normal fitted over it, oriented by frame A's normal,
     when ``wanted[2]``), rows 2 and 3 two spreads. ``wanted`` (5,) says which parts run (0: A, 1: B,
     2: jet, 3, 4: spreads). ``scratch``: ``(queues, dists, subs)``, a row per thread, one slot more
-    than the points; ``out``: ``(normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread)``.
+    than the points; ``out``: ``(normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread)``;
+    ``kept``: the jet fits' ``(state, rows)`` for the jet estimator (:func:`curv.estimators._jet_handover.keep_fit`),
+    or None (compiled without).
 
     The points are walked cell by cell: the columns of a cell's block are looked up once for all
     its points (:func:`curv.core.knn.cell_block`), each point's ball read from them.
@@ -90,12 +93,14 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out):
                 g = -2.0
                 if wanted[2]:
                     evec[3, 0] = math.nan
-                    code, _, _ = fit_jet(i, c_b, sub, (x, y, z, normal_a), degree, (m, vec, cov_jet, frame, evec))
+                    code, h, _ = fit_jet(i, c_b, sub, (x, y, z, normal_a), degree, (m, vec, cov_jet, frame, evec))
                     reason[p] = code
                     if code == OK:
                         jet_normal(vec, frame, fitted, p)
                     else:
                         fitted[p, 0] = fitted[p, 1] = fitted[p, 2] = math.nan
+                    if kept is not None:
+                        keep_fit(code, h, p, math.isfinite(normal_a[i, 0]), (m, vec, cov_jet, frame, evec), kept)
                     if c_b >= 3 and math.isfinite(evec[3, 0]):
                         # the fit's own PCA of this support (its frame): the plane of the gap
                         g = _widest_gap(i, sub, c_b, x, y, z, evec, gaps, screens[1])
@@ -126,10 +131,11 @@ class _Pass:
     gap_b: np.ndarray | None
     fitted: np.ndarray | None
     spreads: tuple
+    kept: tuple | None = None
 
 
 def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = False, normals_b: bool = False,
-              spreads=(), screens=(0.0, 0.0), chunk: int | None = None):
+              spreads=(), screens=(0.0, 0.0), keep_fits: bool = False, chunk: int | None = None):
     """Frames, jet normals and spreads of every point from one ball search per point (a generator).
 
     Parameters
@@ -145,12 +151,15 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     screens : (float, float)
         The two frames' gaps are exact from these angles on (radians; below, an upper bound below
         them, :func:`.frames._widest_gap`); 0 measures every gap exactly.
+    keep_fits : bool
+        Keep the jet fits for the jet estimator (:mod:`curv.estimators._jet_handover`).
 
     Returns
     -------
     _Pass
         Unit PCA normals (n, 3) (NaN under 3 points), gaps (n,), frame A's support sizes (n,)
-        int64, jet normals (n, 3) (NaN without a fit), and the spreads (n,) each.
+        int64, jet normals (n, 3) (NaN without a fit), the spreads (n,) each, and the kept jet fits
+        ``(state, rows)`` with ``keep_fits``.
     """
     n = cloud.n_points
     rows = [frame_a, frame_b] + list(spreads) + [None] * (2 - len(spreads))
@@ -175,10 +184,12 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     fitted = np.empty((n, 3)) if wanted[2] else np.empty((1, 3))
     reason = np.empty(n if wanted[2] else 1, np.uint8)
     spread = np.empty((2, n if len(spreads) else 1))
+    kept = new_kept(n) if keep_fits and wanted[2] else None
 
     def run(lo: int, hi: int) -> None:
         launch(_pass_kernel, lo, hi, (cells, coords), (outer2, radii2, np.array(screens, np.float64)), wanted,
-               DEFAULT_DEGREE, (queues, dists, subs), (normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread))
+               DEFAULT_DEGREE, (queues, dists, subs), (normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread),
+               kept)
 
     yield from iter_chunks(n, run, chunk=chunk)
     del queues, dists, subs, radii2, outer2
@@ -190,7 +201,7 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     return _Pass(normal_a=normal_a if wanted[0] else None, gap_a=gap_a if wanted[0] else None,
                  count_a=count_a if wanted[0] else None, normal_b=normal_b if wanted[1] and normals_b else None,
                  gap_b=gap_b if wanted[1] else None, fitted=fitted if wanted[2] else None,
-                 spreads=tuple(spread[r] for r in range(len(spreads))))
+                 spreads=tuple(spread[r] for r in range(len(spreads))), kept=kept)
 
 
 @jit_parallel
