@@ -62,12 +62,14 @@ def time_round(kind: str, data) -> dict:
     curv.estimate(fresh())
     out["estimate"] = time.perf_counter() - t0
     out["estimate_cpu"] = time.process_time() - cpu0
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     curv.advise(fresh(), check=False)
     out["table"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    out["table_cpu"] = time.process_time() - cpu0
+    t0, cpu0 = time.perf_counter(), time.process_time()
     adv = curv.advise(fresh())
     out["checked"] = time.perf_counter() - t0
+    out["checked_cpu"] = time.process_time() - cpu0
     out["check"] = adv.check.seconds
     out["check_cpu"] = adv.check.cpu_seconds
     out["calls"] = len(adv.check.measured)
