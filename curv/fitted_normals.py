@@ -18,11 +18,11 @@ import numpy as np
 
 from .core.jit import run_to_end
 from .estimators.jet import jet_normals
+from .core.errors import EstimatorError
 from .core.mesh import Mesh
 from .geometry.normals import unusable_normal_vertices, vertex_normals
 from .estimators import get_spec
 from .core.ranges import ball_radii, resolve
-from .estimate_setup import check_vertices
 
 __all__ = ["fitted_normals", "DEFAULT_FIT_RANGE", "DEFAULT_FIT_DEGREE"]
 
@@ -80,7 +80,7 @@ def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
     radii = ball_radii(mesh, rng, uses_normals=False)
     on_crease = features is not None and features.any
     if vertices is not None:
-        vertices = check_vertices(vertices, mesh.n_vertices)
+        vertices = _vertex_indices(vertices, mesh.n_vertices)
     normals, _ = run_to_end(jet_normals(mesh, reference, radii, degree=degree,
                                         features=features if on_crease else None, centres=vertices))
     # the jet normal lies within 90 degrees of the PCA axis, which was turned towards the Max
@@ -92,3 +92,11 @@ def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
             crease = crease & np.isin(np.arange(mesh.n_vertices), vertices)
         normals[crease] = reference[crease]
     return normals
+
+
+def _vertex_indices(vertices, n: int) -> np.ndarray:
+    """``vertices`` as (c,) int64 indices below ``n``; a one-line error otherwise."""
+    arr = np.asarray(vertices)
+    if arr.ndim != 1 or (arr.size and (not np.issubdtype(arr.dtype, np.integer) or arr.min() < 0 or arr.max() >= n)):
+        raise EstimatorError(f"vertices must be a 1-D array of vertex indices from 0 to {n - 1}")
+    return np.ascontiguousarray(arr, dtype=np.int64)
