@@ -223,8 +223,9 @@ def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres:
         Seed of the centres and the noise.
     noise : float, optional
         The copies' noise along the normal in input units; default measured on the twin (the
-        median of the patches' :attr:`~curv.advice.twin.Twin.sigma` where most patches resolve it,
-        else 0).
+        median over its patches of the share of their residuals that is noise,
+        :attr:`~curv.advice.twin.Twin.noise`; a patch whose residuals reached no noise floor is
+        measured again on a narrower patch, :func:`_patch_noise`).
     twin_options : dict, optional
         Keyword arguments of :func:`curv.advice.twin.build_twin` (the fairness study of
         docs/ADVISOR.md builds twins with each candidate's own model).
