@@ -14,8 +14,8 @@ The run (docs/LARGE_SCANS.md):
 
 An interrupted run (Ctrl-C, a lost cluster, a crash) leaves no output and keeps the scratch folder:
 the same call again resumes from the finished tiles. A finished run removes its scratch folder.
-Inputs that cannot be read a chunk at a time (text, PCD, OBJ, an ASCII PLY, a polygon PLY) are
-read whole and tiled in memory (:func:`curv.tiles.estimate_tiled`).
+Inputs that cannot be read a chunk at a time (text, PCD, OBJ, an ASCII polygon PLY, a PLY of other
+elements or face properties) are read whole and tiled in memory (:func:`curv.tiles.estimate_tiled`).
 """
 
 from __future__ import annotations
@@ -299,7 +299,8 @@ def iter_estimate_file(input, output, method: str | None = None, range=None, *, 
 
         yield from _phase(iter_write_ply(output, prepared.n, _Coordinates(source), open_rows,
                                          n_faces=source.n_faces, face_blocks=faces if source.is_mesh else None,
-                                         points=points, label=label, quantity=quantity, cmap=cmap, clim=clim),
+                                         points=points, label=label, quantity=quantity, cmap=cmap, clim=clim,
+                                         face_width=prepared.face_width),
                           0.85, 1.0, "writing")
     t_write = time.perf_counter() - t2
     if not keep_scratch:
@@ -400,7 +401,7 @@ def estimate_file(input, output, method: str | None = None, range=None, **keywor
     Parameters
     ----------
     input : str or Path
-        A point cloud or mesh file: LAS/LAZ and binary PLY (points or triangles) are read a chunk at
+        A point cloud or mesh file: LAS/LAZ and binary PLY (points, triangles or polygons) are read a chunk at
         a time, whatever their size; other formats are read whole.
     output : str or Path
         ``.ply``; ``.las`` or ``.laz`` for a LAS/LAZ input (its records with the curvature as extra

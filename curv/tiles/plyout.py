@@ -3,7 +3,8 @@ that never was in memory whole.
 
 The vertex records are :func:`curv.save_ply`'s (coordinates, colours, k1, k2, H, K, standard
 errors, directions, valid, reason, the shown values, and for points the normals the estimate
-used), then a mesh's faces copied from the input. The colours' limits are
+used), then a mesh's faces copied from the input (a polygon mesh's polygons as they are, as
+:func:`curv.save_ply` writes them: a uchar count, then that many int32 corners). The colours' limits are
 :func:`curv.colors.colour_choice`'s, from the values of every ``stride``-th point when there are
 more than :data:`LIMIT_SAMPLE` (robust percentiles hardly move; say so when comparing colours
 with an in-memory export). Written atomically (:func:`curv.formats.atomic.atomic_path`).
@@ -22,7 +23,7 @@ from ..core.result import Curvature
 from ..core.validity import reason_legend
 from ..formats.atomic import atomic_path
 
-__all__ = ["iter_write_ply", "LIMIT_SAMPLE", "colour_limits"]
+__all__ = ["iter_write_ply", "LIMIT_SAMPLE", "colour_limits", "face_records"]
 
 LIMIT_SAMPLE = 4_000_000
 """Values the colour limits of a tiled PLY are chosen from, at most (every k-th point)."""
@@ -43,8 +44,24 @@ def colour_limits(n: int, read_block: Callable[[int, int], dict], quantity: str,
     return colour_choice(np.concatenate(values), np.concatenate(valid), quantity, cmap=cmap, clim=clim)
 
 
+def face_records(faces: np.ndarray) -> np.ndarray:
+    """The binary little-endian PLY list records of (m, k) faces padded with -1: (b,) uint8, each
+    face a uchar count and that many int32 corners (:func:`curv.save_ply`'s records)."""
+    real = faces >= 0
+    sizes = real.sum(axis=1)
+    flat = faces[real]  # row by row: each face's corners in order (the padding trails)
+    h = flat.size
+    offsets = np.cumsum(sizes) - sizes
+    out = np.empty(faces.shape[0] + 4 * h, np.uint8)
+    out[np.arange(faces.shape[0]) + 4 * offsets] = sizes
+    first = np.repeat(np.arange(faces.shape[0]), sizes) + 1 + 4 * np.arange(h)
+    out[first[:, None] + np.arange(4)] = flat.astype("<i4").view(np.uint8).reshape(h, 4)
+    return out
+
+
 def iter_write_ply(path, n: int, coordinates, open_rows, *, n_faces: int = 0, face_blocks=None, points: bool,
-                   label: Curvature, quantity: str = "mean", cmap=None, clim=None) -> Generator[float, None, Path]:
+                   label: Curvature, quantity: str = "mean", cmap=None, clim=None,
+                   face_width: int = 3) -> Generator[float, None, Path]:
     """Write the PLY (module notes) a block at a time: yields the fraction written, returns the path.
 
     Parameters
@@ -59,18 +76,24 @@ def iter_write_ply(path, n: int, coordinates, open_rows, *, n_faces: int = 0, fa
         read block by block in order: one for the colours' limits (when automatic), one to write.
     n_faces : int
     face_blocks : callable, optional
-        ``face_blocks()`` yields a triangle mesh's faces in order, (m, 3) int blocks.
+        ``face_blocks()`` yields a mesh's faces in order, (m, k) int blocks (-1 pads a polygon).
     points : bool
         A point cloud (its normals are written, and no face element).
     label : Curvature
         A result whose ``method``, ``range`` and ``info`` name the estimate in the header comment.
     quantity, cmap, clim
         As in :func:`curv.save_ply`.
+    face_width : int
+        The longest face's corners (k); at most 255, as :func:`curv.save_ply` writes.
     """
     from plyfile import PlyData, PlyElement
 
     from ..formats.plywrite import DIR_PROPS as _DIR_PROPS, describe_colours, float_props as _float_props
 
+    if face_width > 255:
+        from ..core.errors import MeshError
+
+        raise MeshError(f"a face has {face_width} vertices; PLY lists here hold at most 255")
     float_props = _float_props(label)  # the standard errors only when the tiles computed them
 
     if clim is None:
@@ -128,6 +151,9 @@ def iter_write_ply(path, n: int, coordinates, open_rows, *, n_faces: int = 0, fa
                 for chunk in face_blocks():
                     for lo in range(0, chunk.shape[0], _BLOCK):
                         part = chunk[lo:lo + _BLOCK]
+                        if part.shape[1] != 3:
+                            fh.write(memoryview(face_records(part)))
+                            continue
                         rows = tri[:part.shape[0]]
                         rows["corners"] = part
                         fh.write(memoryview(rows).cast("B"))

@@ -8,7 +8,8 @@ Three passes over the input (:class:`curv.tiles.sources.Source`), each a chunk a
    the tiles are cut (:func:`curv.tiles.plan.plan_tiles`);
 3. **bucket**: each point appended to its tile's file, in the input's order (so every tile's
    points are sorted by their number); a mesh's faces go to the file of every tile that holds one
-   of their vertices.
+   of their vertices (a polygon mesh's padded with -1 to its longest face, as :class:`curv.Mesh`
+   pads them).
 
 :class:`FileInput` then answers a tile's region from those files (:meth:`FileInput.fetch`).
 """
@@ -28,7 +29,7 @@ from ..core.mesh import scatter_sample, scattered_corners
 from .engine import Piece
 from .frame import GridFrame, frame_from_sample
 from .plan import Histogram, Region, TilePlan, plan_tiles
-from .scratch import FACE_DTYPE, Scratch, point_dtype
+from .scratch import Scratch, face_dtype, point_dtype
 from .sources import CHUNK, Source
 
 __all__ = ["Prepared", "iter_prepare", "FileInput"]
@@ -47,6 +48,8 @@ class Prepared:
     n : int
         Points (vertices).
     is_mesh, has_normals : bool
+    face_width : int
+        A mesh's longest face's corners (the width of the tiles' face records).
     """
 
     plan: TilePlan
@@ -54,6 +57,7 @@ class Prepared:
     n: int
     is_mesh: bool
     has_normals: bool
+    face_width: int = 3
 
 
 class FileInput:
@@ -67,6 +71,7 @@ class FileInput:
         self.is_mesh = prepared.is_mesh
         self.dtype = point_dtype(prepared.has_normals)
         self.has_normals = prepared.has_normals
+        self.face_dtype = face_dtype(prepared.face_width)
         self.source_path = Path(source_path)
         self._source = None
 
@@ -99,19 +104,24 @@ class FileInput:
         normals = np.ascontiguousarray(records["normal"]) if self.has_normals else None
         if not self.is_mesh:
             return Piece(ids, points, normals)
-        faces = np.concatenate([scratch.read_faces(t) for t in meeting]) if meeting else np.empty(0, FACE_DTYPE)
+        dtype = self.face_dtype
+        faces = np.concatenate([scratch.read_faces(t, dtype) for t in meeting]) if meeting else np.empty(0, dtype)
         corners = faces["v"]
-        touched = np.isin(corners, ids).any(axis=1)
+        touched = np.isin(corners, ids).any(axis=1)  # -1 (padding) is no point's number
         faces = faces[touched]
         faces = faces[np.unique(faces["face"], return_index=True)[1]]  # in the mesh's order, each once
         corners = faces["v"]
         ring = np.setdiff1d(np.unique(corners), ids, assume_unique=True)
+        if ring.size and ring[0] < 0:
+            ring = ring[1:]
         if ring.size:
             all_ids = np.concatenate([ids, ring])
             all_points = np.concatenate([points, self._vertices_at(ring)])
             sort = np.argsort(all_ids, kind="stable")
             ids, points = all_ids[sort], all_points[sort]
         local = np.searchsorted(ids, corners)
+        if corners.shape[1] != 3:
+            local[corners < 0] = -1
         return Piece(ids, points, None, local)
 
     def _vertices_at(self, ids: np.ndarray) -> np.ndarray:
@@ -126,7 +136,7 @@ def _mesh_frame(source: Source, scan) -> GridFrame | None:
     """A whole mesh's locality grid when the whole call would estimate it in grid order
     (:meth:`curv.Mesh.scattered_order`), else None."""
     picked = scatter_sample(source.n_faces)
-    corners = source.faces_at(picked)
+    corners = source.faces_at(picked)[:, :3]  # every face has three corners at least
     if not scattered_corners(source.n, corners):
         return None
     return frame_from_sample(scan.sample, scan.n, scan.lo, scan.hi)
@@ -170,16 +180,20 @@ def iter_prepare(source: Source, scratch: Scratch, tile_size: int) -> Generator[
             if group.size:
                 scratch.append(scratch.points_path(int(tiles[group[0]])), records[group])
         yield Progress(0.5 + (0.5 if not source.is_mesh else 0.25) * (start + pts.shape[0]) / n, "sorting points into tiles")
+    width = source.face_width() if source.is_mesh else 3
     if source.is_mesh:
         tile_of_all.flush()
+        dtype = face_dtype(width)
         for start, faces in source.face_chunks():
-            owners = np.asarray(tile_of_all[faces.ravel()]).reshape(-1, 3)
-            records = np.empty(faces.shape[0], FACE_DTYPE)
+            owners = np.asarray(tile_of_all[faces.ravel()]).reshape(faces.shape)
+            if width != 3:
+                owners[faces < 0] = -1  # padding: in no tile
+            records = np.empty(faces.shape[0], dtype)
             records["face"] = np.arange(start, start + faces.shape[0])
             records["v"] = faces
             # each face once per distinct tile among its vertices
-            for column in range(3):
-                first = np.ones(faces.shape[0], bool)
+            for column in range(width):
+                first = owners[:, column] >= 0
                 for other in range(column):
                     first &= owners[:, column] != owners[:, other]
                 rows = np.flatnonzero(first)
@@ -192,7 +206,7 @@ def iter_prepare(source: Source, scratch: Scratch, tile_size: int) -> Generator[
             yield Progress(0.75 + 0.25 * (start + faces.shape[0]) / max(source.n_faces, 1), "sorting faces into tiles")
         del tile_of_all
         tile_file.unlink(missing_ok=True)
-    prepared = Prepared(plan, frame, n, source.is_mesh, source.has_normals)
+    prepared = Prepared(plan, frame, n, source.is_mesh, source.has_normals, width)
     scratch.save_plan(prepared)
     yield Progress(1.0, "")
     return prepared

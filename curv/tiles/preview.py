@@ -5,10 +5,11 @@ preview (:func:`read_preview`) read a chunk at a time, so the whole file is neve
 
 * a **point cloud**: every ``stride``-th point in the file's order (a flight line's order thins
   evenly), with its normals if the file has them;
-* a **triangle mesh**: its vertices clustered on a uniform grid whose cells hold about the asked
-  count (each cluster at its vertices' mean position) and its faces between three different
+* a **mesh**: its vertices clustered on a uniform grid whose cells hold about the asked count
+  (each cluster at its vertices' mean position) and its triangles between three different
   clusters, each once: the shape at a coarser resolution (a cluster may join two sheets, so the
-  preview can have non-manifold edges the file does not).
+  preview can have non-manifold edges the file does not). A polygon is cut into the fan of
+  triangles from its first corner first: the preview of a quad or polygon mesh is a triangle mesh.
 
 What the preview shows is said with it (:attr:`Preview.words`): ``1,000,000 of 100,000,000 points
 shown (every 100th)``. Estimates on a preview are estimates of the preview; the full resolution is
@@ -92,7 +93,7 @@ def read_preview(path, max_points: int = PREVIEW_POINTS) -> Preview:
     path = Path(path)
     source = open_source(path)
     if source is None:
-        raise ValueError(f"{path}: is read whole (not LAS/LAZ or a binary PLY of points or triangles)")
+        raise ValueError(f"{path}: is read whole (not LAS/LAZ or a PLY read a chunk at a time)")
     if source.is_mesh:
         return Preview(_clustered(source, max_points), source.n, path)
     stride = max(1, -(-source.n // max_points))
@@ -104,6 +105,15 @@ def read_preview(path, max_points: int = PREVIEW_POINTS) -> Preview:
             normals.append(nrm[first::stride])
     cloud = PointCloud(np.concatenate(points), np.concatenate(normals) if normals else None)
     return Preview(cloud, source.n, path, stride)
+
+
+def _fan(faces: np.ndarray) -> np.ndarray:
+    """(t, 3) the triangles of (m, k) polygons padded with -1, each cut into the fan from its first corner."""
+    if faces.shape[1] == 3:
+        return faces
+    fans = [np.stack([faces[:, 0], faces[:, j], faces[:, j + 1]], axis=1) for j in range(1, faces.shape[1] - 1)]
+    triangles = np.concatenate(fans)
+    return triangles[triangles[:, 2] >= 0]
 
 
 def _clustered(source, max_vertices: int) -> Mesh:
@@ -140,7 +150,7 @@ def _clustered(source, max_vertices: int) -> Mesh:
     vertices = sums / np.maximum(counts, 1)[:, None]
     kept = np.empty((0, 3), np.int64)
     for _, faces in source.face_chunks():
-        f = cluster[faces]
+        f = cluster[_fan(faces)]
         f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
         # each face once whatever its first corner, keeping its orientation
         roll = np.argmin(f, axis=1)

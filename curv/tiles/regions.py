@@ -66,7 +66,7 @@ class FileRegions:
     Parameters
     ----------
     path : str or Path
-        LAS/LAZ (COPC read by bounds) or a binary PLY of points or triangles.
+        LAS/LAZ (COPC read by bounds) or a binary PLY of points, triangles or polygons.
     scratch : str or Path, optional
         Where the tiles are kept; default a folder per file in the system's temporary folder.
     """
@@ -97,7 +97,7 @@ class FileRegions:
             return
         source = open_source(self.path)
         if source is None:
-            raise ValueError(f"{self.path}: is read whole (not LAS/LAZ or a binary PLY of points or triangles)")
+            raise ValueError(f"{self.path}: is read whole (not LAS/LAZ or a PLY read a chunk at a time)")
         identity = self.scratch.identity(self.path, {"regions": True}, REGION_TILE)
         if self.scratch.open(identity):
             prepared = self.scratch.load_plan()

@@ -8,7 +8,8 @@ complete)::
     coordinates.f8           a compressed input's coordinates (and normals) as float64 columns
     plan.pkl                 the tiles (boxes, counts) and the whole input's grid frame
     points/NNNNNN.bin        each tile's core points: records (id, x, y, z[, nx, ny, nz]), ids ascending
-    faces/NNNNNN.bin         a mesh's faces with a vertex in the tile: (face id, v0, v1, v2)
+    faces/NNNNNN.bin         a mesh's faces with a vertex in the tile: (face id, v0, ..., vk-1), k the
+                             longest face's corners (3 for triangles), -1 padding the shorter
     rows/NNNNNN.npy          a finished tile: its core points' results (:data:`ROW_DTYPE`)
     rows/NNNNNN.json         its coordinate steps and points per reason (written just before)
     overlap/NNNNNN.npy       a finished tile's halo normals (the orientation across tiles)
@@ -28,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Scratch", "ROW_DTYPE", "OVERLAP_DTYPE", "point_dtype", "FACE_DTYPE", "rows_to_columns",
+__all__ = ["Scratch", "ROW_DTYPE", "OVERLAP_DTYPE", "point_dtype", "FACE_DTYPE", "face_dtype", "rows_to_columns",
            "columns_to_rows", "read_rows", "write_array"]
 
 ROW_DTYPE = np.dtype([("id", "<i8"), ("k1", "<f8"), ("k2", "<f8"), ("d1", "<f4", (3,)), ("d2", "<f4", (3,)),
@@ -40,6 +41,13 @@ directions, normals and standard errors in float32, the precision every output w
 OVERLAP_DTYPE = np.dtype([("id", "<i8"), ("normal", "<f4", (3,))])
 
 FACE_DTYPE = np.dtype([("face", "<i8"), ("v", "<i8", (3,))])
+"""A triangle's record in a tile's faces file."""
+
+
+def face_dtype(width: int = 3) -> np.dtype:
+    """A face's record in a tile's faces file: its number in the mesh and its ``width`` corners
+    (the mesh's longest face's; -1 pads a shorter one). :data:`FACE_DTYPE` for triangles."""
+    return FACE_DTYPE if width == 3 else np.dtype([("face", "<i8"), ("v", "<i8", (int(width),))])
 
 _VERSION = 1
 
@@ -182,9 +190,9 @@ class Scratch:
         path = self.points_path(tile)
         return np.fromfile(path, dtype=dtype) if path.is_file() else np.empty(0, dtype)
 
-    def read_faces(self, tile: int) -> np.ndarray:
+    def read_faces(self, tile: int, dtype: np.dtype = FACE_DTYPE) -> np.ndarray:
         path = self.faces_path(tile)
-        return np.fromfile(path, dtype=FACE_DTYPE) if path.is_file() else np.empty(0, FACE_DTYPE)
+        return np.fromfile(path, dtype=dtype) if path.is_file() else np.empty(0, dtype)
 
     # --- finished tiles -------------------------------------------------------------------------
     def rows_path(self, tile: int) -> Path:

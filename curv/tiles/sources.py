@@ -8,10 +8,12 @@ coordinates: a LAS file's scaled and offset, a PLY file's as stored; the file's 
   so the first pass (:meth:`Source.scan`) also copies the coordinates (and normals) into the run's
   scratch folder as plain float64 columns, which every later pass reads instead.
 * **Binary PLY** through plyfile's memory map of the vertex element (and of the faces, when every
-  face is a triangle): nothing is copied.
+  face is a triangle): nothing is copied. A polygon mesh's faces (quads, or polygons mixed) are
+  read a block of bytes at a time (:mod:`curv.tiles.polyply`), padded with -1 to the longest.
 * **ASCII PLY** of points or triangles a block of text at a time (:mod:`curv.tiles.asciiply`),
-  copied as plain columns in the first pass as LAS/LAZ. A polygon mesh (kept as polygons by the
-  in-memory reader) or any other format is read whole (:func:`open_source` returns None for them).
+  copied as plain columns in the first pass as LAS/LAZ. An ASCII polygon mesh (kept as polygons by
+  the in-memory reader), a binary PLY of other elements or face properties, or any other format is
+  read whole (:func:`open_source` returns None for them).
 
 Every pass checks what the in-memory readers check (a NaN coordinate, a count the data does not
 hold) with the same one-line :class:`curv.LoadError`.
@@ -68,6 +70,10 @@ class Source:
     has_normals: bool
     is_mesh: bool = False
     n_faces: int = 0
+
+    def face_width(self) -> int:
+        """Corners of a mesh's longest face: the width of :meth:`face_chunks`' blocks (-1 pads the shorter)."""
+        return 3
 
     def chunks(self, size: int = CHUNK) -> Iterator[tuple[int, np.ndarray, np.ndarray | None]]:
         """``(start, points (m, 3) float64, normals (m, 3) float64 or None)`` in file order."""
@@ -245,7 +251,7 @@ class LasSource(Source):
 
 def open_source(path) -> Source | None:
     """A :class:`Source` for ``path`` when it can be read a chunk at a time (LAS/LAZ; a PLY of points
-    or triangles, binary or ASCII), else None (read it whole). Raises :class:`LoadError` for an unreadable file."""
+    or triangles, binary or ASCII; a binary PLY of polygons), else None (read it whole). Raises :class:`LoadError` for an unreadable file."""
     path = Path(path)
     check_readable(path)
     suffix = path.suffix.lower()
@@ -277,11 +283,17 @@ def open_source(path) -> Source | None:
             if key is None or face_lists != [key]:
                 return None
             known = {"face": {key: 3}}
+            from ..formats.guards import check_ply_header
+            from .polyply import polygon_source
+
+            polygons = polygon_source(path, check_ply_header(path))
+            if polygons is not None and not polygons.starts_with_triangle():
+                return polygons  # plyfile would map the faces as triangles, then read them all to find out
         try:
             data = PlyData.read(str(path), known_list_len=known) if known else PlyData.read(str(path))
         except Exception as exc:  # noqa: BLE001 - a polygon mesh (lists of other lengths), or a bad file
             if known and "list length" in str(exc):
-                return None
+                return polygons
             raise LoadError(f"{path}: not a readable PLY file ({one_line(exc)})") from None
         if "vertex" not in [e.name for e in data.elements]:
             raise LoadError(f"{path}: PLY file has no vertex element")
