@@ -16,8 +16,11 @@ loaded):
 - ``curv.advise(input)``: the same and the self-check; its check part is timed by the check itself
   (``Advice.check.seconds``).
 
-Reported: the medians over the rounds, wall seconds, and the ratios to the default estimate. The
-issue's bound: the self-check at most 10x one default estimate at 100k. The kernels are compiled
+Reported: the medians over the rounds, wall seconds, and the ratios to the default estimate; and the
+processor seconds of the default estimate and of the check (every thread of the process together),
+which move less with the machine's load than the wall times. The issue's bound: the self-check at
+most 10x one default estimate at 100k. ``--profile FILE`` writes a ``cProfile`` of one checked advice
+on the mesh (after the rounds) to FILE and prints its 25 largest cumulative entries. The kernels are compiled
 before the first round (a warm-up call on a small input of each kind) so that no round pays a compile.
 """
 
@@ -55,16 +58,20 @@ def time_round(kind: str, data) -> dict:
         return curv.Mesh(*data) if kind == "mesh" else curv.PointCloud(data)
 
     out = {}
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     curv.estimate(fresh())
     out["estimate"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    out["estimate_cpu"] = time.process_time() - cpu0
+    t0, cpu0 = time.perf_counter(), time.process_time()
     curv.advise(fresh(), check=False)
     out["table"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    out["table_cpu"] = time.process_time() - cpu0
+    t0, cpu0 = time.perf_counter(), time.process_time()
     adv = curv.advise(fresh())
     out["checked"] = time.perf_counter() - t0
+    out["checked_cpu"] = time.process_time() - cpu0
     out["check"] = adv.check.seconds
+    out["check_cpu"] = adv.check.cpu_seconds
     out["calls"] = len(adv.check.measured)
     return out
 
@@ -76,6 +83,7 @@ def main(argv=None) -> int:
     parser.add_argument("--vertices", type=int, default=100_000)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--kinds", nargs="+", default=["mesh", "cloud"], choices=["mesh", "cloud"])
+    parser.add_argument("--profile", help="write a cProfile of one checked advice on the mesh here")
     args = parser.parse_args(argv)
     mesh_data, points = inputs(args.vertices)
     data = {"mesh": mesh_data, "cloud": points}
@@ -91,17 +99,32 @@ def main(argv=None) -> int:
             print(f"round {r + 1} {kind}: " + ", ".join(f"{k} {v:.2f}" for k, v in rows[kind][-1].items()), flush=True)
     print()
     print(f"| input ({args.vertices:,}) | default estimate | advise, table only | advise, checked | the check | "
-          f"check / estimate | checked advise / estimate |")
-    print("|---|---|---|---|---|---|---|")
+          f"check / estimate | checked advise / estimate | CPU: estimate, check, check / estimate |")
+    print("|---|---|---|---|---|---|---|---|")
     for kind, rs in rows.items():
         med = {k: float(np.median([x[k] for x in rs])) for k in rs[0]}
         print(f"| {kind} | {med['estimate']:.2f} s | {med['table']:.2f} s | {med['checked']:.2f} s | "
               f"{med['check']:.2f} s ({int(med['calls'])} calls) | {med['check'] / med['estimate']:.1f}x | "
-              f"{med['checked'] / med['estimate']:.1f}x |")
+              f"{med['checked'] / med['estimate']:.1f}x | {med['estimate_cpu']:.2f} s, {med['check_cpu']:.2f} s, "
+              f"{med['check_cpu'] / med['estimate_cpu']:.1f}x |")
     cmd = "benchmarks/bench_advise_cost.py " + " ".join(sys.argv[1:] if argv is None else argv)
     print(f"\nCommand: `{cmd}`; medians of {args.rounds} alternating rounds, wall seconds, "
           f"{curv.core.jit.threads()} threads.")
+    if args.profile:
+        profile(mesh_data, args.profile)
     return 0
+
+
+def profile(mesh_data, path: str) -> None:
+    """A cProfile of one checked advice on a fresh mesh, written to ``path``; its largest entries printed."""
+    import cProfile
+    import pstats
+
+    import curv
+
+    mesh = curv.Mesh(*mesh_data)
+    cProfile.runctx("curv.advise(mesh)", {"curv": curv}, {"mesh": mesh}, path)
+    pstats.Stats(path).sort_stats("cumulative").print_stats(25)
 
 
 if __name__ == "__main__":

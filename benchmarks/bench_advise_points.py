@@ -4,6 +4,7 @@ Run by hand (not part of the test suite)::
 
     python benchmarks/bench_advise_points.py 2                 # 2 surfaces per function: 24 clouds
     python benchmarks/bench_advise_points.py 2 --first 3       # surfaces 3 and 4 (held out)
+    python benchmarks/bench_advise_points.py 1 --first 3 --functions quadratic --noises 1 --samplings blue
 
 The clouds are those of ``bench_accuracy.py --points`` and ``points_wide_ranges.py`` (the study's
 random Monge patches of 3169 vertices, seed 0; about 3169 points, uniform random or blue noise;
@@ -130,6 +131,12 @@ def main(argv=None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--runs", help="also write every cloud's numbers here (JSON)")
     parser.add_argument("--report", help="only the report, from a --runs file")
+    parser.add_argument("--functions", nargs="+", choices=pa.FUNCTIONS, default=pa.FUNCTIONS,
+                        help="only these surfaces' clouds")
+    parser.add_argument("--noises", nargs="+", type=float, choices=pa.NOISES, default=pa.NOISES,
+                        help="only these noise levels")
+    parser.add_argument("--samplings", nargs="+", choices=pa.SAMPLINGS, default=pa.SAMPLINGS,
+                        help="only these samplings")
     args = parser.parse_args(argv)
     if args.report:
         rows = json.loads(Path(args.report).read_text())
@@ -141,8 +148,8 @@ def main(argv=None) -> int:
               "per cloud (median).")
         return 0
     t0 = time.perf_counter()
-    jobs = [(fn, noise, s, si) for noise in pa.NOISES for fn in pa.FUNCTIONS
-            for s in range(args.first, args.first + args.samples) for si in range(len(pa.SAMPLINGS))]
+    jobs = [(fn, noise, s, pa.SAMPLINGS.index(sampling)) for noise in args.noises for fn in args.functions
+            for s in range(args.first, args.first + args.samples) for sampling in args.samplings]
     rows = []
     with ProcessPoolExecutor(args.workers, initializer=_init_worker) as ex:
         for row in ex.map(run_cloud, jobs):

@@ -18,6 +18,7 @@ import numpy as np
 
 from .core.jit import run_to_end
 from .estimators.jet import jet_normals
+from .core.errors import EstimatorError
 from .core.mesh import Mesh
 from .geometry.normals import unusable_normal_vertices, vertex_normals
 from .estimators import get_spec
@@ -33,7 +34,7 @@ DEFAULT_FIT_DEGREE = 2
 
 
 def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
-                   radius: float | None = None, features=None) -> np.ndarray:
+                   radius: float | None = None, features=None, vertices=None) -> np.ndarray:
     """Unit vertex normals of local jet fits.
 
     Parameters
@@ -50,11 +51,17 @@ def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
     features : curv.core.features.FeatureSet, optional
         The fits do not reach across a crease; a vertex on one keeps its Max normal (its curvature
         is ``FEATURE`` anyway, and neighbours never use it).
+    vertices : (c,) int array_like, optional
+        Fit only at these vertices (default every vertex). A fit reads only its own vertex's
+        support, so the normals there are those of the whole call, bit for bit; the other rows are
+        NaN. For a caller that reads the normals at a few of the vertices (an estimate at a few
+        centres: the vertices their supports reach).
 
     Returns
     -------
     (n, 3) float64
-        Unit normals on the side of the Max normals; NaN where the fit is undefined.
+        Unit normals on the side of the Max normals; NaN where the fit is undefined (and at the
+        vertices not asked for).
 
     Raises
     ------
@@ -72,11 +79,24 @@ def fitted_normals(mesh: Mesh, *, range=None, degree: int = DEFAULT_FIT_DEGREE,
         reference[bad] = np.nan
     radii = ball_radii(mesh, rng, uses_normals=False)
     on_crease = features is not None and features.any
+    if vertices is not None:
+        vertices = _vertex_indices(vertices, mesh.n_vertices)
     normals, _ = run_to_end(jet_normals(mesh, reference, radii, degree=degree,
-                                        features=features if on_crease else None))
+                                        features=features if on_crease else None, centres=vertices))
     # the jet normal lies within 90 degrees of the PCA axis, which was turned towards the Max
     # normal; a strongly tilted fit may still end up on the other side
     normals[np.einsum("ij,ij->i", normals, reference) < 0] *= -1.0
     if on_crease:
-        normals[features.vertices] = reference[features.vertices]
+        crease = features.vertices
+        if vertices is not None:
+            crease = crease & np.isin(np.arange(mesh.n_vertices), vertices)
+        normals[crease] = reference[crease]
     return normals
+
+
+def _vertex_indices(vertices, n: int) -> np.ndarray:
+    """``vertices`` as (c,) int64 indices below ``n``; a one-line error otherwise."""
+    arr = np.asarray(vertices)
+    if arr.ndim != 1 or (arr.size and (not np.issubdtype(arr.dtype, np.integer) or arr.min() < 0 or arr.max() >= n)):
+        raise EstimatorError(f"vertices must be a 1-D array of vertex indices from 0 to {n - 1}")
+    return np.ascontiguousarray(arr, dtype=np.int64)

@@ -144,6 +144,35 @@ def test_a_call_runs_on_the_part_of_the_copy_within_its_reach(kind):
     np.testing.assert_allclose(cut.k1[centres] * cut.k2[centres], full.k1[twin.centres] * full.k2[twin.centres],
                                rtol=1e-9)
 
+def test_a_mesh_parts_normals_are_fitted_only_where_its_calls_read_them(monkeypatch):
+    """The check fits a mesh group's normals at the vertices its calls read (a third of a part or
+    less): its report equals, bit for bit, the one with the normals fitted on every vertex of each
+    part, on a noisy mesh where the calls read normals all over their supports."""
+    import curv.advice.copies as copies
+
+    tm = build_test_mesh(Task(19002, "trigonometric", 3169, 10.0, 0.5, 0))
+    fit = {"normals": "fit", "fit_range": 4}
+    calls = {"mru:R3": dict(method="mru", range=3, **fit), "an:R2": dict(method="an", range=2, **fit),
+             "jet:R2": dict(method="jet", range=2, **fit)}
+    pool = np.flatnonzero(tm.evaluated)
+    asked = []
+    read_rows = copies.read_rows
+
+    def counted(part, *args):
+        rows = read_rows(part, *args)
+        asked.append(rows.size / part.n_vertices)
+        return rows
+
+    monkeypatch.setattr(copies, "read_rows", counted)
+    some = run_to_end(iter_check(tm.mesh, calls, pool, centres=16))
+    assert len(asked) == 3 and max(asked) < 0.6
+    monkeypatch.setattr(copies, "read_rows", lambda part, *args: np.arange(part.n_vertices))
+    every = run_to_end(iter_check(tm.mesh, calls, pool, centres=16))
+    for key in calls:
+        assert some.measured[key].copies == every.measured[key].copies, key
+        assert np.isfinite(some.measured[key].erel)
+
+
 # ------------------------------------------------------------------ the check
 def test_the_check_measures_what_the_calls_do_on_the_input():
     """On a noisy analytic patch the measured error of every call is near its true error there."""
@@ -299,3 +328,31 @@ def test_large_inputs_fall_back_to_the_table(monkeypatch):
     assert not adv.checked and "the check was skipped: 642 vertices, more than 100" in adv.note
     assert adv.note in adv.why
     assert curv.advise(s.mesh, check=True).checked
+
+
+@pytest.mark.parametrize("noise", [1.0, 0.0])
+def test_the_noise_of_a_steep_cloud_is_measured_on_patches_its_fit_can_follow(noise):
+    """A steep noisy Monge patch (the study's quadratic, surface 3: z spans 4 over 2 x 1.7) seen through
+    the widest cloud call (13 spacings): the twin's patches hold more of the surface than a degree-6
+    fit follows, so their residuals never reach the noise and the noise measured on them was 0 (the
+    copies noise-free, and the degree-4 jet at R3 advised at 51 times the best call's error). The
+    noise is now measured on narrower patches there: within 15 % of the truth; 0 on the clean cloud."""
+    from scipy.spatial import cKDTree
+
+    from curv.core.ranges import point_spacing
+    from curv.point_normals import border_points
+
+    tm = build_test_mesh(Task(seed=0, function="quadratic", density=3169, irregularity=0.0, noise=noise, sample=3))
+    rng = np.random.default_rng([3, 0, 1, 16])
+    clean = sample_points(tm.sampled.surface, 3169, sampling="blue", rng=rng).cloud
+    points = clean.points + (rng.normal(scale=tm.noise_sigma, size=clean.points.shape) if noise else 0.0)
+    cloud = curv.PointCloud(points)
+    radius = 13.0 * float(np.median(point_spacing(cloud)))
+    # the centres: the points the call's support keeps off the rim (the benchmark's same-footing rule)
+    pool = np.flatnonzero(cKDTree(clean.points[border_points(clean)]).query(clean.points)[0] > radius)
+    assert 0 < pool.size < 10
+    report = run_to_end(iter_check(cloud, {"jet": dict(method="jet", radius=radius, degree=4, width="adaptive")}, pool))
+    if noise:
+        assert report.noise == pytest.approx(tm.noise_sigma, rel=0.15) and report.noise_resolved
+    else:
+        assert report.noise == 0.0

@@ -138,3 +138,35 @@ def test_property_normals_move_with_the_mesh(scale, seed, degree):
     assert ok.mean() > 0.9
     np.testing.assert_array_equal(np.isfinite(moved).all(axis=1), ok)
     np.testing.assert_allclose(moved[ok], base[ok] @ q.T, atol=1e-7)
+
+
+def _bunny():
+    """pymeshlab's sample bunny (a real scan nobody here made), else a noisy sphere made here."""
+    try:
+        import pymeshlab
+        from pathlib import Path
+
+        path = Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "bunny.obj"
+        if path.is_file():
+            return curv.load(path)
+    except ImportError:
+        pass
+    m = icosphere(4, 1.0)
+    return m.with_vertices(m.vertices + np.random.default_rng(3).normal(scale=0.01, size=m.vertices.shape))
+
+
+@pytest.mark.parametrize("range_", [2, 4])
+def test_normals_fitted_at_some_vertices_are_the_whole_calls_bit_for_bit(range_):
+    """A fit reads only its own vertex's support: the normals asked for equal the whole call's exactly,
+    the others are NaN (the advisor's check fits only where its calls read)."""
+    mesh = _bunny()
+    every = fitted_normals(mesh, range=range_)
+    asked = np.random.default_rng(0).choice(mesh.n_vertices, mesh.n_vertices // 3, replace=False)
+    some = fitted_normals(mesh, range=range_, vertices=asked)
+    assert np.isfinite(every[asked]).all(axis=1).mean() > 0.99
+    np.testing.assert_array_equal(some[asked], every[asked])
+    others = np.ones(mesh.n_vertices, bool)
+    others[asked] = False
+    assert np.isnan(some[others]).all()
+    with pytest.raises(curv.CurvError, match="vertex indices"):
+        fitted_normals(mesh, vertices=[mesh.n_vertices])

@@ -34,6 +34,10 @@ CHECK_CENTRES = 64
 REACH_MARGIN = 1.5
 """Range units added to a patch's radius beyond the farthest any call reads."""
 
+NOISE_REACH = 8.0
+"""Radius, in range units, of the narrower patch a twin patch is measured again on where its own
+residuals reached no noise floor (:func:`_patch_noise`)."""
+
 MIN_MEASURED = 0.5
 """A call measured at fewer than this share of the centres (over all copies) is not ranked by
 its measured error (its twin patches cannot hold its support: a coarse closed surface's cap)."""
@@ -95,6 +99,8 @@ class CheckReport:
         Polynomial degree -> number of twin patches fitted at it.
     seconds : float
         Wall time of the whole check.
+    cpu_seconds : float
+        Processor time of the whole check, every thread of the process together.
     """
 
     measured: dict
@@ -105,12 +111,13 @@ class CheckReport:
     centres: int
     degrees: dict = field(default_factory=dict)
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
 
     def as_dict(self) -> dict:
         return {"measured": {k: m.as_dict() for k, m in self.measured.items()}, "noise": self.noise,
                 "noise_bound": self.noise_bound, "noise_resolved": self.noise_resolved, "copies": self.copies,
                 "centres": self.centres, "degrees": {str(k): v for k, v in self.degrees.items()},
-                "seconds": self.seconds}
+                "seconds": self.seconds, "cpu_seconds": self.cpu_seconds}
 
 
 def call_reach(shape, kwargs: dict, units: np.ndarray, centres: np.ndarray) -> np.ndarray:
@@ -176,6 +183,14 @@ def _normals_group(copy, kwargs: dict):
     return None
 
 
+def _on_copy(copy, rows: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A part's ``normals`` at its ``rows`` of ``copy``: (n, 3) normals (NaN elsewhere), (n,) bool rows held."""
+    full = np.full((copy.n_vertices, 3), np.nan)
+    have = np.zeros(copy.n_vertices, bool)
+    full[rows], have[rows] = normals, True
+    return full, have
+
+
 def _score(twin, res, centres: np.ndarray, flip: bool) -> np.ndarray:
     """(c,) e_rel of a result at the twin's centres (their rows ``centres`` in the result) against the
     twin's curvature (NaN where invalid)."""
@@ -208,8 +223,9 @@ def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres:
         Seed of the centres and the noise.
     noise : float, optional
         The copies' noise along the normal in input units; default measured on the twin (the
-        median of the patches' :attr:`~curv.advice.twin.Twin.sigma` where most patches resolve it,
-        else 0).
+        median over its patches of the share of their residuals that is noise,
+        :attr:`~curv.advice.twin.Twin.noise`; a patch whose residuals reached no noise floor is
+        measured again on a narrower patch, :func:`_patch_noise`).
     twin_options : dict, optional
         Keyword arguments of :func:`curv.advice.twin.build_twin` (the fairness study of
         docs/ADVISOR.md builds twins with each candidate's own model).
@@ -230,29 +246,30 @@ def iter_check(shape, calls: dict, pool, *, copies: int = CHECK_COPIES, centres:
 
 def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options, noise_policy):
     """:func:`iter_check`'s work (its parameters in order)."""
-    from .copies import noisy_copy, within_reach
+    from .copies import noisy_copy, part_normals, within_reach
     from .twin import build_twin, range_units
 
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     pool = np.asarray(pool, np.int64)
     if pool.size == 0:
         raise CurvError("cannot check: no vertex where every candidate gives a value")
     rng = np.random.default_rng([seed, 35])
     sets = _centre_sets(pool, copies, centres, rng)
-    twins, reaches = [], []
+    twins, reaches, measures = [], [], []
     for j, chosen in enumerate(sets):
         units = range_units(shape, chosen)
         reach = {key: call_reach(shape, kw, units, chosen) for key, kw in calls.items()}
         twins.append(build_twin(shape, chosen, np.max(list(reach.values()), axis=0), **(twin_options or {})))
         # each kept centre's reach per call (a centre whose patch could not be fitted is not in the twin)
         reaches.append({key: r[np.searchsorted(chosen, twins[-1].source)] for key, r in reach.items()})
+        measures.append(_patch_noise(shape, twins[-1]))
         yield Progress(0.2 * (j + 1) / len(sets), "building the smooth twin")
-    sigma = np.concatenate([t.sigma for t in twins])
-    resolved = np.concatenate([t.resolved for t in twins])
+    sigma = np.concatenate([m[1] for m in measures])
+    resolved = np.concatenate([m[2] for m in measures])
     finite = np.isfinite(sigma)
     noise_resolved = bool(2 * np.sum(resolved & finite) > sigma.size)
     if noise is None and noise_policy == "share":
-        noise = float(np.median(np.concatenate([t.noise for t in twins])[finite])) if finite.any() else 0.0
+        noise = float(np.median(np.concatenate([m[0] for m in measures])[finite])) if finite.any() else 0.0
     elif noise is None and noise_policy == "residual":
         noise = float(np.median(sigma[finite])) if finite.any() else 0.0
     elif noise is None:
@@ -280,6 +297,11 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
             if where not in parts:
                 parts[where] = within_reach(copy, twin, reaches[j][key] if own else widest[group[key]])
             part, rows, centres_in_part = parts[where]
+            if group[key] is not None and group[key] not in shared and support_of(part).has_faces:
+                # a mesh's fitted normals: made once for the group, only where its calls read them
+                same = [calls[k] for k in calls if group[k] == group[key]]
+                made = part_normals(part, same, centres_in_part, twin.patch[rows])
+                shared[group[key]] = _on_copy(copy, rows, made)
             run = dict(calls[key])
             if group[key] in shared and shared[group[key]][1][rows].all():
                 run.pop("fit_range", None)
@@ -288,10 +310,7 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
                 res = yield from rescaled(estimate(part, vertices=centres_in_part, **quiet, **run), start,
                                           start + 0.8 / steps)
                 if group[key] is not None and group[key] not in shared:
-                    full = np.full((copy.n_vertices, 3), np.nan)
-                    have = np.zeros(copy.n_vertices, bool)
-                    full[rows], have[rows] = res.normals, True
-                    shared[group[key]] = (full, have)
+                    shared[group[key]] = _on_copy(copy, rows, res.normals)
                 scores[key].append(_score(twin, res, centres_in_part, flip=not twin.oriented))
             except CurvError:
                 scores[key].append(np.full(twin.centres.size, np.nan))
@@ -303,7 +322,33 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
     return CheckReport(measured=measured, noise=float(noise), noise_bound=bound, noise_resolved=noise_resolved,
                        copies=len(twins), centres=int(min(t.centres.size for t in twins)),
                        degrees={int(d): int(n) for d, n in zip(*np.unique(degrees, return_counts=True))},
-                       seconds=time.perf_counter() - t0)
+                       seconds=time.perf_counter() - t0, cpu_seconds=time.process_time() - cpu0)
+
+
+def _patch_noise(shape, twin) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(c,) noise, residual spread and resolved flag of each of ``twin``'s patches (its
+    :attr:`~curv.advice.twin.Twin.noise`, ``sigma``, ``resolved``), a patch wider than
+    :data:`NOISE_REACH` range units whose residuals reached no noise floor measured again on a patch of
+    that radius around its centre where that one reaches it.
+
+    A patch as wide as the widest call reads may hold more of the surface than its fit can follow (a
+    steep patch at 16 spacings: its residuals still fall at degree 6), so its residual is mostly the
+    surface's own and its noise share near 0, and the copies would be noise-free while the input is
+    not; a narrower patch of the same centre tells the noise from the surface. Where the narrower one
+    reaches no floor either (a clean input), the patch's own measure stands.
+    """
+    from .twin import build_twin, range_units
+
+    noise, sigma, resolved = twin.noise.copy(), twin.sigma.copy(), twin.resolved.copy()
+    again = np.flatnonzero(~resolved & (twin.radius > NOISE_REACH * range_units(shape, twin.source)))
+    if again.size:
+        narrow = build_twin(shape, twin.source[again], NOISE_REACH)
+        order = np.argsort(twin.source[again])
+        rows = again[order[np.searchsorted(twin.source[again], narrow.source, sorter=order)]]  # the ones it fitted
+        floor = narrow.resolved
+        noise[rows[floor]], sigma[rows[floor]] = narrow.noise[floor], narrow.sigma[floor]
+        resolved[rows[floor]] = True
+    return noise, sigma, resolved
 
 
 def _measure(per_copy: list, seconds: float) -> Measured:

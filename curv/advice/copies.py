@@ -15,7 +15,7 @@ from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.support import support_of
 
-__all__ = ["noisy_copy", "within_reach"]
+__all__ = ["noisy_copy", "within_reach", "read_rows", "part_normals"]
 
 
 def noisy_copy(shape: Mesh | PointCloud, twin, noise: float, rng: np.random.Generator) -> Mesh | PointCloud:
@@ -85,3 +85,36 @@ def within_reach(copy: Mesh | PointCloud, twin, reach: np.ndarray) -> tuple[Mesh
     else:
         part = PointCloud(copy.vertices[rows], normals=None if copy.normals is None else copy.normals[rows])
     return part, rows, new[twin.centres]
+
+
+def read_rows(part, calls: list, centres: np.ndarray, patch: np.ndarray) -> np.ndarray:
+    """(k,) int64 the vertices of a mesh ``part`` whose normals ``calls`` read at its ``centres``: within
+    the farthest any of them reads around its own patch's centre (its support and the rings of the
+    support's vertices, :func:`curv.tiles.reach.support_reach`; the twin's patches are apart).
+
+    Parameters
+    ----------
+    part : Mesh
+        A part of a noisy copy (:func:`within_reach`).
+    calls : list of dict
+        Keyword arguments of :func:`curv.estimate` (``method``, ``range`` or ``radius``).
+    centres : (c,) int64
+        The twin's centres in ``part``'s numbering.
+    patch : (k,) int64
+        The centre (0..c-1) each of ``part``'s vertices belongs to.
+    """
+    from ..tiles.reach import support_reach
+
+    reach = np.max([support_reach(part, kw["method"], kw.get("range"), radius=kw.get("radius"), centres=centres)
+                    for kw in calls], axis=0)
+    x = part.vertices
+    return np.flatnonzero(np.linalg.norm(x - x[centres][patch], axis=1) <= reach[patch])
+
+
+def part_normals(part, calls: list, centres: np.ndarray, patch: np.ndarray) -> np.ndarray:
+    """(k, 3) the fitted normals (``normals="fit"`` at the calls' ``fit_range``) that ``calls`` read on a
+    mesh ``part``, fitted only where they read them (:func:`read_rows`: about a third of a part's
+    vertices, the rest reach only the fits); NaN elsewhere. Parameters as in :func:`read_rows`."""
+    from ..fitted_normals import fitted_normals
+
+    return fitted_normals(part, range=calls[0].get("fit_range", 2), vertices=read_rows(part, calls, centres, patch))

@@ -327,16 +327,17 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
 
 
 def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree: int = DEFAULT_DEGREE,
-                weights: str = DEFAULT_WEIGHTS, chunk: int | None = None, features=None):
+                weights: str = DEFAULT_WEIGHTS, chunk: int | None = None, features=None,
+                centres: np.ndarray | None = None):
     """Unit normals of the jets fitted over each vertex's ball support, a generator.
 
     Parameters as in :func:`iter_jet` (``reference`` orients each fit; with ``features`` the fits
-    do not reach across a crease).
+    do not reach across a crease; ``centres``: only these vertices are fitted).
 
     Returns
     -------
     normals : (n, 3) float64
-        NaN where there is no fit.
+        NaN where there is no fit (and at the vertices not in ``centres``).
     reason : (n,) uint8
     """
     degree = check_degree(degree)
@@ -344,14 +345,14 @@ def jet_normals(mesh: Mesh, reference: np.ndarray, radii: np.ndarray, *, degree:
     n = mesh.n_vertices
     out = np.full((n, 3), np.nan)
     reason = np.zeros(n, np.uint8)
-    centres = all_centres(n, None)
+    centres = all_centres(n, centres)
     points, search = _inputs(mesh, reference, radii, centres, features)
 
     def run(lo, hi):
         launch(fit_kernel, JetNormalsFit(degree, smooth), (centres, lo, hi), search, points, (out, reason), None,
                None, None)
 
-    yield from iter_chunks(n, run, chunk=chunk)
+    yield from iter_chunks(centres.size, run, chunk=chunk)
     out[reason != OK] = np.nan
     return out, reason
 

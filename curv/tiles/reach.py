@@ -240,12 +240,10 @@ def mesh_reach(mesh: Mesh, method: str, rng: Range | None, *, fitted_normals: bo
         radii = ball_radii(mesh, rng, uses_normals=spec.uses_normals)
     else:  # the fixed 1-ring formulas read their ring and its vertices' normals
         radii = longest
-    reach = ball_max(mesh.vertices, radii, chain)
-    if pooled:
-        reach = _ring_values(mesh, reach)
-    if centres is not None:
-        reach = reach[np.asarray(centres, np.int64)]
-    return reach
+    if pooled:  # a centre's reach takes its ring's: every vertex's is needed
+        reach = _ring_values(mesh, ball_max(mesh.vertices, radii, chain))
+        return reach if centres is None else reach[np.asarray(centres, np.int64)]
+    return ball_max(mesh.vertices, radii, chain, None if centres is None else np.asarray(centres, np.int64))
 
 
 def support_reach(shape, method: str, range=None, *, radius=None, knn=None, normals=None, fit_range=2,
