@@ -88,24 +88,27 @@ def _cgroup_free() -> int | None:
         return None
 
 
-def available_bytes() -> int | None:
-    """Memory this process can still use: MemAvailable (psutil or /proc/meminfo), capped by a cgroup limit.
-
-    Returns ``None`` when it cannot be determined.
-    """
-    free = None
+def _machine_memory(field: str, meminfo_key: str) -> int | None:
+    """Bytes of psutil's ``virtual_memory().<field>``, else /proc/meminfo's ``meminfo_key``; None when unknown."""
     try:
         import psutil
     except ImportError:
         try:
             for line in Path("/proc/meminfo").read_text().splitlines():
-                if line.startswith("MemAvailable:"):
-                    free = int(line.split()[1]) * 1024
-                    break
+                if line.startswith(meminfo_key + ":"):
+                    return int(line.split()[1]) * 1024
         except (OSError, ValueError, IndexError):
-            free = None
-    else:
-        free = int(psutil.virtual_memory().available)
+            pass
+        return None
+    return int(getattr(psutil.virtual_memory(), field))
+
+
+def available_bytes() -> int | None:
+    """Memory this process can still use: MemAvailable (psutil or /proc/meminfo), capped by a cgroup limit.
+
+    Returns ``None`` when it cannot be determined.
+    """
+    free = _machine_memory("available", "MemAvailable")
     cg = _cgroup_free()
     if cg is not None:
         free = cg if free is None else min(free, cg)
@@ -115,19 +118,7 @@ def available_bytes() -> int | None:
 def total_bytes() -> int | None:
     """The memory this machine gives a process at most, whatever others use now: the physical
     memory (psutil or /proc/meminfo's MemTotal), capped by a cgroup limit. ``None`` when unknown."""
-    total = None
-    try:
-        import psutil
-    except ImportError:
-        try:
-            for line in Path("/proc/meminfo").read_text().splitlines():
-                if line.startswith("MemTotal:"):
-                    total = int(line.split()[1]) * 1024
-                    break
-        except (OSError, ValueError, IndexError):
-            total = None
-    else:
-        total = int(psutil.virtual_memory().total)
+    total = _machine_memory("total", "MemTotal")
     try:
         limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
         if limit != "max":

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import LoadError
-from .sources import CHUNK, Scan, Source, _normal_names
+from .sources import CHUNK, Scan, ScanTally, Source, _normal_names
 
 __all__ = ["AsciiPlySource", "ascii_source", "FACES_COPY"]
 
@@ -210,21 +210,19 @@ class AsciiPlySource(Source):
             return super().scan(None, step)
         folder.mkdir(parents=True, exist_ok=True)
         self._copy = self._faces = None  # this pass reads the text itself
-        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-        sample = []
+        tally = ScanTally(step)
         copy, faces = folder / "coordinates.f8", folder / FACES_COPY
         with open(copy, "wb") as fh, (open(faces, "wb") if self.is_mesh else open(folder / ".none.tmp", "wb")) as fh_faces:
             for kind, start, values, normals in self._text_pass(CHUNK):
                 if kind == "f":
                     fh_faces.write(np.ascontiguousarray(values, np.int64).tobytes())
                     continue
-                lo, hi = np.minimum(lo, values.min(axis=0)), np.maximum(hi, values.max(axis=0))
-                sample.append(values[(-start) % step::step])
+                tally.add(start, values)
                 block = values if normals is None else np.concatenate([values, normals], axis=1)
                 fh.write(np.ascontiguousarray(block, np.float64).tobytes())
         (folder / ".none.tmp").unlink(missing_ok=True)
         self.attach(folder)
-        return Scan(self.n, lo, hi, np.concatenate(sample) if sample else np.empty((0, 3)))
+        return tally.scan(self.n)
 
     def attach(self, folder: Path) -> bool:
         """Read the plain copies an earlier scan left in ``folder``: whether they are whole."""

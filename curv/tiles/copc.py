@@ -184,17 +184,13 @@ def iter_whole_frame(path, n: int) -> Generator[float, None, tuple[tuple, GridFr
     """One pass over a LAS/LAZ file's coordinates only (module notes): yields the fraction done,
     returns ``((least, greatest), frame)``, the whole file's bounds and grid."""
     from ..core.knn import GRAPH_NEIGHBOURS, cell_sample_step
-    from .sources import CHUNK, LasSource
+    from .sources import CHUNK, LasSource, ScanTally
 
     source = LasSource(Path(path), coordinates_only=True)
-    step = cell_sample_step(n)
-    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-    sample = []
+    tally = ScanTally(cell_sample_step(n))
     for start, pts, _ in source.chunks(CHUNK):
-        lo = np.minimum(lo, pts.min(axis=0))
-        hi = np.maximum(hi, pts.max(axis=0))
-        sample.append(pts[(-start) % step::step])
-        yield Progress((start + pts.shape[0]) / max(n, 1), "reading the file's coordinates (its grid)")
-    if not sample:
+        tally.add(start, pts)
+        yield Progress(tally.n / max(n, 1), "reading the file's coordinates (its grid)")
+    if tally.n == 0:
         raise LoadError(f"{path}: has no points")
-    return (lo, hi), frame_from_sample(np.concatenate(sample), n, lo, hi, GRAPH_NEIGHBOURS)
+    return (tally.lo, tally.hi), frame_from_sample(tally.sample, n, tally.lo, tally.hi, GRAPH_NEIGHBOURS)

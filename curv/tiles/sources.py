@@ -30,7 +30,7 @@ import numpy as np
 from ..core.errors import LoadError
 from ..core.paths import check_readable, one_line
 
-__all__ = ["Source", "LasSource", "PlySource", "open_source", "reopen", "CHUNK", "Scan"]
+__all__ = ["Source", "LasSource", "PlySource", "open_source", "reopen", "CHUNK", "Scan", "ScanTally"]
 
 CHUNK = 1 << 20
 """Points per chunk of a pass (about 50 MB of coordinates and normals)."""
@@ -62,6 +62,33 @@ class Scan:
     sample: np.ndarray = field(repr=False)
 
 
+class ScanTally:
+    """A first pass's bounds and every ``step``-th point, added chunk by chunk in file order (every
+    first pass, whatever else it does with its chunks, keeps its :class:`Scan` through this)."""
+
+    def __init__(self, step: int):
+        self.step = step
+        self.lo, self.hi = np.full(3, np.inf), np.full(3, -np.inf)
+        self.n = 0
+        self._sample = []
+
+    def add(self, start: int, pts: np.ndarray) -> None:
+        """Points ``start`` to ``start + len(pts)`` of the file, (m, 3) float64."""
+        self.lo = np.minimum(self.lo, pts.min(axis=0))
+        self.hi = np.maximum(self.hi, pts.max(axis=0))
+        self._sample.append(pts[(-start) % self.step::self.step])
+        self.n = start + pts.shape[0]
+
+    @property
+    def sample(self) -> np.ndarray:
+        """(s, 3) float64 every ``step``-th point seen so far."""
+        return np.concatenate(self._sample) if self._sample else np.empty((0, 3))
+
+    def scan(self, n: int | None = None) -> Scan:
+        """The :class:`Scan` of the pass (``n``: the file's count, default the points seen)."""
+        return Scan(self.n if n is None else n, self.lo, self.hi, self.sample)
+
+
 class Source:
     """An input read a chunk at a time (module notes)."""
 
@@ -82,16 +109,10 @@ class Source:
     def scan(self, folder: Path | None, step: int) -> Scan:
         """The first pass: count, bounds, every ``step``-th point (and a plain copy in ``folder``
         where later passes need one)."""
-        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-        sample = []
-        n = 0
+        tally = ScanTally(step)
         for start, pts, _ in self.chunks():
-            lo = np.minimum(lo, pts.min(axis=0))
-            hi = np.maximum(hi, pts.max(axis=0))
-            first = (-start) % step
-            sample.append(pts[first::step])
-            n = start + pts.shape[0]
-        return Scan(n, lo, hi, np.concatenate(sample) if sample else np.empty((0, 3)))
+            tally.add(start, pts)
+        return tally.scan()
 
     @staticmethod
     def _check(path: Path, start: int, pts: np.ndarray) -> None:
@@ -216,18 +237,15 @@ class LasSource(Source):
         width = 6 if self.has_normals else 3
         copy = folder / "coordinates.f8"
         self._copy = None  # this pass reads the file itself
+        tally = ScanTally(step)
         with open(copy, "wb") as fh:
-            lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-            sample = []
             for start, pts, normals in self._file_chunks(CHUNK):
-                lo = np.minimum(lo, pts.min(axis=0))
-                hi = np.maximum(hi, pts.max(axis=0))
-                sample.append(pts[(-start) % step::step])
+                tally.add(start, pts)
                 block = pts if normals is None else np.concatenate([pts, normals], axis=1)
                 fh.write(np.ascontiguousarray(block, dtype=np.float64).tobytes())
         self._copy = copy
         self._width = width
-        return Scan(self.n, lo, hi, np.concatenate(sample) if sample else np.empty((0, 3)))
+        return tally.scan(self.n)
 
     def attach(self, folder: Path) -> bool:
         """Read the plain copy an earlier scan left in ``folder`` (a resumed run): whether it is whole."""
