@@ -192,6 +192,27 @@ def rules_report(sets: dict, table: dict, with_realized: bool) -> str:
     return "\n".join(lines)
 
 
+def agreement_report(sets: dict, split: int = 500) -> str:
+    """Markdown: how well each judge orders a short list, the correlation of its log errors with the
+    true ones over every (mesh, measured call), each mesh's logs centred (only the order within a
+    mesh matters), on meshes of at most and of more than ``split`` vertices."""
+    judges = [("pred", "the table's prediction"), ("meas", "the check's measure"), ("real", "the realized score")]
+    rows = {False: [], True: []}
+    for recs in sets.values():
+        for rec in recs:
+            calls = [c for c in rec["short"] if all(c.get(j) is not None for j, _ in judges)]
+            if len(calls) > 1:
+                logs = np.log([[c[j] for j, _ in judges] + [rec["e"][c["key"]]] for c in calls])
+                rows[rec["run"]["n_vertices"] > split].append(logs - logs.mean(axis=0))
+    lines = ["| meshes | calls | " + " | ".join(label for _, label in judges) + " |", "|---" * (len(judges) + 2) + "|"]
+    for big, label in ((False, f"at most {split} vertices"), (True, f"more than {split} vertices")):
+        if rows[big]:
+            x = np.concatenate(rows[big])
+            lines.append(f"| {label} | {len(x)} | " + " | ".join(f"{np.corrcoef(x[:, i], x[:, -1])[0, 1]:.2f}"
+                                                              for i in range(len(judges))) + " |")
+    return "\n".join(lines)
+
+
 def losses_report(sets: dict, above: float = 1.2) -> str:
     """Markdown: the meshes where the table's first choice has regret above ``above``."""
     def short(key):
@@ -280,7 +301,13 @@ def main(argv=None) -> int:
                 real_path.write_text(json.dumps(realized_scores(runs, checks)))
             real = json.loads(real_path.read_text())
         sets[Path(path).stem] = mesh_records(runs, checks, real)
-    print(losses_report(sets) if args.losses else rules_report(sets, load_table(), bool(args.realized)))
+    if args.losses:
+        print(losses_report(sets))
+        return 0
+    print(rules_report(sets, load_table(), bool(args.realized)))
+    if args.realized:
+        print("\nThe judges' order of a short list against the truth (correlation of centred log errors):\n")
+        print(agreement_report(sets))
     return 0
 
 
