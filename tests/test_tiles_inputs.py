@@ -193,6 +193,40 @@ def test_an_ascii_polygon_mesh_is_read_whole_and_bad_counts_are_one_line(tmp_pat
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.parametrize("fault", ["beyond", "negative"])
+@pytest.mark.parametrize("form", ["binary", "ascii"])
+def test_a_triangle_ply_with_a_bad_corner_is_the_whole_readers_one_line_on_tiles(tmp_path, form, fault):
+    from curv.core.errors import LoadError
+    from curv.tiles import estimate_file
+    from curv.tiles.sources import open_source
+
+    from meshes import torus_grid
+
+    mesh = torus_grid(16, 10)[0]
+    faces = mesh.face_indices.reshape(-1, 3).copy()
+    bad = {"beyond": (mesh.n_vertices + 4, mesh.n_vertices + 9), "negative": (-3, -5)}[fault]
+    faces[57, 1], faces[90, 2] = bad  # the first of two faults of one kind is named
+    path = tmp_path / "bad.ply"
+    if form == "ascii":
+        _write_ascii_ply(path, mesh.vertices, faces)
+    else:
+        from plyfile import PlyData, PlyElement
+
+        v = np.zeros(mesh.n_vertices, dtype=[("x", "f8"), ("y", "f8"), ("z", "f8")])
+        v["x"], v["y"], v["z"] = mesh.vertices.T
+        f = np.empty(len(faces), dtype=[("vertex_indices", "i4", (3,))])
+        f["vertex_indices"] = faces
+        PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")]).write(str(path))
+    assert open_source(path) is not None  # streamed: the chunked reader's own check
+    with pytest.raises(Exception) as whole:
+        curv.load(path)
+    with pytest.raises(LoadError) as tiled:
+        estimate_file(path, tmp_path / "out.ply", "mru", 2, tile_size=100, workers=1)
+    assert str(tiled.value) == str(whole.value) and "\n" not in str(tiled.value)
+    assert "face 57" in str(tiled.value)
+    assert not (tmp_path / "out.ply").exists()
+
+
 @pytest.mark.parametrize("kind", ["mesh", "cloud"])
 def test_an_ascii_ply_on_tiles_writes_the_whole_calls_file(tmp_path, kind):
     from plyfile import PlyData
