@@ -94,6 +94,37 @@ def test_a_copc_region_by_bounds_is_the_whole_files_points_there(copc_file):
     assert copc.nodes_read == copc.n_nodes
 
 
+def test_a_copc_preview_is_its_coarse_octree_levels_as_laspy_reads_them(copc_file):
+    from laspy.copc import CopcReader
+
+    from curv.tiles.preview import read_preview
+
+    whole = curv.load(copc_file)
+    with CopcReader.open(copc_file) as reader:
+        by_level = [len(reader.query(level=range(0, k + 1))) for k in range(8)]
+        coarse = reader.query(level=range(0, 3))
+        expected = np.column_stack([np.asarray(coarse[c], np.float64) for c in "xyz"])
+    assert by_level[1] < by_level[2] < whole.n_vertices
+    rows = {tuple(p): i for i, p in enumerate(whole.vertices)}
+    # the count between the second level's total and the third's: levels 0-2, every 2nd or 3rd point
+    for cap in (by_level[2], (by_level[1] + by_level[2]) // 2):
+        preview = read_preview(copc_file, cap)
+        stride = -(-by_level[2] // cap)
+        assert preview.levels == 2 and preview.stride == stride and preview.total == whole.n_vertices
+        assert preview.shown == -(-by_level[2] // stride) <= cap
+        how = "octree levels 0-2" + (f", every {stride}{'nd' if stride == 2 else 'rd' if stride == 3 else 'th'}"
+                                     if stride > 1 else "")
+        assert preview.words == f"{preview.shown:,} of {whole.n_vertices:,} points shown ({how})"
+        # laspy's level query's points, in the file's order, every stride-th, the file's own normals
+        at = np.array([rows[tuple(p)] for p in expected])
+        at = np.sort(at)[::stride]
+        assert np.array_equal(preview.shape.points, whole.vertices[at])
+        if whole.normals is not None:
+            assert np.array_equal(preview.shape.normals, whole.normals[at])
+    everything = read_preview(copc_file, whole.n_vertices)
+    assert everything.shown == whole.n_vertices and everything.words.endswith("(all)")
+
+
 def test_the_estimate_around_a_pick_on_a_copc_file_is_the_whole_calls(copc_file, tmp_path):
     from curv.tiles.regions import FileRegions
 
