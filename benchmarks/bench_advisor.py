@@ -446,22 +446,29 @@ def refeature_runs(runs: list[dict], pool) -> list[dict]:
     return [{**r, "raw": {**r["raw"], **row}} for r, row in zip(runs, rows)]
 
 
+def stored_features(raw: dict, table: dict):
+    """The :class:`~curv.advice.features.MeshFeatures` of a run's stored raw measures, calibrated by
+    ``table`` as :func:`curv.advise` calibrates them (a triangle mesh)."""
+    from curv.advice.features import (RESIDUAL_MEASURES, SHAPE_MEASURES, MeshFeatures, calibrate_irregularity,
+                                      calibrate_noise)
+
+    cal = table["calibration"]
+    noise = calibrate_noise(raw["noise_raw"], cal, raw["density"])
+    return MeshFeatures(irregularity_deg=calibrate_irregularity(raw["irregularity_raw_deg"], noise, cal),
+                        noise=noise, density=raw["density"], border_share=raw["border_share"],
+                        polygon_kinds={3: 1}, noise_raw=raw["noise_raw"],
+                        **{k: raw.get(k, float("nan")) for k in (*SHAPE_MEASURES, *RESIDUAL_MEASURES)})
+
+
 def readvise(runs: list[dict], table: dict) -> list[dict]:
     """The runs with the advice of another table, from their stored raw measures (no estimator runs
     again): the same calibration, prediction and candidates as :func:`curv.advise`."""
-    from curv.advice.features import (RESIDUAL_MEASURES, SHAPE_MEASURES, MeshFeatures, calibrate_irregularity,
-                                      calibrate_noise)
     from curv.advice.prediction import predict
     from curv.advice.shares import candidates, rank
 
-    cal = table["calibration"]
     out = []
     for r in runs:  # one prediction per held-out mesh
-        noise = calibrate_noise(r["raw"]["noise_raw"], cal, r["raw"]["density"])
-        feats = MeshFeatures(irregularity_deg=calibrate_irregularity(r["raw"]["irregularity_raw_deg"], noise, cal),
-                             noise=noise, density=r["raw"]["density"], border_share=r["raw"]["border_share"],
-                             polygon_kinds={3: 1}, noise_raw=r["raw"]["noise_raw"],
-                             **{k: r["raw"].get(k, float("nan")) for k in (*SHAPE_MEASURES, *RESIDUAL_MEASURES)})
+        feats = stored_features(r["raw"], table)
         pred = predict(table, feats)
         ok = [v for v in candidates(table, feats) if np.isfinite(pred[v])]
         choice = rank({v: pred[v] for v in ok}, r.get("shares", {}))[0]
