@@ -10,15 +10,13 @@ The order is:
    every such call is as good as the others) and ties broken by the prediction;
 3. then the calls not measured, by the table's prediction (or, without a table, in the order
    given);
-4. the prior's choice stays first unless the check tells the measured best from it by more than
+4. the prior's choice (the first measured call of the covering group in the table's order, or
+   the order given) stays first unless the check tells the measured best from it by more than
    its judge can be trusted to: unless on every copy the prior's choice measured more than
    ``band`` times the best's error. Where the prior is the table's prediction for this very
-   input (a mesh), its choice is the table's first covering call, and it stays first too where the
-   check could not measure it (a call whose support does not fit the twin's patches: a coarse
-   closed surface's cap; nothing measured it worse); ``band`` is :data:`JUDGE_BIAS`, how far the
-   smooth twin itself sets two calls' measured errors apart from their true ratio. Where the prior
-   is only an order (a point cloud: no table), its choice is the first measured call in that
-   order, and ``band`` is 1: the copies' own spread is the only doubt.
+   input (a mesh), ``band`` is :data:`JUDGE_BIAS`, how far the smooth twin itself sets two calls'
+   measured errors apart from their true ratio; where it is only an order (a point cloud: no
+   table), ``band`` is 1 and the copies' own spread is the only doubt.
 
 A measured call that covers the input as well is *within noise* of the recommendation when on at
 least one noisy copy its median error was at or below the recommendation's: the copies do not tell
@@ -88,9 +86,9 @@ def rank_candidates(candidates: list, measured: dict | None, slack: float, *,
                 prior[id(c)])
 
     ordered = sorted(cands, key=key)
-    first, band = _prior_choice([c for c in cands if c.valid_share >= top - slack], judge_bias)
-    if first is not None and first is not ordered[0] and not (_ok(first) and _ok(ordered[0]) and _separated(
-            ordered[0].measured, first.measured, band)):
+    first = next((c for c in cands if c.valid_share >= top - slack and c.measured is not None and c.measured.ok), None)
+    band = judge_bias if first is not None and math.isfinite(first.expected_erel) else 1.0
+    if first is not None and first is not ordered[0] and not _separated(ordered[0].measured, first.measured, band):
         ordered.remove(first)
         ordered.insert(0, first)
     best = ordered[0].measured
@@ -98,23 +96,6 @@ def rank_candidates(candidates: list, measured: dict | None, slack: float, *,
         return ordered
     return [ordered[0]] + [dataclasses.replace(c, within_noise=c.valid_share >= top - slack
                                                and _within_noise(best, c.measured)) for c in ordered[1:]]
-
-
-def _ok(candidate) -> bool:
-    return candidate.measured is not None and candidate.measured.ok
-
-
-def _prior_choice(covering: list, judge_bias: float):
-    """The prior's choice among the covering candidates and the band the check must beat it by.
-
-    With a table (its predictions) the choice is the table's first, measured or not: a call the
-    check could not measure (its support does not fit the twin's patches, :data:`MIN_MEASURED
-    <curv.advice.check.MIN_MEASURED>`) has no measure to overrule it. Without one (a cloud's order)
-    it is the first measured call, and the copies' spread is the only doubt (band 1).
-    """
-    if covering and math.isfinite(covering[0].expected_erel):
-        return covering[0], judge_bias
-    return next((c for c in covering if _ok(c)), None), 1.0
 
 
 def _separated(best, other, band: float) -> bool:
