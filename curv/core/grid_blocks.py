@@ -18,7 +18,7 @@ import numpy as np
 from .jit import jit
 
 __all__ = ["cell_coordinates", "block_around", "ring_of", "start_walk", "next_run", "block_runs", "cell_block",
-           "cell_of"]
+           "cell_of", "run_columns"]
 
 
 @jit
@@ -189,3 +189,32 @@ def cell_of(i, cell_start):
         else:
             hi = mid
     return lo
+
+
+COLUMN_MARGIN = 1e-9
+"""Relative widening of a column's bounds in :func:`run_columns` (of the coordinates' size): a
+point's cell is ``floor((x - origin) / h)`` in floating point, so it may lie a rounding outside the
+column's exact bounds."""
+
+
+@jit
+def run_columns(runs, m, cells, origin, columns):
+    """The x and y bounds of the column (or occupied cell) of each run ``runs[:m]`` of
+    :func:`block_runs`, widened by :data:`COLUMN_MARGIN`: ``columns[r] = (x0, x1, y0, y1)``, every
+    point of run r inside. A ball whose centre is farther than its radius from those bounds in
+    x and y has no point in the run (:func:`curv.core.grid_balls.block_gather` skips it).
+
+    Returns ``columns``, or a larger array when it had fewer than ``m`` rows.
+    """
+    if columns.shape[0] < m:
+        columns = np.empty((runs.shape[0], 4))
+    cell_keys, cell_start, dims = cells[0], cells[1], cells[2]
+    h = origin[3]
+    for r in range(m):
+        ix, iy, _ = cell_coordinates(cell_keys[cell_of(runs[r, 0], cell_start)], dims)
+        x0, y0 = origin[0] + ix * h, origin[1] + iy * h
+        mx = COLUMN_MARGIN * (abs(origin[0]) + abs(x0) + 2.0 * h)
+        my = COLUMN_MARGIN * (abs(origin[1]) + abs(y0) + 2.0 * h)
+        columns[r, 0], columns[r, 1] = x0 - mx, x0 + h + mx
+        columns[r, 2], columns[r, 3] = y0 - my, y0 + h + my
+    return columns
