@@ -33,8 +33,8 @@ import time
 import numpy as np
 
 from curv.core.jit import jit
-from curv.core.grid_blocks import run_columns
-from curv.core.knn import block_gather, cell_block, ring_of
+from curv.core.grid_blocks import cell_runs
+from curv.core.knn import block_gather
 from curv.core.small_linalg import sym3_eigen_closed
 from curv.estimators._jet_fit import fit_jet, jet_scratch
 from curv.point_normals.frames import _spread, _widest_gap, _within, gap_scratch, offset_moments
@@ -49,7 +49,7 @@ def _parts(stage, grid, radii, screens):
     """The pass's walk up to ``stage`` (module notes), serial; returns a checksum."""
     cells, coords = grid
     outer2, radii2 = radii
-    order, cell_start = cells[3], cells[1]
+    order = cells[3]
     x, y, z = coords[1], coords[2], coords[3]
     n = order.size
     queue = np.empty(n + 1, np.int64)
@@ -58,29 +58,20 @@ def _parts(stage, grid, radii, screens):
     cov = np.empty((3, 3))
     vecs = np.empty((4, 3))
     gaps = gap_scratch()
-    runs = np.empty((64, 2), np.int64)
-    columns = np.empty((64, 4))
+    block = (np.empty((64, 2), np.int64), 0, np.empty((64, 4)))
     m, vec, cov_jet, frame, evec = jet_scratch()
     normal_a = np.empty((n, 3))
     total = 0.0
     c = 0
     cell_end = 0
-    n_runs = 0
     for i in range(n):
         if i >= cell_end:
-            while cell_start[c + 1] <= i:
-                c += 1
-            cell_end = cell_start[c + 1]
-            widest = 0.0
-            for j in range(cell_start[c], cell_end):
-                widest = max(widest, outer2[order[j]])
-            n_runs, runs = cell_block(c, ring_of(widest, cells[2], coords[0]), cells, runs)
-            columns = run_columns(runs, n_runs, cells, coords[0], columns)
-            total += n_runs
+            c, cell_end, block = cell_runs(i, c, outer2, cells, coords[0], block)
+            total += block[1]
         if stage < 1:
             continue
         p = order[i]
-        count = block_gather(i, outer2[p], (runs, n_runs, columns), coords, queue, dist2)
+        count = block_gather(i, outer2[p], block, coords, queue, dist2)
         total += count
         if stage < 2:
             continue

@@ -18,7 +18,7 @@ import numpy as np
 from .jit import jit
 
 __all__ = ["cell_coordinates", "block_around", "ring_of", "start_walk", "next_run", "block_runs", "cell_block",
-           "cell_of", "run_columns"]
+           "cell_of", "run_columns", "cell_runs"]
 
 
 @jit
@@ -218,3 +218,25 @@ def run_columns(runs, m, cells, origin, columns):
         columns[r, 0], columns[r, 1] = x0 - mx, x0 + h + mx
         columns[r, 2], columns[r, 3] = y0 - my, y0 + h + my
     return columns
+
+
+@jit
+def cell_runs(i, c, radius2, cells, origin, block):
+    """Move a walk over the sorted points to the cell of sorted position ``i`` (at or after cell
+    ``c``) and read that cell's block for the widest ball of its points: :func:`cell_block` at the
+    rings of the largest ``radius2`` (squared radii, (n,), original order) of the cell's points, and
+    :func:`run_columns` of its runs.
+
+    ``block``: the scratch ``(runs, m, columns)``. Returns ``(c, cell_end, block)``, the cell, where
+    its points end in sorted order, and ``(runs, m, columns)`` filled (the arrays grown if needed):
+    what :func:`curv.core.grid_balls.block_gather` reads for each of the cell's points.
+    """
+    cell_start, order = cells[1], cells[3]
+    while cell_start[c + 1] <= i:
+        c += 1
+    widest = 0.0
+    for j in range(cell_start[c], cell_start[c + 1]):
+        widest = max(widest, radius2[order[j]])
+    runs, _, columns = block
+    m, runs = cell_block(c, ring_of(widest, cells[2], origin), cells, runs)
+    return c, cell_start[c + 1], (runs, m, run_columns(runs, m, cells, origin, columns))

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.jit import iter_chunks, jit_parallel, launch, prange, slice_bounds, threads
-from ..core.grid_blocks import run_columns
-from ..core.knn import block_gather, cell_block, cell_of, ring_of
+from ..core.grid_blocks import cell_runs
+from ..core.knn import block_gather, cell_of
 from ..core.pointcloud import PointCloud
 from ..core.validity import OK
 from ..estimators._jet_fit import fit_jet, jet_normal, jet_scratch
@@ -42,8 +42,8 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
     or None (compiled without).
 
     The points are walked cell by cell: the columns of a cell's block are looked up once for all
-    its points (:func:`curv.core.knn.cell_block`), each point's ball read from them (those within
-    its radius in x and y, :func:`curv.core.grid_blocks.run_columns`).
+    its points (:func:`curv.core.grid_blocks.cell_runs`), each point's ball read from them (those
+    within its radius in x and y).
     """
     cells, coords = grid
     outer2, radii2, screens = radii
@@ -59,26 +59,17 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
         cov = np.empty((3, 3))
         vecs = np.empty((4, 3))
         gaps = gap_scratch()
-        runs = np.empty((64, 2), np.int64)
-        columns = np.empty((64, 4))
+        block = (np.empty((64, 2), np.int64), 0, np.empty((64, 4)))
         m, vec, cov_jet, frame, evec = jet_scratch()
         keep_b = normal_b.shape[0] > 1
         start, stop = slice_bounds(lo, hi, t, parts)
         c = cell_of(start, cell_start) if start < stop else 0
         cell_end = start
-        n_runs = 0
         for i in range(start, stop):
             if i >= cell_end:
-                while cell_start[c + 1] <= i:
-                    c += 1
-                cell_end = cell_start[c + 1]
-                widest = 0.0
-                for j in range(cell_start[c], cell_end):
-                    widest = max(widest, outer2[order[j]])
-                n_runs, runs = cell_block(c, ring_of(widest, cells[2], coords[0]), cells, runs)
-                columns = run_columns(runs, n_runs, cells, coords[0], columns)
+                c, cell_end, block = cell_runs(i, c, outer2, cells, coords[0], block)
             p = order[i]
-            count = block_gather(i, outer2[p], (runs, n_runs, columns), coords, queue, dist2)
+            count = block_gather(i, outer2[p], block, coords, queue, dist2)
             if wanted[0]:
                 # frame A's ball is usually the outer one: the ball search's queue itself, not a copy
                 whole = radii2[0, p] == outer2[p]
