@@ -303,3 +303,69 @@ def test_one_far_point_costs_its_points_not_the_empty_cells(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     found, valid = map(int, proc.stdout.split())
     assert found == 1 and valid > 150
+
+
+def _lattice_plane(step=2.0 ** -6, side=48, origin=(0.0, 0.0, 0.0)):
+    """Points on a tilted lattice whose x and y are exact multiples of a power of two: many sit on
+    the ball grid's cell bounds."""
+    u, v = np.meshgrid(np.arange(side) * step, np.arange(side) * step)
+    pts = np.column_stack([u.ravel(), v.ravel(), 0.5 * u.ravel()])
+    return curv.PointCloud(pts + np.asarray(origin))
+
+
+def _pruned_clouds():
+    yield "uniform sphere", curv.PointCloud(_sphere_points(3000, 5))
+    yield "rows 5:1", sample_points(QuadraticPatch(), 3000, sampling="rows", ratio=5, rng=2).cloud
+    yield "lattice on cell bounds", _lattice_plane()
+    yield "georeferenced lattice", _lattice_plane(step=0.25, side=40, origin=(512000.0, 4096000.0, 120.0))
+    yield "sphere far from the origin", curv.PointCloud(1e-3 * _sphere_points(2000, 6) + 1e4)
+
+
+@pytest.mark.parametrize("name,cloud", list(_pruned_clouds()), ids=[c[0] for c in _pruned_clouds()])
+def test_a_cells_block_skipping_far_columns_gives_every_ball_in_the_search_order(name, cloud):
+    """The pass reads each ball from its cell's block, skipping the columns farther than the radius
+    in x and y (:func:`curv.core.grid_blocks.run_columns`): the same points in the same order as
+    the plain search, also where points lie on the cells' bounds or far from the origin."""
+    from curv.core.grid_blocks import run_columns
+    from curv.core.knn import block_gather, cell_block, cell_of, grid_gather, ring_of
+
+    radii = 3.0 * point_spacing(cloud)
+    cells, coords = cloud.ball_grid(radii)
+    n = cloud.n_points
+    queue, dist2, want, want_d = (np.empty(n + 1, np.int64), np.empty(n + 1), np.empty(n + 1, np.int64),
+                                  np.empty(n + 1))
+    runs, columns = np.empty((4, 2), np.int64), np.empty((4, 4))
+    skipped = 0
+    for i in range(n):
+        r2 = float(radii[cells[3][i]] ** 2)
+        m, runs = cell_block(cell_of(i, cells[1]), ring_of(r2, cells[2], coords[0]), cells, runs)
+        columns = run_columns(runs, m, cells, coords[0], columns)
+        count = block_gather(i, r2, (runs, m, columns), coords, queue, dist2)
+        expect = grid_gather(i, r2, cells, coords, want, want_d)
+        assert count == expect and np.array_equal(queue[:count], want[:count]), f"point {i}"
+        np.testing.assert_array_equal(dist2[:count], want_d[:count])
+        p = np.array([coords[1][i], coords[2][i]])
+        near = np.maximum(np.maximum(columns[:m, [0, 2]] - p, p - columns[:m, [1, 3]]), 0.0)
+        skipped += int(((near ** 2).sum(axis=1) > r2).sum())
+    assert skipped > 0  # the test reaches the skip
+
+
+def test_a_line_check_the_pass_left_out_reads_as_if_the_pass_had_measured_it():
+    """The normals' pass measures the line check at R2 only; an estimate that asks for the one
+    without the neighbours' normals (mru, an: R1) has it measured over the pass's own grid, so its
+    supports' points come in the pass's order: the spreads are those of a pass measuring both."""
+    from curv.core.jit import run_to_end
+    from curv.point_normals import border_radii, point_normals, support_spread
+    from curv.point_normals.normals import EXACT_GAP, ONE_SIDED_GAP, _default_spreads, _radii
+    from curv.point_normals.one_pass import _one_pass
+
+    for cloud_of in (lambda: sample_points(QuadraticPatch(), 4000, sampling="rows", ratio=4, rng=3).cloud,
+                     lambda: curv.PointCloud(_sphere_points(5000, 7))):
+        ref = cloud_of()
+        both = run_to_end(_one_pass(ref, border_radii(ref), _radii(ref, 2), jet=True, spreads=_default_spreads(ref),
+                                    screens=(EXACT_GAP, ONE_SIDED_GAP)))
+        cloud = cloud_of()
+        point_normals(cloud)
+        r2, r1 = _default_spreads(cloud)
+        np.testing.assert_array_equal(_run_gen(support_spread(cloud, r2)), both.spreads[0])
+        np.testing.assert_array_equal(_run_gen(support_spread(cloud, r1)), both.spreads[1])

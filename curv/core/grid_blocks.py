@@ -18,7 +18,7 @@ import numpy as np
 from .jit import jit
 
 __all__ = ["cell_coordinates", "block_around", "ring_of", "start_walk", "next_run", "block_runs", "cell_block",
-           "cell_of"]
+           "cell_of", "run_columns", "cell_runs"]
 
 
 @jit
@@ -189,3 +189,54 @@ def cell_of(i, cell_start):
         else:
             hi = mid
     return lo
+
+
+COLUMN_MARGIN = 1e-9
+"""Relative widening of a column's bounds in :func:`run_columns` (of the coordinates' size): a
+point's cell is ``floor((x - origin) / h)`` in floating point, so it may lie a rounding outside the
+column's exact bounds."""
+
+
+@jit
+def run_columns(runs, m, cells, origin, columns):
+    """The x and y bounds of the column (or occupied cell) of each run ``runs[:m]`` of
+    :func:`block_runs`, widened by :data:`COLUMN_MARGIN`: ``columns[r] = (x0, x1, y0, y1)``, every
+    point of run r inside. A ball whose centre is farther than its radius from those bounds in
+    x and y has no point in the run (:func:`curv.core.grid_balls.block_gather` skips it).
+
+    Returns ``columns``, or a larger array when it had fewer than ``m`` rows.
+    """
+    if columns.shape[0] < m:
+        columns = np.empty((runs.shape[0], 4))
+    cell_keys, cell_start, dims = cells[0], cells[1], cells[2]
+    h = origin[3]
+    for r in range(m):
+        ix, iy, _ = cell_coordinates(cell_keys[cell_of(runs[r, 0], cell_start)], dims)
+        x0, y0 = origin[0] + ix * h, origin[1] + iy * h
+        mx = COLUMN_MARGIN * (abs(origin[0]) + abs(x0) + 2.0 * h)
+        my = COLUMN_MARGIN * (abs(origin[1]) + abs(y0) + 2.0 * h)
+        columns[r, 0], columns[r, 1] = x0 - mx, x0 + h + mx
+        columns[r, 2], columns[r, 3] = y0 - my, y0 + h + my
+    return columns
+
+
+@jit
+def cell_runs(i, c, radius2, cells, origin, block):
+    """Move a walk over the sorted points to the cell of sorted position ``i`` (at or after cell
+    ``c``) and read that cell's block for the widest ball of its points: :func:`cell_block` at the
+    rings of the largest ``radius2`` (squared radii, (n,), original order) of the cell's points, and
+    :func:`run_columns` of its runs.
+
+    ``block``: the scratch ``(runs, m, columns)``. Returns ``(c, cell_end, block)``, the cell, where
+    its points end in sorted order, and ``(runs, m, columns)`` filled (the arrays grown if needed):
+    what :func:`curv.core.grid_balls.block_gather` reads for each of the cell's points.
+    """
+    cell_start, order = cells[1], cells[3]
+    while cell_start[c + 1] <= i:
+        c += 1
+    widest = 0.0
+    for j in range(cell_start[c], cell_start[c + 1]):
+        widest = max(widest, radius2[order[j]])
+    runs, _, columns = block
+    m, runs = cell_block(c, ring_of(widest, cells[2], origin), cells, runs)
+    return c, cell_start[c + 1], (runs, m, run_columns(runs, m, cells, origin, columns))

@@ -52,7 +52,11 @@
    as its reference: a fit turned the other way is the same fit with its sign changed exactly,
    so the normal is turned afterwards, once the orientation is known. For a jet estimate at the
    normals' range the pass keeps its fits (``keep_fits_at``), which the estimator reads instead of
-   fitting again (:mod:`curv.estimators._jet_handover`).
+   fitting again (:mod:`curv.estimators._jet_handover`). Its line check is the one at the fits'
+   range; the one without the neighbours' normals (``mru``, ``an``) is measured when asked, over
+   the pass's grid, so its sums run in the pass's order (:func:`.one_pass.owe_spreads`). Each ball
+   is read from its cell's block, without the columns farther than the radius in x and y
+   (:func:`curv.core.grid_blocks.cell_runs`): the same points in the same order.
 6. **Grid order.** An estimate of a whole cloud runs on its twin in grid order
    (:func:`grid_ordered`) and maps the rows back: the neighbour graph, the orientation and the
    estimators' kernels then read neighbours that are near in memory too (a cloud saved in random

@@ -19,7 +19,7 @@ from ..estimators import get_spec
 from ..estimators._jet_handover import Kept, keep_for
 from ..estimators.jet import DEFAULT_DEGREE
 from ..geometry.neighbourhood import cached_with_mesh, latest_with_mesh
-from .one_pass import _one_pass, _Pass
+from .one_pass import _one_pass, _Pass, owe_spreads
 from .orientation import default_orientation, orient_normals
 from .quantised import support_floor
 
@@ -167,8 +167,9 @@ def _keep(cloud: PointCloud, found: _Pass, spread_radii) -> None:
 
 
 def _default_spreads(cloud: PointCloud) -> list:
-    """The radii of the line check of an estimate at the default range, with and without the
-    neighbours' normals (``mru``, ``an``: ``k - 1``): the pass measures those on the way."""
+    """The radii of the line check of an estimate at the default range, without and with the
+    neighbours' normals (``mru``, ``an``: ``k - 1``): the passes measure those on the way (the
+    normals' pass the first, :func:`point_normals`)."""
     return [_radii(cloud, NORMAL_RANGE), _radii(cloud, NORMAL_RANGE, uses_normals=True)]
 
 
@@ -219,8 +220,11 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     if widened.any():
         radii = np.where(widened, floor * (1.0 + TIE_TOLERANCE), radii)
     # one pass: the frames at BORDER_RANGE (borders; the PCA normals that orient), the frame and
-    # the jet normals at the fits' range (module notes, "One pass"), the default line checks
-    spread_radii = _default_spreads(cloud)
+    # the jet normals at the fits' range (module notes, "One pass"), the line check on the fits'
+    # supports. The one that leaves the neighbours without a normal out (mru, an: k - 1) is measured
+    # when one asks (owe_spreads): over fitted normals some are NaN (one-sided, ambiguous) and that
+    # check then searches its own balls, so the pass would measure it for nothing.
+    spread_radii, owed = _default_spreads(cloud)[:1], _default_spreads(cloud)[1:]
     keep_fits = method == "jet" and rng in tuple(keep_fits_at)
     found = latest_with_mesh(cloud, "normals pass", (rng.label, method, floor, keep_fits),
                              lambda: run_to_end(_one_pass(cloud, border_radii(cloud), radii,
@@ -230,6 +234,7 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     if found.kept is not None:
         keep_for(cloud, Kept(radii, *found.kept, degree=DEFAULT_DEGREE, smooth=False))
     _keep(cloud, found, spread_radii)
+    owe_spreads(cloud, owed, found.grid_radius)
     pca, gap = _frames(cloud)
     if method == "pca" and (rng.label != resolve(get_spec("jet"), BORDER_RANGE).label or widened.any()):
         pca = found.normal_b

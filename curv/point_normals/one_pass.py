@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.jit import iter_chunks, jit_parallel, launch, prange, slice_bounds, threads
-from ..core.knn import block_gather, cell_block, cell_of, ring_of
+from ..core.grid_blocks import cell_runs
+from ..core.knn import block_gather, cell_of
 from ..core.pointcloud import PointCloud
 from ..core.validity import OK
 from ..estimators._jet_fit import fit_jet, jet_normal, jet_scratch
@@ -22,7 +23,7 @@ from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mes
                                       new_queues, new_scratch)
 from .frames import _frame, _spread, _widest_gap, _within, gap_scratch
 
-__all__ = ["local_frames", "support_spread", "ball_walk_inputs"]
+__all__ = ["local_frames", "support_spread", "ball_walk_inputs", "owe_spreads"]
 
 
 @jit_parallel
@@ -41,7 +42,8 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
     or None (compiled without).
 
     The points are walked cell by cell: the columns of a cell's block are looked up once for all
-    its points (:func:`curv.core.knn.cell_block`), each point's ball read from them.
+    its points (:func:`curv.core.grid_blocks.cell_runs`), each point's ball read from them (those
+    within its radius in x and y).
     """
     cells, coords = grid
     outer2, radii2, screens = radii
@@ -57,24 +59,17 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
         cov = np.empty((3, 3))
         vecs = np.empty((4, 3))
         gaps = gap_scratch()
-        runs = np.empty((64, 2), np.int64)
+        block = (np.empty((64, 2), np.int64), 0, np.empty((64, 4)))
         m, vec, cov_jet, frame, evec = jet_scratch()
         keep_b = normal_b.shape[0] > 1
         start, stop = slice_bounds(lo, hi, t, parts)
         c = cell_of(start, cell_start) if start < stop else 0
         cell_end = start
-        n_runs = 0
         for i in range(start, stop):
             if i >= cell_end:
-                while cell_start[c + 1] <= i:
-                    c += 1
-                cell_end = cell_start[c + 1]
-                widest = 0.0
-                for j in range(cell_start[c], cell_end):
-                    widest = max(widest, outer2[order[j]])
-                n_runs, runs = cell_block(c, ring_of(widest, cells[2], coords[0]), cells, runs)
+                c, cell_end, block = cell_runs(i, c, outer2, cells, coords[0], block)
             p = order[i]
-            count = block_gather(i, outer2[p], runs, n_runs, coords, queue, dist2)
+            count = block_gather(i, outer2[p], block, coords, queue, dist2)
             if wanted[0]:
                 # frame A's ball is usually the outer one: the ball search's queue itself, not a copy
                 whole = radii2[0, p] == outer2[p]
@@ -132,10 +127,12 @@ class _Pass:
     fitted: np.ndarray | None
     spreads: tuple
     kept: tuple | None = None
+    grid_radius: float = math.nan
 
 
 def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = False, normals_b: bool = False,
-              spreads=(), screens=(0.0, 0.0), keep_fits: bool = False, chunk: int | None = None):
+              spreads=(), screens=(0.0, 0.0), keep_fits: bool = False, grid_radius: float | None = None,
+              chunk: int | None = None):
     """Frames, jet normals and spreads of every point from one ball search per point (a generator).
 
     Parameters
@@ -153,13 +150,17 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
         them, :func:`.frames._widest_gap`); 0 measures every gap exactly.
     keep_fits : bool
         Keep the jet fits for the jet estimator (:mod:`curv.estimators._jet_handover`).
+    grid_radius : float, optional
+        Search the grid of :meth:`PointCloud.ball_grid` for balls of this radius instead of the
+        one for the radii asked (another pass's, :attr:`_Pass.grid_radius`: a ball's points then
+        come in that pass's order, so sums over them round the same).
 
     Returns
     -------
     _Pass
         Unit PCA normals (n, 3) (NaN under 3 points), gaps (n,), frame A's support sizes (n,)
         int64, jet normals (n, 3) (NaN without a fit), the spreads (n,) each, and the kept jet fits
-        ``(state, rows)`` with ``keep_fits``.
+        ``(state, rows)`` with ``keep_fits``, and the grid's radius (``grid_radius``).
     """
     n = cloud.n_points
     rows = [frame_a, frame_b] + list(spreads) + [None] * (2 - len(spreads))
@@ -170,7 +171,9 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
         if radii is not None:
             np.square(np.asarray(radii, np.float64), out=radii2[r])
     outer = np.sqrt(radii2.max(axis=0))
-    cells, coords = cloud.ball_grid(outer)
+    # the grid's cells follow the median radius (PointCloud.ball_grid): a one-entry array asks for that one
+    grid_radius = float(np.median(outer)) if grid_radius is None else float(grid_radius)
+    cells, coords = cloud.ball_grid(np.array([grid_radius]))
     outer2 = radii2.max(axis=0)
     parts = max(1, min(threads(), n))
     queues = new_queues(n + 1, parts)
@@ -201,7 +204,7 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     return _Pass(normal_a=normal_a if wanted[0] else None, gap_a=gap_a if wanted[0] else None,
                  count_a=count_a if wanted[0] else None, normal_b=normal_b if wanted[1] and normals_b else None,
                  gap_b=gap_b if wanted[1] else None, fitted=fitted if wanted[2] else None,
-                 spreads=tuple(spread[r] for r in range(len(spreads))), kept=kept)
+                 spreads=tuple(spread[r] for r in range(len(spreads))), kept=kept, grid_radius=grid_radius)
 
 
 @jit_parallel
@@ -267,11 +270,13 @@ def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | N
     n = cloud.n_points
     every = usable is None or bool(np.all(usable))
     for known, spread in cached_with_mesh(cloud, "spreads", list) if every else ():
-        if known.shape == np.shape(radii) and np.array_equal(known, radii):
+        if _same_radii(known, radii):
             yield 1.0
             return spread
     if centres is None and every:
-        found = yield from _one_pass(cloud, spreads=(np.asarray(radii, np.float64),), chunk=chunk)
+        # a line check a pass left out (owe_spreads) searches that pass's grid: the same sums
+        grid = next((r for known, r in cached_with_mesh(cloud, "spread grids", list) if _same_radii(known, radii)), None)
+        found = yield from _one_pass(cloud, spreads=(np.asarray(radii, np.float64),), grid_radius=grid, chunk=chunk)
         return found.spreads[0]
     # a region (or points left out): its own centres through the ball search, at the cost of the region
     usable = np.ones(n, np.bool_) if every else np.ascontiguousarray(usable, dtype=np.bool_)
@@ -283,6 +288,20 @@ def support_spread(cloud: PointCloud, radii: np.ndarray, centres: np.ndarray | N
 
     yield from iter_chunks(centres.size, run, chunk=chunk)
     return spread
+
+
+def _same_radii(known: np.ndarray, radii) -> bool:
+    return known.shape == np.shape(radii) and np.array_equal(known, radii)
+
+
+def owe_spreads(cloud: PointCloud, spread_radii, grid_radius: float) -> None:
+    """Note line checks at ``spread_radii`` that a pass over the grid of ``grid_radius``
+    (:attr:`_Pass.grid_radius`) could have measured and left out: :func:`support_spread` measures
+    them on demand over that grid, so their supports' points come in the order that pass would have
+    read them, and the spreads are the same to the bit."""
+    owed = cached_with_mesh(cloud, "spread grids", list)
+    owed.extend((np.asarray(radii, np.float64), grid_radius) for radii in spread_radii)
+    del owed[:-4]
 
 
 def local_frames(cloud: PointCloud, radii: np.ndarray, *, chunk: int | None = None):
