@@ -24,6 +24,7 @@ leverage-corrected: unbiased for Gaussian noise).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,7 +33,7 @@ from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.support import support_of
 from .twin_base import choose_bases
-from .twin_fit import MAX_DEGREE, evaluate, fit_heights
+from .twin_fit import MAX_DEGREE, Fits, evaluate, fit_heights
 
 __all__ = ["Twin", "build_twin", "CAP_COSINE", "WEIGHT_WIDTH", "patch_radii", "range_units"]
 
@@ -226,9 +227,9 @@ def build_twin(shape: Mesh | PointCloud, centres, radii, *, max_degree: int = MA
     radii = np.asarray(radii, float)
     is_mesh = support_of(shape).has_faces
     if is_mesh and input_normals is None:
-        from ..geometry.normals import vertex_normals
+        from ..geometry.normals import cached_max_normals
 
-        input_normals = vertex_normals(shape)
+        input_normals = cached_max_normals(shape)  # made once per input (each copy's twin reads them)
     patches = (_mesh_patches if is_mesh else _cloud_patches)(shape, centres, radii)
     x = shape.vertices
     frames, members = [], []
@@ -261,12 +262,24 @@ def build_twin(shape: Mesh | PointCloud, centres, radii, *, max_degree: int = MA
             better = sphere.sphere & (_residual_share(sphere_fits, packed[3])
                                       <= SPHERE_SLACK * _residual_share(fits, w))
             if better.any():
+                # a patch's fit depends on its own points only, so each patch keeps the fit of its base
                 bases = sphere.restricted(better)
-                s, t, z, w, count, members = _pack(bases, x, members, weight)
-                fits = fit_heights(s, t, z, w, count, max_degree)
-    height, gs, gt = evaluate(fits, s, t)
+                s, t, z, w, count = (_row_wise(better, a, b) for a, b in zip((s, t, z, w, count), packed[:5]))
+                members = [m if b else k for m, k, b in zip(packed[5], members, better)]
+                fits = Fits(*(_row_wise(better, getattr(fits, f.name), getattr(sphere_fits, f.name))
+                              for f in dataclasses.fields(Fits)))
+    height, gs, gt = evaluate(fits, s, t, count)
     k1, k2, centre_normals = bases.centre_curvature(fits)
     return _assemble(shape, centres, members, bases, (s, t, height, gs, gt), fits, w, k1, k2, centre_normals)
+
+
+def _row_wise(chosen: np.ndarray, one: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """(c, ...) ``other``'s rows where ``chosen`` (c,) bool, ``one``'s elsewhere; a padded last axis
+    (the patches' points) is padded with zeros to the wider of the two."""
+    if one.ndim == 2 and one.shape[1] != other.shape[1]:
+        width = max(one.shape[1], other.shape[1])
+        one, other = (np.pad(a, ((0, 0), (0, width - a.shape[1]))) for a in (one, other))
+    return np.where(chosen.reshape((-1,) + (1,) * (one.ndim - 1)), other, one)
 
 
 def _residual_share(fits, w) -> np.ndarray:
