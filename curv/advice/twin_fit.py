@@ -171,10 +171,11 @@ def _gram_cholesky(n, p, a, lower):
 
 
 @jit
-def _fit_row(r, data, count, settings, out, a):
-    """Fit patch ``r`` (see :func:`_fit_rows`): ``a`` is (N, P) scratch."""
+def _fit_row(r, data, count, settings, out, scratch):
+    """Fit patch ``r`` (see :func:`_fit_rows`): ``scratch`` = (a (N, P), q (P, N))."""
     s, t, z, w = data
     qb, spread, chol, col, residual, sums, allowed = out
+    a, q = scratch
     n = count[r]
     degree, sums[r, 1] = _fitted_degree(n, w[r], settings[0], settings[1])
     p = _n_unknowns(degree)
@@ -184,24 +185,30 @@ def _fit_row(r, data, count, settings, out, a):
     if not _gram_cholesky(n, p, a, chol[r]):
         return
     lower = chol[r]
-    for i in range(n):  # Q = A L^-T (orthonormal columns), row by row in place of A
-        for k in range(p):
-            acc = a[i, k]
-            for j in range(k):
-                acc -= lower[k, j] * a[i, j]
-            a[i, k] = acc / lower[k, k]
-        root = np.sqrt(w[r, i])
-        for k in range(p):
-            qb[r, k] += a[i, k] * (root * z[r, i])
-            spread[r, k] += w[r, i] * a[i, k] * a[i, k]
+    rz = np.empty(n)
+    for i in range(n):
+        rz[i] = np.sqrt(w[r, i]) * z[r, i]
+    # Q = A L^-T (orthonormal columns), a column at a time (the inner loops run along the points)
+    for k in range(p):
+        for i in range(n):
+            q[k, i] = a[i, k]
+        for j in range(k):
+            for i in range(n):
+                q[k, i] -= lower[k, j] * q[j, i]
+        for i in range(n):
+            q[k, i] /= lower[k, k]
+        for i in range(n):
+            qb[r, k] += q[k, i] * rz[i]
+            spread[r, k] += w[r, i] * q[k, i] * q[k, i]
+    fitted = np.zeros(n)
+    for k in range(p):
+        for i in range(n):
+            fitted[i] += q[k, i] * qb[r, k]
     rss = 0.0
     for i in range(n):
         root = np.sqrt(w[r, i])
         if root > 0.0:
-            fitted = 0.0
-            for k in range(p):
-                fitted += a[i, k] * qb[r, k]
-            residual[r, i] = (root * z[r, i] - fitted) / root
+            residual[r, i] = (rz[i] - fitted[i]) / root
             rss += w[r, i] * residual[r, i] * residual[r, i]
     sums[r, 0] = rss
     allowed[r] = degree
@@ -219,8 +226,7 @@ def _fit_rows(data, count, settings, out):
     width = data[0].shape[1]
     cols = out[0].shape[1]
     for r in prange(count.size):
-        a = np.empty((width, cols))
-        _fit_row(r, data, count, settings, out, a)
+        _fit_row(r, data, count, settings, out, (np.empty((width, cols)), np.empty((cols, width))))
 
 
 def fit_heights(s, t, z, w, count, max_degree: int = MAX_DEGREE, *, threshold: float = SIGNIFICANCE,
