@@ -18,7 +18,8 @@ loaded):
 
 Reported: the medians over the rounds, wall seconds, and the ratios to the default estimate; and the
 processor seconds of the default estimate and of the check (every thread of the process together),
-which move less with the machine's load than the wall times. The issue's bound: the self-check at
+which move less with the machine's load than the wall times, with their ratio from the two medians
+and the median of the per-round ratios (``ratio_cpu`` in each round's line). The issue's bound: the self-check at
 most 10x one default estimate at 100k. ``--profile FILE`` writes a ``cProfile`` of one checked advice
 on the mesh (after the rounds) to FILE and prints its 25 largest cumulative entries. The kernels are compiled
 before the first round (a warm-up call on a small input of each kind) so that no round pays a compile.
@@ -73,6 +74,7 @@ def time_round(kind: str, data) -> dict:
     out["check"] = adv.check.seconds
     out["check_cpu"] = adv.check.cpu_seconds
     out["calls"] = len(adv.check.measured)
+    out["ratio_cpu"] = out["check_cpu"] / out["estimate_cpu"]
     return out
 
 
@@ -99,14 +101,15 @@ def main(argv=None) -> int:
             print(f"round {r + 1} {kind}: " + ", ".join(f"{k} {v:.2f}" for k, v in rows[kind][-1].items()), flush=True)
     print()
     print(f"| input ({args.vertices:,}) | default estimate | advise, table only | advise, checked | the check | "
-          f"check / estimate | checked advise / estimate | CPU: estimate, check, check / estimate |")
+          f"check / estimate | checked advise / estimate | CPU: estimate, check, check / estimate "
+          f"(from the medians; per round, median) |")
     print("|---|---|---|---|---|---|---|---|")
     for kind, rs in rows.items():
         med = {k: float(np.median([x[k] for x in rs])) for k in rs[0]}
         print(f"| {kind} | {med['estimate']:.2f} s | {med['table']:.2f} s | {med['checked']:.2f} s | "
               f"{med['check']:.2f} s ({int(med['calls'])} calls) | {med['check'] / med['estimate']:.1f}x | "
               f"{med['checked'] / med['estimate']:.1f}x | {med['estimate_cpu']:.2f} s, {med['check_cpu']:.2f} s, "
-              f"{med['check_cpu'] / med['estimate_cpu']:.1f}x |")
+              f"{med['check_cpu'] / med['estimate_cpu']:.1f}x; {med['ratio_cpu']:.1f}x |")
     cmd = "benchmarks/bench_advise_cost.py " + " ".join(sys.argv[1:] if argv is None else argv)
     print(f"\nCommand: `{cmd}`; medians of {args.rounds} alternating rounds, wall seconds, "
           f"{curv.core.jit.threads()} threads.")

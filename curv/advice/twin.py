@@ -24,15 +24,17 @@ leverage-corrected: unbiased for Gaussian noise).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.jit import jit
 from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.support import support_of
 from .twin_base import choose_bases
-from .twin_fit import MAX_DEGREE, evaluate, fit_heights
+from .twin_fit import MAX_DEGREE, Fits, evaluate, fit_heights
 
 __all__ = ["Twin", "build_twin", "CAP_COSINE", "WEIGHT_WIDTH", "patch_radii", "range_units"]
 
@@ -143,15 +145,17 @@ def _cloud_patches(cloud: PointCloud, centres: np.ndarray, radii: np.ndarray) ->
     return out
 
 
-def _frames(points: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
-    """(3, 3) rows e1, e2, n: the weighted principal axes of the patch's inner half (n: least spread)."""
-    d = points - centre
-    w = np.exp(-0.5 * np.sum(d * d, axis=1) / (0.25 * radius) ** 2)
-    cov = (d * w[:, None]).T @ d
-    _, vecs = np.linalg.eigh(cov)
-    n = vecs[:, 0]
-    e1 = vecs[:, 2]
-    return np.stack([e1, np.cross(n, e1), n])
+def _frames(x: np.ndarray, patches: list[np.ndarray], radii: np.ndarray) -> np.ndarray:
+    """(c, 3, 3) each patch's rows e1, e2, n: the weighted principal axes of its inner half around its
+    first vertex (n: least spread)."""
+    covs = np.empty((len(patches), 3, 3))
+    for i, (patch, radius) in enumerate(zip(patches, radii)):
+        d = x[patch] - x[patch[0]]
+        w = np.exp(-0.5 * np.sum(d * d, axis=1) / (0.25 * radius) ** 2)
+        covs[i] = (d * w[:, None]).T @ d
+    _, vecs = np.linalg.eigh(covs)
+    n, e1 = vecs[..., 0], vecs[..., 2]
+    return np.stack([e1, np.cross(n, e1), n], axis=1)
 
 
 def _mesh_cap(mesh: Mesh, patch: np.ndarray, normals: np.ndarray, axis: np.ndarray) -> np.ndarray:
@@ -173,18 +177,61 @@ def _mesh_cap(mesh: Mesh, patch: np.ndarray, normals: np.ndarray, axis: np.ndarr
     return kept[label == label[0]]
 
 
-def _mesh_faces(mesh: Mesh, members: np.ndarray) -> np.ndarray:
-    """(f, k) int64 the faces whose corners are all in ``members``, in local numbering (-1 padded)."""
-    inside = np.full(mesh.n_vertices, -1, np.int64)
-    inside[members] = np.arange(members.size)
+@jit
+def _patch_faces(vertex_faces, faces, members, starts, mark, out):
+    """Fill ``out`` (f, k) with each patch's whole faces in twin numbering; returns how many.
+
+    ``vertex_faces`` = (indptr, indices) of the faces at each vertex; ``members`` = (ptr (c + 1,),
+    vertices): the patches' vertices, each patch's from its ``ptr``; ``starts`` (c,) each patch's
+    first twin row; ``mark`` (n,) int64 scratch filled with -1 (left so)."""
+    indptr, indices = vertex_faces
+    ptr, vertices = members
+    found = 0
+    for c in range(ptr.size - 1):
+        for m in range(ptr[c], ptr[c + 1]):
+            mark[vertices[m]] = starts[c] + m - ptr[c]
+        first = found
+        for m in range(ptr[c], ptr[c + 1]):
+            v = vertices[m]
+            for e in range(indptr[v], indptr[v + 1]):
+                f = indices[e]
+                if faces[f, 0] != v:  # a face is met once, at its first corner
+                    continue
+                whole = True
+                for k in range(faces.shape[1]):
+                    if faces[f, k] >= 0 and mark[faces[f, k]] < 0:
+                        whole = False
+                if whole:
+                    out[found, 0] = f
+                    found += 1
+        picked = np.sort(out[first:found, 0])  # the mesh's order within a patch
+        found = first
+        for i in range(picked.size):
+            if i > 0 and picked[i] == picked[i - 1]:
+                continue  # a degenerate face lists its first corner's vertex twice
+            for k in range(faces.shape[1]):
+                corner = faces[picked[i], k]
+                out[found, k] = mark[corner] if corner >= 0 else -1
+            found += 1
+        for m in range(ptr[c], ptr[c + 1]):
+            mark[vertices[m]] = -1
+    return found
+
+
+def _mesh_faces(mesh: Mesh, members: list[np.ndarray], starts: np.ndarray) -> np.ndarray:
+    """(f, k) int64 the twin's faces: each patch's faces whose corners are all among its ``members``
+    (in the mesh's order, patch after patch), numbered from the patch's first twin row ``starts``
+    (-1 padded as the mesh's faces)."""
+    sizes = np.array([m.size for m in members], np.int64)
+    ptr = np.concatenate(([0], np.cumsum(sizes)))
+    vertices = np.concatenate(members).astype(np.int64)
     vf = mesh.vertex_faces
-    starts, stops = vf.indptr[members], vf.indptr[members + 1]
-    faces = np.unique(vf.indices[np.repeat(stops - (stops - starts).cumsum(), stops - starts)
-                                 + np.arange((stops - starts).sum())])
-    rows = mesh.faces[faces]
-    local = np.where(rows >= 0, inside[np.maximum(rows, 0)], -1)
-    whole = np.all((local >= 0) | (rows < 0), axis=1)
-    return local[whole]
+    faces = np.ascontiguousarray(mesh.faces, np.int64)
+    most = int(np.sum(vf.indptr[vertices + 1] - vf.indptr[vertices]))
+    out = np.empty((most, faces.shape[1]), np.int64)
+    found = _patch_faces((np.asarray(vf.indptr, np.int64), np.asarray(vf.indices, np.int64)), faces, (ptr, vertices),
+                         np.asarray(starts, np.int64), np.full(mesh.n_vertices, -1, np.int64), out)
+    return out[:found]
 
 
 # ---------------------------------------------------------------------------- the twin
@@ -226,22 +273,17 @@ def build_twin(shape: Mesh | PointCloud, centres, radii, *, max_degree: int = MA
     radii = np.asarray(radii, float)
     is_mesh = support_of(shape).has_faces
     if is_mesh and input_normals is None:
-        from ..geometry.normals import vertex_normals
+        from ..geometry.normals import cached_max_normals
 
-        input_normals = vertex_normals(shape)
+        input_normals = cached_max_normals(shape)  # made once per input (each copy's twin reads them)
     patches = (_mesh_patches if is_mesh else _cloud_patches)(shape, centres, radii)
     x = shape.vertices
-    frames, members = [], []
-    for patch, r in zip(patches, radii):
-        frame = _frames(x[patch], x[patch[0]], r)
+    frames, members = _frames(x, patches, radii).reshape(-1, 3, 3), []
+    for i, patch in enumerate(patches):
         if input_normals is not None and np.all(np.isfinite(input_normals[patch[0]])):
-            if frame[2] @ input_normals[patch[0]] < 0:
-                frame = np.stack([frame[1], frame[0], -frame[2]])  # keep it right-handed
-        if is_mesh:
-            patch = _mesh_cap(shape, patch, input_normals, frame[2])
-        frames.append(frame)
-        members.append(patch)
-    frames = np.array(frames).reshape(-1, 3, 3)
+            if frames[i, 2] @ input_normals[patch[0]] < 0:
+                frames[i] = np.stack([frames[i, 1], frames[i, 0], -frames[i, 2]])  # keep it right-handed
+        members.append(_mesh_cap(shape, patch, input_normals, frames[i, 2]) if is_mesh else patch)
     origin = x[centres]
     weight = (lambda d2: np.exp(-0.5 * d2 / weight_width**2)) if np.isfinite(weight_width) else np.ones_like
     plane = _plane_bases(origin, frames, radii)
@@ -261,12 +303,24 @@ def build_twin(shape: Mesh | PointCloud, centres, radii, *, max_degree: int = MA
             better = sphere.sphere & (_residual_share(sphere_fits, packed[3])
                                       <= SPHERE_SLACK * _residual_share(fits, w))
             if better.any():
+                # a patch's fit depends on its own points only, so each patch keeps the fit of its base
                 bases = sphere.restricted(better)
-                s, t, z, w, count, members = _pack(bases, x, members, weight)
-                fits = fit_heights(s, t, z, w, count, max_degree)
-    height, gs, gt = evaluate(fits, s, t)
+                s, t, z, w, count = (_row_wise(better, a, b) for a, b in zip((s, t, z, w, count), packed[:5]))
+                members = [m if b else k for m, k, b in zip(packed[5], members, better)]
+                fits = Fits(*(_row_wise(better, getattr(fits, f.name), getattr(sphere_fits, f.name))
+                              for f in dataclasses.fields(Fits)))
+    height, gs, gt = evaluate(fits, s, t, count)
     k1, k2, centre_normals = bases.centre_curvature(fits)
     return _assemble(shape, centres, members, bases, (s, t, height, gs, gt), fits, w, k1, k2, centre_normals)
+
+
+def _row_wise(chosen: np.ndarray, one: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """(c, ...) ``other``'s rows where ``chosen`` (c,) bool, ``one``'s elsewhere; a padded last axis
+    (the patches' points) is padded with zeros to the wider of the two."""
+    if one.ndim == 2 and one.shape[1] != other.shape[1]:
+        width = max(one.shape[1], other.shape[1])
+        one, other = (np.pad(a, ((0, 0), (0, width - a.shape[1]))) for a in (one, other))
+    return np.where(chosen.reshape((-1,) + (1,) * (one.ndim - 1)), other, one)
 
 
 def _residual_share(fits, w) -> np.ndarray:
@@ -311,7 +365,7 @@ def _assemble(shape, centres, members, bases, surface, fits, w, k1, k2, centre_n
     keep = np.flatnonzero(fits.degree >= 2)
     if not keep.size:
         raise ValueError("no patch of the twin could be fitted")
-    points, normals, patch_of, faces, starts = [], [], [], [], []
+    points, normals, patch_of, starts = [], [], [], []
     sigma = np.full(len(members), np.nan)
     height_sigma2 = np.sum(w * fits.residual**2, axis=1) / np.maximum(fits.dof, 1e-300)
     share = fits.noise_share(height_sigma2)
@@ -326,9 +380,6 @@ def _assemble(shape, centres, members, bases, surface, fits, w, k1, k2, centre_n
         points.append(position)
         normals.append(normal)
         patch_of.append(np.full(n, out, np.int64))
-        if is_mesh:
-            f = _mesh_faces(shape, members[c])
-            faces.append(np.where(f >= 0, f + offset, -1))
         starts.append(offset)
         offset += n
     if not is_mesh:
@@ -338,9 +389,7 @@ def _assemble(shape, centres, members, bases, surface, fits, w, k1, k2, centre_n
         points = [p + np.array([gap * i, 0.0, 0.0]) for i, p in enumerate(points)]
     vertices = np.concatenate(points)
     if is_mesh:
-        width = max(f.shape[1] for f in faces)
-        faces = np.concatenate([np.pad(f, ((0, 0), (0, width - f.shape[1])), constant_values=-1) for f in faces])
-        twin_shape = Mesh(vertices, faces)
+        twin_shape = Mesh(vertices, _mesh_faces(shape, [members[c] for c in keep], np.array(starts, np.int64)))
     else:
         twin_shape = PointCloud(vertices)
     return Twin(shape=twin_shape, centres=np.array(starts, np.int64), source=centres[keep], k1=k1[keep],

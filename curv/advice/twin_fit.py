@@ -2,7 +2,7 @@
 
 Every patch is fitted at the highest degree up to :data:`MAX_DEGREE` its points allow, in the basis
 the weighted monomials (ordered by total degree) become when made orthonormal (one Cholesky
-factorisation of their Gram matrix per patch; batched QR is far slower). In that basis each
+factorisation of their Gram matrix per patch, one numba kernel step per patch). In that basis each
 coefficient has its own standard error from the residual noise, and the terms whose coefficient
 stays below :data:`SIGNIFICANCE` standard errors are dropped: what is left is the shape the patch's
 points show above their noise (measured from the patch's base, :mod:`curv.advice.twin_base`: over a
@@ -16,6 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..core.jit import jit, jit_inlined, jit_parallel, launch, prange
 
 __all__ = ["Fits", "fit_heights", "evaluate", "monomial_powers", "MAX_DEGREE", "SIGNIFICANCE", "RESOLVED_RATIO",
            "POINTS_PER_UNKNOWN"]
@@ -41,23 +43,9 @@ def monomial_powers(degree: int) -> np.ndarray:
     return np.array([(d - j, j) for d in range(degree + 1) for j in range(d + 1)], np.int64)
 
 
+@jit_inlined
 def _n_unknowns(degree: int) -> int:
     return (degree + 1) * (degree + 2) // 2
-
-
-def _power_table(x: np.ndarray, degree: int) -> np.ndarray:
-    """(..., degree + 1) float64 ``x**0 .. x**degree`` by repeated products (exact and cheap)."""
-    out = np.empty(x.shape + (degree + 1,))
-    out[..., 0] = 1.0
-    for i in range(1, degree + 1):
-        out[..., i] = out[..., i - 1] * x
-    return out
-
-
-def _monomials(s: np.ndarray, t: np.ndarray, powers: np.ndarray) -> np.ndarray:
-    """(..., P) float64 the monomials ``s^i t^j`` of ``powers``."""
-    top = int(powers.max()) if powers.size else 0
-    return _power_table(s, top)[..., powers[:, 0]] * _power_table(t, top)[..., powers[:, 1]]
 
 
 @dataclass(frozen=True)
@@ -116,6 +104,131 @@ class Fits:
         return self.coef[:, col] * float(np.prod(np.arange(1, i + 1)) * np.prod(np.arange(1, j + 1)))
 
 
+@jit
+def _fitted_degree(n, w, max_degree, points_per_unknown):
+    """The highest degree ``n`` points of weights ``w`` (n,) allow (-1: not even a quadric), and the
+    weights' sum."""
+    wsum = 0.0
+    w2sum = 0.0
+    for i in range(n):
+        wsum += w[i]
+        w2sum += w[i] * w[i]
+    n_eff = wsum * wsum / max(w2sum, 1e-300)
+    degree = -1
+    for d in range(2, max_degree + 1):
+        if n_eff >= points_per_unknown * _n_unknowns(d) and n > _n_unknowns(d):
+            degree = d
+    return degree, wsum
+
+
+@jit
+def _scaled_monomials(n, s, t, w, degree, a, norm):
+    """``a[:n, :p]`` the monomials ``s^i t^j`` (by total degree, powers by repeated products) times the roots of the weights, each column divided by its norm ``norm`` (p,)."""
+    p = _n_unknowns(degree)
+    for i in range(n):
+        root = np.sqrt(w[i])
+        k = 0
+        for d in range(degree + 1):
+            for j in range(d + 1):
+                si = 1.0
+                for _ in range(d - j):
+                    si *= s[i]
+                tj = 1.0
+                for _ in range(j):
+                    tj *= t[i]
+                a[i, k] = si * tj * root
+                norm[k] += a[i, k] * a[i, k]
+                k += 1
+    for k in range(p):  # column scaling: a better-conditioned Gram
+        norm[k] = np.sqrt(max(norm[k], 1e-300))
+    for i in range(n):
+        for k in range(p):
+            a[i, k] /= norm[k]
+
+
+@jit
+def _gram_cholesky(n, p, a, lower):
+    """``lower`` (p, p): the Cholesky factor L of ``a[:n, :p]``'s Gram matrix + 1e-12 I; False where
+    it is not positive definite."""
+    for k in range(p):
+        lower[k, k] = 1e-12
+    for i in range(n):  # the Gram matrix's lower triangle first, row by row of a
+        for k in range(p):
+            for m in range(k + 1):
+                lower[k, m] += a[i, k] * a[i, m]
+    for k in range(p):
+        for m in range(k + 1):
+            acc = lower[k, m]
+            for j in range(m):
+                acc -= lower[k, j] * lower[m, j]
+            if m < k:
+                lower[k, m] = acc / lower[m, m]
+            elif acc > 0.0:
+                lower[k, k] = np.sqrt(acc)
+            else:
+                return False
+    return True
+
+
+@jit
+def _fit_row(r, data, count, settings, out, scratch):
+    """Fit patch ``r`` (see :func:`_fit_rows`): ``scratch`` = (a (N, P), q (P, N))."""
+    s, t, z, w = data
+    qb, spread, chol, col, residual, sums, allowed = out
+    a, q = scratch
+    n = count[r]
+    degree, sums[r, 1] = _fitted_degree(n, w[r], settings[0], settings[1])
+    p = _n_unknowns(degree)
+    if degree < 2:
+        return
+    _scaled_monomials(n, s[r], t[r], w[r], degree, a, col[r])
+    if not _gram_cholesky(n, p, a, chol[r]):
+        return
+    lower = chol[r]
+    rz = np.empty(n)
+    for i in range(n):
+        rz[i] = np.sqrt(w[r, i]) * z[r, i]
+    # Q = A L^-T (orthonormal columns), a column at a time (the inner loops run along the points)
+    for k in range(p):
+        for i in range(n):
+            q[k, i] = a[i, k]
+        for j in range(k):
+            for i in range(n):
+                q[k, i] -= lower[k, j] * q[j, i]
+        for i in range(n):
+            q[k, i] /= lower[k, k]
+        for i in range(n):
+            qb[r, k] += q[k, i] * rz[i]
+            spread[r, k] += w[r, i] * q[k, i] * q[k, i]
+    fitted = np.zeros(n)
+    for k in range(p):
+        for i in range(n):
+            fitted[i] += q[k, i] * qb[r, k]
+    rss = 0.0
+    for i in range(n):
+        root = np.sqrt(w[r, i])
+        if root > 0.0:
+            residual[r, i] = (rz[i] - fitted[i]) / root
+            rss += w[r, i] * residual[r, i] * residual[r, i]
+    sums[r, 0] = rss
+    allowed[r] = degree
+
+
+@jit_parallel
+def _fit_rows(data, count, settings, out):
+    """Every patch's full least-squares fit in the orthonormalised basis, one patch per step.
+
+    ``data`` = (s, t, z, w), (c, N) each; ``count`` (c,); ``settings`` = (max_degree,
+    points_per_unknown); ``out`` = (qb (c, P), spread (c, P), chol (c, P, P), col (c, P), residual
+    (c, N), sums (c, 2): weighted residual sum of squares and weight sum, allowed (c,): the degree
+    fitted, -1 where none). Every sum runs over the patch's own ``count`` points only, so a patch's fit
+    does not depend on the padding or on the other patches."""
+    width = data[0].shape[1]
+    cols = out[0].shape[1]
+    for r in prange(count.size):
+        _fit_row(r, data, count, settings, out, (np.empty((width, cols)), np.empty((cols, width))))
+
+
 def fit_heights(s, t, z, w, count, max_degree: int = MAX_DEGREE, *, threshold: float = SIGNIFICANCE,
                 points_per_unknown: float = POINTS_PER_UNKNOWN) -> Fits:
     """Fit ``z = g(s, t)`` in every patch (see the module's docstring).
@@ -136,63 +249,82 @@ def fit_heights(s, t, z, w, count, max_degree: int = MAX_DEGREE, *, threshold: f
     Returns
     -------
     Fits
+        Each patch's fit depends on its own points only (its row of ``s, t, z, w`` up to its count).
     """
     c = s.shape[0]
     powers = monomial_powers(max_degree)
-    coef = np.zeros((c, powers.shape[0]))
+    n_powers = powers.shape[0]
+    qb, spread, col = (np.zeros((c, n_powers)) for _ in range(3))
+    chol = np.zeros((c, n_powers, n_powers))
+    residual = np.zeros(np.shape(z))
+    sums = np.zeros((c, 2))
+    allowed = np.full(c, -1, np.int64)
+    data = tuple(np.ascontiguousarray(a, np.float64) for a in (s, t, z, w))
+    launch(_fit_rows, data, np.ascontiguousarray(count, np.int64), (int(max_degree), float(points_per_unknown)),
+           (qb, spread, chol, col, residual, sums, allowed))
+    coef = np.zeros((c, n_powers))
     degree = np.full(c, -1, np.int64)
-    residual = np.zeros_like(z)
     dof = np.full(c, np.nan)
     resolved = np.zeros(c, bool)
     lower = np.full(c, np.nan)
-    wsum = w.sum(axis=1)
-    n_eff = wsum**2 / np.maximum((w * w).sum(axis=1), 1e-300)
-    allowed = np.full(c, -1, np.int64)
-    for d in range(2, max_degree + 1):
-        p = _n_unknowns(d)
-        allowed[(n_eff >= points_per_unknown * p) & (count > p)] = d
+    rss, wsum = sums[:, 0], sums[:, 1]
     for d in sorted(set(allowed[allowed >= 2].tolist())):
         rows = np.flatnonzero(allowed == d)
         p = _n_unknowns(d)
         order = powers[:p].sum(axis=1)
-        ww = w[rows]
-        root = np.sqrt(ww)
-        a = _monomials(s[rows], t[rows], powers[:p]) * root[..., None]  # (k, N, p)
-        col = np.sqrt(np.maximum(np.sum(a * a, axis=1), 1e-300))  # column scaling: a better-conditioned Gram
-        a /= col[:, None, :]
-        chol = np.linalg.cholesky(np.swapaxes(a, 1, 2) @ a + 1e-12 * np.eye(p))  # Q = A L^-T: orthonormal
-        q = np.swapaxes(np.linalg.solve(chol, np.swapaxes(a, 1, 2)), 1, 2)  # (k, N, p)
-        qb = (np.swapaxes(q, 1, 2) @ (root * z[rows])[..., None])[..., 0]  # (k, p)
-        fitted = (q @ qb[..., None])[..., 0]
-        res = np.where(root > 0, (root * z[rows] - fitted) / np.where(root > 0, root, 1.0), 0.0)
-        spread = np.sum(ww[..., None] * q * q, axis=1)  # (k, p): each coefficient's variance over sigma^2
-        dof_k = wsum[rows] - spread.sum(axis=1)
-        sigma2 = np.sum(ww * res * res, axis=1) / np.maximum(dof_k, 1e-300)
-        strength = qb * qb / np.maximum(sigma2[:, None] * spread, 1e-300)
+        qb_d, spread_d = qb[rows, :p], spread[rows, :p]
+        dof_k = wsum[rows] - spread_d.sum(axis=1)
+        sigma2 = rss[rows] / np.maximum(dof_k, 1e-300)
+        strength = qb_d * qb_d / np.maximum(sigma2[:, None] * spread_d, 1e-300)
         keep = strength > threshold**2
-        coef[rows, :p] = np.linalg.solve(np.swapaxes(chol, 1, 2), (qb * keep)[..., None])[..., 0] / col
+        upper = np.swapaxes(chol[rows, :p, :p], 1, 2)
+        coef[rows, :p] = np.linalg.solve(upper, (qb_d * keep)[..., None])[..., 0] / col[rows, :p]
         degree[rows] = np.maximum(np.max(np.where(keep, order[None, :], 0), axis=1), 2)
-        residual[rows] = res
         dof[rows] = dof_k
         resolved[rows] = np.mean(strength[:, order == d], axis=1) < RESOLVED_RATIO
         if d >= 4:
             low = _n_unknowns(d - 2)
-            rss_low = np.sum(ww * res * res, axis=1) + np.sum(qb[:, low:] ** 2, axis=1)
-            lower[rows] = rss_low / np.maximum(wsum[rows] - spread[:, :low].sum(axis=1), 1e-300)
+            rss_low = rss[rows] + np.sum(qb_d[:, low:] ** 2, axis=1)
+            lower[rows] = rss_low / np.maximum(wsum[rows] - spread_d[:, :low].sum(axis=1), 1e-300)
+    residual[degree < 2] = 0.0
     return Fits(coef=coef, degree=degree, residual=residual, dof=dof, resolved=resolved, lower=lower)
 
 
-def evaluate(fits: Fits, s: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(c, N) each patch's polynomial and its first derivatives ``g, g_s, g_t`` at ``(s, t)``."""
-    powers = fits.powers
-    i, j = powers[:, 0], powers[:, 1]
-    top = int(powers.max())
-    sp, tp = _power_table(s, top), _power_table(t, top)
-    mono = sp[..., i] * tp[..., j]
-    ds = sp[..., np.maximum(i - 1, 0)] * tp[..., j] * i
-    dt = sp[..., i] * tp[..., np.maximum(j - 1, 0)] * j
+@jit
+def _evaluate_row(r, st, count, coef, out):
+    """Patch ``r``'s polynomial and slopes at its points (see :func:`evaluate`)."""
+    s, t = st
+    g, gs, gt = out
+    n_powers = coef.shape[1]
+    top = int(round((np.sqrt(8 * n_powers + 1) - 3) / 2))
+    sp = np.empty(top + 1)
+    tp = np.empty(top + 1)
+    for i in range(count[r]):
+        sp[0] = 1.0
+        tp[0] = 1.0
+        for e in range(1, top + 1):
+            sp[e] = sp[e - 1] * s[r, i]
+            tp[e] = tp[e - 1] * t[r, i]
+        k = 0
+        for d in range(top + 1):
+            for j in range(d + 1):
+                e = d - j
+                g[r, i] += (sp[e] * tp[j]) * coef[r, k]
+                gs[r, i] += (sp[max(e - 1, 0)] * tp[j] * e) * coef[r, k]
+                gt[r, i] += (sp[e] * tp[max(j - 1, 0)] * j) * coef[r, k]
+                k += 1
 
-    def apply(m):
-        return (m @ fits.coef[..., None])[..., 0]
 
-    return apply(mono), apply(ds), apply(dt)
+@jit_parallel
+def _evaluate_rows(st, count, coef, out):
+    for r in prange(count.size):
+        _evaluate_row(r, st, count, coef, out)
+
+
+def evaluate(fits: Fits, s: np.ndarray, t: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(c, N) each patch's polynomial and its first derivatives ``g, g_s, g_t`` at ``(s, t)`` (c, N), at
+    its first ``count`` (c,) points (zero in the padding)."""
+    out = tuple(np.zeros(np.shape(s)) for _ in range(3))
+    launch(_evaluate_rows, tuple(np.ascontiguousarray(a, np.float64) for a in (s, t)),
+           np.ascontiguousarray(count, np.int64), np.ascontiguousarray(fits.coef), out)
+    return out
