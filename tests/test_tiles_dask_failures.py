@@ -1,0 +1,86 @@
+"""A local Dask cluster that cannot finish a tiled run ends it in one line, never waits forever: its
+workers all gone, a tile past its worker's memory limit every time; the pages of a mapped file do
+not count against that limit (curv.tiles.driver)."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+distributed = pytest.importorskip("distributed")
+
+from curv.tiles.driver import Runner, TileFailed  # noqa: E402
+
+WORKER_BYTES = 300 * 2**20
+
+
+def hold_memory(tile: int, nbytes: int, seconds: float) -> int:
+    """A tile task that holds ``nbytes`` of its own memory for ``seconds``."""
+    block = np.ones(nbytes // 8)
+    time.sleep(seconds)
+    return int(block.size) + tile
+
+
+def read_mapped(tile: int, path: str, seconds: float) -> float:
+    """A tile task that reads every page of a memory-mapped file and keeps it mapped for ``seconds``."""
+    mapped = np.memmap(path, dtype=np.float64, mode="r")
+    total = float(mapped.sum())
+    time.sleep(seconds)
+    return total + tile
+
+
+def run_in_thread(gen, seconds: float):
+    """Consume ``gen`` in a thread for at most ``seconds``: (results, error, still running)."""
+    out = {"results": [], "error": None}
+
+    def consume():
+        try:
+            for result, _ in gen:
+                out["results"].append(result)
+        except BaseException as exc:  # noqa: BLE001 - handed to the test
+            out["error"] = exc
+
+    thread = threading.Thread(target=consume, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    return out["results"], out["error"], thread.is_alive()
+
+
+def test_a_local_cluster_left_without_workers_ends_the_run_in_one_line():
+    with Runner(workers=2, worker_bytes=WORKER_BYTES) as runner:
+        gen = runner.iter_run(time.sleep, [(30,), (30,)], keys=["curv-tile-ab12-0", "curv-tile-ab12-1"])
+        runner._cluster.scale(0)  # every worker gone, none coming back: the run used to wait forever
+        t0 = time.monotonic()
+        results, error, waiting = run_in_thread(gen, 60)
+        assert not waiting, "the run waited for workers that will never come"
+        assert isinstance(error, TileFailed) and time.monotonic() - t0 < 30
+        text = str(error)
+        assert text.startswith("tile 0: the local cluster has no worker left") and "\n" not in text
+
+
+def test_a_tile_past_its_workers_memory_limit_every_time_ends_the_run_naming_it_and_the_limit():
+    with Runner(workers=2, worker_bytes=WORKER_BYTES) as runner:
+        tasks = [(0, 10 * 2**20, 0.0), (1, 2 * WORKER_BYTES, 4.0)]
+        gen = runner.iter_run(hold_memory, tasks, keys=["curv-tile-cd34-0", "curv-tile-cd34-1"])
+        results, error, waiting = run_in_thread(gen, 120)
+        assert not waiting
+        assert isinstance(error, TileFailed), error
+        text = str(error)
+        assert text.startswith("tile 1: its worker went past its memory limit") and "limit 300.0 MiB" in text
+        assert "--memory" in text and "--tile-size" in text and "\n" not in text
+
+
+def test_the_pages_of_a_mapped_file_do_not_count_against_a_workers_limit(tmp_path):
+    """A worker that reads a mapped file larger than its limit holds those pages in its resident
+    size (Dask's nanny stopped it at 95 % of the limit, four times, then failed the tile); they are
+    the page cache's, not the worker's."""
+    path = tmp_path / "big.f8"
+    np.full(WORKER_BYTES // 8 + 2**20, 0.5).tofile(path)
+    with Runner(workers=2, worker_bytes=WORKER_BYTES) as runner:
+        gen = runner.iter_run(read_mapped, [(0, str(path), 3.0)], keys=["curv-tile-ef56-0"])
+        results, error, waiting = run_in_thread(gen, 120)
+    assert not waiting and error is None, error
+    assert results == [0.5 * (WORKER_BYTES // 8 + 2**20)]
