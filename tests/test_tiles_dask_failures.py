@@ -84,3 +84,21 @@ def test_the_pages_of_a_mapped_file_do_not_count_against_a_workers_limit(tmp_pat
         results, error, waiting = run_in_thread(gen, 120)
     assert not waiting and error is None, error
     assert results == [0.5 * (WORKER_BYTES // 8 + 2**20)]
+
+
+def test_an_input_in_memory_tiled_on_a_cluster_equals_the_plain_tiled_call():
+    """``estimate_tiled(client=...)`` runs its tiles through the same watched runner."""
+    import curv
+    from curv.tiles import estimate_tiled
+
+    from meshes import torus_grid
+
+    mesh = torus_grid(60, 30)[0]
+    plain = estimate_tiled(mesh, "mru", 2, tile_size=600)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  env={"CURV_THREADS": "1"}) as cluster, distributed.Client(cluster) as client:
+        tiled = estimate_tiled(mesh, "mru", 2, tile_size=600, client=client)
+    assert tiled.info["tiles"] >= 3 and np.array_equal(tiled.reason, plain.reason)
+    for name in ("k1", "k2", "d1", "d2", "normals"):
+        assert np.array_equal(getattr(tiled, name), getattr(plain, name), equal_nan=True), name
+    assert np.array_equal(plain.k1, curv.estimate(mesh, "mru", 2).k1, equal_nan=True)

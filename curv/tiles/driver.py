@@ -54,11 +54,13 @@ seconds in 30 s with Dask's defaults, 1.8 with these)."""
 
 LOCAL_CLUSTER = {**QUIET_CLUSTER, "distributed.worker.memory.terminate": False,
                  "distributed.worker.memory.pause": False, "distributed.worker.memory.spill": False,
-                 "distributed.worker.memory.target": False, "distributed.scheduler.allowed-failures": 1}
+                 "distributed.worker.memory.target": False, "distributed.scheduler.allowed-failures": 1,
+                 "distributed.scheduler.worker-saturation": 1.0}
 """Dask settings of a local cluster: the quiet ticks, the memory thresholds on resident size off (the
-driver keeps the limit on private memory: module notes), and a tile whose worker died twice while
+driver keeps the limit on private memory: module notes), a tile whose worker died twice while
 running it failed (a tile past its memory limit once is past it again; one death, as a worker
-killed from outside, is still retried)."""
+killed from outside, is still retried), and one tile at a time sent to a worker (Dask's default
+sends two to a one-thread worker: a worker stopped past its limit was then charged with both)."""
 
 WATCH_SECONDS = 1.0
 """How often the driver looks at the cluster while tiles run (the workers' memory, the workers left)."""
