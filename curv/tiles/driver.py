@@ -223,9 +223,8 @@ class Runner:
             for key in keys:
                 self._causes[str(key)] = (f"its worker went past its memory limit ({format_bytes(own)} of its own "
                                           f"memory, limit {format_bytes(self.worker_bytes)})")
-            _LOG.info("a worker used %s of its own memory, past its limit of %s, "
-                                                "while running %s: stopped", format_bytes(own),
-                                                format_bytes(self.worker_bytes), ", ".join(map(str, keys)) or "no tile")
+            _LOG.info("a worker used %s of its own memory, past its limit of %s, while running %s: stopped",
+                      format_bytes(own), format_bytes(self.worker_bytes), ", ".join(map(str, keys)) or "no tile")
 
     @staticmethod
     def _stepping(steps, function, args):
