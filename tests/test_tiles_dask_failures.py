@@ -32,8 +32,9 @@ def read_mapped(tile: int, path: str, seconds: float) -> float:
     return total + tile
 
 
-def run_in_thread(gen, seconds: float):
-    """Consume ``gen`` in a thread for at most ``seconds``: (results, error, still running)."""
+def run_in_thread(gen, seconds: float, meanwhile=None):
+    """Consume ``gen`` in a thread for at most ``seconds`` (calling ``meanwhile()`` here once it
+    started): (results, error, still running)."""
     out = {"results": [], "error": None}
 
     def consume():
@@ -45,6 +46,8 @@ def run_in_thread(gen, seconds: float):
 
     thread = threading.Thread(target=consume, daemon=True)
     thread.start()
+    if meanwhile is not None:
+        meanwhile()
     thread.join(seconds)
     return out["results"], out["error"], thread.is_alive()
 
@@ -71,6 +74,33 @@ def test_a_tile_past_its_workers_memory_limit_every_time_ends_the_run_naming_it_
         text = str(error)
         assert text.startswith("tile 1: its worker went past its memory limit") and "limit 300.0 MiB" in text
         assert "--memory" in text and "--tile-size" in text and "\n" not in text
+
+
+def test_a_local_worker_killed_once_mid_tile_gives_a_retry_and_every_result():
+    import os
+    import signal
+
+    with Runner(workers=2, worker_bytes=WORKER_BYTES) as runner:
+        tasks = [(0, 2**20, 3.0), (1, 2**20, 3.0)]
+        gen = runner.iter_run(hold_memory, tasks, keys=["curv-tile-gh78-0", "curv-tile-gh78-1"])
+        killed = []
+
+        def kill_one_busy_worker():
+            t0 = time.monotonic()
+            while time.monotonic() - t0 < 30:
+                busy = [address for address, keys in runner.client.processing().items() if keys]
+                if busy:
+                    nanny = next(n for n in runner._cluster.workers.values() if n.worker_address == busy[0])
+                    time.sleep(1.0)  # mid-tile
+                    os.kill(nanny.process.pid, signal.SIGKILL)
+                    killed.append(busy[0])
+                    return
+                time.sleep(0.1)
+
+        results, error, waiting = run_in_thread(gen, 120, kill_one_busy_worker)
+        assert killed
+    assert not waiting and error is None, error
+    assert sorted(results) == [2**17, 2**17 + 1]
 
 
 def test_the_pages_of_a_mapped_file_do_not_count_against_a_workers_limit(tmp_path):
