@@ -11,6 +11,9 @@ region (the COPC file's coordinates-only pass for its grid, or the plain file's 
 tiles) and a second region elsewhere (the octree query, or the tiles' files): the points within 1 %
 of the extent of a point and the halo ``qs`` R2 reads around them (what the Region dock then
 estimates). Wall seconds and their ratio; the two regions' points are checked equal.
+
+Then the viewer's preview of each file at ``--preview`` points (:func:`curv.tiles.preview.read_preview`):
+the COPC file's coarse octree levels against every k-th point of the plain file's full pass.
 """
 
 from __future__ import annotations
@@ -33,11 +36,13 @@ def main() -> None:
 
     from copc_files import write_copc
     from curv.core.jit import run_to_end
+    from curv.tiles.preview import read_preview
     from curv.tiles.regions import FileRegions
 
     parser = argparse.ArgumentParser()
     parser.add_argument("--points", type=int, default=2_000_000)
     parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--preview", type=int, default=200_000, help="points in the preview")
     args = parser.parse_args()
     folder = Path(tempfile.mkdtemp(prefix="copc-bench-"))
     rng = np.random.default_rng(3)
@@ -71,6 +76,13 @@ def main() -> None:
             print(f"{args.points:,} points, region of {a.ball.size:,} points: first region COPC {copc[0]:.2f} s, "
                   f"plain LAZ {plain[0]:.2f} s ({plain[0] / copc[0]:.1f}x); second region COPC {copc[1]:.3f} s, "
                   f"plain LAZ {plain[1]:.3f} s", flush=True)
+            shown = {}
+            for name in ("scan.copc.laz", "scan.laz"):
+                t = time.perf_counter()
+                preview = read_preview(folder / name, args.preview)
+                shown[name] = (time.perf_counter() - t, preview.words)
+            (tc, wc), (tp, wp) = shown["scan.copc.laz"], shown["scan.laz"]
+            print(f"preview: COPC {tc:.2f} s ({wc}), plain LAZ {tp:.2f} s ({wp}): {tp / tc:.1f}x", flush=True)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 

@@ -94,6 +94,37 @@ def test_a_copc_region_by_bounds_is_the_whole_files_points_there(copc_file):
     assert copc.nodes_read == copc.n_nodes
 
 
+def test_a_copc_preview_is_its_coarse_octree_levels_as_laspy_reads_them(copc_file):
+    from laspy.copc import CopcReader
+
+    from curv.tiles.preview import read_preview
+
+    whole = curv.load(copc_file)
+    with CopcReader.open(copc_file) as reader:
+        by_level = [len(reader.query(level=range(0, k + 1))) for k in range(8)]
+        coarse = reader.query(level=range(0, 3))
+        expected = np.column_stack([np.asarray(coarse[c], np.float64) for c in "xyz"])
+    assert by_level[1] < by_level[2] < whole.n_vertices
+    rows = {tuple(p): i for i, p in enumerate(whole.vertices)}
+    # the count between the second level's total and the third's: levels 0-2, every 2nd or 3rd point
+    for cap in (by_level[2], (by_level[1] + by_level[2]) // 2):
+        preview = read_preview(copc_file, cap)
+        stride = -(-by_level[2] // cap)
+        assert preview.levels == 2 and preview.stride == stride and preview.total == whole.n_vertices
+        assert preview.shown == -(-by_level[2] // stride) <= cap
+        how = "octree levels 0-2" + (f", every {stride}{'nd' if stride == 2 else 'rd' if stride == 3 else 'th'}"
+                                     if stride > 1 else "")
+        assert preview.words == f"{preview.shown:,} of {whole.n_vertices:,} points shown ({how})"
+        # laspy's level query's points, in the file's order, every stride-th, the file's own normals
+        at = np.array([rows[tuple(p)] for p in expected])
+        at = np.sort(at)[::stride]
+        assert np.array_equal(preview.shape.points, whole.vertices[at])
+        if whole.normals is not None:
+            assert np.array_equal(preview.shape.normals, whole.normals[at])
+    everything = read_preview(copc_file, whole.n_vertices)
+    assert everything.shown == whole.n_vertices and everything.words.endswith("(all)")
+
+
 def test_the_estimate_around_a_pick_on_a_copc_file_is_the_whole_calls(copc_file, tmp_path):
     from curv.tiles.regions import FileRegions
 
@@ -191,6 +222,40 @@ def test_an_ascii_polygon_mesh_is_read_whole_and_bad_counts_are_one_line(tmp_pat
     with pytest.raises(LoadError, match="more than its header declares") as err:
         source.scan(tmp_path / "scratch", 1)
     assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("fault", ["beyond", "negative"])
+@pytest.mark.parametrize("form", ["binary", "ascii"])
+def test_a_triangle_ply_with_a_bad_corner_is_the_whole_readers_one_line_on_tiles(tmp_path, form, fault):
+    from curv.core.errors import LoadError
+    from curv.tiles import estimate_file
+    from curv.tiles.sources import open_source
+
+    from meshes import torus_grid
+
+    mesh = torus_grid(16, 10)[0]
+    faces = mesh.face_indices.reshape(-1, 3).copy()
+    bad = {"beyond": (mesh.n_vertices + 4, mesh.n_vertices + 9), "negative": (-3, -5)}[fault]
+    faces[57, 1], faces[90, 2] = bad  # the first of two faults of one kind is named
+    path = tmp_path / "bad.ply"
+    if form == "ascii":
+        _write_ascii_ply(path, mesh.vertices, faces)
+    else:
+        from plyfile import PlyData, PlyElement
+
+        v = np.zeros(mesh.n_vertices, dtype=[("x", "f8"), ("y", "f8"), ("z", "f8")])
+        v["x"], v["y"], v["z"] = mesh.vertices.T
+        f = np.empty(len(faces), dtype=[("vertex_indices", "i4", (3,))])
+        f["vertex_indices"] = faces
+        PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")]).write(str(path))
+    assert open_source(path) is not None  # streamed: the chunked reader's own check
+    with pytest.raises(Exception) as whole:
+        curv.load(path)
+    with pytest.raises(LoadError) as tiled:
+        estimate_file(path, tmp_path / "out.ply", "mru", 2, tile_size=100, workers=1)
+    assert str(tiled.value) == str(whole.value) and "\n" not in str(tiled.value)
+    assert "face 57" in str(tiled.value)
+    assert not (tmp_path / "out.ply").exists()
 
 
 @pytest.mark.parametrize("kind", ["mesh", "cloud"])

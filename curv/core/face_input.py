@@ -9,7 +9,7 @@ import numpy as np
 
 from .errors import MeshError
 
-__all__ = ["flat_faces"]
+__all__ = ["flat_faces", "negative_corner", "missing_corner", "block_corner_fault"]
 
 
 def flat_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
@@ -80,10 +80,45 @@ def flat_faces(faces, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
 
         neg = np.flatnonzero(indices < 0)
         if neg.size:
-            raise MeshError(f"face {face_of(neg[0])} has a negative vertex index {indices[neg[0]]}")
+            raise MeshError(negative_corner(face_of(neg[0]), int(indices[neg[0]])))
         high = np.flatnonzero(indices >= n_vertices)
-        raise MeshError(
-            f"face {face_of(high[0])} refers to vertex {indices[high[0]]}, "
-            f"but the mesh has only {n_vertices} vertices"
-        )
+        raise MeshError(missing_corner(face_of(high[0]), int(indices[high[0]]), n_vertices))
     return indices, offsets
+
+
+def negative_corner(face: int, index: int) -> str:
+    """The words for a face with a negative vertex index (every reader says it the same way)."""
+    return f"face {face} has a negative vertex index {index}"
+
+
+def missing_corner(face: int, index: int, n_vertices: int) -> str:
+    """The words for a face that refers to a vertex past the last one."""
+    return f"face {face} refers to vertex {index}, but the mesh has only {n_vertices} vertices"
+
+
+def block_corner_fault(faces: np.ndarray, n_vertices: int, start: int = 0) -> str | None:
+    """The first fault of a block of fixed-width faces read from a file, in :func:`flat_faces`' words.
+
+    Parameters
+    ----------
+    faces : (m, k) int64
+        Face ``start + i`` is row ``i``; no padding.
+    n_vertices : int
+    start : int
+        The block's first face in the file.
+
+    Returns
+    -------
+    str or None
+        A negative corner first (as :func:`flat_faces` reports it), else a corner past the last
+        vertex; None when every corner is a vertex.
+    """
+    negative = faces < 0
+    if negative.any():
+        row = int(np.flatnonzero(negative.any(axis=1))[0])
+        return negative_corner(start + row, int(faces[row][negative[row]][0]))
+    beyond = faces >= n_vertices
+    if beyond.any():
+        row = int(np.flatnonzero(beyond.any(axis=1))[0])
+        return missing_corner(start + row, int(faces[row][beyond[row]][0]), n_vertices)
+    return None

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import LoadError
+from ..core.face_input import block_corner_fault
 from .sources import CHUNK, Scan, ScanTally, Source, _normal_names
 
 __all__ = ["AsciiPlySource", "ascii_source", "FACES_COPY"]
@@ -159,11 +160,12 @@ class AsciiPlySource(Source):
                     row = int(np.flatnonzero(rows[:, 0] != 3)[0])
                     raise LoadError(f"{self.path}: face {start + row} is not a triangle (a polygon mesh is read whole)")
                 faces = rows[:, 1:].astype(np.int64)
-                if (faces != rows[:, 1:]).any() or faces.min() < 0 or faces.max() >= self.n:
-                    row = int(np.flatnonzero((faces != rows[:, 1:]).any(axis=1) | (faces < 0).any(axis=1)
-                                             | (faces >= self.n).any(axis=1))[0])
-                    raise LoadError(f"{self.path}: face {start + row} refers to a vertex that does not exist "
-                                    f"(the file has {self.n})")
+                if (faces != rows[:, 1:]).any():
+                    row = int(np.flatnonzero((faces != rows[:, 1:]).any(axis=1))[0])
+                    raise LoadError(f"{self.path}: face {start + row} has non-integer indices")
+                fault = block_corner_fault(faces, self.n, start)
+                if fault is not None:
+                    raise LoadError(f"{self.path}: {fault}")
                 yield "f", start, faces, None
             extra = numbers.rest()
             if extra:

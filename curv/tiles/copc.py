@@ -139,10 +139,36 @@ class CopcInput:
 
     def fetch(self, region: Region) -> Piece:
         """Every point of the file inside ``region``, in the file's order, numbered as in the file."""
+        rows = self._meeting(region)
+        ids, xyz, normals = self._read_nodes(rows)
+        inside = region.contains(xyz)
+        order = np.flatnonzero(inside)[np.argsort(ids[inside], kind="stable")]
+        return Piece(np.ascontiguousarray(ids[order]), np.ascontiguousarray(xyz[order]),
+                     None if normals is None else np.ascontiguousarray(normals[order]))
+
+    def levels_holding(self, points: int) -> int:
+        """The shallowest octree level whose nodes, with every node above them, hold at least
+        ``points`` points (the deepest level where the whole file holds fewer)."""
+        levels = self._nodes["level"].astype(np.int64)
+        held = np.cumsum(np.bincount(levels, weights=self._nodes["count"].astype(np.float64)))
+        return min(int(np.searchsorted(held, points, side="left")), held.size - 1)
+
+    def fetch_levels(self, deepest: int) -> Piece:
+        """Every point of the nodes at octree levels 0..``deepest``, in the file's order.
+
+        A COPC writer puts a spatially even thinning of the cloud in its coarse levels (each level
+        about the points of the one above at half the spacing), so these are a preview of the whole
+        file read from a fraction of its chunks."""
+        ids, xyz, normals = self._read_nodes(np.flatnonzero(self._nodes["level"] <= deepest))
+        order = np.argsort(ids, kind="stable")
+        return Piece(ids[order], xyz[order], None if normals is None else normals[order])
+
+    def _read_nodes(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """``(ids, xyz, normals)`` of every point of the nodes ``rows`` (rows of the node table),
+        decompressed with the coordinates and the normals' extra bytes only."""
         import lazrs
 
         laspy = self._laspy
-        rows = self._meeting(region)
         self.nodes_read = int(rows.size)
         nodes = self._nodes[rows]
         counts = nodes["count"].astype(np.int64)
@@ -172,12 +198,10 @@ class CopcInput:
         xyz = np.empty((ids.size, 3))
         for i, c in enumerate("xyz"):
             xyz[:, i] = points[c]
-        inside = region.contains(xyz)
-        order = np.flatnonzero(inside)[np.argsort(ids[inside], kind="stable")]
         normals = None
         if self.has_normals:
-            normals = np.column_stack([np.asarray(points[c], np.float64)[order] for c in self._normals])
-        return Piece(np.ascontiguousarray(ids[order]), np.ascontiguousarray(xyz[order]), normals)
+            normals = np.column_stack([np.asarray(points[c], np.float64) for c in self._normals])
+        return ids, xyz, normals
 
 
 def iter_whole_frame(path, n: int) -> Generator[float, None, tuple[tuple, GridFrame]]:

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import LoadError
+from ..core.face_input import missing_corner, negative_corner
 from ..core.jit import jit, jit_inlined
 from .sources import CHUNK, PlySource
 
@@ -222,10 +223,9 @@ class PolygonPlySource(PlySource):
         if small is not None:
             raise LoadError(f"{self.path}: face {small[0]} has {small[1]} vertices; a face needs at least 3")
         if negative is not None:
-            raise LoadError(f"{self.path}: face {negative[0]} has a negative vertex index {negative[1]}")
+            raise LoadError(f"{self.path}: {negative_corner(*negative)}")
         if beyond is not None:
-            raise LoadError(f"{self.path}: face {beyond[0]} refers to vertex {beyond[1]}, but the mesh has only "
-                            f"{self.n} vertices")
+            raise LoadError(f"{self.path}: {missing_corner(*beyond, self.n)}")
 
     def starts_with_triangle(self) -> bool:
         """Whether the first face is a triangle (then plyfile's memory map of triangles is tried

@@ -1,10 +1,15 @@
-"""A preview of an input too large to draw: every k-th point of a cloud, a mesh's vertices clustered.
+"""A preview of an input too large to draw: every k-th point of a cloud (a COPC file's coarse octree
+levels), a mesh's vertices clustered.
 
 The viewer draws a few million points or vertices interactively; a 100M-point scan opens as a
 preview (:func:`read_preview`) read a chunk at a time, so the whole file is never in memory:
 
 * a **point cloud**: every ``stride``-th point in the file's order (a flight line's order thins
   evenly), with its normals if the file has them;
+* a **COPC file**: the points of its octree's coarse levels, which its writer made a spatially
+  even thinning: levels 0..L, the first that hold the count, thinned to it by taking every k-th
+  point (each level holds about 4 times the points above it on a surface, so k < 5 mostly); only
+  those chunks are decompressed, not the whole file;
 * a **mesh**: its vertices clustered on a uniform grid whose cells hold about the asked count
   (each cluster at its vertices' mean position) and its triangles between three different
   clusters, each once: the shape at a coarser resolution (a cluster may join two sheets, so the
@@ -45,13 +50,16 @@ class Preview:
         Points (vertices) in the file.
     path : Path
     stride : int
-        For a cloud: every ``stride``-th point; 0 for a clustered mesh.
+        For a cloud: every ``stride``-th point (of a COPC file's levels); 0 for a clustered mesh.
+    levels : int or None
+        For a COPC file: the points of its octree's levels 0..``levels`` are thinned.
     """
 
     shape: object
     total: int
     path: Path
     stride: int = 0
+    levels: int | None = None
 
     @property
     def shown(self) -> int:
@@ -62,6 +70,8 @@ class Preview:
         """``1,000,000 of 100,000,000 points shown (every 100th)``."""
         if not support_of(self.shape).has_faces:  # a cloud: every k-th point, not clusters
             how = f"every {_ordinal(self.stride)}" if self.stride > 1 else "all"
+            if self.levels is not None and self.shown < self.total:
+                how = f"octree levels 0-{self.levels}" + (f", every {_ordinal(self.stride)}" if self.stride > 1 else "")
             return f"{self.shown:,} of {self.total:,} points shown ({how})"
         return f"{self.shown:,} of {self.total:,} vertices shown (clustered)"
 
@@ -90,7 +100,16 @@ def read_preview(path, max_points: int = PREVIEW_POINTS) -> Preview:
     """A :class:`Preview` of ``path`` (LAS/LAZ, binary PLY) holding at most about ``max_points``
     (module notes). Raises :class:`curv.LoadError` for an unreadable file; ``ValueError`` for one
     that cannot be read a chunk at a time (read it whole)."""
+    from .copc import CopcInput, is_copc
+
     path = Path(path)
+    if is_copc(path):
+        copc = CopcInput(path)
+        levels = copc.levels_holding(max_points)
+        piece = copc.fetch_levels(levels)
+        stride = max(1, -(-piece.ids.size // max_points))
+        cloud = PointCloud(piece.points[::stride], None if piece.normals is None else piece.normals[::stride])
+        return Preview(cloud, copc.n, path, stride, levels)
     source = open_source(path)
     if source is None:
         raise ValueError(f"{path}: is read whole (not LAS/LAZ or a PLY read a chunk at a time)")

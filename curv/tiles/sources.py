@@ -28,6 +28,7 @@ from typing import Iterator
 import numpy as np
 
 from ..core.errors import LoadError
+from ..core.face_input import block_corner_fault
 from ..core.paths import check_readable, one_line
 
 __all__ = ["Source", "LasSource", "PlySource", "open_source", "reopen", "CHUNK", "Scan", "ScanTally"]
@@ -169,10 +170,9 @@ class PlySource(Source):
         """``(start, faces (m, 3) int64)`` in file order; an index out of range is a LoadError."""
         for start in range(0, self.n_faces, size):
             faces = np.asarray(self._faces[start:start + size], dtype=np.int64)
-            if faces.size and (faces.min() < 0 or faces.max() >= self.n):
-                row = int(np.flatnonzero((faces < 0).any(axis=1) | (faces >= self.n).any(axis=1))[0])
-                raise LoadError(f"{self.path}: face {start + row} refers to a vertex that does not exist "
-                                f"(the file has {self.n})")
+            fault = block_corner_fault(faces, self.n, start) if faces.size else None
+            if fault is not None:
+                raise LoadError(f"{self.path}: {fault}")
             yield start, faces
 
     def faces_at(self, ids: np.ndarray) -> np.ndarray:
