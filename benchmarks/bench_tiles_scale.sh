@@ -19,7 +19,7 @@ cd "$ROOT"
 
 # each command's wall time, CPU time and peak memory summed over every process it starts
 run() { $PY -c "import sys; sys.path.insert(0, 'benchmarks'); from bench_tiles import measure; \
-m = measure(sys.argv[1:]); print(f\"wall {m['wall']:.0f} s, cpu {m['cpu']:.0f} s, peak {m['peak'] / 2**30:.2f} GiB (all processes), exit {m['rc']}\"); \
+m = measure(sys.argv[1:]); print(f\"wall {m['wall']:.0f} s, cpu {m['cpu']:.0f} s, peak {m['peak'] / 2**30:.2f} GiB resident, {m['own'] / 2**30:.2f} GiB own (all processes), exit {m['rc']}\"); \
 print(m['out'][-2000:])" "$@"; }
 
 for M in qs jet; do

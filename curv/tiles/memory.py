@@ -150,18 +150,24 @@ def _run_tiles(tasks, plan, source, job, frame, settings, client, out, step, lo,
                     break
                 yield Progress(lo + (hi - lo) * (i + float(progress)) / len(tasks), getattr(progress, "message", ""))
         return
-    shared = client.scatter(source, broadcast=True)  # the input travels to each worker once, not per tile
-    futures = {client.submit(_run_tile_task, core, box, plan.bounds, shared, job, frame, step, settings, pure=False): index
-               for index, core, box in tasks}
-    from distributed import as_completed
+    import uuid
 
-    for done, future in enumerate(as_completed(list(futures)), 1):
-        out.add(futures[future], future.result())
+    from .driver import Runner
+
+    shared = client.scatter(source, broadcast=True)  # the input travels to each worker once, not per tile
+    run_id = uuid.uuid4().hex[:8]
+    calls = [(index, core, box, plan.bounds, shared, job, frame, step, settings) for index, core, box in tasks]
+    # through the driver's runner: a tile that keeps failing, or a cluster left without workers, ends
+    # the call in one line (curv.tiles.driver) instead of waiting forever
+    runner = Runner(client=client)
+    results = runner.iter_run(_run_tile_task, calls, keys=[f"curv-tile-{run_id}-{call[0]}" for call in calls])
+    for done, (result, _) in enumerate(results, 1):
+        out.add(*result)
         yield Progress(lo + (hi - lo) * done / len(tasks))
 
 
-def _run_tile_task(core, box, bounds, source, job, frame, step, settings) -> TileRows:
-    return run_to_end(iter_run_tile(core, box, bounds, source.fetch, job, frame, step=step, **settings))
+def _run_tile_task(index, core, box, bounds, source, job, frame, step, settings) -> tuple[int, TileRows]:
+    return index, run_to_end(iter_run_tile(core, box, bounds, source.fetch, job, frame, step=step, **settings))
 
 
 def _mesh_frame(mesh: Mesh) -> GridFrame | None:
