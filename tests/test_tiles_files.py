@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import errno
 import os
+import pickle
 import shutil
 import signal
 
@@ -94,6 +95,39 @@ def test_a_ply_mesh_on_tiles_writes_the_whole_calls_file(tmp_path):
     for name in a.dtype.names:
         assert np.array_equal(a[name], b[name], equal_nan=True), name
     assert np.array_equal(fa, fb)
+
+
+def test_a_process_opens_the_input_once_for_all_its_tiles_and_again_when_it_changes(tmp_path, monkeypatch):
+    from curv.tiles import sources
+
+    opened = []
+
+    def counting(path, folder):
+        opened.append(path)
+        return reopen(path, folder)
+
+    reopen = sources.reopen
+    monkeypatch.setattr(sources, "reopen", counting)
+    from curv.tiles import driver
+
+    def as_a_cluster_sends_them(self, function, tasks, **keywords):  # each task its own copy of the input
+        return iter_run(self, function, [pickle.loads(pickle.dumps(args)) for args in tasks], **keywords)
+
+    iter_run = driver.Runner.iter_run
+    monkeypatch.setattr(driver.Runner, "iter_run", as_a_cluster_sends_them)
+    mesh = torus_grid(40, 20)[0]
+    _write_ply(tmp_path / "in.ply", mesh.vertices, mesh.face_indices.reshape(-1, 3), dtype="f8")
+    run = estimate_file(tmp_path / "in.ply", tmp_path / "a.ply", "mru", 2, tile_size=200, workers=1)
+    assert run.tiles >= 3 and len(opened) == 1  # each tile's ring vertices read through one opening
+    _write_ply(tmp_path / "in.ply", mesh.vertices * 2.0, mesh.face_indices.reshape(-1, 3), dtype="f8")
+    os.utime(tmp_path / "in.ply", ns=(1, 1))  # another time, whatever the clock's resolution
+    estimate_file(tmp_path / "in.ply", tmp_path / "b.ply", "mru", 2, tile_size=200, workers=1)
+    assert len(opened) == 2
+    shape = curv.load(tmp_path / "in.ply")
+    curv.save_ply(tmp_path / "whole.ply", shape, curv.estimate(shape, "mru", 2))
+    (a, _, _), (b, _, _) = _ply_rows(tmp_path / "whole.ply"), _ply_rows(tmp_path / "b.ply")
+    for name in a.dtype.names:  # the second run read the new file's vertices, not the first's
+        assert np.array_equal(a[name], b[name], equal_nan=True), name
 
 
 def test_a_ply_cloud_on_tiles_writes_the_whole_calls_values(tmp_path):
