@@ -216,6 +216,18 @@ def _measured(*copies):
     return Measured(float(np.exp(logs.mean())), copies, float(np.exp(logs.std(ddof=1))), 1.0, 0.0)
 
 
+def test_two_calls_no_copy_measured_both_are_not_told_apart():
+    from curv.advice.check import Measured
+    from curv.advice.ranking import _separated
+
+    nan = float("nan")
+    best = Measured(0.1, (0.1, nan, nan), nan, 1.0, 0.0)
+    other = Measured(0.9, (nan, 0.9, 0.9), nan, 1.0, 0.0)
+    assert not _separated(best, other, 3.0)  # no copy measured both: no veto on no evidence
+    assert _separated(best, Measured(0.9, (0.9, 0.9, nan), nan, 1.0, 0.0), 3.0)  # copy 0 tells them apart
+    assert not _separated(best, Measured(0.2, (0.2, 0.9, nan), nan, 1.0, 0.0), 3.0)
+
+
 def test_the_ranking_is_by_measured_error_and_says_what_is_within_noise():
     """Without a table's prediction (a cloud's prior order) the copies' spread is the only doubt."""
     from curv.advice.answer import Candidate

@@ -358,7 +358,8 @@ class Controller(QObject):
         self._forget_advice()
         self.doc.set_advice(record)
         adv = record.advice
-        error = (f"measured median e_rel {adv.best.measured_erel:.2g}" if adv.checked and adv.best.measured is not None
+        measured = adv.checked and adv.best.measured is not None and adv.best.measured.ok  # as the table shows it
+        error = (f"measured median e_rel {adv.best.measured_erel:.2g}" if measured
                  else f"expected median e_rel {adv.expected_erel:.2g}")
         self.message.emit(f"Advice for {record.source_label} in {record.seconds:.2f} s: {adv.label}, {error}")
         self._update_busy()

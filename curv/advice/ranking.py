@@ -99,11 +99,12 @@ def rank_candidates(candidates: list, measured: dict | None, slack: float, *,
 
 
 def _separated(best, other, band: float) -> bool:
-    """Whether ``other`` measured more than ``band`` times ``best``'s error on every copy (both floored)."""
+    """Whether ``other`` measured more than ``band`` times ``best``'s error on every copy (both floored);
+    False where no copy measured both (nothing tells them apart)."""
     a = np.array([_floored(x) for x in best.copies])
     b = np.array([_floored(x) for x in other.copies])
     ok = np.isfinite(a) & np.isfinite(b)
-    return bool(np.all(b[ok] > band * a[ok]))
+    return bool(ok.any() and np.all(b[ok] > band * a[ok]))
 
 
 def _within_noise(best, other) -> bool:
