@@ -16,7 +16,7 @@ import numpy as np
 
 from ..core.jit import jit, jit_inlined
 from ..core.small_linalg import (cholesky_scaled, cholesky_solve_scaled, reciprocal_condition, scaled_determinant,
-                                 scaled_norm_bound, sym2_eigen, sym3_eigen)
+                                 scaled_norm_bound, sym2_eigen, sym3_eigen_closed)
 from ..core.validity import DEGENERATE, OK, SINGULAR, TOO_FEW
 from ..uncertainty.factored import whitened_errors
 from ..uncertainty.propagation import noise_variance, principal_gradients
@@ -193,10 +193,7 @@ def _pca_frame(support, points, r2, scratch):
         cov[1, 1] += wt * dy * dy
         cov[1, 2] += wt * dy * dz
         cov[2, 2] += wt * dz * dz
-    cov[1, 0] = cov[0, 1]
-    cov[2, 0] = cov[0, 2]
-    cov[2, 1] = cov[1, 2]
-    sym3_eigen(cov, evec)
+    sym3_eigen_closed(cov, evec)  # reads the upper triangle
     # The support must be a height field over its PCA plane: a plane far from the vertex normal
     # (a support wrapping round a thin rim) gives an arbitrary fit whose sign flips with rounding.
     along = evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz
