@@ -1,5 +1,5 @@
 """The jet at its normals' range reads the normals' pass's fits (curv.estimators._jet_handover): the
-same answer as fitting again, to the rounding of the support's order."""
+same answer as fitting again, to the rounding of the support's order. qs's hand-over: test_qs_handover.py."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import pytest
 import curv
 from curv.core.jit import run_to_end
 from curv.core.ranges import ball_radii, resolve
-from curv.estimators import _jet_handover, get_spec
+from curv.estimators import _handover, _jet_handover, get_spec
 from curv.estimators._principal import Rows
-from curv.estimators.jet import iter_jet
+from curv.estimators.jet import JET_FITS, iter_jet
 from curv.point_normals import grid_ordered, point_normals
 from curv.surfaces import QuadraticPatch, Sphere, sample_points
 
@@ -44,14 +44,14 @@ def _handed_and_refitted(cloud, normals_of=lambda n: n):
     rng = resolve(get_spec("jet"), 2)
     normals = normals_of(point_normals(cloud, range=2, keep_fits_at=(rng,)).normals)
     radii = ball_radii(cloud, rng, uses_normals=False)
-    kept = _jet_handover.kept_fits(cloud, 2, False)
+    kept = _handover.kept_fits(cloud, JET_FITS.options)
     assert kept is not None
     handed = run_to_end(iter_jet(cloud, normals, radii))
     # how many the hand-over leaves to a fit: only the points the pass did not fit to the end
     n = cloud.n_points
     scratch = Rows(np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.zeros(n, np.uint8))
-    left = run_to_end(_jet_handover.iter_handed(kept, normals, radii, np.arange(n), scratch))
-    _jet_handover._KEPT.pop(cloud)
+    left = run_to_end(_handover.iter_handed(kept, normals, radii, np.arange(n), scratch))
+    _handover.forget_fits(cloud)
     refitted = run_to_end(iter_jet(cloud, normals, radii))
     return handed, refitted, left
 
@@ -85,7 +85,7 @@ def test_the_handed_fits_follow_any_reference():
 
 def test_an_estimate_reads_the_fits_only_where_they_match():
     """The whole call: the jet at R2 (handed over) against the same with standard errors (a fit per
-    point: their kernel reads the fit's normal matrix), and a qs estimate keeps no fits."""
+    point: their kernel reads the fit's normal matrix), and no other estimate keeps the jet's fits."""
     cloud = CLOUDS["blue patch"]
     plain = curv.estimate(cloud, "jet", 2)
     fitted = curv.estimate(cloud, "jet", 2, standard_errors=True)
@@ -96,15 +96,15 @@ def test_an_estimate_reads_the_fits_only_where_they_match():
     curv.estimate(other, "qs", 2)
     curv.estimate(other, "jet", 3)
     curv.estimate(other, "jet", 2, degree=3)
-    assert _jet_handover.kept_fits(twin, 2, False) is None
+    assert _handover.kept_fits(twin, JET_FITS.options) is None
     curv.estimate(other, "jet", 2)
-    assert _jet_handover.kept_fits(twin, 2, False) is not None
+    assert _handover.kept_fits(twin, JET_FITS.options) is not None
 
 
 def test_the_memory_model_counts_the_kept_fits():
     from curv.memory import estimate_peak_bytes
 
     n = 1_000_000
-    extra = estimate_peak_bytes(n, 0, "jet", points=True, threads=1) - estimate_peak_bytes(n, 0, "qs", points=True,
+    extra = estimate_peak_bytes(n, 0, "jet", points=True, threads=1) - estimate_peak_bytes(n, 0, "mru", points=True,
                                                                                             threads=1)
     assert extra == n * _jet_handover.BYTES_PER_POINT

@@ -1,0 +1,174 @@
+"""Where a point cloud's estimator time goes after its normals: search, fit, assembly, checks (CPU seconds).
+
+Run by hand from the repository root::
+
+    CURV_THREADS=1 PYTHONPATH=. .venv/bin/python benchmarks/points_estimator_parts.py 1000000 qs
+
+N uniform random points of the unit sphere (seed 0, as ``points_profile.py``), no normals, default
+orientation. One ``curv.estimate(cloud, method, 2)`` on a fresh cloud, with the steps after the
+normals timed inside the call (the library's functions wrapped, a generator's time counted while it
+runs): the normals and flags (``point_setup``, the one pass and the orientation:
+``points_profile.py`` splits them), the radii, the visiting order (it builds the estimate's search
+grid), the estimator (its search grid and scratch, its kernel, the hand-over of the normals' fits
+where it reads them), and the finish (the two support checks, the rows' settling, NaN-filling and
+putting the rows back in the caller's order). Then, on the same cloud with every cache warm, the
+estimator's kernel once more and a copy of its ball search alone (the same grid and radii, the
+supports only counted): the search, and so the fit (the kernel less the search). CPU seconds are
+the process's over all threads.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import sys
+import time
+from collections import defaultdict
+
+import numpy as np
+
+TOTALS: dict = defaultdict(float)
+
+
+def _timed(label, function):
+    """``function`` timing its own CPU seconds into ``TOTALS[label]`` (a generator's while it runs)."""
+    def run(*args, **kwargs):
+        c = time.process_time()
+        out = function(*args, **kwargs)
+        TOTALS[label] += time.process_time() - c
+        if not inspect.isgenerator(out):
+            return out
+        return (yield from _timed_generator(label, out))
+
+    def plain(*args, **kwargs):
+        c = time.process_time()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            TOTALS[label] += time.process_time() - c
+
+    return functools.wraps(function)(run if inspect.isgeneratorfunction(function) else plain)
+
+
+def _timed_generator(label, gen):
+    value = None
+    while True:
+        c = time.process_time()
+        try:
+            item = gen.send(value)
+        except StopIteration as stop:
+            TOTALS[label] += time.process_time() - c
+            return stop.value
+        TOTALS[label] += time.process_time() - c
+        value = yield item
+
+
+def _patch(module, name, label):
+    setattr(module, name, _timed(label, getattr(module, name)))
+
+
+def sphere_points(n: int) -> np.ndarray:
+    p = np.random.default_rng(0).normal(size=(n, 3))
+    return p / np.linalg.norm(p, axis=1, keepdims=True)
+
+
+def _search_only_kernel():
+    from curv.core.jit import jit_parallel, prange, slice_bounds
+    from curv.geometry.neighbourhood import ball_support
+
+    @jit_parallel
+    def search_only(centres, radius, indptr, indices, coords, stamps, queues, counts):
+        x, y, z = coords
+        slices = stamps.shape[0]
+        for t in prange(slices):
+            stamp, queue = stamps[t], queues[t]
+            start, stop = slice_bounds(0, centres.size, t, slices)
+            for i in range(start, stop):
+                p = centres[i]
+                count, queue = ball_support(p, radius[p] ** 2, indptr, indices, x, y, z, stamp, queue)
+                # what a fit reads of each support point: its coordinates
+                s = 0.0
+                for j in range(count):
+                    q = queue[j]
+                    s += x[q] - x[p] + y[q] - y[p] + z[q] - z[p]
+                counts[p] = count + (s > 1e300)
+
+    return search_only
+
+
+def main() -> None:
+    import curv
+    import curv.api as api
+    import curv.estimate_finish as finish_mod
+    import curv.estimators._fit_driver as driver
+    from curv.core.jit import run_to_end, threads
+    from curv.core.ranges import ball_radii, resolve
+    from curv.core.support import CloudSupport
+    from curv.estimators import get_spec
+    from curv.geometry.neighbourhood import coordinate_columns, expansion_adjacency, new_queues, new_scratch
+
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
+    method = sys.argv[2] if len(sys.argv) > 2 else "qs"
+    curv.estimate(curv.PointCloud(sphere_points(2000)), method, 2)  # kernels from the cache
+    points = sphere_points(n)
+    spec = get_spec(method)
+
+    _patch(api, "point_setup", "normals and flags (point_setup)")
+    _patch(api, "ball_radii", "radii")
+    _patch(CloudSupport, "visit_order", "visiting order (the estimate's search grid)")
+    _patch(driver, "expansion_adjacency", "estimator: search grid")
+    _patch(driver, "new_scratch", "estimator: scratch")
+    _patch(driver, "new_queues", "estimator: scratch")
+    _patch(driver, "launch", "estimator: fit kernel (search + fit)")
+    _patch(api, "finish", "finish (all)")
+    _patch(finish_mod, "launch", "finish: mark and settle rows")
+    _patch(finish_mod, "rows_back", "finish: rows back in the caller's order")
+    import curv.point_normals as pn
+    _patch(pn, "support_spread", "finish: line check")
+    _patch(pn, "quantised_supports", "finish: quantised supports")
+    function = spec.function
+    object.__setattr__(spec, "function", _timed("estimator (all)", function))
+    for mod_name in ("curv.estimators._jet_handover", "curv.estimators._handover"):
+        mod = sys.modules.get(mod_name)
+        if mod is not None and hasattr(mod, "iter_handed"):
+            _patch(mod, "iter_handed", "estimator: hand-over")
+            for user in ("curv.estimators.jet", "curv.estimators.qs"):
+                if hasattr(sys.modules[user], "iter_handed"):
+                    _patch(sys.modules[user], "iter_handed", "estimator: hand-over")
+
+    cloud = curv.PointCloud(points)
+    t, c = time.perf_counter(), time.process_time()
+    res = curv.estimate(cloud, method, 2)
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
+    object.__setattr__(spec, "function", function)
+    for label in sorted(TOTALS, key=lambda k: (k.split(":")[0], k)):
+        print(f"{label:<48} cpu {TOTALS[label]:7.2f}")
+    rest = cpu - TOTALS["normals and flags (point_setup)"] - TOTALS["radii"] - TOTALS[
+        "visiting order (the estimate's search grid)"] - TOTALS["estimator (all)"] - TOTALS["finish (all)"]
+    print(f"{'the rest of the call':<48} cpu {rest:7.2f}")
+    print(f"{'whole ' + method + ' R2 call':<48} cpu {cpu:7.2f}  wall {wall:7.2f}  (valid {res.valid.mean():.4f})")
+
+    # again on the grid-ordered twin the call ran on, every cache warm: the kernel, then the search alone
+    twin, rows = api.cloud_twin(cloud)
+    normals = np.asarray(res.normals)[rows]
+    radii = ball_radii(twin, resolve(spec, 2, None, None), uses_normals=spec.uses_normals)
+    order = CloudSupport(twin).visit_order(radii)
+    c = time.process_time()
+    run_to_end(function(twin, normals, radii, centres=order))
+    kernel = time.process_time() - c
+    indptr, indices = expansion_adjacency(twin, radii=radii)
+    parts = max(1, min(threads(), n))
+    counts = np.empty(n, np.int64)
+    search_only = _search_only_kernel()
+    args = (order, np.ascontiguousarray(radii), indptr, indices, coordinate_columns(twin),
+            new_scratch(n, parts), new_queues(n, parts), counts)
+    search_only(order[:100], *args[1:])  # compiled
+    c = time.process_time()
+    search_only(*args)
+    search = time.process_time() - c
+    print(f"{'again: the estimator, warm':<48} cpu {kernel:7.2f}")
+    print(f"{'again: its ball search alone':<48} cpu {search:7.2f}  (mean support {counts.mean():.1f})")
+
+
+if __name__ == "__main__":
+    main()
