@@ -113,28 +113,23 @@ def main() -> None:
     points = sphere_points(n)
     spec = get_spec(method)
 
-    _patch(api, "point_setup", "normals and flags (point_setup)")
-    _patch(api, "ball_radii", "radii")
-    _patch(CloudSupport, "visit_order", "visiting order (the estimate's search grid)")
-    _patch(driver, "expansion_adjacency", "estimator: search grid")
-    _patch(driver, "new_scratch", "estimator: scratch")
-    _patch(driver, "new_queues", "estimator: scratch")
-    _patch(driver, "launch", "estimator: fit kernel (search + fit)")
-    _patch(api, "finish", "finish (all)")
-    _patch(finish_mod, "launch", "finish: mark and settle rows")
-    _patch(finish_mod, "rows_back", "finish: rows back in the caller's order")
     import curv.point_normals as pn
-    _patch(pn, "support_spread", "finish: line check")
-    _patch(pn, "quantised_supports", "finish: quantised supports")
+    import curv.estimators.jet as jet_mod
+    import curv.estimators.qs as qs_mod
+
+    for owner, name, label in (
+            (api, "point_setup", "normals and flags (point_setup)"), (api, "ball_radii", "radii"),
+            (CloudSupport, "visit_order", "visiting order (the estimate's search grid)"),
+            (driver, "expansion_adjacency", "estimator: search grid"), (driver, "new_scratch", "estimator: scratch"),
+            (driver, "new_queues", "estimator: scratch"), (driver, "launch", "estimator: fit kernel (search + fit)"),
+            (api, "finish", "finish (all)"), (finish_mod, "launch", "finish: mark and settle rows"),
+            (finish_mod, "rows_back", "finish: rows back in the caller's order"),
+            (pn, "support_spread", "finish: line check"), (pn, "quantised_supports", "finish: quantised supports"),
+            (jet_mod, "iter_handed", "estimator: hand-over"), (qs_mod, "iter_handed", "estimator: hand-over")):
+        if hasattr(owner, name):  # a tree before the hand-over has none
+            _patch(owner, name, label)
     function = spec.function
     object.__setattr__(spec, "function", _timed("estimator (all)", function))
-    for mod_name in ("curv.estimators._jet_handover", "curv.estimators._handover"):
-        mod = sys.modules.get(mod_name)
-        if mod is not None and hasattr(mod, "iter_handed"):
-            _patch(mod, "iter_handed", "estimator: hand-over")
-            for user in ("curv.estimators.jet", "curv.estimators.qs"):
-                if hasattr(sys.modules[user], "iter_handed"):
-                    _patch(sys.modules[user], "iter_handed", "estimator: hand-over")
 
     cloud = curv.PointCloud(points)
     t, c = time.perf_counter(), time.process_time()

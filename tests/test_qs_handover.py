@@ -9,10 +9,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 import curv
-from curv.core.jit import run_to_end
-from curv.core.ranges import ball_radii, resolve
 from curv.core.validity import OK
-from curv.estimators import _handover, get_spec
+from curv.estimators import _handover
 from curv.estimators._frames import Geometry
 from curv.estimators._jet_fit import jet_scratch
 from curv.estimators._principal import new_rows
@@ -21,6 +19,7 @@ from curv.estimators.jet import JET_FITS
 from curv.estimators.qs import NO_FIT, QS, QS_FITS, _handed_fit, _keep_fit, iter_qs, new_qs_fits
 from curv.point_normals import grid_ordered, point_normals
 from curv.surfaces import QuadraticPatch, Sphere, sample_points
+from tests.handover_checks import handed_and_refitted, same_to_rounding
 
 
 def _clouds():
@@ -81,31 +80,7 @@ def test_the_kept_fit_turned_over_is_the_fit_in_the_turned_frame():
 
 def _handed_and_refitted(cloud, normals_of=lambda n: n):
     """qs at R2 with the pass's fits kept, and with them dropped (a fit per point)."""
-    spec = get_spec("qs")
-    rng = resolve(spec, 2)
-    normals = normals_of(point_normals(cloud, range=2, keep_fits_at=(rng,), keep_fits=QS_FITS).normals)
-    radii = ball_radii(cloud, rng, uses_normals=False)
-    fits = _handover.kept_fits(cloud, QS_FITS.options)
-    assert fits is not None
-    handed = run_to_end(iter_qs(cloud, normals, radii))
-    n = cloud.n_points
-    left = run_to_end(_handover.iter_handed(fits, normals, radii, np.arange(n), new_rows(n)))
-    _handover.forget_fits(cloud)
-    refitted = run_to_end(iter_qs(cloud, normals, radii))
-    return handed, refitted, left
-
-
-def _same(a, b, *, rtol):
-    """Equal reasons, and k1, k2 and the directions equal to ``rtol`` of the largest |k|."""
-    np.testing.assert_array_equal(a.reason, b.reason)
-    ok = a.reason == OK
-    scale = np.abs(b.k1[ok]).max() + np.abs(b.k2[ok]).max()
-    for name in ("k1", "k2"):
-        np.testing.assert_allclose(getattr(a, name)[ok], getattr(b, name)[ok], rtol=0, atol=rtol * scale, err_msg=name)
-    for name in ("d1", "d2"):
-        dot = np.abs(np.einsum("ij,ij->i", getattr(a, name)[ok], getattr(b, name)[ok]))
-        umbilic = np.abs(b.k1[ok] - b.k2[ok]) < 1e-6 * scale
-        assert (dot[~umbilic] > 1 - 1e-9).all(), name
+    return handed_and_refitted(cloud, "qs", QS_FITS, iter_qs, normals_of)
 
 
 @pytest.mark.parametrize("name", list(CLOUDS))
@@ -113,7 +88,7 @@ def test_the_handed_fits_are_the_fits(name):
     handed, refitted, left = _handed_and_refitted(CLOUDS[name])
     assert left.size == 0  # NaN normals are DEGENERATE as a fit makes them: nothing left to fit
     assert (handed.reason == OK).sum() > 0.5 * handed.reason.size
-    _same(handed, refitted, rtol=1e-7 if name == "rows" else 1e-11)
+    same_to_rounding(handed, refitted, rtol=1e-7 if name == "rows" else 1e-11)
 
 
 def test_the_handed_fits_follow_the_normal_turned_over():
@@ -122,7 +97,7 @@ def test_the_handed_fits_follow_the_normal_turned_over():
     cloud = CLOUDS["sphere"]
     handed, refitted, left = _handed_and_refitted(cloud, lambda n: -n)
     assert left.size == 0
-    _same(handed, refitted, rtol=1e-11)
+    same_to_rounding(handed, refitted, rtol=1e-11)
     assert (handed.k1[handed.reason == OK] < 0).all()  # outward sphere seen from inside
 
     def rotated(n):
@@ -136,7 +111,7 @@ def test_the_handed_fits_follow_the_normal_turned_over():
     finite = np.isfinite(rotated(point_normals(cloud, range=2).normals)).all(axis=1)
     np.testing.assert_array_equal(np.sort(left), np.flatnonzero(every_third & finite))
     _rows_equal(handed, refitted, left)  # fitted again: the fit itself
-    _same(handed, refitted, rtol=1e-11)
+    same_to_rounding(handed, refitted, rtol=1e-11)
 
 
 def test_an_estimate_reads_the_fits_only_where_they_match():
@@ -145,7 +120,7 @@ def test_an_estimate_reads_the_fits_only_where_they_match():
     cloud = CLOUDS["blue patch"]
     plain = curv.estimate(cloud, "qs", 2)
     fitted = curv.estimate(cloud, "qs", 2, standard_errors=True)
-    _same(plain, fitted, rtol=1e-11)
+    same_to_rounding(plain, fitted, rtol=1e-11)
     np.testing.assert_array_equal(plain.valid, fitted.valid)
     region = curv.estimate(cloud, "qs", 2, vertices=np.arange(0, cloud.n_points, 7))
     _rows_equal(region, plain, slice(0, None, 7))

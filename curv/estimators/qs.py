@@ -26,13 +26,14 @@ On a point cloud whose jet normals were fitted over the same balls (the normals'
 fitted normal, on the support it holds (:func:`_keep_fit`), and the estimate without standard
 errors finishes from that fit (:mod:`curv.estimators._handover`): no second search, no second fit.
 The estimate's normal is the fitted one oriented, so either that normal or its opposite. Turned
-over (N -> -N), the frame's U = N x axis turns over and V = N x U stays (:func:`~curv.estimators._frames.tangent_frame`),
-so an offset's u and w change sign and v does not; the rows ``(u²/2, uv, v²/2)`` become
-``(u²/2, -uv, v²/2)`` and the heights -w: the normal equations are ``S AᵀA S`` and ``-S Aᵀb`` with
-``S = diag(1, -1, 1)``, whose solution is ``(-A, B, -C)``, to the bit (every product and sum only
-changes sign, and Cramer's rule, :func:`~curv.core.small_linalg.solve_sym3`, gives the same
-determinant and verdict). :func:`_handed_fit` turns the kept fit so and finishes as :func:`fit_at`
-does; a normal that is neither the kept one nor its opposite is fitted again.
+over (N -> -N), the frame's U = N x axis turns over and V = N x U stays
+(:func:`~curv.estimators._frames.tangent_frame`), so an offset's u and w change sign and v does
+not; the rows ``(u²/2, uv, v²/2)`` become ``(u²/2, -uv, v²/2)`` and the heights -w: the normal
+equations are ``S AᵀA S`` and ``-S Aᵀb`` with ``S = diag(1, -1, 1)``, whose solution is
+``(-A, B, -C)``, to the bit (every product and sum only changes sign, and Cramer's rule,
+:func:`~curv.core.small_linalg.solve_sym3`, gives the same determinant and verdict).
+:func:`_handed_fit` turns the kept fit so and finishes as :func:`fit_at` does; a normal that is
+neither the kept one nor its opposite is fitted again.
 """
 
 from __future__ import annotations
