@@ -13,8 +13,9 @@ grid), the estimator (its search grid and scratch, its kernel, the hand-over of 
 where it reads them), and the finish (the two support checks, the rows' settling, NaN-filling and
 putting the rows back in the caller's order). Then, on the same cloud with every cache warm, the
 estimator's kernel once more and a copy of its ball search alone (the same grid and radii, the
-supports only counted): the search, and so the fit (the kernel less the search). CPU seconds are
-the process's over all threads.
+supports only counted): the search, and so the fit (the kernel less the search); and the normals'
+pass without and with the fits the estimator reads kept (:mod:`curv.estimators._handover`).
+CPU seconds are the process's over all threads.
 """
 
 from __future__ import annotations
@@ -163,6 +164,33 @@ def main() -> None:
     search = time.process_time() - c
     print(f"{'again: the estimator, warm':<48} cpu {kernel:7.2f}")
     print(f"{'again: its ball search alone':<48} cpu {search:7.2f}  (mean support {counts.mean():.1f})")
+    _pass_with_fits(twin, spec)
+
+
+def _pass_with_fits(cloud, spec) -> None:
+    """The normals' pass without and with the fits the estimator reads kept (alternating, the
+    least of two each): what keeping them costs the pass."""
+    import inspect
+
+    from curv.core.jit import run_to_end
+    from curv.point_normals import border_radii
+    from curv.point_normals.normals import EXACT_GAP, ONE_SIDED_GAP, _default_spreads, _radii
+    from curv.point_normals.one_pass import _one_pass
+
+    reads = spec.reads_normal_fits
+    fits = reads({}, False) if reads is not None and "kept" in inspect.signature(_one_pass).parameters else None
+    if not fits:
+        return
+    border, r2, spreads = border_radii(cloud), _radii(cloud, 2), _default_spreads(cloud)[:1]
+    times = {False: [], True: []}
+    for keep in (False, True, False, True):
+        kept = fits.new(r2) if keep else None
+        c = time.process_time()
+        run_to_end(_one_pass(cloud, border, r2, jet=True, spreads=spreads, screens=(EXACT_GAP, ONE_SIDED_GAP),
+                             kept=kept))
+        times[keep].append(time.process_time() - c)
+    print(f"{'the normals pass, without / with kept fits':<48} cpu {min(times[False]):7.2f} / {min(times[True]):.2f}"
+          f"  (runs {times[False]} / {times[True]})")
 
 
 if __name__ == "__main__":
