@@ -7,6 +7,11 @@ follows the centres, not the input) and is scored by the median e_rel over the c
 value at, against the twin's exact curvature. Over the copies a call's measured error is the
 geometric mean of its medians and its spread their geometric standard deviation; the copies are
 independent (new centres, new noise), so the spread is an honest standard error of the measure.
+
+On a mesh each call also runs on the input itself at each twin's centres (:func:`_realized_steps`),
+scored against the same twin's curvature: its *realized* error, the one judge that sees the input's
+own noise draw (the copies draw it afresh), which :mod:`curv.advice.ranking` weighs against the
+table's prediction.
 """
 
 from __future__ import annotations
@@ -58,7 +63,11 @@ class Measured:
     measured : float
         Share of the centres (over all copies) the call gave a value at.
     seconds : float
-        Time the call took over all copies.
+        Time the call took over all copies (and on the input, for :attr:`realized`).
+    realized : tuple of float
+        On a mesh, the median e_rel of the call run on the input itself at each copy's centres
+        against that copy's twin (NaN where it gave no value there); empty where not run (a point
+        cloud). :func:`curv.advice.ranking.realized_score` makes the ranking's score of them.
     """
 
     erel: float
@@ -66,6 +75,7 @@ class Measured:
     spread: float
     measured: float
     seconds: float
+    realized: tuple = ()
 
     @property
     def ok(self) -> bool:
@@ -74,7 +84,15 @@ class Measured:
 
     def as_dict(self) -> dict:
         return {"erel": self.erel, "copies": list(self.copies), "spread": self.spread,
-                "measured": self.measured, "seconds": self.seconds}
+                "measured": self.measured, "seconds": self.seconds, "realized": list(self.realized)}
+
+    @property
+    def realized_spread(self) -> float:
+        """Geometric standard deviation of the positive :attr:`realized` errors (a factor; NaN with
+        fewer than two)."""
+        r = np.asarray(self.realized, float)
+        logs = np.log(r[np.isfinite(r) & (r > 0)])
+        return float(np.exp(logs.std(ddof=1))) if logs.size > 1 else float("nan")
 
 
 @dataclass(frozen=True)
@@ -278,9 +296,20 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
     estimate, quiet = _estimate_keywords()
     scores = {key: [] for key in calls}
     seconds = {key: 0.0 for key in calls}
-    steps = len(twins) * len(calls)
+    realize = support_of(shape).has_faces
+    realized = {key: [] for key in calls}
+    steps = len(twins) * len(calls) * (2 if realize else 1)
     step = 0
+    tree = []  # the input's k-d tree, made once where a call's fitted normals are read on the input
     for j, twin in enumerate(twins):
+        if realize:
+            start = 0.2 + 0.8 * step / steps
+            scored = yield from rescaled(_realized_steps(shape, twin, calls, tree, seconds), start,
+                                         start + 0.8 * len(calls) / steps)
+            for key in calls:
+                realized[key].append(scored[key])
+            step += len(calls)
+            yield Progress(0.2 + 0.8 * step / steps, "scoring the candidates on the input itself")
         copy = noisy_copy(shape, twin, noise, rng)
         # the calls that read the same normals share them and one part of the copy (what the widest of
         # them reads), so what an estimate caches on its input is made once per part; a knn call finds
@@ -317,7 +346,7 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
             seconds[key] += time.perf_counter() - t1
             step += 1
             yield Progress(0.2 + 0.8 * step / steps, "checking the candidates on noisy copies")
-    measured = {key: _measure(scores[key], seconds[key]) for key in calls}
+    measured = {key: _measure(scores[key], seconds[key], realized[key]) for key in calls}
     degrees = np.concatenate([t.degree for t in twins])
     return CheckReport(measured=measured, noise=float(noise), noise_bound=bound, noise_resolved=noise_resolved,
                        copies=len(twins), centres=int(min(t.centres.size for t in twins)),
@@ -351,8 +380,63 @@ def _patch_noise(shape, twin) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return noise, sigma, resolved
 
 
-def _measure(per_copy: list, seconds: float) -> Measured:
-    """A call's :class:`Measured` from its per-centre e_rel on each copy."""
+def _realized_steps(shape, twin, calls: dict, tree: list, seconds: dict):
+    """Each call run on the input mesh ``shape`` itself at ``twin``'s centres (its source vertices) and
+    scored against the twin's curvature there: call key -> the median e_rel (NaN where it gave no value).
+
+    The calls are those of :func:`iter_check` on the whole input (as a user would run them, with
+    ``vertices=``); a call's fitted normals are fitted only where its group's calls read them
+    (:func:`input_normals`, the same normals bit for bit, which the estimate normalises again as it does
+    any normals it is given: the score as the whole call's to about 1e-15), so the cost follows the centres. ``tree``
+    holds the input's k-d tree once made; ``seconds`` gets each call's time added. A generator:
+    yields progress, returns the scores.
+    """
+    estimate, quiet = _estimate_keywords()
+    group = {key: _normals_group(shape, kw) for key, kw in calls.items()}
+    made: dict = {}
+    out = {}
+    for i, key in enumerate(calls):
+        t1 = time.perf_counter()
+        run = dict(calls[key])
+        if group[key] is not None:
+            if group[key] not in made:
+                made[group[key]] = input_normals(shape, [calls[k] for k in calls if group[k] == group[key]],
+                                                 twin.source, tree)
+            run.pop("fit_range", None)
+            run["normals"] = made[group[key]]
+        try:
+            res = yield from rescaled(estimate(shape, vertices=twin.source, **quiet, **run), i / len(calls),
+                                      (i + 1) / len(calls))
+            err = _score(twin, res, twin.source, flip=False)
+            out[key] = float(np.nanmedian(err)) if np.isfinite(err).any() else float("nan")
+        except CurvError:
+            out[key] = float("nan")
+        seconds[key] += time.perf_counter() - t1
+    return out
+
+
+def input_normals(mesh, calls: list, centres: np.ndarray, tree: list) -> np.ndarray:
+    """(n, 3) the fitted normals (``normals="fit"`` at the calls' ``fit_range``) that ``calls`` read at
+    ``centres`` of ``mesh``: fitted at the vertices within the farthest any of them reads around each
+    centre (:func:`curv.tiles.reach.support_reach`), NaN elsewhere (:func:`curv.fitted_normals.fitted_normals`
+    with ``vertices=``: those of the whole call there, bit for bit). ``tree``: a list holding the mesh's
+    :class:`scipy.spatial.cKDTree` once made (made here where empty)."""
+    from scipy.spatial import cKDTree
+
+    from ..fitted_normals import fitted_normals
+    from ..tiles.reach import support_reach
+
+    if not tree:
+        tree.append(cKDTree(mesh.vertices))
+    reach = np.max([support_reach(mesh, kw["method"], kw.get("range"), radius=kw.get("radius"), centres=centres)
+                    for kw in calls], axis=0)
+    near = tree[0].query_ball_point(mesh.vertices[centres], reach)
+    rows = np.unique(np.concatenate([np.asarray(r, np.int64) for r in near]))
+    return fitted_normals(mesh, range=calls[0].get("fit_range", 2), vertices=rows)
+
+
+def _measure(per_copy: list, seconds: float, realized: list) -> Measured:
+    """A call's :class:`Measured` from its per-centre e_rel on each copy, and its realized medians."""
     medians = np.array([np.nanmedian(e) if np.isfinite(e).any() else np.nan for e in per_copy])
     share = float(np.mean(np.concatenate([np.isfinite(e) for e in per_copy]))) if per_copy else 0.0
     ok = np.isfinite(medians) & (medians > 0)
@@ -360,4 +444,4 @@ def _measure(per_copy: list, seconds: float) -> Measured:
     erel = float(np.exp(logs.mean())) if ok.any() else (0.0 if np.any(medians == 0) else float("nan"))
     spread = float(np.exp(logs.std(ddof=1))) if ok.sum() > 1 else float("nan")
     return Measured(erel=erel, copies=tuple(float(m) for m in medians), spread=spread, measured=share,
-                    seconds=seconds)
+                    seconds=seconds, realized=tuple(float(x) for x in realized))
