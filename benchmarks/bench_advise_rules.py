@@ -111,6 +111,19 @@ def pick_weighted(rec: dict, weight: float, judge: str = "meas") -> str:
     return min(calls, key=lambda c: (1 - weight) * math.log(c["pred"]) + weight * math.log(c[judge]))["key"]
 
 
+def pick_weighted_veto(rec: dict, weight: float, band: float) -> str:
+    """:func:`pick_weighted` on the realized score, then the table-first rule's veto: the check's measured
+    best instead where the copies measured the pick more than ``band`` times its error on every copy."""
+    from curv.advice.ranking import _separated
+
+    pick = pick_weighted(rec, weight, "real")
+    calls = _measured(rec)
+    if not calls or rec["measured"].get(pick) is None or not rec["measured"][pick].ok:
+        return pick
+    best = min(calls, key=lambda c: c["meas"])["key"]
+    return best if _separated(rec["measured"][best], rec["measured"][pick], band) else pick
+
+
 def pick_within_ties(rec: dict, table: dict, k: float) -> str:
     """The measured best among the calls the table cannot tell from its first: the neighbours' mean
     log ratio to the first within ``k`` standard errors of that mean."""
@@ -190,6 +203,8 @@ def rules(table: dict, with_realized: bool, library: bool = False) -> list:
     if with_realized:
         out += [(f"realized score, weight {w:g} (the rest the table's)", lambda r, w=w: pick_weighted(r, w, "real"))
                 for w in (0.5, 0.7, 1.0)]
+        out.append((f"realized score, weight 0.5, the check's veto at {JUDGE_BIAS:g}x",
+                    lambda r: pick_weighted_veto(r, 0.5, JUDGE_BIAS)))
     if library:
         out.append(("the library's ranking (rank_candidates, its stored realized scores)", pick_library))
     out.append(("bound: the truly best of the short list", lambda r: min(r["short"], key=lambda c: r["e"][c["key"]])["key"]))

@@ -297,19 +297,13 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
     scores = {key: [] for key in calls}
     seconds = {key: 0.0 for key in calls}
     realize = support_of(shape).has_faces
-    realized = {key: [] for key in calls}
-    steps = len(twins) * len(calls) * (2 if realize else 1)
-    step = 0
-    tree = []  # the input's k-d tree, made once where a call's fitted normals are read on the input
+    steps = (len(twins) + realize) * len(calls)
+    realized = {key: () for key in calls}
+    if realize:
+        realized = yield from rescaled(_realized_steps(shape, twins, calls, seconds), 0.2, 0.2 + 0.8 * len(calls) / steps)
+        yield Progress(0.2 + 0.8 * len(calls) / steps, "scoring the candidates on the input itself")
+    step = len(calls) if realize else 0
     for j, twin in enumerate(twins):
-        if realize:
-            start = 0.2 + 0.8 * step / steps
-            scored = yield from rescaled(_realized_steps(shape, twin, calls, tree, seconds), start,
-                                         start + 0.8 * len(calls) / steps)
-            for key in calls:
-                realized[key].append(scored[key])
-            step += len(calls)
-            yield Progress(0.2 + 0.8 * step / steps, "scoring the candidates on the input itself")
         copy = noisy_copy(shape, twin, noise, rng)
         # the calls that read the same normals share them and one part of the copy (what the widest of
         # them reads), so what an estimate caches on its input is made once per part; a knn call finds
@@ -380,18 +374,20 @@ def _patch_noise(shape, twin) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return noise, sigma, resolved
 
 
-def _realized_steps(shape, twin, calls: dict, tree: list, seconds: dict):
-    """Each call run on the input mesh ``shape`` itself at ``twin``'s centres (its source vertices) and
-    scored against the twin's curvature there: call key -> the median e_rel (NaN where it gave no value).
+def _realized_steps(shape, twins: list, calls: dict, seconds: dict):
+    """Each call run on the input mesh ``shape`` itself at every twin's centres (their source vertices)
+    and scored against each twin's curvature there: call key -> (median e_rel per twin, NaN where the
+    call gave no value at its centres).
 
-    The calls are those of :func:`iter_check` on the whole input (as a user would run them, with
-    ``vertices=``); a call's fitted normals are fitted only where its group's calls read them
-    (:func:`input_normals`, the same normals bit for bit, which the estimate normalises again as it does
-    any normals it is given: the score as the whole call's to about 1e-15), so the cost follows the centres. ``tree``
-    holds the input's k-d tree once made; ``seconds`` gets each call's time added. A generator:
-    yields progress, returns the scores.
+    The calls run on the whole input (as a user would run them, with ``vertices=``), once for the
+    centres of all twins together (an estimate at a vertex does not depend on which others are asked
+    for); a call's fitted normals are fitted only where its group's calls read them
+    (:func:`input_normals`: the same normals bit for bit, which the estimate normalises again as it
+    does any normals it is given, so the score is the whole call's to about 1e-15), so the cost follows
+    the centres. ``seconds`` gets each call's time added. A generator: yields progress, returns the scores.
     """
     estimate, quiet = _estimate_keywords()
+    centres = np.unique(np.concatenate([t.source for t in twins]))
     group = {key: _normals_group(shape, kw) for key, kw in calls.items()}
     made: dict = {}
     out = {}
@@ -400,42 +396,41 @@ def _realized_steps(shape, twin, calls: dict, tree: list, seconds: dict):
         run = dict(calls[key])
         if group[key] is not None:
             if group[key] not in made:
-                made[group[key]] = input_normals(shape, [calls[k] for k in calls if group[k] == group[key]],
-                                                 twin.source, tree)
+                made[group[key]] = input_normals(shape, [calls[k] for k in calls if group[k] == group[key]], centres)
             run.pop("fit_range", None)
             run["normals"] = made[group[key]]
         try:
-            res = yield from rescaled(estimate(shape, vertices=twin.source, **quiet, **run), i / len(calls),
+            res = yield from rescaled(estimate(shape, vertices=centres, **quiet, **run), i / len(calls),
                                       (i + 1) / len(calls))
-            err = _score(twin, res, twin.source, flip=False)
-            out[key] = float(np.nanmedian(err)) if np.isfinite(err).any() else float("nan")
+            errs = [_score(twin, res, twin.source, flip=False) for twin in twins]
         except CurvError:
-            out[key] = float("nan")
+            errs = [np.full(twin.source.size, np.nan) for twin in twins]
+        out[key] = tuple(float(np.nanmedian(e)) if np.isfinite(e).any() else float("nan") for e in errs)
         seconds[key] += time.perf_counter() - t1
     return out
 
 
-def input_normals(mesh, calls: list, centres: np.ndarray, tree: list) -> np.ndarray:
+def input_normals(mesh, calls: list, centres: np.ndarray) -> np.ndarray:
     """(n, 3) the fitted normals (``normals="fit"`` at the calls' ``fit_range``) that ``calls`` read at
-    ``centres`` of ``mesh``: fitted at the vertices within the farthest any of them reads around each
-    centre (:func:`curv.tiles.reach.support_reach`), NaN elsewhere (:func:`curv.fitted_normals.fitted_normals`
-    with ``vertices=``: those of the whole call there, bit for bit). ``tree``: a list holding the mesh's
-    :class:`scipy.spatial.cKDTree` once made (made here where empty)."""
-    from scipy.spatial import cKDTree
+    ``centres`` of ``mesh``, NaN elsewhere (:func:`curv.fitted_normals.fitted_normals` with ``vertices=``:
+    those of the whole call there, bit for bit).
 
+    They are fitted at the vertices a walk through the mesh reaches within each centre's reach
+    (:func:`curv.advice.copies.widest_reach`): a support is connected within its ball and every vertex
+    whose normal it reads is an edge from it, so the walk reaches them all, without a search of the
+    whole input's space.
+    """
     from ..fitted_normals import fitted_normals
-    from ..tiles.reach import support_reach
+    from ..geometry.neighbourhood import supports
+    from .copies import widest_reach
 
-    if not tree:
-        tree.append(cKDTree(mesh.vertices))
-    reach = np.max([support_reach(mesh, kw["method"], kw.get("range"), radius=kw.get("radius"), centres=centres)
-                    for kw in calls], axis=0)
-    near = tree[0].query_ball_point(mesh.vertices[centres], reach)
-    rows = np.unique(np.concatenate([np.asarray(r, np.int64) for r in near]))
-    return fitted_normals(mesh, range=calls[0].get("fit_range", 2), vertices=rows)
+    reach = np.full(mesh.n_vertices, np.nan)
+    reach[centres] = widest_reach(mesh, calls, centres)
+    _, indices = supports(mesh, reach, centres)
+    return fitted_normals(mesh, range=calls[0].get("fit_range", 2), vertices=np.union1d(centres, indices))
 
 
-def _measure(per_copy: list, seconds: float, realized: list) -> Measured:
+def _measure(per_copy: list, seconds: float, realized: tuple) -> Measured:
     """A call's :class:`Measured` from its per-centre e_rel on each copy, and its realized medians."""
     medians = np.array([np.nanmedian(e) if np.isfinite(e).any() else np.nan for e in per_copy])
     share = float(np.mean(np.concatenate([np.isfinite(e) for e in per_copy]))) if per_copy else 0.0
@@ -444,4 +439,4 @@ def _measure(per_copy: list, seconds: float, realized: list) -> Measured:
     erel = float(np.exp(logs.mean())) if ok.any() else (0.0 if np.any(medians == 0) else float("nan"))
     spread = float(np.exp(logs.std(ddof=1))) if ok.sum() > 1 else float("nan")
     return Measured(erel=erel, copies=tuple(float(m) for m in medians), spread=spread, measured=share,
-                    seconds=seconds, realized=tuple(float(x) for x in realized))
+                    seconds=seconds, realized=tuple(realized))

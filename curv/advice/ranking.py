@@ -14,7 +14,9 @@ On a mesh (the candidates carry the table's predictions) the order is:
 
 Why: replayed on the 288 held-out meshes of seeds 23000-34000 (docs/ADVISOR.md, "Where the p90 is
 lost"), this rule had regret p90 1.234, worst 3.02, mean 1.083, against the table-first rule's
-1.312 / 3.02 / 1.115; the realized score is the one judge that sees the input's own noise draw.
+1.312 / 3.02 / 1.115; then on 96 fresh meshes (seeds 35000-38000, "The realized score shipped")
+p90 1.126, worst 1.93, against the table-first rule's 1.456 / 3.34 on the same checks. The realized
+score is the one judge that sees the input's own noise draw (the copies draw it afresh).
 
 On a point cloud (no table), and on a mesh with ``realized_weight=None`` (the table-first rule shipped
 before), the order is:
