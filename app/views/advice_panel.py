@@ -278,11 +278,16 @@ class AdvicePanel(QWidget):
         what = "point cloud" if record.advice.is_cloud else "mesh"
         self.features_box.setTitle(f"Measured on the {what}" if current else f"Measured on the earlier {what} (stale)")
         checked = record.advice.checked
+        mesh_checked = checked and not record.advice.is_cloud  # the prediction and the realized error decide
         # a short title: a group box never wraps its title, and its width is the dock's minimum
-        self.ranking_box.setTitle("Ranking by measured error" if checked else "Ranking by predicted error")
-        self.ranking_box.setToolTip("Best first: the checked calls by the error measured on noisy copies of the "
-                                    "input's smooth twin, then the others by the table's prediction" if checked else
-                                    "Best first, by the error the study's table predicts for such an input")
+        self.ranking_box.setTitle("Ranking by predicted × realized" if mesh_checked else
+                                  "Ranking by measured error" if checked else "Ranking by predicted error")
+        self.ranking_box.setToolTip(
+            "Best first: the checked calls by the geometric mean of the table's predicted error and their error "
+            "on the mesh itself against its smooth twin (realized), then the others" if mesh_checked else
+            "Best first: the checked calls by the error measured on noisy copies of the input's smooth twin, then "
+            "the others by the table's prediction" if checked else
+            "Best first, by the error the study's table predicts for such an input")
         self._update_apply()
 
     def _fill(self, record) -> None:

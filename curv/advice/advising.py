@@ -137,13 +137,13 @@ def _answer(shape, features, ranking, sharp, report, note) -> Advice:
                    else f" (on {report.copies} noisy copy of its smooth twin)"))
         if np.isfinite(best.expected_erel):
             why += f"; the table predicted {best.expected_erel:.2g}"
-        if np.isfinite(realized_score(best.measured)):
-            why += f"; realized {realized_score(best.measured):.2g} on the input itself"
         ties = [c.label for c in ranking if c.within_noise]
         if ties:
             why += "; within noise: " + ", ".join(ties[:3]) + (f" and {len(ties) - 3} more" if len(ties) > 3 else "")
     elif np.isfinite(best.expected_erel):
         why += f", expected median e_rel {best.expected_erel:.2g}"
+    if np.isfinite(realized_score(best.measured)):
+        why += f"; realized {realized_score(best.measured):.2g} on the input itself"
     if best.valid_share < 0.995:
         why += f"; valid at {100 * best.valid_share:.0f} % of the {'points' if cloud else 'vertices'}"
     rule = ranked_by(ranking)

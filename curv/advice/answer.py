@@ -131,6 +131,7 @@ class Candidate:
                 "expected_erel": self.expected_erel, "valid_share": self.valid_share, "label": self.label,
                 "kwargs": self.kwargs, "key": self.key,
                 "measured": None if self.measured is None else self.measured.as_dict(),
+                "realized_erel": self.realized_erel,
                 "within_noise": self.within_noise}
 
 
