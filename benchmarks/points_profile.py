@@ -120,8 +120,13 @@ def main() -> None:
     phase("grid + 10 nearest", lambda: cloud.nearest)
     border = phase("border radii", lambda: pn.border_radii(cloud))
     r2, spreads = _radii(cloud, 2), _default_spreads(cloud)
-    # a jet estimate at R2 has the pass keep its fits (a tree without that keyword: nothing to keep)
-    keep = {"keep_fits": True} if method == "jet" and "keep_fits" in inspect.signature(_one_pass).parameters else {}
+    # an estimate that reads the pass's fits at R2 (the jet, qs) has the pass keep them (a tree
+    # without the keyword: nothing kept; with the older one, the jet's only)
+    params = inspect.signature(_one_pass).parameters
+    reads = curv.estimators.get_spec(method).reads_normal_fits
+    fits = reads({}, False) if "kept" in params and reads is not None else None
+    keep = ({"kept": fits.new(r2)} if fits else
+            {"keep_fits": True} if method == "jet" and "keep_fits" in params else {})
     found = phase("one pass (frames, jet, line checks)",
                   lambda: run_to_end(_one_pass(cloud, border, r2, jet=True, spreads=spreads,
                                                screens=(EXACT_GAP, ONE_SIDED_GAP), **keep)))

@@ -250,11 +250,12 @@ def _iter_estimates(
         t0 = time.perf_counter()
         if support.kind == "points":  # its normals fitted and oriented, its borders found
             work_mesh = mesh
-            # an estimator that reads the normals' own fits (the jet at their range) has them kept
+            # an estimator that reads the normals' pass's fits (the jet and qs at their range) has them kept
             reads = len(specs) == 1 and spec.reads_normal_fits is not None and spec.reads_normal_fits(
                 options_of[spec.name], bool(standard_errors))
             used_normals, flags, normals_label = point_setup(mesh, given, orient=orient, fit_range=fit_range,
-                                                             keep_fits_at=rngs if reads else ())
+                                                             keep_fits_at=rngs if reads else (),
+                                                             keep_fits=reads or None)
             fused = False
         else:
             work_mesh, used_normals, flags, fused = mesh_setup(mesh, spec, given, normal_weighting, smooth,

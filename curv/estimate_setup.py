@@ -121,12 +121,12 @@ def mesh_setup(mesh: Mesh, spec, normals, normal_weighting, smooth, smooth_itera
     return work_mesh, used_normals, flags, fused
 
 
-def point_setup(cloud: PointCloud, normals, *, orient, fit_range, keep_fits_at=()):
+def point_setup(cloud: PointCloud, normals, *, orient, fit_range, keep_fits_at=(), keep_fits=None):
     """A point cloud's normals (given, the cloud's own, or estimated and oriented) and flags.
 
     ``normals``: None (the cloud's if it has them, else jet fits), ``"fit"`` (jet), ``"pca"``, or
-    an (n, 3) array. ``keep_fits_at``: the ranges of an estimate that reads the normals' fits
-    (:func:`curv.point_normals.point_normals`).
+    an (n, 3) array. ``keep_fits_at``, ``keep_fits``: the ranges of an estimate that reads the
+    normals' fits, and the fits it reads (:func:`curv.point_normals.point_normals`).
     """
     from .point_normals import border_points, point_normals, support_floor
 
@@ -137,7 +137,8 @@ def point_setup(cloud: PointCloud, normals, *, orient, fit_range, keep_fits_at=(
         used, label = normalize_rows(np.asarray(cloud.normals)), "file"
     elif normals is None or (isinstance(normals, str) and normals in ("pca", "fit")):
         method = "pca" if isinstance(normals, str) and normals == "pca" else "jet"
-        est = point_normals(cloud, method=method, range=fit_range, orient=orient, keep_fits_at=keep_fits_at)
+        est = point_normals(cloud, method=method, range=fit_range, orient=orient, keep_fits_at=keep_fits_at,
+                            keep_fits=keep_fits)
         used, ambiguous, one_sided, label = est.normals, est.ambiguous, est.one_sided, f"{method} {est.label}"
         orientation = est.orient if isinstance(est.orient, str) else tuple(float(v) for v in est.orient)
         widened = est.widened

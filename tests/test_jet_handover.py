@@ -1,5 +1,5 @@
 """The jet at its normals' range reads the normals' pass's fits (curv.estimators._jet_handover): the
-same answer as fitting again, to the rounding of the support's order."""
+same answer as fitting again, to the rounding of the support's order. qs's hand-over: test_qs_handover.py."""
 
 from __future__ import annotations
 
@@ -7,13 +7,11 @@ import numpy as np
 import pytest
 
 import curv
-from curv.core.jit import run_to_end
-from curv.core.ranges import ball_radii, resolve
-from curv.estimators import _jet_handover, get_spec
-from curv.estimators._principal import Rows
-from curv.estimators.jet import iter_jet
-from curv.point_normals import grid_ordered, point_normals
+from curv.estimators import _handover, _jet_handover
+from curv.estimators.jet import JET_FITS, iter_jet
+from curv.point_normals import grid_ordered
 from curv.surfaces import QuadraticPatch, Sphere, sample_points
+from tests.handover_checks import handed_and_refitted, same_to_rounding
 
 
 def _clouds():
@@ -25,35 +23,9 @@ def _clouds():
 CLOUDS = dict(_clouds())
 
 
-def _same(a, b, *, rtol=1e-9):
-    """Equal reasons, and k1, k2 and the directions equal to ``rtol`` of the largest |k|."""
-    np.testing.assert_array_equal(a.reason, b.reason)
-    ok = a.reason == 0
-    scale = np.abs(b.k1[ok]).max() + np.abs(b.k2[ok]).max()
-    for name in ("k1", "k2"):
-        np.testing.assert_allclose(getattr(a, name)[ok], getattr(b, name)[ok], rtol=0, atol=rtol * scale, err_msg=name)
-    for name in ("d1", "d2"):
-        # a direction's sign is free where k1 = k2 (the sphere): compare the lines
-        dot = np.abs(np.einsum("ij,ij->i", getattr(a, name)[ok], getattr(b, name)[ok]))
-        umbilic = np.abs(b.k1[ok] - b.k2[ok]) < 1e-6 * scale
-        assert (dot[~umbilic] > 1 - 1e-9).all(), name
-
-
 def _handed_and_refitted(cloud, normals_of=lambda n: n):
-    """The jet at R2 with the pass's fits kept, and with them dropped (a fit per point)."""
-    rng = resolve(get_spec("jet"), 2)
-    normals = normals_of(point_normals(cloud, range=2, keep_fits_at=(rng,)).normals)
-    radii = ball_radii(cloud, rng, uses_normals=False)
-    kept = _jet_handover.kept_fits(cloud, 2, False)
-    assert kept is not None
-    handed = run_to_end(iter_jet(cloud, normals, radii))
-    # how many the hand-over leaves to a fit: only the points the pass did not fit to the end
-    n = cloud.n_points
-    scratch = Rows(np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.zeros(n, np.uint8))
-    left = run_to_end(_jet_handover.iter_handed(kept, normals, radii, np.arange(n), scratch))
-    _jet_handover._KEPT.pop(cloud)
-    refitted = run_to_end(iter_jet(cloud, normals, radii))
-    return handed, refitted, left
+    """jet at R2 with the pass's fits kept, and with them dropped (a fit per point)."""
+    return handed_and_refitted(cloud, "jet", JET_FITS, iter_jet, normals_of)
 
 
 @pytest.mark.parametrize("name", list(CLOUDS))
@@ -62,7 +34,7 @@ def test_the_handed_fits_are_the_fits(name):
     assert left.size < 0.1 * handed.reason.size
     assert (handed.reason == 0).sum() > 0.5 * handed.reason.size
     # scan rows 4:1 apart fit nearly singular systems, whose rounding the support's order moves more
-    _same(handed, refitted, rtol=1e-5 if name == "rows" else 1e-11)
+    same_to_rounding(handed, refitted, rtol=1e-5 if name == "rows" else 1e-11)
 
 
 def test_the_handed_fits_follow_any_reference():
@@ -70,7 +42,7 @@ def test_the_handed_fits_follow_any_reference():
     DEGENERATE test: the same as the fit with those references."""
     cloud = CLOUDS["sphere"]
     handed, refitted, _ = _handed_and_refitted(cloud, lambda n: -n)
-    _same(handed, refitted, rtol=1e-11)
+    same_to_rounding(handed, refitted, rtol=1e-11)
     assert (handed.k1[handed.reason == 0] < 0).all()  # outward sphere seen from inside
 
     def tilted(n):
@@ -79,32 +51,32 @@ def test_the_handed_fits_follow_any_reference():
         return out / np.linalg.norm(out, axis=1, keepdims=True)
 
     handed, refitted, _ = _handed_and_refitted(cloud, tilted)
-    _same(handed, refitted, rtol=1e-11)
+    same_to_rounding(handed, refitted, rtol=1e-11)
     assert (handed.reason[::3] == curv.Reason.DEGENERATE).mean() > 0.9
 
 
 def test_an_estimate_reads_the_fits_only_where_they_match():
     """The whole call: the jet at R2 (handed over) against the same with standard errors (a fit per
-    point: their kernel reads the fit's normal matrix), and a qs estimate keeps no fits."""
+    point: their kernel reads the fit's normal matrix), and no other estimate keeps the jet's fits."""
     cloud = CLOUDS["blue patch"]
     plain = curv.estimate(cloud, "jet", 2)
     fitted = curv.estimate(cloud, "jet", 2, standard_errors=True)
-    _same(plain, fitted, rtol=1e-11)
+    same_to_rounding(plain, fitted, rtol=1e-11)
     np.testing.assert_array_equal(plain.valid, fitted.valid)
     other = curv.PointCloud(np.asarray(cloud.vertices) + 0.0)
     twin = grid_ordered(other)[0]  # the estimate's cloud, kept with the cloud
     curv.estimate(other, "qs", 2)
     curv.estimate(other, "jet", 3)
     curv.estimate(other, "jet", 2, degree=3)
-    assert _jet_handover.kept_fits(twin, 2, False) is None
+    assert _handover.kept_fits(twin, JET_FITS.options) is None
     curv.estimate(other, "jet", 2)
-    assert _jet_handover.kept_fits(twin, 2, False) is not None
+    assert _handover.kept_fits(twin, JET_FITS.options) is not None
 
 
 def test_the_memory_model_counts_the_kept_fits():
     from curv.memory import estimate_peak_bytes
 
     n = 1_000_000
-    extra = estimate_peak_bytes(n, 0, "jet", points=True, threads=1) - estimate_peak_bytes(n, 0, "qs", points=True,
+    extra = estimate_peak_bytes(n, 0, "jet", points=True, threads=1) - estimate_peak_bytes(n, 0, "mru", points=True,
                                                                                             threads=1)
     assert extra == n * _jet_handover.BYTES_PER_POINT

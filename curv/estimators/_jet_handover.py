@@ -15,36 +15,37 @@ oriented normal (or any given normals). The reference decides three things of a 
   rounding is symmetric in sign, so to the bit), and the same condition estimate
   (:func:`~curv.core.small_linalg.reciprocal_condition`), so ``SINGULAR`` holds on either side.
 
-So the pass keeps, per point (:func:`keep_fit`): a state (the fit's reason, or that it stopped before
-its solve: :data:`NO_FIT` without a reference, :data:`OFF_NORMAL` at the reference test) and a row
-of :data:`ROW_WIDTH` floats: the support's PCA normal, ``e1``, the coefficients of the first and
-second order turned to the side of that PCA normal, and the scale ``h``. The estimator
-(:func:`iter_handed`) turns them to its reference's side and finishes as a fit would
+So the pass keeps, per point (:func:`keep_fit`), in a :class:`JetFits` bundle: a state (the fit's
+reason, or that it stopped before its solve: :data:`NO_FIT` without a reference, :data:`OFF_NORMAL`
+at the reference test) and a row of :data:`ROW_WIDTH` floats: the support's PCA normal, ``e1``, the
+coefficients of the first and second order turned to the side of that PCA normal, and the scale
+``h``. The estimator (:func:`handed_fit`, through :func:`curv.estimators._handover.iter_handed`)
+turns them to its reference's side and finishes as a fit would
 (:func:`~curv.estimators._jet_fit.jet_principal`); the points the pass did not fit to the end, or
 whose radius is not the pass's, are fitted as before. The result is the fit's over the pass's
 support, whose points the pass met in its own grid's order: the sums, and so the last bits, follow
 that order (docs/BENCHMARKS.md says by how much).
 
-What matches (:func:`kept_fits`): the estimator's degree and weights equal the pass's, the fixed
-width, no standard errors (they read the fit's normal matrix, which is not kept), and per point the
-same radius. The normals the estimator is given need not be the pass's: each is tested as a fit
-would test it.
+What matches (:data:`curv.estimators.jet.JET_FITS`): the estimator's degree and weights equal the
+pass's, the fixed width, no standard errors (they read the fit's normal matrix, which is not kept),
+and per point the same radius. The normals the estimator is given need not be the pass's: each is
+tested as a fit would test it.
 """
 
 from __future__ import annotations
 
 import math
-import weakref
 from collections import namedtuple
 
 import numpy as np
 
-from ..core.jit import iter_chunks, jit, jit_parallel, launch, prange, slice_bounds, threads
+from ..core.jit import jit
 from ..core.validity import DEGENERATE, OK, SINGULAR, TOO_FEW
+from ._handover import Handover, register_handover
 from ._jet_fit import MIN_NORMAL_COSINE, V_SIGNS, jet_principal, jet_scratch
 
-__all__ = ["ROW_WIDTH", "NO_FIT", "OFF_NORMAL", "BYTES_PER_POINT", "new_kept", "keep_fit", "keep_for", "kept_fits",
-           "iter_handed"]
+__all__ = ["ROW_WIDTH", "NO_FIT", "OFF_NORMAL", "BYTES_PER_POINT", "JetFits", "new_jet_fits", "keep_fit",
+           "handed_fit"]
 
 ROW_WIDTH = 12
 """Floats kept per point: the support's PCA normal (3, the eigen-solve's sign), ``e1`` (3), the
@@ -60,25 +61,26 @@ that accepts it refits)."""
 BYTES_PER_POINT = 8 * ROW_WIDTH + 1 + 8
 """What the kept fits hold per point: the rows, the state and the pass's radius."""
 
-Kept = namedtuple("Kept", ["radii", "state", "rows", "degree", "smooth"])
-"""The fits a pass kept: the radius of every point's ball (n,), the states (n,) uint8, the rows
-(n, :data:`ROW_WIDTH`), and the fit's options."""
-
-_KEPT: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+JetFits = namedtuple("JetFits", ["radii", "state", "rows"])
+"""The jet fits a pass keeps: the radius of every point's ball (n,), the states (n,) uint8 and the
+rows (n, :data:`ROW_WIDTH`)."""
 
 
-def new_kept(n: int) -> tuple:
-    """``(state (n,) uint8, rows (n, ROW_WIDTH) float64)`` for a pass to fill (:func:`keep_fit`)."""
-    return np.empty(n, np.uint8), np.empty((n, ROW_WIDTH))
+def new_jet_fits(radii: np.ndarray) -> JetFits:
+    """An unfilled :class:`JetFits` for a pass over balls of these radii (n,)."""
+    n = radii.shape[0]
+    return JetFits(np.asarray(radii, np.float64), np.empty(n, np.uint8), np.empty((n, ROW_WIDTH)))
 
 
 @jit
-def keep_fit(code, h, p, referenced, scratch, kept):
-    """Keep point p's fit (:func:`~curv.estimators._jet_fit.fit_jet`'s ``code`` and ``h``, its
-    ``scratch``) in row p of ``kept = (state, rows)``. ``referenced``: the fit's reference normal
-    was finite. The caller set ``scratch``'s smallest eigenvalue (``evec[3, 0]``) to NaN before the
-    fit, so that a fit stopped before its PCA shows it."""
-    state, rows = kept
+def keep_fit(fits, p, i, fit, support, coords, fitted):
+    """Keep point p's jet fit (``fit = (code, h, referenced, scratch)``: :func:`~curv.estimators._jet_fit.fit_jet`'s
+    code and h, whether its reference normal was finite, its scratch) in row p of ``fits``
+    (:class:`JetFits`; :class:`~curv.estimators._handover.Handover`'s ``keep``). The caller set the
+    scratch's smallest eigenvalue (``evec[3, 0]``) to NaN before the fit, so that a fit stopped
+    before its PCA shows it."""
+    code, h, referenced, scratch = fit
+    state, rows = fits.state, fits.rows
     _, vec, _, frame, evec = scratch
     if code == TOO_FEW or code == OK or code == SINGULAR:
         st = code
@@ -101,14 +103,14 @@ def keep_fit(code, h, p, referenced, scratch, kept):
 
 
 @jit
-def handed_fit(p, kept, normals, scratch, out):
+def handed_fit(fits, p, normals, scratch, out):
     """Row p of ``out`` (:class:`~curv.estimators._principal.Rows`, as the jet's fit with the
-    reference ``normals[p]`` would write it) from ``kept = (state, rows)``: returns False when only
-    a fit can tell (nothing written).
+    reference ``normals[p]`` would write it) from ``fits`` (:class:`JetFits`): returns False when
+    only a fit can tell (nothing written).
 
     Not inlined, and the reason written here: written in the parallel loop itself, numba 0.68 lost
     the write (as :func:`curv.estimators.jet._jet_fit_at` notes)."""
-    code = _handed_reason(p, kept, normals, scratch, out)
+    code = _handed_reason(p, (fits.state, fits.rows), normals, scratch, out)
     if code == NO_FIT:
         return False
     out.reason[p] = code
@@ -148,63 +150,9 @@ def _handed_reason(p, kept, normals, scratch, out):
     return jet_principal(scratch, rows[p, 11], normals, out, p)
 
 
-@jit_parallel
-def _handed_kernel(centres, lo, hi, radii, kept, normals, out, refit, parts):
-    """Rows ``centres[lo:hi]`` of ``out`` from ``kept = (radii, state, rows)`` where the radius is
-    the pass's and it fitted to the end; ``refit[p]`` True where a fit must tell."""
-    fit_radii, state, rows = kept
-    for t in prange(parts):
-        scratch = jet_scratch()
-        start, stop = slice_bounds(lo, hi, t, parts)
-        for c in range(start, stop):
-            p = centres[c]
-            refit[p] = not (radii[p] == fit_radii[p] and handed_fit(p, (state, rows), normals, scratch, out))
+@jit
+def _scratch(fits):
+    return jet_scratch()
 
 
-def keep_for(cloud, kept: Kept) -> None:
-    """Keep a pass's fits with ``cloud`` (the latest pass's; they go with the cloud)."""
-    _KEPT[cloud] = kept
-
-
-def kept_fits(cloud, degree: int, smooth: bool) -> Kept | None:
-    """The fits a pass kept with ``cloud`` when they are the fits of these options (the owner of the
-    match: degree and weights; the caller asks only for a fixed width without standard errors), else None."""
-    try:
-        kept = _KEPT.get(cloud)
-    except TypeError:  # an input that cannot be referenced weakly keeps nothing
-        return None
-    if kept is None or kept.degree != degree or kept.smooth != smooth:
-        return None
-    return kept
-
-
-def iter_handed(kept: Kept, normals: np.ndarray, radii: np.ndarray, centres: np.ndarray, out, *,
-                chunk: int | None = None):
-    """Rows ``centres`` of ``out`` from the kept fits, a generator (yields the fraction done).
-
-    Parameters
-    ----------
-    kept : Kept
-    normals : (n, 3) float64
-        The estimator's reference normals (any layout).
-    radii : (n,) float64
-        The estimator's radii.
-    centres : (c,) int64
-    out : Rows
-
-    Returns
-    -------
-    (r,) int64
-        The centres still to fit (their rows unset), in the order of ``centres``.
-    """
-    refit = np.zeros(kept.radii.shape[0], np.bool_)
-    parts = max(1, min(threads(), centres.size))
-    state = (np.asarray(kept.radii, np.float64), kept.state, kept.rows)
-    radius = np.asarray(radii, np.float64)
-    normals = np.asarray(normals, np.float64)
-
-    def run(lo: int, hi: int) -> None:
-        launch(_handed_kernel, centres, lo, hi, radius, state, normals, out, refit, parts)
-
-    yield from iter_chunks(centres.size, run, chunk=chunk)
-    return centres[refit[centres]]
+register_handover(JetFits, Handover(keep_fit, handed_fit, _scratch))

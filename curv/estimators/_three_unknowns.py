@@ -28,7 +28,7 @@ from ._frames import MIN_TANGENT_LENGTH, normal_frame, offset_in_frame
 from ._principal import finish_fit, mark_degenerate
 
 __all__ = ["Equations", "register_three_unknowns", "NO_SUMS", "add_equation", "normal_matrix", "residual",
-           "row_sums"]
+           "row_sums", "fit_in_frame"]
 
 Equations = namedtuple("Equations", ["equation", "shape_operator", "parts"])
 """A fit of three unknowns (``@jit`` functions):
@@ -175,6 +175,20 @@ def _level_add(fit, sums, p, q, geometry, frame, tiny2):
         return sums, l2, False
     row, rhs, _, _ = equation(fit, u, v, w, l2)
     return add_equation(sums, row, rhs), l2, True
+
+
+@jit
+def fit_in_frame(fit, p, queue, count, positions, frame, tiny2):
+    """The fit at point p over ``queue[1:count]`` in ``frame`` without standard errors, as
+    :func:`fit_at` makes it (the same rows in the same order: the same sums): ``(x0, x1, x2,
+    singular, used)``. ``positions``: anything with the coordinate columns ``x, y, z`` that ``p``
+    and the queue index (a pass's grid-ordered columns)."""
+    sums, used = NO_SUMS, 0
+    for j in range(1, count):
+        sums, _, usable = _level_add(fit, sums, p, queue[j], positions, frame, tiny2)
+        used += usable
+    x0, x1, x2, singular = _solve(sums)
+    return x0, x1, x2, singular, used
 
 
 @jit

@@ -60,7 +60,8 @@ from ._fit_driver import (KERNELS, FitFunctions, Search, Walk, fit_kernel, fit_l
                           walk_level)
 from ._jet_fit import (MAX_UNKNOWNS, RCOND, Points, fit_jet, jet_errors, jet_normal, jet_principal, jet_scratch,
                        smooth_weight)
-from ._jet_handover import BYTES_PER_POINT, iter_handed, kept_fits
+from ._handover import NormalFits, iter_handed, kept_fits
+from ._jet_handover import BYTES_PER_POINT, new_jet_fits
 from ._principal import Rows, level_rows
 from .jet_width import DEFAULT_WIDTH, WIDTHS, iter_adaptive_jet
 from .registry import register
@@ -170,11 +171,16 @@ def _matches_normal_fits(degree: int, smooth: bool, adaptive: bool, standard_err
     return degree == DEFAULT_DEGREE and not smooth and not adaptive and not standard_errors
 
 
-def _reads_normal_fits(options: dict, standard_errors: bool) -> bool:
-    """The registry's ``reads_normal_fits``: :func:`_matches_normal_fits` of these options."""
-    return _matches_normal_fits(check_degree(options.get("degree", DEFAULT_DEGREE)),
-                                check_weights(options.get("weights", DEFAULT_WEIGHTS)),
-                                check_width(options.get("width", DEFAULT_WIDTH)), bool(standard_errors))
+JET_FITS = NormalFits(("jet", DEFAULT_DEGREE, False), new_jet_fits, BYTES_PER_POINT)
+"""The jet normals' fits as the jet estimator reads them (:mod:`curv.estimators._jet_handover`)."""
+
+
+def _reads_normal_fits(options: dict, standard_errors: bool) -> NormalFits | None:
+    """The registry's ``reads_normal_fits``: :data:`JET_FITS` when :func:`_matches_normal_fits` of these options."""
+    matches = _matches_normal_fits(check_degree(options.get("degree", DEFAULT_DEGREE)),
+                                   check_weights(options.get("weights", DEFAULT_WEIGHTS)),
+                                   check_width(options.get("width", DEFAULT_WIDTH)), bool(standard_errors))
+    return JET_FITS if matches else None
 
 
 def check_degree(degree) -> int:
@@ -298,7 +304,7 @@ def iter_jet(mesh: Mesh, normals: np.ndarray, radii: np.ndarray, *, chunk: int |
     kept = None
     if not levels and features is None and _matches_normal_fits(degree, smooth, False, standard_errors):
         # a cloud's jet normals fitted these balls already (their pass kept the fits): read them
-        kept = kept_fits(mesh, degree, smooth)
+        kept = kept_fits(mesh, JET_FITS.options)
     if kept is not None:
         fitted = yield from rescaled(iter_handed(kept, normals, radii, centres, out, chunk=chunk), 0.0, 0.2)
     if fitted.size:
@@ -364,5 +370,5 @@ register(fit_spec(
     summary="least-squares bivariate polynomial (degree 2-4, with constant and linear terms) in a PCA frame",
     min_neighbours=lambda options: unknowns(options.get("degree", DEFAULT_DEGREE)) - 1,
     extra_bytes_per_unit=0.0, kernels=KERNELS[:2], pools_errors=False,
-    reads_normal_fits=_reads_normal_fits, extra_bytes_per_point=BYTES_PER_POINT,
+    reads_normal_fits=_reads_normal_fits, extra_bytes_per_point=JET_FITS.bytes_per_point,
 ))

@@ -98,12 +98,13 @@ class EstimatorSpec:
         whole-mesh per-edge and per-face arrays and stamps (``csm``, ``icc``); :mod:`curv.memory`
         adds it to its model.
     reads_normal_fits : callable or None
-        ``(options, standard_errors) -> bool``: with these options its estimate at the point normals'
-        range reads the fits the normals' pass kept (the ``jet``, :mod:`curv.estimators._jet_handover`),
-        so that pass keeps them; None: it reads none.
+        ``(options, standard_errors) -> NormalFits or None``: the fits its estimate with these options
+        at the point normals' range reads from the normals' pass (:mod:`curv.estimators._handover`:
+        the ``jet``'s own fits, ``qs`` fitted in the pass), so that pass makes and keeps them; None
+        (the field or its answer): it reads none.
     extra_bytes_per_point : float
         Peak memory of a point-cloud estimate beyond :data:`curv.memory.PER_POINT_BYTES`, bytes per
-        point (the kept fits of ``reads_normal_fits``).
+        point (the kept fits of ``reads_normal_fits``: its ``bytes_per_point``).
     takes_points : bool
         Runs on a :class:`curv.PointCloud`: it needs only positions, normals and a support (no
         faces, no edges). The face-based estimators refuse point clouds (:func:`refusal`).

@@ -50,9 +50,10 @@
    so that neighbours are near in memory; in the cloud's own order (random for a scan saved
    unsorted) every neighbour was a cache miss. The jet is fitted with the unoriented PCA normal
    as its reference: a fit turned the other way is the same fit with its sign changed exactly,
-   so the normal is turned afterwards, once the orientation is known. For a jet estimate at the
-   normals' range the pass keeps its fits (``keep_fits_at``), which the estimator reads instead of
-   fitting again (:mod:`curv.estimators._jet_handover`). Its line check is the one at the fits'
+   so the normal is turned afterwards, once the orientation is known. For a jet or qs estimate at
+   the normals' range the pass keeps what the estimator reads instead of searching and fitting
+   again (``keep_fits_at``, :mod:`curv.estimators._handover`): the jet fits themselves, or qs fitted
+   on their support in the frame of the fitted normal. Its line check is the one at the fits'
    range; the one without the neighbours' normals (``mru``, ``an``) is measured when asked, over
    the pass's grid, so its sums run in the pass's order (:func:`.one_pass.owe_spreads`). Each ball
    is read from its cell's block, without the columns farther than the radius in x and y

@@ -16,8 +16,8 @@ from ..core.jit import announce, jit_parallel, launch, prange, run_to_end, slice
 from ..core.pointcloud import PointCloud
 from ..core.ranges import TIE_TOLERANCE, ball_radii, point_spacing, resolve
 from ..estimators import get_spec
-from ..estimators._jet_handover import Kept, keep_for
-from ..estimators.jet import DEFAULT_DEGREE
+from ..estimators._handover import Kept, keep_for
+from ..estimators.jet import JET_FITS
 from ..geometry.neighbourhood import cached_with_mesh, latest_with_mesh
 from .one_pass import _one_pass, _Pass, owe_spreads
 from .orientation import default_orientation, orient_normals
@@ -185,7 +185,7 @@ def _frames(cloud: PointCloud):
 
 
 def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE, radius: float | None = None,
-                  knn: int | None = None, orient=None, keep_fits_at=()) -> PointNormals:
+                  knn: int | None = None, orient=None, keep_fits_at=(), keep_fits=None) -> PointNormals:
     """Estimate and orient the normals of a point cloud (module notes).
 
     Parameters
@@ -200,8 +200,12 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     orient : {"up", "top", "outward"} or (3,) array_like, optional
         See :func:`orient_normals`; default :func:`default_orientation`.
     keep_fits_at : sequence of curv.core.ranges.Range
-        The ranges of a jet estimate that reads the fits (:mod:`curv.estimators._jet_handover`):
-        with ``method="jet"`` and the normals' range among them, the fits are kept with the cloud.
+        The ranges of an estimate that reads the pass's fits (:mod:`curv.estimators._handover`):
+        with ``method="jet"`` and the normals' range among them, the fits ``keep_fits`` names are
+        kept with the cloud.
+    keep_fits : curv.estimators._handover.NormalFits, optional
+        The fits that estimate reads (its registry entry's ``reads_normal_fits``); default the
+        jet's (:data:`curv.estimators.jet.JET_FITS`).
 
     Returns
     -------
@@ -225,14 +229,14 @@ def point_normals(cloud: PointCloud, *, method: str = "jet", range=NORMAL_RANGE,
     # when one asks (owe_spreads): over fitted normals some are NaN (one-sided, ambiguous) and that
     # check then searches its own balls, so the pass would measure it for nothing.
     spread_radii, owed = _default_spreads(cloud)[:1], _default_spreads(cloud)[1:]
-    keep_fits = method == "jet" and rng in tuple(keep_fits_at)
-    found = latest_with_mesh(cloud, "normals pass", (rng.label, method, floor, keep_fits),
+    keep = (keep_fits or JET_FITS) if method == "jet" and rng in tuple(keep_fits_at) else None
+    found = latest_with_mesh(cloud, "normals pass", (rng.label, method, floor, keep and keep.options),
                              lambda: run_to_end(_one_pass(cloud, border_radii(cloud), radii,
                                                     jet=method == "jet", normals_b=method == "pca",
                                                     spreads=spread_radii, screens=(EXACT_GAP, ONE_SIDED_GAP),
-                                                    keep_fits=keep_fits)))
+                                                    kept=keep and keep.new(radii))))
     if found.kept is not None:
-        keep_for(cloud, Kept(radii, *found.kept, degree=DEFAULT_DEGREE, smooth=False))
+        keep_for(cloud, Kept(found.kept, keep.options))
     _keep(cloud, found, spread_radii)
     owe_spreads(cloud, owed, found.grid_radius)
     pca, gap = _frames(cloud)

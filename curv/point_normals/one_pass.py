@@ -17,7 +17,7 @@ from ..core.knn import block_gather, cell_of
 from ..core.pointcloud import PointCloud
 from ..core.validity import OK
 from ..estimators._jet_fit import fit_jet, jet_normal, jet_scratch
-from ..estimators._jet_handover import keep_fit, new_kept
+from ..estimators._handover import keep_fit
 from ..estimators.jet import DEFAULT_DEGREE
 from ..geometry.neighbourhood import (all_centres, ball_support, cached_with_mesh, coordinate_columns, expansion_adjacency,
                                       new_queues, new_scratch)
@@ -38,8 +38,8 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
     when ``wanted[2]``), rows 2 and 3 two spreads. ``wanted`` (5,) says which parts run (0: A, 1: B,
     2: jet, 3, 4: spreads). ``scratch``: ``(queues, dists, subs)``, a row per thread, one slot more
     than the points; ``out``: ``(normal_a, gap_a, count_a, normal_b, gap_b, fitted, reason, spread)``;
-    ``kept``: the jet fits' ``(state, rows)`` for the jet estimator (:func:`curv.estimators._jet_handover.keep_fit`),
-    or None (compiled without).
+    ``kept``: the fits bundle an estimator reads (:mod:`curv.estimators._handover`), filled per point
+    after its jet fit, or None (compiled without).
 
     The points are walked cell by cell: the columns of a cell's block are looked up once for all
     its points (:func:`curv.core.grid_blocks.cell_runs`), each point's ball read from them (those
@@ -95,7 +95,8 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
                     else:
                         fitted[p, 0] = fitted[p, 1] = fitted[p, 2] = math.nan
                     if kept is not None:
-                        keep_fit(code, h, p, math.isfinite(normal_a[i, 0]), (m, vec, cov_jet, frame, evec), kept)
+                        keep_fit(kept, p, i, (code, h, math.isfinite(normal_a[i, 0]), (m, vec, cov_jet, frame, evec)),
+                                 (sub, c_b), (x, y, z), fitted)
                     if c_b >= 3 and math.isfinite(evec[3, 0]):
                         # the fit's own PCA of this support (its frame): the plane of the gap
                         g = _widest_gap(i, sub, c_b, x, y, z, evec, gaps, screens[1])
@@ -131,7 +132,7 @@ class _Pass:
 
 
 def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = False, normals_b: bool = False,
-              spreads=(), screens=(0.0, 0.0), keep_fits: bool = False, grid_radius: float | None = None,
+              spreads=(), screens=(0.0, 0.0), kept=None, grid_radius: float | None = None,
               chunk: int | None = None):
     """Frames, jet normals and spreads of every point from one ball search per point (a generator).
 
@@ -148,8 +149,9 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     screens : (float, float)
         The two frames' gaps are exact from these angles on (radians; below, an upper bound below
         them, :func:`.frames._widest_gap`); 0 measures every gap exactly.
-    keep_fits : bool
-        Keep the jet fits for the jet estimator (:mod:`curv.estimators._jet_handover`).
+    kept : namedtuple, optional
+        A fits bundle an estimator reads (:attr:`curv.estimators._handover.NormalFits.new` of frame
+        B's radii), filled with ``jet`` (:mod:`curv.estimators._handover`).
     grid_radius : float, optional
         Search the grid of :meth:`PointCloud.ball_grid` for balls of this radius instead of the
         one for the radii asked (another pass's, :attr:`_Pass.grid_radius`: a ball's points then
@@ -159,8 +161,8 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     -------
     _Pass
         Unit PCA normals (n, 3) (NaN under 3 points), gaps (n,), frame A's support sizes (n,)
-        int64, jet normals (n, 3) (NaN without a fit), the spreads (n,) each, and the kept jet fits
-        ``(state, rows)`` with ``keep_fits``, and the grid's radius (``grid_radius``).
+        int64, jet normals (n, 3) (NaN without a fit), the spreads (n,) each, ``kept`` filled (None
+        without the jet), and the grid's radius (``grid_radius``).
     """
     n = cloud.n_points
     rows = [frame_a, frame_b] + list(spreads) + [None] * (2 - len(spreads))
@@ -187,7 +189,7 @@ def _one_pass(cloud: PointCloud, frame_a=None, frame_b=None, *, jet: bool = Fals
     fitted = np.empty((n, 3)) if wanted[2] else np.empty((1, 3))
     reason = np.empty(n if wanted[2] else 1, np.uint8)
     spread = np.empty((2, n if len(spreads) else 1))
-    kept = new_kept(n) if keep_fits and wanted[2] else None
+    kept = kept if wanted[2] else None
 
     def run(lo: int, hi: int) -> None:
         launch(_pass_kernel, lo, hi, (cells, coords), (outer2, radii2, np.array(screens, np.float64)), wanted,
