@@ -18,7 +18,8 @@ report needs only the stored rankings and the runs' true errors:
 - the meshes where the check's measured best is not the table's first choice, and which of the two
   was truly better;
 - the regret (against the best call on that mesh, the calls within the valid-share slack) of the
-  rule of :func:`curv.advice.ranking.rank_candidates` at each ``--bands`` value: the table's first
+  table-first rule of :func:`curv.advice.ranking.rank_candidates` (``realized_weight=None``) at each
+  ``--bands`` value: the table's first
   choice kept unless the check measured it more than that many times the best's error on every copy
   (1: the check's best unless the copies cannot tell them apart; ``inf``: the table alone).
 """
@@ -76,7 +77,8 @@ def _candidates(stored: list[dict]) -> tuple[list, dict]:
     # the table's order: by coverage, then by prediction (what rank_candidates gets from the table)
     order = sorted(stored, key=lambda c: (c["valid_share"] < top - VALID_SHARE_SLACK, c["expected_erel"]))
     cands = [Candidate(c["method"], c["range"], c["options"], c["expected_erel"], c["valid_share"]) for c in order]
-    measured = {c["key"]: Measured(m["erel"], tuple(m["copies"]), m["spread"], m["measured"], m["seconds"])
+    measured = {c["key"]: Measured(m["erel"], tuple(m["copies"]), m["spread"], m["measured"], m["seconds"],
+                                   tuple(m.get("realized", ())))
                 for c in order if (m := c["measured"]) is not None}
     return cands, measured
 
@@ -100,9 +102,10 @@ def report(runs: list[dict], checks: list[dict], bands: list[float]) -> str:
         if logs.size > 1:
             pairs.extend(np.abs(logs[:, None] - logs[None, :])[np.triu_indices(logs.size, 1)])
         for b in bands:
-            regrets[b].append(e[rank_candidates(cands, measured, VALID_SHARE_SLACK, judge_bias=b)[0].key] / best)
-        table_pick = rank_candidates(cands, measured, VALID_SHARE_SLACK, judge_bias=math.inf)[0].key
-        check_pick = rank_candidates(cands, measured, VALID_SHARE_SLACK, judge_bias=0.0)[0].key
+            regrets[b].append(e[rank_candidates(cands, measured, VALID_SHARE_SLACK, judge_bias=b,
+                                                realized_weight=None)[0].key] / best)
+        table_pick = rank_candidates(cands, measured, VALID_SHARE_SLACK, judge_bias=math.inf, realized_weight=None)[0].key
+        check_pick = rank_candidates(cands, measured, VALID_SHARE_SLACK, judge_bias=0.0, realized_weight=None)[0].key
         if table_pick != check_pick:
             t, c = e[table_pick] / best, e[check_pick] / best
             wins, losses = wins + (c * 1.02 < t), losses + (t * 1.02 < c)

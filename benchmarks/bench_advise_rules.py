@@ -8,6 +8,12 @@ them (every mesh advised once, the measured errors of its short list)::
     python benchmarks/bench_advise_rules.py runs23000.json runs24000.json --checks checks23000.json checks24000.json
     python benchmarks/bench_advise_rules.py RUNS... --checks CHECKS... --losses           # where the table loses
     python benchmarks/bench_advise_rules.py RUNS... --checks CHECKS... --realized REAL... # also the input's own score
+    python benchmarks/bench_advise_rules.py runs35000.json --checks runs35000.json        # the checks bench_advisor.py stored
+
+A check made by the library since the realized score (``bench_advisor.py``'s runs keep each mesh's
+ranking; ``bench_advise_judge.py``'s checks too) carries each call's realized medians: the realized
+rules then read those (no ``--realized``), and the library's own ranking is one more row, to be the
+same as the realized rule at :data:`curv.advice.ranking.REALIZED_WEIGHT`.
 
 Every rule picks one call of the short list (the calls the check measured, in the table's order)
 from what the advice knows at run time: the table's predicted errors, the kernel's neighbours in
@@ -47,7 +53,10 @@ def mesh_records(runs: list[dict], checks: list[dict], realized: list[dict] | No
     from curv.advice.shares import VALID_SHARE_SLACK
 
     by_index = {c["index"]: c["ranking"] for c in checks}
-    real = {r["index"]: r["scores"] for r in realized or []}
+    # the realized scores of a --realized file, else those the library stored with its checks
+    real = {r["index"]: r["scores"] for r in realized or []} or {
+        c["index"]: {s["key"]: s["measured"].get("realized", []) for s in c["ranking"] if s["measured"] is not None}
+        for c in checks}
     out = []
     for r in runs:
         e = {v: max(x, FLOOR) for v, x in r["erel"].items() if x is not None and x > 0}
@@ -102,6 +111,19 @@ def pick_weighted(rec: dict, weight: float, judge: str = "meas") -> str:
     return min(calls, key=lambda c: (1 - weight) * math.log(c["pred"]) + weight * math.log(c[judge]))["key"]
 
 
+def pick_weighted_veto(rec: dict, weight: float, band: float) -> str:
+    """:func:`pick_weighted` on the realized score, then the table-first rule's veto: the check's measured
+    best instead where the copies measured the pick more than ``band`` times its error on every copy."""
+    from curv.advice.ranking import _separated
+
+    pick = pick_weighted(rec, weight, "real")
+    calls = _measured(rec)
+    if not calls or rec["measured"].get(pick) is None or not rec["measured"][pick].ok:
+        return pick
+    best = min(calls, key=lambda c: c["meas"])["key"]
+    return best if _separated(rec["measured"][best], rec["measured"][pick], band) else pick
+
+
 def pick_within_ties(rec: dict, table: dict, k: float) -> str:
     """The measured best among the calls the table cannot tell from its first: the neighbours' mean
     log ratio to the first within ``k`` standard errors of that mean."""
@@ -148,19 +170,30 @@ def pick_vote(rec: dict, table: dict) -> str:
 
 
 def pick_band(rec: dict, band: float) -> str:
-    """:func:`curv.advice.ranking.rank_candidates`'s rule at ``band``: the table's first unless the
-    check measured it more than ``band`` times the best on every copy."""
+    """:func:`curv.advice.ranking.rank_candidates`'s table-first rule at ``band`` (``realized_weight=None``,
+    shipped before the realized score): the table's first unless the check measured it more than
+    ``band`` times the best on every copy."""
     from curv.advice.ranking import rank_candidates
     from curv.advice.shares import VALID_SHARE_SLACK
 
-    return rank_candidates(rec["cands"], rec["measured"], VALID_SHARE_SLACK, judge_bias=band)[0].key
+    return rank_candidates(rec["cands"], rec["measured"], VALID_SHARE_SLACK, judge_bias=band,
+                           realized_weight=None)[0].key
 
 
-def rules(table: dict, with_realized: bool) -> list:
+def pick_library(rec: dict) -> str:
+    """:func:`curv.advice.ranking.rank_candidates` as shipped, on the realized scores the library stored
+    with its checks (the same figures as ``pick_weighted(rec, REALIZED_WEIGHT, "real")``, from the library)."""
+    from curv.advice.ranking import rank_candidates
+    from curv.advice.shares import VALID_SHARE_SLACK
+
+    return rank_candidates(rec["cands"], rec["measured"], VALID_SHARE_SLACK)[0].key
+
+
+def rules(table: dict, with_realized: bool, library: bool = False) -> list:
     """(label, pick) of every rule compared."""
     from curv.advice.ranking import JUDGE_BIAS
 
-    out = [(f"the table's first, the check's veto at {JUDGE_BIAS:g}x (shipped)", lambda r: pick_band(r, JUDGE_BIAS)),
+    out = [(f"the table's first, the check's veto at {JUDGE_BIAS:g}x (table-first)", lambda r: pick_band(r, JUDGE_BIAS)),
            ("the check's measured best (band 1)", lambda r: pick_band(r, 1.0))]
     out += [(f"weighted geometric mean, check's weight {w:g}", lambda r, w=w: pick_weighted(r, w)) for w in (0.2, 0.5)]
     out += [(f"the check among the table's ties ({k:g} standard error)", lambda r, k=k: pick_within_ties(r, table, k))
@@ -170,6 +203,10 @@ def rules(table: dict, with_realized: bool) -> list:
     if with_realized:
         out += [(f"realized score, weight {w:g} (the rest the table's)", lambda r, w=w: pick_weighted(r, w, "real"))
                 for w in (0.5, 0.7, 1.0)]
+        out.append((f"realized score, weight 0.5, the check's veto at {JUDGE_BIAS:g}x",
+                    lambda r: pick_weighted_veto(r, 0.5, JUDGE_BIAS)))
+    if library:
+        out.append(("the library's ranking (rank_candidates, its stored realized scores)", pick_library))
     out.append(("bound: the truly best of the short list", lambda r: min(r["short"], key=lambda c: r["e"][c["key"]])["key"]))
     return out
 
@@ -179,12 +216,12 @@ def _cells(x) -> str:
     return f"{np.median(x):.3f} / {np.percentile(x, 90):.3f} / {x.max():.2f}"
 
 
-def rules_report(sets: dict, table: dict, with_realized: bool) -> str:
+def rules_report(sets: dict, table: dict, with_realized: bool, library: bool = False) -> str:
     """Markdown: every rule's regret pooled and per set."""
     names = list(sets)
     lines = [f"| rule | pooled ({sum(len(v) for v in sets.values())}) | " + " | ".join(names) + " | mean regret |",
              "|---" * (len(names) + 3) + "|"]
-    for label, pick in rules(table, with_realized):
+    for label, pick in rules(table, with_realized, library):
         per = {n: [rec["e"][pick(rec)] / rec["best"] for rec in recs] for n, recs in sets.items()}
         pooled = sum(per.values(), [])
         lines.append(f"| {label} | {_cells(pooled)} | " + " | ".join(_cells(per[n]) for n in names)
@@ -304,8 +341,10 @@ def main(argv=None) -> int:
     if args.losses:
         print(losses_report(sets))
         return 0
-    print(rules_report(sets, load_table(), bool(args.realized)))
-    if args.realized:
+    stored = any(bool(c["measured"].get("realized")) for path in args.checks
+                 for m in json.loads(Path(path).read_text()) for c in m["ranking"] if c["measured"] is not None)
+    print(rules_report(sets, load_table(), bool(args.realized) or stored, library=stored))
+    if args.realized or stored:
         print("\nThe judges' order of a short list against the truth (correlation of centred log errors):\n")
         print(agreement_report(sets))
     return 0

@@ -131,6 +131,7 @@ def evaluate(setting: dict) -> dict:
             "shares": valid_shares(mesh, variants), "n_evaluated": int(evaluated.sum()),
             "noise_est": adv.features.noise, "irr_est": adv.features.irregularity_deg,
             "density_est": adv.features.density, "irr_true": irr_true,
+            "ranking": [c.as_dict() for c in adv.ranking],  # the checks, for bench_advise_rules.py's replays
             "irr_clean_3d": angle_deviation_deg(clean.vertices, fan_triangles(clean)), "advise_seconds": t_adv}
 
 

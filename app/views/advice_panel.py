@@ -33,15 +33,17 @@ ERROR_COLOUR = "#b00020"
 
 INTRO = ("Advise measures the mesh (noise, irregularity, density, borders, polygons), ranks every "
          "estimator and range by the median relative error the paper's study predicts for such a mesh, then "
-         "checks the first of them on noisy copies of the mesh's own smooth twin and ranks them by the error "
-         "measured there. On a point cloud every candidate is checked.")
+         "checks the first of them on noisy copies of the mesh's own smooth twin and on the mesh itself, and "
+         "ranks them by the predicted error and the error on the mesh itself against its twin (realized) "
+         "together. On a point cloud every candidate is checked and ranks by the error measured on the copies.")
 ERREL_TIP = ("Predicted median relative error e_rel (paper eq. 5.2) of this call on a mesh with the measured "
              "features, from the study's results on its test surfaces (none on a point cloud). Lower is better.")
 MEASURED_TIP = ("Median relative error e_rel measured on noisy copies of the input's smooth twin (the input's "
                 "sampling or connectivity, its noise removed by wide polynomial fits, so its curvature is exact), "
                 "with the noise measured on the input put back: the geometric mean over the copies, and × its "
                 "spread over them (a factor). ≈: within noise of the recommendation (it did as well on at least "
-                "one copy). Empty: not checked. Checked calls rank by this, the others after them.")
+                "one copy). Empty: not checked. On a point cloud checked calls rank by this, the others after them; on "
+                "a mesh the predicted and the realized error decide (the summary above says so).")
 OPTIONS_TIP = ("Options of the call besides estimator and range: the jet's degree (deg 4), or normals from a "
                "local jet fit at a range (fit R4: normals=\"fit\", fit_range=4). Apply sets them in the pane too.")
 VALID_TIP = ("Share of this mesh's vertices the call gives a value at: border vertices, supports with fewer "
@@ -276,11 +278,16 @@ class AdvicePanel(QWidget):
         what = "point cloud" if record.advice.is_cloud else "mesh"
         self.features_box.setTitle(f"Measured on the {what}" if current else f"Measured on the earlier {what} (stale)")
         checked = record.advice.checked
+        mesh_checked = checked and not record.advice.is_cloud  # the prediction and the realized error decide
         # a short title: a group box never wraps its title, and its width is the dock's minimum
-        self.ranking_box.setTitle("Ranking by measured error" if checked else "Ranking by predicted error")
-        self.ranking_box.setToolTip("Best first: the checked calls by the error measured on noisy copies of the "
-                                    "input's smooth twin, then the others by the table's prediction" if checked else
-                                    "Best first, by the error the study's table predicts for such an input")
+        self.ranking_box.setTitle("Ranking by predicted × realized" if mesh_checked else
+                                  "Ranking by measured error" if checked else "Ranking by predicted error")
+        self.ranking_box.setToolTip(
+            "Best first: the checked calls by the geometric mean of the table's predicted error and their error "
+            "on the mesh itself against its smooth twin (realized), then the others" if mesh_checked else
+            "Best first: the checked calls by the error measured on noisy copies of the input's smooth twin, then "
+            "the others by the table's prediction" if checked else
+            "Best first, by the error the study's table predicts for such an input")
         self._update_apply()
 
     def _fill(self, record) -> None:

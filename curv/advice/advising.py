@@ -120,7 +120,7 @@ def _answer(shape, features, ranking, sharp, report, note) -> Advice:
 
     from .clouds import describe_cloud
     from .features import describe_mesh
-    from .ranking import rank_candidates
+    from .ranking import rank_candidates, ranked_by, realized_score
     from .shares import VALID_SHARE_SLACK
 
     cloud = support_of(shape).kind == "points"
@@ -142,12 +142,17 @@ def _answer(shape, features, ranking, sharp, report, note) -> Advice:
             why += "; within noise: " + ", ".join(ties[:3]) + (f" and {len(ties) - 3} more" if len(ties) > 3 else "")
     elif np.isfinite(best.expected_erel):
         why += f", expected median e_rel {best.expected_erel:.2g}"
+    if np.isfinite(realized_score(best.measured)):
+        why += f"; realized {realized_score(best.measured):.2g} on the input itself"
     if best.valid_share < 0.995:
         why += f"; valid at {100 * best.valid_share:.0f} % of the {'points' if cloud else 'vertices'}"
+    rule = ranked_by(ranking)
+    if report is not None:
+        why += f"; ranked by {rule}"
     if note:
         why += f" [{note}]"
     if sharp is not None:
         why += f"; many sharp edges: estimate with features={sharp:g} so the creases are not smoothed over"
     return Advice(features=features, ranking=ranking, method=best.method, range=best.range,
                   expected_erel=best.expected_erel, why=why, suggested_features=sharp, options=dict(best.options),
-                  valid_share=best.valid_share, check=report, note=note)
+                  valid_share=best.valid_share, check=report, note=note, ranked_by=rule)

@@ -114,6 +114,14 @@ class Candidate:
         return float(self.measured.erel) if self.measured is not None else math.nan
 
     @property
+    def realized_erel(self) -> float:
+        """The realized score: the call's error on the input itself against its smooth twin (NaN where
+        not scored; :func:`curv.advice.ranking.realized_score`)."""
+        from .ranking import realized_score
+
+        return realized_score(self.measured)
+
+    @property
     def measured_spread(self) -> float:
         """The measure's spread over the copies, a factor (NaN where not checked)."""
         return float(self.measured.spread) if self.measured is not None else math.nan
@@ -123,6 +131,7 @@ class Candidate:
                 "expected_erel": self.expected_erel, "valid_share": self.valid_share, "label": self.label,
                 "kwargs": self.kwargs, "key": self.key,
                 "measured": None if self.measured is None else self.measured.as_dict(),
+                "realized_erel": self.realized_erel,
                 "within_noise": self.within_noise}
 
 
@@ -161,6 +170,8 @@ class Advice:
     note : str
         Why the ranking is the table's alone, when it is (``check=False``, a large input, no vertex
         to check at), else empty.
+    ranked_by : str
+        What decided the recommendation, in words (:func:`curv.advice.ranking.ranked_by`).
     """
 
     features: object
@@ -174,6 +185,7 @@ class Advice:
     valid_share: float = 1.0
     check: object = None
     note: str = ""
+    ranked_by: str = ""
 
     @property
     def best(self) -> Candidate:
@@ -225,7 +237,7 @@ class Advice:
             "method": self.method, "range": self.range, "options": dict(self.options), "kwargs": self.kwargs,
             "call": self.call, "label": self.label, "expected_erel": self.expected_erel,
             "valid_share": self.valid_share, "why": self.why, "suggested_features": self.suggested_features,
-            "features": f, "checked": self.checked, "note": self.note,
+            "features": f, "checked": self.checked, "note": self.note, "ranked_by": self.ranked_by,
             "check": None if self.check is None else self.check.as_dict(),
             "ranking": [c.as_dict() for c in self.ranking],
         }

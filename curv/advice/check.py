@@ -7,6 +7,11 @@ follows the centres, not the input) and is scored by the median e_rel over the c
 value at, against the twin's exact curvature. Over the copies a call's measured error is the
 geometric mean of its medians and its spread their geometric standard deviation; the copies are
 independent (new centres, new noise), so the spread is an honest standard error of the measure.
+
+On a mesh each call also runs on the input itself at each twin's centres (:func:`_realized_steps`),
+scored against the same twin's curvature: its *realized* error, the one judge that sees the input's
+own noise draw (the copies draw it afresh), which :mod:`curv.advice.ranking` weighs against the
+table's prediction.
 """
 
 from __future__ import annotations
@@ -58,7 +63,11 @@ class Measured:
     measured : float
         Share of the centres (over all copies) the call gave a value at.
     seconds : float
-        Time the call took over all copies.
+        Time the call took over all copies (and on the input, for :attr:`realized`).
+    realized : tuple of float
+        On a mesh, the median e_rel of the call run on the input itself at each copy's centres
+        against that copy's twin (NaN where it gave no value there); empty where not run (a point
+        cloud). :func:`curv.advice.ranking.realized_score` makes the ranking's score of them.
     """
 
     erel: float
@@ -66,6 +75,7 @@ class Measured:
     spread: float
     measured: float
     seconds: float
+    realized: tuple = ()
 
     @property
     def ok(self) -> bool:
@@ -74,7 +84,15 @@ class Measured:
 
     def as_dict(self) -> dict:
         return {"erel": self.erel, "copies": list(self.copies), "spread": self.spread,
-                "measured": self.measured, "seconds": self.seconds}
+                "measured": self.measured, "seconds": self.seconds, "realized": list(self.realized)}
+
+    @property
+    def realized_spread(self) -> float:
+        """Geometric standard deviation of the positive :attr:`realized` errors (a factor; NaN with
+        fewer than two)."""
+        r = np.asarray(self.realized, float)
+        logs = np.log(r[np.isfinite(r) & (r > 0)])
+        return float(np.exp(logs.std(ddof=1))) if logs.size > 1 else float("nan")
 
 
 @dataclass(frozen=True)
@@ -278,8 +296,13 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
     estimate, quiet = _estimate_keywords()
     scores = {key: [] for key in calls}
     seconds = {key: 0.0 for key in calls}
-    steps = len(twins) * len(calls)
-    step = 0
+    realize = support_of(shape).has_faces
+    steps = (len(twins) + realize) * len(calls)
+    realized = {key: () for key in calls}
+    if realize:
+        realized = yield from rescaled(_realized_steps(shape, twins, calls, seconds), 0.2, 0.2 + 0.8 * len(calls) / steps)
+        yield Progress(0.2 + 0.8 * len(calls) / steps, "scoring the candidates on the input itself")
+    step = len(calls) if realize else 0
     for j, twin in enumerate(twins):
         copy = noisy_copy(shape, twin, noise, rng)
         # the calls that read the same normals share them and one part of the copy (what the widest of
@@ -317,7 +340,7 @@ def _check_steps(shape, calls, pool, copies, centres, seed, noise, twin_options,
             seconds[key] += time.perf_counter() - t1
             step += 1
             yield Progress(0.2 + 0.8 * step / steps, "checking the candidates on noisy copies")
-    measured = {key: _measure(scores[key], seconds[key]) for key in calls}
+    measured = {key: _measure(scores[key], seconds[key], realized[key]) for key in calls}
     degrees = np.concatenate([t.degree for t in twins])
     return CheckReport(measured=measured, noise=float(noise), noise_bound=bound, noise_resolved=noise_resolved,
                        copies=len(twins), centres=int(min(t.centres.size for t in twins)),
@@ -351,8 +374,64 @@ def _patch_noise(shape, twin) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return noise, sigma, resolved
 
 
-def _measure(per_copy: list, seconds: float) -> Measured:
-    """A call's :class:`Measured` from its per-centre e_rel on each copy."""
+def _realized_steps(shape, twins: list, calls: dict, seconds: dict):
+    """Each call run on the input mesh ``shape`` itself at every twin's centres (their source vertices)
+    and scored against each twin's curvature there: call key -> (median e_rel per twin, NaN where the
+    call gave no value at its centres).
+
+    The calls run on the whole input (as a user would run them, with ``vertices=``), once for the
+    centres of all twins together (an estimate at a vertex does not depend on which others are asked
+    for); a call's fitted normals are fitted only where its group's calls read them
+    (:func:`input_normals`: the same normals bit for bit, which the estimate normalises again as it
+    does any normals it is given, so the score is the whole call's to about 1e-15), so the cost follows
+    the centres. ``seconds`` gets each call's time added. A generator: yields progress, returns the scores.
+    """
+    estimate, quiet = _estimate_keywords()
+    centres = np.unique(np.concatenate([t.source for t in twins]))
+    group = {key: _normals_group(shape, kw) for key, kw in calls.items()}
+    made: dict = {}
+    out = {}
+    for i, key in enumerate(calls):
+        t1 = time.perf_counter()
+        run = dict(calls[key])
+        if group[key] is not None:
+            if group[key] not in made:
+                made[group[key]] = input_normals(shape, [calls[k] for k in calls if group[k] == group[key]], centres)
+            run.pop("fit_range", None)
+            run["normals"] = made[group[key]]
+        try:
+            res = yield from rescaled(estimate(shape, vertices=centres, **quiet, **run), i / len(calls),
+                                      (i + 1) / len(calls))
+            errs = [_score(twin, res, twin.source, flip=False) for twin in twins]
+        except CurvError:
+            errs = [np.full(twin.source.size, np.nan) for twin in twins]
+        out[key] = tuple(float(np.nanmedian(e)) if np.isfinite(e).any() else float("nan") for e in errs)
+        seconds[key] += time.perf_counter() - t1
+    return out
+
+
+def input_normals(mesh, calls: list, centres: np.ndarray) -> np.ndarray:
+    """(n, 3) the fitted normals (``normals="fit"`` at the calls' ``fit_range``) that ``calls`` read at
+    ``centres`` of ``mesh``, NaN elsewhere (:func:`curv.fitted_normals.fitted_normals` with ``vertices=``:
+    those of the whole call there, bit for bit).
+
+    They are fitted at the vertices a walk through the mesh reaches within each centre's reach
+    (:func:`curv.advice.copies.widest_reach`): a support is connected within its ball and every vertex
+    whose normal it reads is an edge from it, so the walk reaches them all, without a search of the
+    whole input's space.
+    """
+    from ..fitted_normals import fitted_normals
+    from ..geometry.neighbourhood import supports
+    from .copies import widest_reach
+
+    reach = np.full(mesh.n_vertices, np.nan)
+    reach[centres] = widest_reach(mesh, calls, centres)
+    _, indices = supports(mesh, reach, centres)
+    return fitted_normals(mesh, range=calls[0].get("fit_range", 2), vertices=np.union1d(centres, indices))
+
+
+def _measure(per_copy: list, seconds: float, realized: tuple) -> Measured:
+    """A call's :class:`Measured` from its per-centre e_rel on each copy, and its realized medians."""
     medians = np.array([np.nanmedian(e) if np.isfinite(e).any() else np.nan for e in per_copy])
     share = float(np.mean(np.concatenate([np.isfinite(e) for e in per_copy]))) if per_copy else 0.0
     ok = np.isfinite(medians) & (medians > 0)
@@ -360,4 +439,4 @@ def _measure(per_copy: list, seconds: float) -> Measured:
     erel = float(np.exp(logs.mean())) if ok.any() else (0.0 if np.any(medians == 0) else float("nan"))
     spread = float(np.exp(logs.std(ddof=1))) if ok.sum() > 1 else float("nan")
     return Measured(erel=erel, copies=tuple(float(m) for m in medians), spread=spread, measured=share,
-                    seconds=seconds)
+                    seconds=seconds, realized=tuple(realized))

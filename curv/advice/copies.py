@@ -15,7 +15,7 @@ from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.support import support_of
 
-__all__ = ["noisy_copy", "within_reach", "read_rows", "part_normals"]
+__all__ = ["noisy_copy", "within_reach", "read_rows", "widest_reach", "part_normals"]
 
 
 def noisy_copy(shape: Mesh | PointCloud, twin, noise: float, rng: np.random.Generator) -> Mesh | PointCloud:
@@ -89,8 +89,8 @@ def within_reach(copy: Mesh | PointCloud, twin, reach: np.ndarray) -> tuple[Mesh
 
 def read_rows(part, calls: list, centres: np.ndarray, patch: np.ndarray) -> np.ndarray:
     """(k,) int64 the vertices of a mesh ``part`` whose normals ``calls`` read at its ``centres``: within
-    the farthest any of them reads around its own patch's centre (its support and the rings of the
-    support's vertices, :func:`curv.tiles.reach.support_reach`; the twin's patches are apart).
+    the farthest any of them reads around its own patch's centre (:func:`widest_reach`; the twin's
+    patches are apart).
 
     Parameters
     ----------
@@ -103,12 +103,36 @@ def read_rows(part, calls: list, centres: np.ndarray, patch: np.ndarray) -> np.n
     patch : (k,) int64
         The centre (0..c-1) each of ``part``'s vertices belongs to.
     """
-    from ..tiles.reach import support_reach
-
-    reach = np.max([support_reach(part, kw["method"], kw.get("range"), radius=kw.get("radius"), centres=centres)
-                    for kw in calls], axis=0)
+    reach = widest_reach(part, calls, centres)
     x = part.vertices
     return np.flatnonzero(np.linalg.norm(x - x[centres][patch], axis=1) <= reach[patch])
+
+
+def widest_reach(mesh, calls: list, centres: np.ndarray) -> np.ndarray:
+    """(c,) float64 how far ``calls`` read normals around each of ``centres`` of a mesh: their supports
+    and the rings of the supports' vertices, as :func:`curv.tiles.reach.support_reach` (the farthest
+    ``|q - p|`` + q's longest edge over the vertices q of the ball), the calls' balls taken together
+    (the widest at each centre): one search for all of them, at least each one's reach.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    calls : list of dict
+        Keyword arguments of :func:`curv.estimate` (``method``, ``range`` or ``radius``).
+    centres : (c,) int64
+    """
+    from ..core.ranges import ball_radii, resolve
+    from ..estimators import get_spec
+    from ..tiles.reach import ball_max
+
+    longest = np.asarray(mesh.longest_edge, dtype=np.float64)
+    radii = np.full(mesh.n_vertices, -np.inf)
+    for kw in calls:
+        spec = get_spec(kw["method"])
+        own = (ball_radii(mesh, resolve(spec, kw.get("range"), kw.get("radius"), None), uses_normals=spec.uses_normals,
+                          at=centres) if spec.has_support else longest)
+        radii[centres] = np.maximum(radii[centres], own[centres])
+    return ball_max(mesh.vertices, radii, longest, centres)
 
 
 def part_normals(part, calls: list, centres: np.ndarray, patch: np.ndarray) -> np.ndarray:

@@ -36,16 +36,18 @@ def check_lines(adv) -> list[str]:
     noise = (f"noise {report.noise:.3g} along the normal (input units)" if report.noise > 0 else
              f"no noise the twin resolves (at most {report.noise_bound:.2g})")
     return [f"  checked: {len(report.measured)} calls on {report.copies} noisy copies of the smooth twin, "
-            f"{report.centres} centres each; {noise}; {report.seconds:.1f} s"]
+            f"{report.centres} centres each; {noise}; {report.seconds:.1f} s",
+            f"  ranked by {adv.ranked_by}"]
 
 
 def ranking_lines(adv, top: int) -> list[str]:
-    """The first ``top`` candidates: label, valid share, predicted and measured error."""
+    """The first ``top`` candidates: label, valid share, predicted, realized and measured error."""
     out = []
     shown = adv.ranking[:top]
     width = max((len(c.label) for c in shown), default=7)
-    out.append(f"{'rank':>4}  {'variant':<{width}}  valid  {'predicted':>9}  "
-               f"measured median e_rel (x spread over copies)")
+    realized = adv.check is not None and not adv.is_cloud  # a mesh's check scores the calls on the input
+    out.append(f"{'rank':>4}  {'variant':<{width}}  valid  {'predicted':>9}  " + (f"{'realized':>8}  " if realized else "")
+               + "measured median e_rel (x spread over copies)")
     for i, c in enumerate(shown, 1):
         pred = f"{c.expected_erel:9.3g}" if c.expected_erel == c.expected_erel else f"{'-':>9}"
         m = c.measured
@@ -53,7 +55,8 @@ def ranking_lines(adv, top: int) -> list[str]:
         if m is not None and m.ok:
             meas = f"{m.erel:.3g}" + (f" x{m.spread:.2f}" if m.spread == m.spread else "")
             meas += "  within noise" if c.within_noise else ""
-        out.append(f"{i:>4}  {c.label:<{width}}  {100 * c.valid_share:4.0f}%  {pred}  {meas}")
+        real = (f"{c.realized_erel:8.3g}  " if c.realized_erel == c.realized_erel else f"{'-':>8}  ") if realized else ""
+        out.append(f"{i:>4}  {c.label:<{width}}  {100 * c.valid_share:4.0f}%  {pred}  {real}{meas}")
     if len(adv.ranking) > len(shown):
         out.append(f"  ... {len(adv.ranking) - len(shown)} more (--top N, --json)")
     return out

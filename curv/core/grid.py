@@ -15,6 +15,8 @@ import math
 import numpy as np
 
 from .errors import MeshError
+from .jit import jit_parallel, launch, prange
+from .radix import stable_sort
 
 __all__ = ["build_grid", "sample_cell_size", "cell_sample_step", "in_sorted_order"]
 
@@ -59,6 +61,16 @@ def sample_cell_size(sample: np.ndarray, n: int, extent: float, k: int) -> float
     return max(h * math.sqrt(fraction), extent * 1e-7)
 
 
+@jit_parallel
+def _coordinates_in(order, points, xs, ys, zs):
+    """The points' coordinates in ``order`` (numpy's three gathers, in parallel)."""
+    for i in prange(order.size):
+        p = order[i]
+        xs[i] = points[p, 0]
+        ys[i] = points[p, 1]
+        zs[i] = points[p, 2]
+
+
 def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None, origin: np.ndarray | None = None):
     """The uniform grid of :func:`curv.core.knn.nearest_neighbours` and of point-cloud ball supports.
 
@@ -94,13 +106,13 @@ def build_grid(points: np.ndarray, k: int = 10, *, cell: float | None = None, or
         raise MeshError("the points span too many grid cells (a few points very far from the rest?)")
     keys = (cells3[:, 0] * dims[1] + cells3[:, 1]) * dims[2] + cells3[:, 2]
     del cells3
-    order = np.argsort(keys, kind="stable")
-    keys = keys[order]
+    order, keys = stable_sort(keys)  # np.argsort(keys, kind="stable") and keys[order], in parallel
     starts = np.flatnonzero(np.diff(keys)) + 1
     cell_keys = keys[np.concatenate(([0], starts))]
     cell_start = np.concatenate(([0], starts, [n])).astype(np.int64)
     del keys
-    xs, ys, zs = (np.ascontiguousarray(points[order, c]) for c in range(3))
+    xs, ys, zs = np.empty(n), np.empty(n), np.empty(n)
+    launch(_coordinates_in, order, points, xs, ys, zs)
     origin = np.array([lo[0], lo[1], lo[2], h])
     arrays = (cell_keys, cell_start, dims.astype(np.int64), order.astype(np.int64), origin, xs, ys, zs)
     for arr in arrays:

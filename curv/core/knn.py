@@ -131,6 +131,21 @@ def _knn_kernel(cells, coords, k, out_d, out_i):
                     _scan_runs(i, wide, wide_m, coords, (out_d, out_i), k)
 
 
+@jit_parallel
+def _in_callers_order(order, found, indices, distances):
+    """The search's rows (in the grid's sorted order) in the caller's: sorted row i is row
+    ``order[i]``, its neighbours named by their positions in the caller's order (-1 kept), its
+    squared distances square-rooted; ``found = (out_d, out_i)`` of :func:`_knn_kernel`."""
+    out_d, out_i = found
+    n, k = out_i.shape
+    for i in prange(n):
+        row = order[i]
+        for j in range(k):
+            q = out_i[i, j]
+            indices[row, j] = order[q] if q >= 0 else -1
+            distances[row, j] = math.sqrt(out_d[i, j])
+
+
 def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarray, np.ndarray]:
     """The k nearest other points of every point (a uniform-grid search).
 
@@ -158,11 +173,9 @@ def nearest_neighbours(points: np.ndarray, k: int, grid=None) -> tuple[np.ndarra
     out_d = np.empty((n, k))
     out_i = np.empty((n, k), np.int64)
     launch(_knn_kernel, cells, coords, int(k), out_d, out_i)
-    # back to the caller's order: rows by original point, entries as original indices
+    # back to the caller's order in one parallel pass (numpy's gathers and scatters here cost as
+    # much as the search, on one thread)
     indices = np.empty_like(out_i)
-    indices[order] = np.where(out_i >= 0, order[np.maximum(out_i, 0)], -1)
-    del out_i
     distances = np.empty_like(out_d)
-    np.sqrt(out_d, out=out_d)
-    distances[order] = out_d
+    launch(_in_callers_order, order, (out_d, out_i), indices, distances)
     return indices, distances

@@ -19,49 +19,64 @@ on scan rows 5:1 apart (the rows' kNN lists stay in their row), so supports come
 
 
 @jit
-def _graph_counts(indices, counts):
+def _lists(indices, q, p):
+    """Whether point q's list ``indices[q]`` names p."""
+    for j in range(indices.shape[1]):
+        if indices[q, j] == p:
+            return True
+    return False
+
+
+@jit_parallel
+def _one_way(indices, one_way, own):
+    """``one_way[p, j]``: p's j-th neighbour q does not list p (the edge q -> p is p's alone to
+    give q's row); ``own[p]``: p's listed neighbours (not -1)."""
     n, k = indices.shape
-    for i in range(n):
+    for p in prange(n):
+        m = 0
         for j in range(k):
-            q = indices[i, j]
+            q = indices[p, j]
+            one_way[p, j] = q >= 0 and not _lists(indices, q, p)
             if q >= 0:
-                counts[i] += 1
-                counts[q] += 1
+                m += 1
+        own[p] = m
 
 
 @jit
-def _graph_fill(indices, indptr, fill, out):
+def _reverse_counts(indices, one_way, counts):
+    """Add to ``counts[q]`` the points that list q where q does not list them (one pass, serial:
+    rows of other points are written)."""
     n, k = indices.shape
-    for i in range(n):
+    for p in range(n):
         for j in range(k):
-            q = indices[i, j]
-            if q >= 0:
-                out[indptr[i] + fill[i]] = q
-                fill[i] += 1
-                out[indptr[q] + fill[q]] = i
+            if one_way[p, j]:
+                counts[indices[p, j]] += 1
+
+
+@jit
+def _reverse_fill(indices, one_way, fill, out):
+    """Write those points into their rows, from ``fill[q]`` on (the place after q's own list)."""
+    n, k = indices.shape
+    for p in range(n):
+        for j in range(k):
+            if one_way[p, j]:
+                q = indices[p, j]
+                out[fill[q]] = p
                 fill[q] += 1
 
 
 @jit_parallel
-def _graph_dedupe(indptr, out, unique):
-    n = indptr.size - 1
-    for i in prange(n):
-        row = out[indptr[i]:indptr[i + 1]]
-        row.sort()
-        u = 0
-        for j in range(row.size):
-            if j == 0 or row[j] != row[j - 1]:
-                row[u] = row[j]
-                u += 1
-        unique[i] = u
-
-
-@jit_parallel
-def _graph_compact(indptr, out, new_ptr, new):
-    n = indptr.size - 1
-    for i in prange(n):
-        for j in range(new_ptr[i + 1] - new_ptr[i]):
-            new[new_ptr[i] + j] = out[indptr[i] + j]
+def _own_rows(indices, indptr, out):
+    """Row p: its own listed neighbours ahead of the reverse ones already written, then sorted."""
+    n, k = indices.shape
+    for p in prange(n):
+        at = indptr[p]
+        for j in range(k):
+            q = indices[p, j]
+            if q >= 0:
+                out[at] = q
+                at += 1
+        out[indptr[p]:indptr[p + 1]].sort()
 
 
 def symmetric_graph(indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -70,7 +85,8 @@ def symmetric_graph(indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     indices : (n, k) int64
-        :func:`curv.core.knn.nearest_neighbours` indices (-1 entries ignored).
+        :func:`curv.core.knn.nearest_neighbours` indices (-1 entries ignored; a list names a point
+        at most once, never its own).
 
     Returns
     -------
@@ -78,20 +94,21 @@ def symmetric_graph(indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     neighbours : (a,) int64
         Row p is ``neighbours[indptr[p]:indptr[p+1]]``, sorted, without repeats or p itself.
     """
+    indices = np.ascontiguousarray(indices, dtype=np.int64)
     n = indices.shape[0]
-    counts = np.zeros(n, np.int64)
-    _graph_counts(indices, counts)
+    # row p: p's own list, and the points that list p where p does not list them (no repeats, so
+    # no row needs deduplicating); only those reverse edges are written one by one
+    one_way = np.empty(indices.shape, np.bool_)
+    own = np.empty(n, np.int64)
+    launch(_one_way, indices, one_way, own)
+    counts = own.copy()
+    _reverse_counts(indices, one_way, counts)
     indptr = np.zeros(n + 1, np.int64)
     np.cumsum(counts, out=indptr[1:])
-    out = np.empty(indptr[-1], np.int64)
-    _graph_fill(indices, indptr, np.zeros(n, np.int64), out)
-    unique = np.empty(n, np.int64)
-    launch(_graph_dedupe, indptr, out, unique)
-    new_ptr = np.zeros(n + 1, np.int64)
-    np.cumsum(unique, out=new_ptr[1:])
-    new = np.empty(new_ptr[-1], np.int64)
-    launch(_graph_compact, indptr, out, new_ptr, new)
-    return new_ptr, new
+    neighbours = np.empty(indptr[-1], np.int64)
+    _reverse_fill(indices, one_way, indptr[:-1] + own, neighbours)
+    launch(_own_rows, indices, indptr, neighbours)
+    return indptr, neighbours
 
 
 @jit_parallel

@@ -3,7 +3,7 @@ tree, a viewpoint; the undecided points.
 
 "up": each normal turned by its own nz, the edge-on ones and those their nearest oppose undecided
 (:func:`_orient_up`, :func:`_opposed`). The propagation: the neighbour graph's edges weighted
-``1 - |n_p . n_q|``, ranked by a stable radix sort (:func:`_stable_rank`), Kruskal's spanning forest
+``1 - |n_p . n_q|``, ranked by a stable parallel radix sort (:func:`_stable_rank`), Kruskal's spanning forest
 (:func:`_spanning_forest`), a breadth-first walk of each part's tree from its root
 (:func:`_propagate`) and the neighbours' agreement (:func:`_agreement`).
 """
@@ -16,6 +16,7 @@ from ..core.connectivity import find_root
 from ..core.errors import EstimatorError
 from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.pointcloud import PointCloud
+from ..core.radix import stable_order
 
 __all__ = ["orient_normals", "default_orientation", "describe_orientation", "AGREE_COSINE", "GRAZING_COSINE",
            "ORIENTATIONS"]
@@ -67,47 +68,13 @@ def _tree_edges(indptr, neighbours, normal, finite):
     return rows, cols, weight
 
 
-RADIX_BITS = 11
-"""Bits per pass of :func:`_stable_rank` (2048 buckets: their counts stay in the cache)."""
-
-
-@jit
-def _radix_rank(weight, rank, spare_rank):
-    """:func:`_stable_rank` into one of the two (m,) int scratch arrays, which it returns."""
-    m = weight.size
-    keys = weight.view(np.int64).copy()
-    spare_keys = np.empty(m, np.int64)
-    for i in range(m):
-        rank[i] = i
-    buckets = 1 << RADIX_BITS
-    count = np.empty(buckets + 1, np.int64)
-    for shift in range(0, 64, RADIX_BITS):
-        count[:] = 0
-        for i in range(m):
-            count[((keys[i] >> shift) & (buckets - 1)) + 1] += 1
-        if count.max() == m:
-            continue
-        for d in range(buckets):
-            count[d + 1] += count[d]
-        for i in range(m):
-            d = (keys[i] >> shift) & (buckets - 1)
-            at = count[d]
-            count[d] = at + 1
-            spare_keys[at] = keys[i]
-            spare_rank[at] = rank[i]
-        keys, spare_keys = spare_keys, keys
-        rank, spare_rank = spare_rank, rank
-    return rank
-
-
 def _stable_rank(weight: np.ndarray) -> np.ndarray:
     """(m,) ``np.argsort(weight, kind="stable")`` of non-negative finite floats (int32 below 2^31
-    weights), by a least-significant-digit radix sort of their bit patterns (which order such
-    floats as their values): each pass keeps the order of equal digits, so ties keep their order.
-    Passes whose digit is the same for every weight are skipped (the high bits of weights in [0, 2))."""
+    weights), by a parallel radix sort of their bit patterns (:func:`curv.core.radix.stable_order`),
+    which order such floats as their values: ties keep their order."""
     weight = np.ascontiguousarray(weight, dtype=np.float64)
     dtype = np.int32 if weight.size < 2 ** 31 else np.int64
-    return _radix_rank(weight, np.empty(weight.size, dtype), np.empty(weight.size, dtype))
+    return stable_order(weight.view(np.int64), 64, dtype)
 
 
 @jit
