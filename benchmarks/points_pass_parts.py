@@ -15,7 +15,9 @@ walk runs up to a stage and stops there; the cost of a part is the step from the
 2. frame A's second moments and eigen-solve;
 3. frame A's angular gap (exact from 60 degrees on: the border test's);
 4. the R2 support picked from the ball;
-5. the jet fit over it;
+5. the jet fit over it, in four steps: its PCA frame (centroid, covariance, eigen-solve), the normal
+   equations, the scaled Cholesky factor and solve, then the whole fit (the step adds the
+   ``SINGULAR`` verdict, :func:`curv.estimators._jet_fit._solve`);
 6. the fit's gap (exact from 150 degrees on: the one-sided test's);
 7. the line check at R2 (on the jet fit's support);
 8. the line check at R1 (its support picked from the ball, then the spread).
@@ -36,11 +38,14 @@ from curv.core.jit import jit
 from curv.core.grid_blocks import cell_runs
 from curv.core.knn import block_gather
 from curv.core.small_linalg import sym3_eigen_closed
-from curv.estimators._jet_fit import fit_jet, jet_scratch
+from curv.core.small_linalg import cholesky_scaled, cholesky_solve_scaled, scaled_norm_bound
+from curv.core.validity import OK
+from curv.estimators._jet_fit import MAX_UNKNOWNS, _normal_equations, _pca_frame, fit_jet, jet_scratch
 from curv.point_normals.frames import _spread, _widest_gap, _within, gap_scratch, offset_moments
 
 STAGES = ("walk and cell blocks", "ball search (outer radius)", "frame A: moments and eigen-solve",
-          "frame A: gap (border test)", "R2 support from the ball", "jet fit at R2", "jet fit's gap (one-sided)",
+          "frame A: gap (border test)", "R2 support from the ball", "jet fit: PCA frame", "jet fit: normal equations",
+          "jet fit: Cholesky and solve", "jet fit: the verdict (whole fit)", "jet fit's gap (one-sided)",
           "line check R2", "line check R1")
 
 
@@ -92,16 +97,27 @@ def _parts(stage, grid, radii, screens):
         if stage < 5:
             continue
         evec[3, 0] = math.nan
+        if stage < 8:
+            # the fit's first steps apart (stage 8: the whole fit)
+            code, h2 = _pca_frame((i, c_b, sub), (x, y, z, normal_a), 0.0, (m, vec, cov_jet, frame, evec))
+            if stage > 5 and code == OK:
+                total += _normal_equations((i, c_b, sub), (x, y, z), frame, (0.0, 1.0 / math.sqrt(h2)), 2, (m, vec))
+            if stage > 6 and code == OK:
+                total += scaled_norm_bound(m, 6, MAX_UNKNOWNS)
+                if cholesky_scaled(m, 6, MAX_UNKNOWNS):
+                    cholesky_solve_scaled(m, MAX_UNKNOWNS, 6, vec)
+            total += code
+            continue
         code, h, _ = fit_jet(i, c_b, sub, (x, y, z, normal_a), 2, (m, vec, cov_jet, frame, evec))
         total += code
-        if stage < 6:
+        if stage < 9:
             continue
         if c_b >= 3 and math.isfinite(evec[3, 0]):
             total += _widest_gap(i, sub, c_b, x, y, z, evec, gaps, screens[1])
-        if stage < 7:
+        if stage < 10:
             continue
         total += _spread(i, sub, c_b, x, y, z, cov, vecs)
-        if stage < 8:
+        if stage < 11:
             continue
         c_s = _within(queue, dist2, count, radii2[3, p], sub)
         total += _spread(i, sub, c_s, x, y, z, cov, vecs)

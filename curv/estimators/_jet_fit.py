@@ -14,9 +14,9 @@ from collections import namedtuple
 
 import numpy as np
 
-from ..core.jit import jit
-from ..core.small_linalg import (cholesky_scaled, cholesky_solve_scaled, reciprocal_condition, scaled_norm_bound,
-                                 sym2_eigen, sym3_eigen)
+from ..core.jit import jit, jit_inlined
+from ..core.small_linalg import (cholesky_scaled, cholesky_solve_scaled, reciprocal_condition, scaled_determinant,
+                                 scaled_norm_bound, sym2_eigen, sym3_eigen_closed)
 from ..core.validity import DEGENERATE, OK, SINGULAR, TOO_FEW
 from ..uncertainty.factored import whitened_errors
 from ..uncertainty.propagation import noise_variance, principal_gradients
@@ -122,14 +122,43 @@ def fit_jet(p, count, queue, points, degree, scratch, r2=0.0):
     ww : float
         The sum of the (weighted) squared heights ``bᵀWb`` (scaled coordinates), for the residuals.
     """
-    x, y, z, normals = points
-    m, vec, cov, frame, evec = scratch
+    m, vec, _, frame, _ = scratch
     nd = (degree + 1) * (degree + 2) // 2  # unknowns(degree); the registry's min_neighbours is nd - 1
     if count < nd:
         return TOO_FEW, 0.0, 0.0
+    code, h2 = _pca_frame((p, count, queue), points, r2, scratch)
+    if code != OK:
+        return code, 0.0, 0.0
+    # normal equations of the height fit in coordinates divided by h
+    ww = _normal_equations((p, count, queue), points, frame, (r2, 1.0 / math.sqrt(h2)), degree, (m, vec))
+    if not _solve(m, vec, nd):
+        return SINGULAR, 0.0, 0.0
+    for a in range(nd):
+        if not math.isfinite(vec[1, a]):
+            return SINGULAR, 0.0, 0.0
+    return OK, math.sqrt(h2), ww
+
+
+@jit
+def _pca_frame(support, points, r2, scratch):
+    """The fit's frame over ``support = (p, count, queue)`` (step 1 of the module notes): the rows
+    ``e1, e2, e3`` of ``scratch``'s ``frame`` from the (weighted) PCA of the support, ``e3`` turned
+    towards ``normals[p]``; the eigenpairs in ``evec`` (left unset when it stops before them).
+
+    Returns
+    -------
+    reason : int
+        ``OK``, or ``DEGENERATE``: no reference normal, a support of one place, or a PCA normal
+        too far from the reference (:data:`MIN_NORMAL_COSINE`).
+    h2 : float
+        The squared largest distance from p to a support point.
+    """
+    p, count, queue = support
+    x, y, z, normals = points
+    _, _, cov, frame, evec = scratch
     rx, ry, rz = normals[p, 0], normals[p, 1], normals[p, 2]
     if not (math.isfinite(rx) and math.isfinite(ry) and math.isfinite(rz)):
-        return DEGENERATE, 0.0, 0.0
+        return DEGENERATE, 0.0
     px, py, pz = x[p], y[p], z[p]
     # centroid c and covariance sum (q - c)(q - c)^T, from offsets to p for accuracy
     cx = cy = cz = 0.0
@@ -146,7 +175,7 @@ def fit_jet(p, count, queue, points, degree, scratch, r2=0.0):
         total += wt
         h2 = max(h2, d2)
     if not (h2 > 0.0 and total > 0.0):
-        return DEGENERATE, 0.0, 0.0
+        return DEGENERATE, 0.0
     cx /= total
     cy /= total
     cz /= total
@@ -164,15 +193,12 @@ def fit_jet(p, count, queue, points, degree, scratch, r2=0.0):
         cov[1, 1] += wt * dy * dy
         cov[1, 2] += wt * dy * dz
         cov[2, 2] += wt * dz * dz
-    cov[1, 0] = cov[0, 1]
-    cov[2, 0] = cov[0, 2]
-    cov[2, 1] = cov[1, 2]
-    sym3_eigen(cov, evec)
+    sym3_eigen_closed(cov, evec)  # reads the upper triangle
     # The support must be a height field over its PCA plane: a plane far from the vertex normal
     # (a support wrapping round a thin rim) gives an arbitrary fit whose sign flips with rounding.
     along = evec[0, 0] * rx + evec[1, 0] * ry + evec[2, 0] * rz
     if not abs(along) >= MIN_NORMAL_COSINE * math.sqrt(rx * rx + ry * ry + rz * rz):
-        return DEGENERATE, 0.0, 0.0
+        return DEGENERATE, 0.0
     # e3: least variance (the height axis), turned towards the reference normal; e1: most variance
     sign = 1.0 if along >= 0.0 else -1.0
     for a in range(3):
@@ -181,21 +207,46 @@ def fit_jet(p, count, queue, points, degree, scratch, r2=0.0):
     frame[1, 0] = frame[2, 1] * frame[0, 2] - frame[2, 2] * frame[0, 1]
     frame[1, 1] = frame[2, 2] * frame[0, 0] - frame[2, 0] * frame[0, 2]
     frame[1, 2] = frame[2, 0] * frame[0, 1] - frame[2, 1] * frame[0, 0]
-    # normal equations of the height fit in coordinates divided by h
-    inv_h = 1.0 / math.sqrt(h2)
+    return OK, h2
+
+
+@jit_inlined
+def _heights(q, origin, points, frame, scale):
+    """Support point q in the fit's frame: its weight and ``(u, v, w)``, the offsets from
+    ``origin = (px, py, pz)`` divided by h (``scale = (r2, 1 / h)``) along ``e1, e2, e3``."""
+    x, y, z = points[0], points[1], points[2]
+    r2, inv_h = scale
+    dx, dy, dz = x[q] - origin[0], y[q] - origin[1], z[q] - origin[2]
+    wt = smooth_weight(dx * dx + dy * dy + dz * dz, r2)
+    dx, dy, dz = dx * inv_h, dy * inv_h, dz * inv_h
+    u = dx * frame[0, 0] + dy * frame[0, 1] + dz * frame[0, 2]
+    v = dx * frame[1, 0] + dy * frame[1, 1] + dz * frame[1, 2]
+    w = dx * frame[2, 0] + dy * frame[2, 1] + dz * frame[2, 2]
+    return wt, u, v, w
+
+
+@jit
+def _normal_equations(support, points, frame, scale, degree, out):
+    """The normal equations of the height fit of degree ``degree`` over ``support = (p, count,
+    queue)``: the upper triangle of ``Σ wt μ μᵀ`` into ``m`` and ``Σ wt w μ`` into ``vec[0]``
+    (``out = (m, vec)``; ``μ`` the monomials of :func:`_monomials` at :func:`_heights`'s ``(u,
+    v)``, ``vec[1]`` overwritten). Returns ``ww = Σ wt w²``.
+
+    Degree 2 (the default, and the point normals' fit) adds in scalars (:func:`_normal_equations_2`);
+    the same products in the same order, so the sums are the same to the bit."""
+    if degree == 2:
+        return _normal_equations_2(support, points, frame, scale, out)
+    p, count, queue = support
+    m, vec = out
+    nd = (degree + 1) * (degree + 2) // 2
+    origin = (points[0][p], points[1][p], points[2][p])
     ww = 0.0
     for a in range(nd):
         vec[0, a] = 0.0
         for b in range(a, nd):
             m[a, b] = 0.0
     for i in range(count):
-        q = queue[i]
-        dx, dy, dz = x[q] - px, y[q] - py, z[q] - pz
-        wt = smooth_weight(dx * dx + dy * dy + dz * dz, r2)
-        dx, dy, dz = dx * inv_h, dy * inv_h, dz * inv_h
-        u = dx * frame[0, 0] + dy * frame[0, 1] + dz * frame[0, 2]
-        v = dx * frame[1, 0] + dy * frame[1, 1] + dz * frame[1, 2]
-        w = dx * frame[2, 0] + dy * frame[2, 1] + dz * frame[2, 2]
+        wt, u, v, w = _heights(queue[i], origin, points, frame, scale)
         _monomials(u, v, degree, vec)
         ww += wt * w * w
         for a in range(nd):
@@ -203,27 +254,89 @@ def fit_jet(p, count, queue, points, degree, scratch, r2=0.0):
             vec[0, a] += ma * w
             for b in range(a, nd):
                 m[a, b] += ma * vec[1, b]
-    rcond = _solve(m, vec, nd)
-    if not rcond >= RCOND:
-        return SINGULAR, 0.0, 0.0
-    for a in range(nd):
-        if not math.isfinite(vec[1, a]):
-            return SINGULAR, 0.0, 0.0
-    return OK, math.sqrt(h2), ww
+    return ww
+
+
+@jit
+def _normal_equations_2(support, points, frame, scale, out):
+    """:func:`_normal_equations` of degree 2 (monomials ``1, u, v, u², vu, v²``): each sum in a
+    scalar, as the general loop adds it (``(wt mono_a) mono_b``), so that no sum goes through memory."""
+    p, count, queue = support
+    m, vec = out
+    origin = (points[0][p], points[1][p], points[2][p])
+    ww = b0 = b1 = b2 = b3 = b4 = b5 = 0.0
+    m00 = m01 = m02 = m03 = m04 = m05 = m11 = m12 = m13 = m14 = m15 = 0.0
+    m22 = m23 = m24 = m25 = m33 = m34 = m35 = m44 = m45 = m55 = 0.0
+    for i in range(count):
+        wt, u, v, w = _heights(queue[i], origin, points, frame, scale)
+        uu, vu, vv = u * u, v * u, v * v
+        ww += wt * w * w
+        a0, a1, a2, a3, a4, a5 = wt * 1.0, wt * u, wt * v, wt * uu, wt * vu, wt * vv
+        b0 += a0 * w
+        b1 += a1 * w
+        b2 += a2 * w
+        b3 += a3 * w
+        b4 += a4 * w
+        b5 += a5 * w
+        m00 += a0 * 1.0
+        m01 += a0 * u
+        m02 += a0 * v
+        m03 += a0 * uu
+        m04 += a0 * vu
+        m05 += a0 * vv
+        m11 += a1 * u
+        m12 += a1 * v
+        m13 += a1 * uu
+        m14 += a1 * vu
+        m15 += a1 * vv
+        m22 += a2 * v
+        m23 += a2 * uu
+        m24 += a2 * vu
+        m25 += a2 * vv
+        m33 += a3 * uu
+        m34 += a3 * vu
+        m35 += a3 * vv
+        m44 += a4 * vu
+        m45 += a4 * vv
+        m55 += a5 * vv
+    vec[0, 0], vec[0, 1], vec[0, 2], vec[0, 3], vec[0, 4], vec[0, 5] = b0, b1, b2, b3, b4, b5
+    m[0, 0], m[0, 1], m[0, 2], m[0, 3], m[0, 4], m[0, 5] = m00, m01, m02, m03, m04, m05
+    m[1, 1], m[1, 2], m[1, 3], m[1, 4], m[1, 5] = m11, m12, m13, m14, m15
+    m[2, 2], m[2, 3], m[2, 4], m[2, 5] = m22, m23, m24, m25
+    m[3, 3], m[3, 4], m[3, 5] = m33, m34, m35
+    m[4, 4], m[4, 5] = m44, m45
+    m[5, 5] = m55
+    return ww
+
+
+CLEAR = 1e3 * RCOND
+"""A fit whose scaled normal matrix has a smallest eigenvalue provably at least this times its
+norm bound is not ``SINGULAR`` without the estimate (:func:`_solve`): a thousand times
+:data:`RCOND`, far beyond the rounding of the factor and the estimate's solves."""
 
 
 @jit
 def _solve(m, vec, nd):
     """Solve the normal equations (``m``'s upper triangle, right-hand side ``vec[0]``) into
     ``vec[1]`` by the Jacobi-scaled Cholesky factor (:func:`~curv.core.small_linalg.cholesky_scaled`,
-    left in ``m``), and return the scaled matrix's estimated reciprocal condition number (0 when
-    the factorisation broke down): the same for either side of the frame (:data:`V_SIGNS`), so that
-    ``SINGULAR`` does not follow the reference normal's free sign."""
+    left in ``m``); returns whether the scaled matrix is conditioned: its estimated reciprocal
+    condition number (:func:`~curv.core.small_linalg.reciprocal_condition`) at least :data:`RCOND`
+    (False when the factorisation broke down), the same for either side of the frame
+    (:data:`V_SIGNS`), so that ``SINGULAR`` does not follow the reference normal's free sign.
+
+    The estimate (six solves) is asked only where a free bound leaves the verdict open: the scaled
+    matrix's eigenvalues are at most ``lam_max`` (:func:`~curv.core.small_linalg.scaled_norm_bound`),
+    so its smallest is at least ``det / lam_max^(nd - 1)``, the determinant being the factor's
+    diagonal squared. The estimate is itself at least the smallest eigenvalue (inverse iteration),
+    so where the bound is at least :data:`CLEAR` times ``lam_max`` the estimate is above
+    :data:`RCOND` and the verdict is its own (the bound is as sign-symmetric as the estimate)."""
     lam_max = scaled_norm_bound(m, nd, MAX_UNKNOWNS)
     if not cholesky_scaled(m, nd, MAX_UNKNOWNS):
-        return 0.0
+        return False
     cholesky_solve_scaled(m, MAX_UNKNOWNS, nd, vec)
-    return reciprocal_condition(m, nd, lam_max, vec, 2, V_SIGNS)
+    if scaled_determinant(m, nd) >= CLEAR * lam_max ** nd:
+        return True
+    return reciprocal_condition(m, nd, lam_max, vec, 2, V_SIGNS) >= RCOND
 
 
 @jit
