@@ -7,6 +7,8 @@ sorted cell keys). A block with more columns than occupied cells between its fir
 point far from the rest: a grid of mostly empty cells) walks those cells instead of its columns,
 in the same order: a search never costs more than the points. Either way the runs come in
 ascending key order, so every search that reads a block sees the same points in the same order.
+The point normals' pass reads a block one run per occupied cell, each with its box
+(:func:`block_cells`), so that a ball skips the cells beyond its radius in z as well as in x and y.
 """
 
 from __future__ import annotations
