@@ -1,5 +1,5 @@
 """The parallel stable radix sort (curv.core.radix) and the parallel passes built on it or beside
-it: the grid's order, the kNN lists (written in the caller's order by the search), the symmetric neighbour graph,
+it: the grid's order, the kNN lists put back in the caller's order, the symmetric neighbour graph,
 a result's rows put back (issue 33, item 5)."""
 
 import numpy as np
@@ -56,8 +56,7 @@ def test_grid_order_is_the_stable_argsort_of_the_cells(n):
 def _knn_reference(points, k):
     """The k nearest by brute force, each row in (distance, grid position) order: the search scans
     every block in ascending sorted position and keeps the first of equal distances, so its lists
-    are exactly these, ties included (what nearest_neighbours gave before it wrote its rows in
-    the caller's order straight from the search)."""
+    are exactly these, ties included."""
     cells, _ = build_grid(points, k)
     order, n = cells[3], points.shape[0]
     position = np.empty(n, np.int64)
