@@ -63,7 +63,7 @@ def _parts(stage, grid, radii, screens):
     cov = np.empty((3, 3))
     vecs = np.empty((4, 3))
     gaps = gap_scratch()
-    block = (np.empty((64, 2), np.int64), 0, np.empty((64, 4)))
+    block = (np.empty((64, 2), np.int64), 0, np.empty((64, 6)))
     m, vec, cov_jet, frame, evec = jet_scratch()
     normal_a = np.empty((n, 3))
     total = 0.0

@@ -322,32 +322,40 @@ def _pruned_clouds():
 
 
 @pytest.mark.parametrize("name,cloud", list(_pruned_clouds()), ids=[c[0] for c in _pruned_clouds()])
-def test_a_cells_block_skipping_far_columns_gives_every_ball_in_the_search_order(name, cloud):
-    """The pass reads each ball from its cell's block, skipping the columns farther than the radius
-    in x and y (:func:`curv.core.grid_blocks.run_columns`): the same points in the same order as
-    the plain search, also where points lie on the cells' bounds or far from the origin."""
-    from curv.core.grid_blocks import run_columns
-    from curv.core.knn import block_gather, cell_block, cell_of, grid_gather, ring_of
+def test_a_cells_block_skipping_far_cells_gives_every_ball_in_the_search_order(name, cloud):
+    """The pass reads each ball from its cell's block, one run per occupied cell, skipping the
+    cells whose box lies farther than the radius (:func:`curv.core.grid_blocks.block_cells`): the
+    same points in the same order as the plain search, also where points lie on the cells' bounds
+    or far from the origin."""
+    from curv.core.grid_blocks import block_around, block_cells, block_runs, cell_coordinates
+    from curv.core.knn import block_gather, cell_of, grid_gather, ring_of
 
     radii = 3.0 * point_spacing(cloud)
     cells, coords = cloud.ball_grid(radii)
     n = cloud.n_points
     queue, dist2, want, want_d = (np.empty(n + 1, np.int64), np.empty(n + 1), np.empty(n + 1, np.int64),
                                   np.empty(n + 1))
-    runs, columns = np.empty((4, 2), np.int64), np.empty((4, 4))
-    skipped = 0
+    runs, bounds, columns = np.empty((4, 2), np.int64), np.empty((4, 6)), np.empty((4, 2), np.int64)
+    skipped = skipped_z = 0
     for i in range(n):
         r2 = float(radii[cells[3][i]] ** 2)
-        m, runs = cell_block(cell_of(i, cells[1]), ring_of(r2, cells[2], coords[0]), cells, runs)
-        columns = run_columns(runs, m, cells, coords[0], columns)
-        count = block_gather(i, r2, (runs, m, columns), coords, queue, dist2)
+        c = cell_of(i, cells[1])
+        block = block_around(*cell_coordinates(cells[0][c], cells[2]), ring_of(r2, cells[2], coords[0]), cells[2])
+        m, runs, bounds = block_cells(block, cells, coords[0], runs, bounds)
+        # the block's points in the columns' order, one run per occupied cell
+        m_col, columns = block_runs(block, cells, columns)
+        assert np.array_equal(np.concatenate([np.arange(a, b) for a, b in runs[:m]]),
+                              np.concatenate([np.arange(a, b) for a, b in columns[:m_col]]))
+        assert all(cell_of(a, cells[1]) == cell_of(b - 1, cells[1]) for a, b in runs[:m])
+        count = block_gather(i, r2, (runs, m, bounds), coords, queue, dist2)
         expect = grid_gather(i, r2, cells, coords, want, want_d)
         assert count == expect and np.array_equal(queue[:count], want[:count]), f"point {i}"
         np.testing.assert_array_equal(dist2[:count], want_d[:count])
-        p = np.array([coords[1][i], coords[2][i]])
-        near = np.maximum(np.maximum(columns[:m, [0, 2]] - p, p - columns[:m, [1, 3]]), 0.0)
-        skipped += int(((near ** 2).sum(axis=1) > r2).sum())
-    assert skipped > 0  # the test reaches the skip
+        p = np.array([coords[1][i], coords[2][i], coords[3][i]])
+        near = np.maximum(np.maximum(bounds[:m, [0, 2, 4]] - p, p - bounds[:m, [1, 3, 5]]), 0.0) ** 2
+        skipped += int((near.sum(axis=1) > r2).sum())
+        skipped_z += int(((near[:, :2].sum(axis=1) <= r2) & (near.sum(axis=1) > r2)).sum())
+    assert skipped > 0 and skipped_z > 0  # the test reaches the skip, and the one in z
 
 
 def test_a_line_check_the_pass_left_out_reads_as_if_the_pass_had_measured_it():

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from curv.core.grid import build_grid
-from curv.core.jit import launch
 from curv.core.knn import nearest_neighbours
 from curv.core.neighbour_graph import symmetric_graph
 from curv.core.radix import _SLICE, stable_order, stable_sort
@@ -55,28 +54,46 @@ def test_grid_order_is_the_stable_argsort_of_the_cells(n):
 
 
 def _knn_reference(points, k):
-    """numpy's mapping of the kernel's sorted rows back (what nearest_neighbours did before)."""
-    from curv.core.knn import _knn_kernel
-
-    cells, coords = build_grid(points, k)
+    """The k nearest by brute force, each row in (distance, grid position) order: the search scans
+    every block in ascending sorted position and keeps the first of equal distances, so its lists
+    are exactly these, ties included."""
+    cells, _ = build_grid(points, k)
     order, n = cells[3], points.shape[0]
-    out_d, out_i = np.empty((n, k)), np.empty((n, k), np.int64)
-    launch(_knn_kernel, cells, coords, k, out_d, out_i)
-    indices = np.empty_like(out_i)
-    indices[order] = np.where(out_i >= 0, order[np.maximum(out_i, 0)], -1)
-    distances = np.empty_like(out_d)
-    distances[order] = np.sqrt(out_d)
+    position = np.empty(n, np.int64)
+    position[order] = np.arange(n)
+    indices, distances = np.full((n, k), -1, np.int64), np.full((n, k), np.inf)
+    for p in range(n):
+        dx, dy, dz = (points[:, a] - points[p, a] for a in range(3))
+        d2 = dx * dx + dy * dy + dz * dz  # the search's sum, in its order
+        d2[p] = np.inf
+        near = np.lexsort((position, d2))[:min(k, n - 1)]
+        indices[p, :near.size], distances[p, :near.size] = near, np.sqrt(d2[near])
     return indices, distances
 
 
-@pytest.mark.parametrize("n,k", [(5, 8), (20_000, 10)])
-def test_nearest_rows_back_in_the_callers_order(n, k):
-    """Bit for bit what numpy's gathers gave, -1 and inf kept where there are fewer than k others."""
-    p = np.random.default_rng(n).uniform(size=(n, 3))
+def _knn_clouds():
+    rng = np.random.default_rng(5)
+    sphere = rng.normal(size=(3000, 3))
+    sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    duplicates = sphere.copy()
+    duplicates[:600] = duplicates[600:1200]  # coincident points: ties at distance 0
+    clusters = (rng.normal(size=(20, 1, 3)) + 0.01 * rng.normal(size=(20, 150, 3))).reshape(-1, 3)
+    lattice = np.stack(np.meshgrid(np.arange(15.0), np.arange(15.0), np.arange(12.0)), -1).reshape(-1, 3)
+    outliers = np.concatenate([sphere[:2500], rng.uniform(-40, 40, size=(6, 3))])  # the wider rings
+    return {"few": rng.uniform(size=(5, 3)), "uniform": rng.uniform(size=(3000, 3)), "sphere": sphere,
+            "duplicates": duplicates, "clusters": clusters, "lattice (exact ties)": lattice, "outliers": outliers}
+
+
+@pytest.mark.parametrize("cloud", list(_knn_clouds()))
+@pytest.mark.parametrize("k", [3, 10])
+def test_nearest_rows_are_the_brute_force_lists(cloud, k):
+    """Bit for bit the brute-force lists in the caller's order, ties broken by the grid position,
+    -1 and inf kept where there are fewer than k others."""
+    p = _knn_clouds()[cloud]
     idx, dist = nearest_neighbours(p, k)
     want_idx, want_dist = _knn_reference(p, k)
     assert np.array_equal(idx, want_idx) and np.array_equal(dist, want_dist)
-    assert (idx >= 0).sum() == n * min(k, n - 1)
+    assert (idx >= 0).sum() == p.shape[0] * min(k, p.shape[0] - 1)
 
 
 def _graph_reference(indices):

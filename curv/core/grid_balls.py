@@ -121,25 +121,26 @@ def grid_gather(i, radius2, cells, coords, queue, dist2):
 
 @jit
 def block_gather(i, radius2, block, coords, queue, dist2):
-    """:func:`grid_gather` from a block of :func:`curv.core.grid_blocks.cell_block` (of the cell of
-    sorted point ``i``, at least as many rings as this radius needs): the same ball in the same order.
+    """:func:`grid_gather` from a block of :func:`curv.core.grid_blocks.block_cells` (around the
+    cell of sorted point ``i``, at least as many rings as this radius needs): the same ball in the same order.
 
-    ``block``: ``(runs, m, columns)``, the block's runs and their columns' bounds
-    (:func:`curv.core.grid_blocks.run_columns`); a run whose column lies farther than the radius
-    from the centre in x and y is skipped (a ball's points keep their order: the same ball). ``queue``
+    ``block``: ``(runs, m, bounds)``, the block's occupied cells as runs and their boxes
+    (:func:`curv.core.grid_blocks.block_cells`); a cell whose box lies farther than the radius from
+    the centre is skipped (a ball's points keep their order: the same ball). ``queue``
     and ``dist2`` need one slot more than the grid has points (each candidate is written before it
     is tested: no branch per candidate). Returns ``count`` (``queue[1:count]`` the ball).
     """
-    runs, m, columns = block
+    runs, m, bounds = block
     xs, ys, zs = coords[1], coords[2], coords[3]
     px, py, pz = xs[i], ys[i], zs[i]
     queue[0] = i
     dist2[0] = 0.0
     count = 1
     for r in range(m):
-        ex = max(columns[r, 0] - px, px - columns[r, 1], 0.0)
-        ey = max(columns[r, 2] - py, py - columns[r, 3], 0.0)
-        if ex * ex + ey * ey > radius2:
+        ex = max(bounds[r, 0] - px, px - bounds[r, 1], 0.0)
+        ey = max(bounds[r, 2] - py, py - bounds[r, 3], 0.0)
+        ez = max(bounds[r, 4] - pz, pz - bounds[r, 5], 0.0)
+        if ex * ex + ey * ey + ez * ez > radius2:
             continue
         for j in range(runs[r, 0], runs[r, 1]):
             dx, dy, dz = xs[j] - px, ys[j] - py, zs[j] - pz

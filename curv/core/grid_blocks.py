@@ -7,6 +7,8 @@ sorted cell keys). A block with more columns than occupied cells between its fir
 point far from the rest: a grid of mostly empty cells) walks those cells instead of its columns,
 in the same order: a search never costs more than the points. Either way the runs come in
 ascending key order, so every search that reads a block sees the same points in the same order.
+The point normals' pass reads a block one run per occupied cell, each with its box
+(:func:`block_cells`), so that a ball skips the cells beyond its radius in z as well as in x and y.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import numpy as np
 from .jit import jit
 
 __all__ = ["cell_coordinates", "block_around", "ring_of", "start_walk", "next_run", "block_runs", "cell_block",
-           "cell_of", "run_columns", "cell_runs"]
+           "cell_of", "block_cells", "cell_runs"]
 
 
 @jit
@@ -192,43 +194,91 @@ def cell_of(i, cell_start):
 
 
 COLUMN_MARGIN = 1e-9
-"""Relative widening of a column's bounds in :func:`run_columns` (of the coordinates' size): a
-point's cell is ``floor((x - origin) / h)`` in floating point, so it may lie a rounding outside the
-column's exact bounds."""
+"""Relative widening of a cell's box in :func:`block_cells` (of the coordinates' size): a point's
+cell is ``floor((x - origin) / h)`` in floating point, so it may lie a rounding outside the
+cell's exact bounds."""
 
 
 @jit
-def run_columns(runs, m, cells, origin, columns):
-    """The x and y bounds of the column (or occupied cell) of each run ``runs[:m]`` of
-    :func:`block_runs`, widened by :data:`COLUMN_MARGIN`: ``columns[r] = (x0, x1, y0, y1)``, every
-    point of run r inside. A ball whose centre is farther than its radius from those bounds in
-    x and y has no point in the run (:func:`curv.core.grid_balls.block_gather` skips it).
-
-    Returns ``columns``, or a larger array when it had fewer than ``m`` rows.
-    """
-    if columns.shape[0] < m:
-        columns = np.empty((runs.shape[0], 4))
+def _add_cell(c, k, cells, origin, out):
+    """Row k of ``out = (runs, bounds)``: occupied cell c's sorted positions and its box, widened by
+    :data:`COLUMN_MARGIN`."""
+    runs, bounds = out
     cell_keys, cell_start, dims = cells[0], cells[1], cells[2]
     h = origin[3]
-    for r in range(m):
-        ix, iy, _ = cell_coordinates(cell_keys[cell_of(runs[r, 0], cell_start)], dims)
-        x0, y0 = origin[0] + ix * h, origin[1] + iy * h
-        mx = COLUMN_MARGIN * (abs(origin[0]) + abs(x0) + 2.0 * h)
-        my = COLUMN_MARGIN * (abs(origin[1]) + abs(y0) + 2.0 * h)
-        columns[r, 0], columns[r, 1] = x0 - mx, x0 + h + mx
-        columns[r, 2], columns[r, 3] = y0 - my, y0 + h + my
-    return columns
+    runs[k, 0], runs[k, 1] = cell_start[c], cell_start[c + 1]
+    ix, iy, iz = cell_coordinates(cell_keys[c], dims)
+    for a, at in ((0, ix), (1, iy), (2, iz)):
+        lo = origin[a] + at * h
+        margin = COLUMN_MARGIN * (abs(origin[a]) + abs(lo) + 2.0 * h)
+        bounds[k, 2 * a], bounds[k, 2 * a + 1] = lo - margin, lo + h + margin
+
+
+@jit
+def block_cells(block, cells, origin, runs, bounds):
+    """The occupied cells of ``block`` (``(x0, x1, y0, y1, z0, z1)``, inclusive) one run each, in
+    :func:`next_run`'s order (the same points in the same order), with their boxes: a ball skips
+    every cell whose box lies farther than its radius (:func:`curv.core.grid_balls.block_gather`),
+    in z too, where a column's run was skipped only in x and y (on a sphere's ball grid the pass's
+    balls read a third fewer points, 282 -> 188 a point for 58 in the ball: docs/BENCHMARKS.md, "one
+    walk for the nearest and the ball").
+
+    Parameters
+    ----------
+    block : 6-tuple of int
+    cells : tuple
+        :func:`curv.core.grid.build_grid`'s ``cells``.
+    origin : (4,) float64
+        The grid's lower corner and cell edge.
+    runs : (k, 2) int64
+        Scratch for the cells' sorted positions (``runs[r, 0] <= j < runs[r, 1]``).
+    bounds : (k, 6) float64
+        Scratch for their boxes ``(x0, x1, y0, y1, z0, z1)``.
+
+    Returns
+    -------
+    m : int
+    runs, bounds : arrays
+        ``runs[:m]``, ``bounds[:m]`` (new arrays when the scratch had too few rows).
+    """
+    cell_keys, dims = cells[0], cells[2]
+    ny, nz = dims[1], dims[2]
+    x0, x1, y0, y1, z0, z1 = block
+    c0, c1, sparse = _block_span(block, dims, cell_keys)
+    most = min(c1 - c0, (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1))
+    if runs.shape[0] < most:
+        runs = np.empty((most, 2), np.int64)
+    if bounds.shape[0] < most:
+        bounds = np.empty((most, 6))
+    out = (runs, bounds)
+    m = 0
+    if sparse:
+        for c in range(c0, c1):
+            if _in_block(cell_keys[c], block, dims):
+                _add_cell(c, m, cells, origin, out)
+                m += 1
+        return m, runs, bounds
+    for ix in range(x0, x1 + 1):
+        for iy in range(y0, y1 + 1):
+            base = (ix * ny + iy) * nz
+            c = _first_at_least(cell_keys, base + z0)
+            # a column's cells in the block follow one another: no second search for its end
+            while c < c1 and cell_keys[c] <= base + z1:
+                _add_cell(c, m, cells, origin, out)
+                m += 1
+                c += 1
+    return m, runs, bounds
 
 
 @jit
 def cell_runs(i, c, radius2, cells, origin, block):
     """Move a walk over the sorted points to the cell of sorted position ``i`` (at or after cell
-    ``c``) and read that cell's block for the widest ball of its points: :func:`cell_block` at the
-    rings of the largest ``radius2`` (squared radii, (n,), original order) of the cell's points, and
-    :func:`run_columns` of its runs.
+    ``c``) and read that cell's block for the widest ball of its points: :func:`block_cells` of the
+    block within the rings of the largest ``radius2`` (squared radii, (n,), original order) of the
+    cell's points (:func:`cell_block`'s block).
 
-    ``block``: the scratch ``(runs, m, columns)``. Returns ``(c, cell_end, block)``, the cell, where
-    its points end in sorted order, and ``(runs, m, columns)`` filled (the arrays grown if needed):
+    ``block``: the scratch ``(runs, m, bounds)``. Returns ``(c, cell_end, block)``, the cell, where
+    its points end in sorted order, and ``(runs, m, bounds)`` filled (the arrays grown if needed):
     what :func:`curv.core.grid_balls.block_gather` reads for each of the cell's points.
     """
     cell_start, order = cells[1], cells[3]
@@ -237,6 +287,8 @@ def cell_runs(i, c, radius2, cells, origin, block):
     widest = 0.0
     for j in range(cell_start[c], cell_start[c + 1]):
         widest = max(widest, radius2[order[j]])
-    runs, _, columns = block
-    m, runs = cell_block(c, ring_of(widest, cells[2], origin), cells, runs)
-    return c, cell_start[c + 1], (runs, m, run_columns(runs, m, cells, origin, columns))
+    runs, _, bounds = block
+    cx, cy, cz = cell_coordinates(cells[0][c], cells[2])
+    ring = ring_of(widest, cells[2], origin)
+    m, runs, bounds = block_cells(block_around(cx, cy, cz, ring, cells[2]), cells, origin, runs, bounds)
+    return c, cell_start[c + 1], (runs, m, bounds)

@@ -56,7 +56,7 @@
    on their support in the frame of the fitted normal. Its line check is the one at the fits'
    range; the one without the neighbours' normals (``mru``, ``an``) is measured when asked, over
    the pass's grid, so its sums run in the pass's order (:func:`.one_pass.owe_spreads`). Each ball
-   is read from its cell's block, without the columns farther than the radius in x and y
+   is read from its cell's block, without the cells farther than the radius
    (:func:`curv.core.grid_blocks.cell_runs`): the same points in the same order.
 6. **Grid order.** An estimate of a whole cloud runs on its twin in grid order
    (:func:`grid_ordered`) and maps the rows back: the neighbour graph, the orientation and the

@@ -41,9 +41,9 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
     ``kept``: the fits bundle an estimator reads (:mod:`curv.estimators._handover`), filled per point
     after its jet fit, or None (compiled without).
 
-    The points are walked cell by cell: the columns of a cell's block are looked up once for all
+    The points are walked cell by cell: the cells of a cell's block are looked up once for all
     its points (:func:`curv.core.grid_blocks.cell_runs`), each point's ball read from them (those
-    within its radius in x and y).
+    whose box lies within its radius).
     """
     cells, coords = grid
     outer2, radii2, screens = radii
@@ -59,7 +59,7 @@ def _pass_kernel(lo, hi, grid, radii, wanted, degree, scratch, out, kept):
         cov = np.empty((3, 3))
         vecs = np.empty((4, 3))
         gaps = gap_scratch()
-        block = (np.empty((64, 2), np.int64), 0, np.empty((64, 4)))
+        block = (np.empty((64, 2), np.int64), 0, np.empty((64, 6)))
         m, vec, cov_jet, frame, evec = jet_scratch()
         keep_b = normal_b.shape[0] > 1
         start, stop = slice_bounds(lo, hi, t, parts)
