@@ -147,3 +147,56 @@ def test_save_ply_written_in_blocks_is_the_same_file(tmp_path, sphere_result, mo
         assert blocks.read_bytes() == whole.read_bytes()
         back = PlyData.read(str(blocks))
         assert np.array_equal(back["vertex"]["e"], np.arange(m.n_vertices) * np.float32(0.5))
+
+
+def _quad_grid(n: int = 6) -> tuple[np.ndarray, np.ndarray]:
+    u, v = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float), indexing="ij")
+    vertices = np.c_[u.ravel(), v.ravel(), 0.1 * (u * v).ravel()]
+    idx = np.arange(n * n).reshape(n, n)
+    quads = np.c_[idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()]
+    return vertices, quads
+
+
+def _write_binary_ply(path, vertices, faces, *, byte_order="<", length_type="u1"):
+    from plyfile import PlyElement
+
+    vert = np.zeros(len(vertices), dtype=[("x", "f4"), ("y", "f4"), ("z", "f4"), ("intensity", "u2")])
+    for i, c in enumerate("xyz"):
+        vert[c] = vertices[:, i]
+    if isinstance(faces, np.ndarray):
+        face = np.empty(len(faces), dtype=[("vertex_indices", "i4", (faces.shape[1],))])
+    else:
+        face = np.empty(len(faces), dtype=[("vertex_indices", object)])
+        faces = [np.asarray(f, np.int32) for f in faces]
+    face["vertex_indices"] = faces
+    elements = [PlyElement.describe(vert, "vertex"),
+                PlyElement.describe(face, "face", len_types={"vertex_indices": length_type})]
+    PlyData(elements, byte_order=byte_order).write(str(path))
+    return path
+
+
+@pytest.mark.parametrize("byte_order, length_type", [("<", "u1"), (">", "u1"), ("<", "i4"), (">", "u2")])
+def test_a_binary_ply_of_quads_is_memory_mapped_whole(tmp_path, monkeypatch, byte_order, length_type):
+    from curv.formats import meshread
+
+    vertices, quads = _quad_grid()
+    path = _write_binary_ply(tmp_path / "quads.ply", vertices, quads, byte_order=byte_order, length_type=length_type)
+    reads = []
+    real_read = PlyData.read
+    monkeypatch.setattr(PlyData, "read", staticmethod(lambda *a, **kw: reads.append(kw) or real_read(*a, **kw)))
+    got_vertices, got_faces = meshread.read_arrays(path)
+    assert reads == [{"known_list_len": {"face": {"vertex_indices": 4}}}]  # one read, every face a (4,) row
+    assert isinstance(got_faces, np.ndarray) and np.array_equal(got_faces, quads)
+    np.testing.assert_allclose(got_vertices, vertices.astype(np.float32))
+    assert curv.load(path).report().polygon_kinds == {4: len(quads)}
+
+
+def test_a_binary_ply_whose_first_face_is_a_quad_but_not_the_rest_is_read_face_by_face(tmp_path):
+    from curv.formats import meshread
+
+    vertices, quads = _quad_grid()
+    faces = [quads[0].tolist()] + [[a, b, c] for a, b, c, _ in quads[1:].tolist()]
+    path = _write_binary_ply(tmp_path / "mixed.ply", vertices, faces)
+    got = meshread.read_arrays(path)[1]
+    assert [list(f) for f in got] == faces
+    assert curv.load(path).report().polygon_kinds == {4: 1, 3: len(quads) - 1}

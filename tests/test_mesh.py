@@ -68,6 +68,26 @@ def test_polygons_padded_and_mixed():
     assert m.report().polygon_kinds == {3: 1, 4: 2}
 
 
+def test_polygon_geometry_is_newells_and_flags_every_degenerate_polygon():
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(40, 3))
+    v[30:34] = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]  # on a line: a zero-area quad
+    polys = [list(rng.choice(30, size=k, replace=False)) for k in rng.integers(3, 8, size=60)]
+    polys += [[30, 31, 32, 33], [0, 1, 0, 2], [3, 4, 5, 6, 4], [7, 7, 8, 9]]  # zero area, repeated indices
+    m = curv.Mesh(v, polys)
+    assert not m.is_triangular
+    # Newell's sum, corner by corner in the face's order (the kernel's order: equal to the last bit)
+    want = np.array([0.5 * np.sum([np.cross(v[p[c]], v[p[(c + 1) % len(p)]]) for c in range(len(p))], axis=0)
+                     for p in polys])
+    want_area = np.linalg.norm(want, axis=1)
+    np.testing.assert_allclose(m.face_vector_areas, want, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(m.face_areas, want_area, rtol=1e-13, atol=1e-15)
+    longest2 = np.array([max(np.sum((v[p[(c + 1) % len(p)]] - v[p[c]]) ** 2) for c in range(len(p))) for p in polys])
+    repeated = np.array([len(set(p)) < len(p) for p in polys])
+    assert m.degenerate_faces.tolist() == (repeated | (want_area <= 1e-12 * longest2)).tolist()
+    assert m.degenerate_faces[-4:].tolist() == [True] * 4 and not m.degenerate_faces[:-4].any()
+
+
 def test_defects_detected_not_fatal():
     v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0], [3, 0, 0], [9, 9, 9],
                   [-1, 0, 0], [0, -1, 0]], float)

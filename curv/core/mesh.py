@@ -306,30 +306,27 @@ class Mesh(PointSet):
         return vector_area, area, degenerate
 
     @cached_property
+    def _polygon_geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Polygon meshes: ``(vector areas (m, 3), areas (m,), degenerate (m,))`` in one pass."""
+        m = self.n_faces
+        vector_area, area, degenerate = np.empty((m, 3)), np.empty(m), np.empty(m, bool)
+        launch(_kernels.polygon_geometry, (self._offsets, self._indices), self._vertices, (vector_area, area),
+               degenerate)
+        return vector_area, area, degenerate
+
+    @cached_property
     def face_vector_areas(self) -> np.ndarray:
         """(m, 3) float64 Newell vector area of each face: unit normal times area.
 
         Exact for planar polygons and the natural average normal for non-planar ones. For a
         triangle it is half the cross product of two edges (the same vector, with less rounding).
         """
-        if self.is_triangular:
-            return self._triangle_geometry[0]
-        v = self._vertices
-        a = np.take(v, self._indices, axis=0)
-        b = np.take(a, self.corner_next, axis=0)
-        cross = np.cross(a, b)
-        out = np.empty((self.n_faces, 3))
-        for k in range(3):
-            # the corners of a face are contiguous: one segment sum per face
-            out[:, k] = np.add.reduceat(cross[:, k], self._offsets[:-1])
-        return 0.5 * out
+        return (self._triangle_geometry if self.is_triangular else self._polygon_geometry)[0]
 
     @cached_property
     def face_areas(self) -> np.ndarray:
         """(m,) float64 face areas (norm of the Newell vector area)."""
-        if self.is_triangular:
-            return self._triangle_geometry[1]
-        return np.linalg.norm(self.face_vector_areas, axis=1)
+        return (self._triangle_geometry if self.is_triangular else self._polygon_geometry)[1]
 
     @cached_property
     def face_normals(self) -> np.ndarray:
@@ -365,22 +362,7 @@ class Mesh(PointSet):
             degenerate = np.empty(self.n_faces, bool)
             launch(_kernels.triangle_geometry, self._indices.reshape(-1, 3), self._vertices, None, degenerate)
             return degenerate
-        repeated = np.zeros(self.n_faces, bool)
-        null = self.halfedge_edge < 0
-        repeated[self.corner_face[null]] = True
-        # an index repeated non-consecutively (e.g. a quad 0 1 0 2) gives no null edge
-        order = np.lexsort((self._indices, self.corner_face))
-        f_sorted = self.corner_face[order]
-        i_sorted = self._indices[order]
-        dup = (f_sorted[1:] == f_sorted[:-1]) & (i_sorted[1:] == i_sorted[:-1])
-        repeated[f_sorted[1:][dup]] = True
-        he = self.halfedges
-        d = np.take(self._vertices, he[:, 1], axis=0) - np.take(self._vertices, he[:, 0], axis=0)
-        lengths2 = np.einsum("ij,ij->i", d, d)
-        longest2 = np.maximum.reduceat(lengths2, self._offsets[:-1])
-        area = self.face_areas
-        tiny = area <= 1e-12 * longest2
-        return repeated | tiny
+        return self._polygon_geometry[2]
 
     # ------------------------------------------------------------------ topology flags
     @cached_property

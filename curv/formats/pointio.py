@@ -15,6 +15,7 @@ allocation or a loop that runs away.
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -161,7 +162,9 @@ def _text_layout(path: Path) -> tuple[int, str | None, list[str] | None]:
 def _read_text(path: Path) -> PointCloud:
     skip, delimiter, header = _text_layout(path)
     try:
-        table = np.loadtxt(path, dtype=np.float64, delimiter=delimiter, comments="#", skiprows=skip, ndmin=2)
+        with warnings.catch_warnings():  # a header and no rows: said below in one line, not warned too
+            warnings.filterwarnings("ignore", "loadtxt: input contained no data", UserWarning)
+            table = np.loadtxt(path, dtype=np.float64, delimiter=delimiter, comments="#", skiprows=skip, ndmin=2)
     except ValueError as exc:
         raise LoadError(f"{path}: not a readable point file ({_one_line(exc)})") from None
     if table.size == 0:

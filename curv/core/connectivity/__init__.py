@@ -12,7 +12,8 @@ without hashing or sorting global keys:
   border, non-manifold and inconsistently oriented vertices (counting the fans of faces around each
   vertex), the edge neighbours, the longest 1-ring edge and the Max vertex normals: what a fresh
   estimate needs;
-- :func:`triangle_geometry` gives the vector area, area and degeneracy of every triangle.
+- :func:`triangle_geometry` and :func:`polygon_geometry` give the vector area, area and degeneracy
+  of every triangle or polygon.
 
 The :class:`curv.Mesh` properties wrap them; their meaning is documented there. The modules:
 :mod:`~.corners` (grouping and stepping), :mod:`~.edges` (the edge table, incidences, dihedral
@@ -26,11 +27,12 @@ from . import corners, edges, faces, fans
 from .corners import corner_links, find_root, group_corners, next_corner, prev_corner
 from .edges import (EDGE_COUNTS, component_labels, dihedral_angles, edge_counts, edge_table, vertex_face_incidence,
                     vertex_incidence)
-from .faces import duplicate_positions, triangle_geometry
+from .faces import duplicate_positions, polygon_geometry, triangle_geometry
 from .fans import CornerPass, corner_pass, fan_flags
 
 __all__ = ["group_corners", "edge_table", "vertex_incidence", "vertex_face_incidence", "corner_pass", "CornerPass",
-           "fan_flags", "next_corner", "prev_corner", "find_root", "triangle_geometry", "duplicate_positions",
+           "fan_flags", "next_corner", "prev_corner", "find_root", "triangle_geometry", "polygon_geometry",
+           "duplicate_positions",
            "dihedral_angles", "corner_links", "component_labels", "edge_counts", "EDGE_COUNTS", "KERNELS"]
 
 KERNELS = (*corners.KERNELS, *edges.KERNELS, *fans.KERNELS, *faces.KERNELS)

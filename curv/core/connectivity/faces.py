@@ -1,6 +1,7 @@
 """Per-face geometry of a mesh and its repeated positions.
 
-:func:`triangle_geometry` gives the vector area, area and degeneracy of every triangle;
+:func:`triangle_geometry` gives the vector area, area and degeneracy of every triangle,
+:func:`polygon_geometry` the same of every polygon of any size;
 :func:`duplicate_positions` the vertices that repeat the position of a lower one.
 """
 
@@ -12,7 +13,7 @@ import numpy as np
 
 from ..jit import jit, jit_parallel, prange
 
-__all__ = ["triangle_geometry", "duplicate_positions", "KERNELS"]
+__all__ = ["triangle_geometry", "polygon_geometry", "duplicate_positions", "KERNELS"]
 
 
 @jit_parallel
@@ -46,6 +47,43 @@ def triangle_geometry(tri, vertices, shape, degenerate):
         cz = vertices[k, 2] - vertices[j, 2]
         longest2 = max(ax * ax + ay * ay + az * az, cx * cx + cy * cy + cz * cz, bx * bx + by * by + bz * bz)
         degenerate[f] = i == j or j == k or i == k or a <= 1e-12 * longest2
+
+
+@jit_parallel
+def polygon_geometry(faces, vertices, shape, degenerate):
+    """Per polygon: Newell vector area (half the sum of ``p_c x p_next(c)`` over its corners), its
+    norm, and degeneracy (an index repeated anywhere in the face, or area <= 1e-12 times the squared
+    longest side). One face at a time: the arrays of every corner's position and cross product that
+    numpy would make (0.5 GB at a million quads) are never built.
+
+    ``faces = (offsets (m + 1,), indices (c,))``, the corners of face f at ``offsets[f]:offsets[f+1]``;
+    ``shape = (vector_area (m, 3), area (m,))``; ``degenerate`` (m,) bool.
+    """
+    offsets, indices = faces
+    for f in prange(offsets.size - 1):
+        start, stop = offsets[f], offsets[f + 1]
+        nx = ny = nz = 0.0
+        longest2 = 0.0
+        repeated = False
+        for c in range(start, stop):
+            i = indices[c]
+            j = indices[c + 1] if c + 1 < stop else indices[start]
+            ax, ay, az = vertices[i, 0], vertices[i, 1], vertices[i, 2]
+            bx, by, bz = vertices[j, 0], vertices[j, 1], vertices[j, 2]
+            nx += ay * bz - az * by
+            ny += az * bx - ax * bz
+            nz += ax * by - ay * bx
+            dx, dy, dz = bx - ax, by - ay, bz - az
+            longest2 = max(longest2, dx * dx + dy * dy + dz * dz)
+            for d in range(c + 1, stop):
+                repeated = repeated or indices[d] == i
+        nx, ny, nz = 0.5 * nx, 0.5 * ny, 0.5 * nz
+        a = math.sqrt(nx * nx + ny * ny + nz * nz)
+        shape[0][f, 0] = nx
+        shape[0][f, 1] = ny
+        shape[0][f, 2] = nz
+        shape[1][f] = a
+        degenerate[f] = repeated or a <= 1e-12 * longest2
 
 
 @jit
@@ -95,5 +133,5 @@ def duplicate_positions(vertices, bits, out):
             slot = (slot + np.uint64(1)) & mask
 
 
-KERNELS = (triangle_geometry, duplicate_positions)
+KERNELS = (triangle_geometry, polygon_geometry, duplicate_positions)
 """The numba dispatchers of this module (for :func:`curv.core.jit.compile_pending`)."""
