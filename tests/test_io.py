@@ -200,3 +200,14 @@ def test_a_binary_ply_whose_first_face_is_a_quad_but_not_the_rest_is_read_face_b
     got = meshread.read_arrays(path)[1]
     assert [list(f) for f in got] == faces
     assert curv.load(path).report().polygon_kinds == {4: 1, 3: len(quads) - 1}
+
+
+def test_an_all_quad_mesh_is_written_as_packed_records_and_reads_back(tmp_path):
+    vertices, quads = _quad_grid(7)
+    mesh = curv.Mesh(vertices, quads)
+    path = save_ply(tmp_path / "q.ply", mesh, curv.estimate(mesh, "mru", 2))
+    faces = PlyData.read(str(path))["face"].data["vertex_indices"]
+    assert np.array_equal(np.stack(faces), quads)
+    # a uchar count and four int32 indices a face: 17 bytes each, then nothing
+    records = np.c_[np.full((len(quads), 1), 4, np.uint8), quads.astype("<i4").view(np.uint8).reshape(-1, 16)]
+    assert path.read_bytes().endswith(records.tobytes())

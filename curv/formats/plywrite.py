@@ -38,21 +38,23 @@ _WRITE_BLOCK = 1 << 18
 def _write_face_lists(fh, mesh: Mesh) -> None:
     """Write the faces as binary little-endian PLY list records: a uchar count, then that many int32 indices.
 
-    Triangles go as packed (count, 3 indices) records a block at a time. Other polygons are built in
-    one go with numpy: face f's count byte sits at ``f + 4 * offset[f]`` and corner c's four index
-    bytes right after the counts and corners before it, at ``corner_face[c] + 1 + 4 c``.
+    Faces of one size (triangles, an all-quad mesh) go as packed (count, k indices) records a block
+    at a time. Mixed polygons are built in one go with numpy: face f's count byte sits at
+    ``f + 4 * offset[f]`` and corner c's four index bytes right after the counts and corners before
+    it, at ``corner_face[c] + 1 + 4 c``.
     """
     sizes = mesh.face_sizes
     if sizes.size and sizes.max() > 255:
         raise MeshError(f"a face has {int(sizes.max())} vertices; PLY lists here hold at most 255")
-    if mesh.is_triangular:
+    k = int(sizes[0]) if sizes.size else 3
+    if mesh.is_triangular or (sizes == k).all():
         # one packed record per face (numpy's structured dtypes have no padding unless asked)
-        triangles = mesh.face_indices.reshape(-1, 3)
-        block = np.empty(min(mesh.n_faces, _WRITE_BLOCK), dtype=[("count", "u1"), ("corners", "<i4", (3,))])
-        block["count"] = 3
+        faces = mesh.face_indices.reshape(-1, k)
+        block = np.empty(min(mesh.n_faces, _WRITE_BLOCK), dtype=[("count", "u1"), ("corners", "<i4", (k,))])
+        block["count"] = k
         for lo in range(0, mesh.n_faces, _WRITE_BLOCK):
             rows = block[:min(mesh.n_faces - lo, _WRITE_BLOCK)]
-            rows["corners"] = triangles[lo:lo + rows.size]
+            rows["corners"] = faces[lo:lo + rows.size]
             fh.write(memoryview(rows).cast("B"))
         return
     offsets = mesh.face_offsets[:-1]
