@@ -83,6 +83,11 @@ class PlyHeader:
     def counts(self) -> dict[str, int]:
         return {e.name: e.count for e in self.elements if e.count is not None}
 
+    @property
+    def lists(self) -> dict[str, list[str]]:
+        """The list properties' names of each element."""
+        return {e.name: e.lists for e in self.elements}
+
 
 def read_ply_header(fh) -> PlyHeader:
     """Parse a PLY header from an open binary file positioned after the ``ply`` line.

@@ -92,7 +92,7 @@ def _read_ply(path: Path):
 
     with open(path, "rb") as fh:
         header = read_ply_header(fh)
-        fmt, counts, lists = header.format, header.counts, {e.name: e.lists for e in header.elements}
+        fmt, counts, lists = header.format, header.counts, header.lists
         header_end = fh.tell()
         fh.seek(0)
         key = next((k for k in ("vertex_indices", "vertex_index") if k in lists.get("face", [])), None)

@@ -282,12 +282,13 @@ def open_source(path) -> Source | None:
     if suffix == ".ply":
         from plyfile import PlyData
 
-        from ..formats.meshread import _ply_header
+        from ..formats.guards import read_ply_header
 
         with open(path, "rb") as fh:
             if fh.readline().strip() != b"ply":
                 raise LoadError(f"{path}: not a PLY file (no 'ply' line)")
-            fmt, counts, lists = _ply_header(fh)
+            header = read_ply_header(fh)
+        fmt, counts, lists = header.format, header.counts, header.lists
         if fmt == "ascii":
             from .asciiply import ascii_source
 
