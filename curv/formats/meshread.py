@@ -24,7 +24,7 @@ _MESHIO_SUFFIXES = {".obj"}
 
 
 _PLY_LENGTH_TYPES = {"uchar": "u1", "uint8": "u1", "ushort": "u2", "uint16": "u2", "uint": "u4", "uint32": "u4",
-                 "char": "i1", "int8": "i1", "short": "i2", "int16": "i2", "int": "i4", "int32": "i4"}
+                     "char": "i1", "int8": "i1", "short": "i2", "int16": "i2", "int": "i4", "int32": "i4"}
 """numpy type codes of the PLY integer types a list's length may have."""
 
 
@@ -36,14 +36,15 @@ def _first_face_length(fh, header: PlyHeader) -> int:
     offset = header.header_bytes
     for element in header.elements:
         if element.name == "face":
-            if offset is None or not element.properties or element.properties[0][2] not in _PLY_LENGTH_TYPES:
+            length_type = element.properties[0][2] if element.properties else None
+            if offset is None or length_type not in _PLY_LENGTH_TYPES:
                 return 3
             order = "<" if header.format == "binary_little_endian" else ">"
             fh.seek(offset)
-            raw = fh.read(PLY_TYPE_SIZES[element.properties[0][2]])
-            if len(raw) < PLY_TYPE_SIZES[element.properties[0][2]]:
+            raw = fh.read(PLY_TYPE_SIZES[length_type])
+            if len(raw) < PLY_TYPE_SIZES[length_type]:
                 return 3
-            return max(3, int(np.frombuffer(raw, order + _PLY_LENGTH_TYPES[element.properties[0][2]])[0]))
+            return max(3, int(np.frombuffer(raw, order + _PLY_LENGTH_TYPES[length_type])[0]))
         sizes = [PLY_TYPE_SIZES.get(kind) if length is None else None for _, kind, length in element.properties]
         if element.count is None or offset is None or None in sizes:
             return 3

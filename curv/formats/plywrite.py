@@ -47,7 +47,7 @@ def _write_face_lists(fh, mesh: Mesh) -> None:
     if sizes.size and sizes.max() > 255:
         raise MeshError(f"a face has {int(sizes.max())} vertices; PLY lists here hold at most 255")
     k = int(sizes[0]) if sizes.size else 3
-    if mesh.is_triangular or (sizes == k).all():
+    if (sizes == k).all():
         # one packed record per face (numpy's structured dtypes have no padding unless asked)
         faces = mesh.face_indices.reshape(-1, k)
         block = np.empty(min(mesh.n_faces, _WRITE_BLOCK), dtype=[("count", "u1"), ("corners", "<i4", (k,))])
