@@ -69,10 +69,11 @@ def _cloud():
 
 
 def _mesh_step() -> None:
-    """Connectivity, incidence, normals, the mesh report and feature edges: what every estimate and the viewer's load need."""
+    """Connectivity, incidence, normals, the mesh report and feature edges: what every estimate and
+    the viewer's load need, on triangles and on polygons (their face geometry's own kernel)."""
     import curv
 
-    for mesh in (_mesh(), _open_mesh()):
+    for mesh in (_mesh(), _open_mesh(), _quad_mesh()):
         mesh.report()
         curv.vertex_normals(mesh)
         curv.feature_edges(mesh, 30.0)
