@@ -37,35 +37,70 @@ ORIENTATIONS = ("up", "top", "outward")
 """The named orientation rules (module notes, step 2); a viewpoint (x, y, z) is the fourth."""
 
 
-@jit
-def _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight):
-    """Count (``rows`` None) or write the edges of :func:`_tree_edges`; returns their number."""
-    n = indptr.size - 1
-    m = 0
-    for p in range(n):
+@jit_parallel
+def _edge_counts(indptr, neighbours, finite, count):
+    """``count[p + 1]``: the edges ``p < q`` of row p of the graph between finite normals."""
+    for p in prange(indptr.size - 1):
+        m = 0
         if finite[p]:
             for j in range(indptr[p], indptr[p + 1]):
                 q = neighbours[j]
                 if q > p and finite[q]:
-                    if rows is not None:
-                        rows[m] = p
-                        cols[m] = q
-                        c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
-                        # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
-                        weight[m] = 1.0 - abs(c) + 1e-9
                     m += 1
-    return m
+        count[p + 1] = m
 
 
-@jit
-def _tree_edges(indptr, neighbours, normal, finite):
-    """The neighbour graph's edges ``p < q`` between finite normals, and their weights ``1 - |n_p . n_q|``."""
-    m = _edge_pass(indptr, neighbours, normal, finite, None, None, None)
-    rows = np.empty(m, np.int32)
-    cols = np.empty(m, np.int32)
-    weight = np.empty(m)
-    _edge_pass(indptr, neighbours, normal, finite, rows, cols, weight)
-    return rows, cols, weight
+@jit_parallel
+def _edge_fill(indptr, neighbours, normal, finite, start, out):
+    """Write row p's edges of :func:`_tree_edges` from ``start[p]`` on; ``out`` is (rows, cols, weight)."""
+    rows, cols, weight = out
+    for p in prange(indptr.size - 1):
+        if not finite[p]:
+            continue
+        m = start[p]
+        for j in range(indptr[p], indptr[p + 1]):
+            q = neighbours[j]
+            if q > p and finite[q]:
+                rows[m] = p
+                cols[m] = q
+                c = normal[p, 0] * normal[q, 0] + normal[p, 1] * normal[q, 1] + normal[p, 2] * normal[q, 2]
+                # kept positive (a sparse MST once read zero as no edge), so the tree and its ties stay as they were
+                weight[m] = 1.0 - abs(c) + 1e-9
+                m += 1
+
+
+def _tree_edges(indptr: np.ndarray, neighbours: np.ndarray, normal: np.ndarray,
+                finite: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The neighbour graph's edges ``p < q`` between finite normals, row by row, and their weights.
+
+    Each row's edges are counted, then written from its place in the counts' running sum, both in
+    parallel: the same order as one serial pass over the rows.
+
+    Parameters
+    ----------
+    indptr : (n+1,) int64
+        The graph's CSR row starts.
+    neighbours : (nnz,) int
+        Its column indices.
+    normal : (n, 3) float64
+        The normals, zero where not finite.
+    finite : (n,) bool
+        The rows whose normal takes part.
+
+    Returns
+    -------
+    rows, cols : (m,) int32
+        The edges' ends, ``rows < cols``.
+    weight : (m,) float64
+        ``1 - |n_p . n_q| + 1e-9``.
+    """
+    count = np.zeros(indptr.size, np.int64)
+    launch(_edge_counts, indptr, neighbours, finite, count)
+    start = np.cumsum(count)
+    m = int(start[-1])
+    out = (np.empty(m, np.int32), np.empty(m, np.int32), np.empty(m))
+    launch(_edge_fill, indptr, neighbours, normal, finite, start, out)
+    return out
 
 
 def _stable_rank(weight: np.ndarray) -> np.ndarray:
@@ -77,33 +112,98 @@ def _stable_rank(weight: np.ndarray) -> np.ndarray:
     return stable_order(weight.view(np.int64), 64, dtype)
 
 
+@jit_parallel
+def _ranked_ends(rank, rows, cols, ends):
+    """``ends[i] = rows[rank[i]], cols[rank[i]]``."""
+    for i in prange(rank.size):
+        e = rank[i]
+        ends[i, 0] = rows[e]
+        ends[i, 1] = cols[e]
+
+
 @jit
-def _spanning_forest(n, rank, rows, cols):
-    """Kruskal: the edges of the minimum spanning forest, lightest first (``rank`` sorts the
-    weights), as a CSR adjacency ``(ptr (n+1,), adj)``, and each point's part (a representative)."""
-    parent = np.arange(n)
-    take = np.zeros(rank.size, np.bool_)
+def _kruskal(n, ends, take):
+    """Kruskal over the edges ``ends`` (lightest first): ``take[i]`` for those of the spanning
+    forest; returns the union-find forest ``parent`` (n,) (every ``parent[p] <= p``) and the
+    points' degrees in the spanning forest, shifted by one, (n+1,)."""
+    parent = np.arange(n).astype(np.int32)
     degree = np.zeros(n + 1, np.int64)
-    for e in rank:
-        a = find_root(parent, rows[e])
-        b = find_root(parent, cols[e])
+    for i in range(ends.shape[0]):
+        a = find_root(parent, ends[i, 0])
+        b = find_root(parent, ends[i, 1])
         if a != b:
             parent[max(a, b)] = min(a, b)
-            take[e] = True
-            degree[rows[e] + 1] += 1
-            degree[cols[e] + 1] += 1
-    ptr = np.cumsum(degree)
+            take[i] = True
+            degree[ends[i, 0] + 1] += 1
+            degree[ends[i, 1] + 1] += 1
+    return parent, degree
+
+
+@jit_parallel
+def _taken_by_edge(rank, take, taken):
+    """``taken[rank[i]] = take[i]``: the forest's edges flagged in the edges' own order."""
+    for i in prange(rank.size):
+        if take[i]:
+            taken[rank[i]] = True
+
+
+@jit
+def _forest_csr(ptr, rows, cols, taken, parent):
+    """The forest's CSR adjacency (each row's neighbours in the edges' order) and each point's part:
+    the smallest index of its tree, read off ``parent`` in one ascending pass (a union joins the
+    larger root under the smaller and path halving only shortens, so ``parent[p] <= p`` and p's part
+    is its parent's, already known)."""
+    n = parent.size
     adj = np.empty(ptr[n], np.int64)
     fill = ptr[:n].copy()
-    for e in range(rank.size):
-        if take[e]:
+    for e in range(taken.size):
+        if taken[e]:
             adj[fill[rows[e]]] = cols[e]
             fill[rows[e]] += 1
             adj[fill[cols[e]]] = rows[e]
             fill[cols[e]] += 1
     part = np.empty(n, np.int64)
     for p in range(n):
-        part[p] = find_root(parent, p)
+        part[p] = p if parent[p] == p else part[parent[p]]
+    return adj, part
+
+
+def _spanning_forest(n: int, rank: np.ndarray, rows: np.ndarray,
+                     cols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Kruskal's minimum spanning forest of the edges ``rows[e] - cols[e]`` taken in the order ``rank``.
+
+    The edges' ends are first gathered in that order in parallel: Kruskal's serial loop then reads
+    them in a row. Fetched one by one inside the loop, each random read waited on the union-find's
+    before it, and the loop cost 0.43-0.55 s at 1M points (5.7M edges); on the gathered ends
+    0.07-0.12 s, the gather 0.07 (measured 2026-12-05, 2 cores, load 2-3).
+
+    Parameters
+    ----------
+    n : int
+        Points.
+    rank : (m,) int
+        The edges, lightest first (:func:`_stable_rank` of the weights).
+    rows, cols : (m,) int32
+        The edges' ends.
+
+    Returns
+    -------
+    ptr : (n+1,) int64
+        The forest's CSR row starts.
+    adj : (ptr[n],) int64
+        Each point's neighbours in the forest, in the edges' order.
+    part : (n,) int64
+        Each point's part: the smallest index of its tree.
+    """
+    ends = np.empty((rank.size, 2), np.int32)
+    launch(_ranked_ends, rank, rows, cols, ends)
+    take = np.zeros(rank.size, np.bool_)
+    parent, degree = _kruskal(n, ends, take)
+    del ends
+    taken = np.zeros(rank.size, np.bool_)
+    launch(_taken_by_edge, rank, take, taken)
+    ptr = np.cumsum(degree)
+    adj, part = _forest_csr(ptr, rows, cols, taken, parent)
     return ptr, adj, part
 
 
