@@ -83,10 +83,11 @@ from .normals import (BORDER_GAP, BORDER_RANGE, NORMAL_METHODS, NORMAL_RANGE, ON
                       border_radii, border_test_radii, point_normals)
 from .one_pass import local_frames, support_spread
 from .orientation import (AGREE_COSINE, GRAZING_COSINE, ORIENTATIONS, default_orientation, describe_orientation,
-                          orient_normals)
+                          orient_normals, tree_parts)
 from .quantised import MIN_SUPPORT_STEPS, quantised_supports, range_above_grid, support_floor
 
-__all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "default_orientation",
+__all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "tree_parts",
+           "default_orientation",
            "describe_orientation", "border_points", "border_radii", "border_test_radii", "ORIENTATIONS",
            "support_spread", "support_floor", "quantised_supports", "range_above_grid",
            "MIN_SPREAD", "MIN_SUPPORT_STEPS", "ONE_SIDED_GAP", "BORDER_RANGE",

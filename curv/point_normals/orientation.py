@@ -10,6 +10,8 @@ tree, a viewpoint; the undecided points.
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..core.connectivity import find_root
@@ -18,8 +20,8 @@ from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.pointcloud import PointCloud
 from ..core.radix import stable_order
 
-__all__ = ["orient_normals", "default_orientation", "describe_orientation", "AGREE_COSINE", "GRAZING_COSINE",
-           "ORIENTATIONS"]
+__all__ = ["orient_normals", "default_orientation", "describe_orientation", "tree_parts", "AGREE_COSINE",
+           "GRAZING_COSINE", "ORIENTATIONS"]
 
 AGREE_COSINE = 0.5
 """Neighbours whose normals are within 60 degrees (or opposed within 60) count as agreeing (or not)."""
@@ -35,6 +37,8 @@ leave out steep roofs and slopes whose up side is clear."""
 
 ORIENTATIONS = ("up", "top", "outward")
 """The named orientation rules (module notes, step 2); a viewpoint (x, y, z) is the fourth."""
+
+_TREE_PARTS: "weakref.WeakKeyDictionary[PointCloud, np.ndarray]" = weakref.WeakKeyDictionary()
 
 
 @jit_parallel
@@ -317,6 +321,20 @@ def _orient_up(cloud: PointCloud, out: np.ndarray, finite: np.ndarray) -> np.nda
     return ambiguous
 
 
+def tree_parts(cloud: PointCloud) -> np.ndarray | None:
+    """(n,) int64: the part each point's normal was oriented in by the last propagation along a
+    spanning tree on ``cloud`` (:func:`orient_normals` with ``"top"`` or ``"outward"``): the smallest
+    point index of its tree, so two points share a label exactly when one root decided both. None
+    when the last orientation on ``cloud`` decided each point alone (up, a viewpoint) or none ran.
+
+    An estimate of a whole cloud orients its twin in grid order
+    (:func:`curv.point_normals.grid_ordered`); a cloud already in its grid's order (a tile's
+    region) is oriented itself. The tiles ask it: a tile's parts are turned over one by one to
+    agree with the others (:mod:`curv.tiles.orient`).
+    """
+    return _TREE_PARTS.get(cloud)
+
+
 def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tuple[np.ndarray, np.ndarray]:
     """Orient unoriented normals (module notes, step 2) and find the undecided ones (step 3).
 
@@ -340,6 +358,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tu
     out = np.array(normals, dtype=np.float64, copy=True)
     n = out.shape[0]
     finite = np.isfinite(out).all(axis=1)
+    _TREE_PARTS.pop(cloud, None)
     if orient is None:
         orient = default_orientation(cloud)
     if not isinstance(orient, str):
@@ -375,6 +394,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tu
     key[~finite] = -np.inf
     root_sign[~finite] = 0.0
     _propagate(ptr, adj, part, key, root_sign, out)
+    _TREE_PARTS[cloud] = part
     ambiguous = np.zeros(n, bool)
     safe = np.where(finite[:, None], out, 0.0)
     launch(_agreement, indptr, neighbours, safe, AGREE_COSINE, ambiguous)

@@ -25,14 +25,19 @@ from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.validity import Reason
 from .frame import GridFrame, framed_cloud, tile_mesh
+from .orient import turned
 from .plan import Region
 from .reach import support_reach
 
 __all__ = ["Job", "Piece", "TileRows", "iter_run_tile", "shape_of", "step_redo", "whole_step", "ROW_FIELDS",
            "empty_rows"]
 
-ROW_FIELDS = ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se")
-"""The per-point columns of a result a tile hands back (as :class:`curv.Curvature` names them)."""
+ROW_FIELDS = ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se", "part")
+"""The per-point columns of a result a tile hands back (as :class:`curv.Curvature` names them), and
+``part``: the part of the tile's region each normal was oriented in, for the orientation across
+tiles (:mod:`curv.tiles.orient`; 0 where the normals are decided point by point)."""
+
+_RESULT_FIELDS = ROW_FIELDS[:-1]
 
 _TILED_KEYWORDS = {"radius", "knn", "normals", "normal_weighting", "fit_range", "orient", "standard_errors",
                    "features", "block_size"}
@@ -150,7 +155,7 @@ class TileRows:
 def empty_rows() -> dict:
     return {"k1": np.empty(0), "k2": np.empty(0), "d1": np.empty((0, 3)), "d2": np.empty((0, 3)),
             "normals": np.empty((0, 3)), "valid": np.empty(0, bool), "reason": np.empty(0, np.uint8),
-            "k1_se": np.empty(0), "k2_se": np.empty(0)}
+            "k1_se": np.empty(0), "k2_se": np.empty(0), "part": np.empty(0, np.int64)}
 
 
 def shape_of(piece: Piece, frame: GridFrame | None, *, points: bool, georeferenced: bool = False,
@@ -183,6 +188,74 @@ def _estimate(shape, job: Job, centres) -> Generator[float, None, object]:
     return (yield from iter_estimate(shape, call.pop("method"), call.pop("range"), vertices=centres, **call))
 
 
+def _region_parts(shape) -> np.ndarray:
+    """(n,) int64: the part of the region each point's normal was oriented in along a spanning tree,
+    numbered 0, 1, ... (:func:`curv.point_normals.tree_parts`; all 0 if none ran)."""
+    from ..point_normals import tree_parts
+
+    parts = tree_parts(shape)
+    if parts is None:
+        return np.zeros(shape.n_vertices, np.int64)
+    return np.unique(parts, return_inverse=True)[1].astype(np.int64).reshape(-1)
+
+
+def _halo_votes(shape, job, region, ids: np.ndarray, core_ids: np.ndarray, normals: np.ndarray, labels: np.ndarray):
+    """``(ids, normals, labels)`` of a pass's points outside the tile's core whose normal it decided
+    as the whole call does (their reach within the region): they vote on how this tile's parts and
+    the others' agree (:func:`curv.tiles.orient.part_signs`). Every pass votes: a narrow first halo
+    may decide none, and a redo's wider region then links the tile to its neighbours."""
+    from .reach import normal_reach
+
+    at = np.minimum(np.searchsorted(core_ids, ids), max(core_ids.size - 1, 0))
+    outside = np.flatnonzero(core_ids[at] != ids) if core_ids.size else np.arange(ids.size)
+    reach = normal_reach(shape, fit_range=job.keywords.get("fit_range", 2), orient=job.keywords.get("orient"))
+    outside = outside[reach[outside] <= region.room(shape.vertices[outside])]
+    return ids[outside], normals[outside], labels[outside]
+
+
+def _aligned_parts(first: tuple, ids: np.ndarray, normals: np.ndarray, labels: np.ndarray, used: int):
+    """A later pass's parts matched to the first pass's: ``(turn (n,), labels (n,), used)``.
+
+    Each part of the later pass follows the first pass's part it shares the strongest vote with
+    (their normals at the points both regions hold, as :func:`curv.tiles.orient.part_signs` votes):
+    its rows take that part's label and are turned (``turn`` -1) where the two disagree. A part
+    that shares no voting point with the first pass takes a label of its own (``used`` onwards).
+
+    Parameters
+    ----------
+    first : ((m,) int64, (m, 3) float64, (m,) int64)
+        The first pass's points (ascending numbers), their normals and part labels.
+    ids, normals, labels : (n,) int64, (n, 3) float64, (n,) int64
+        This pass's points (numbers), normals and part labels (0 .. P-1), in its shape's order.
+    used : int
+        Labels given so far.
+    """
+    from .orient import AGREE
+
+    first_ids, first_normals, first_labels = first
+    n_parts = int(labels.max(initial=-1)) + 1
+    at = np.minimum(np.searchsorted(first_ids, ids), max(first_ids.size - 1, 0))
+    rows = np.flatnonzero(first_ids[at] == ids) if first_ids.size else np.empty(0, np.int64)
+    cos = np.einsum("ij,ij->i", normals[rows], first_normals[at[rows]])
+    vote = (cos >= AGREE) | (cos <= -AGREE)
+    rows, cos = rows[vote], cos[vote]
+    width = int(first_labels.max(initial=-1)) + 1
+    pairs, inverse = np.unique(labels[rows] * width + first_labels[at[rows]], return_inverse=True)
+    yes = np.bincount(inverse, weights=cos >= AGREE, minlength=pairs.size)
+    margin = 2.0 * yes - np.bincount(inverse, minlength=pairs.size)
+    mine, theirs = pairs // max(width, 1), pairs % max(width, 1)
+    strongest = np.lexsort((-np.abs(margin), mine))  # each part's strongest vote first
+    lead = strongest[np.unique(mine[strongest], return_index=True)[1]]
+    lead = lead[margin[lead] != 0]
+    part_label = np.full(n_parts, -1, np.int64)
+    part_turn = np.ones(n_parts, np.int64)
+    part_label[mine[lead]] = theirs[lead]
+    part_turn[mine[lead]] = np.where(margin[lead] > 0, 1, -1)
+    alone = np.flatnonzero(part_label < 0)
+    part_label[alone] = used + np.arange(alone.size)
+    return part_turn[labels], part_label[labels], used + alone.size
+
+
 def _faceless(piece: Piece, rows: np.ndarray) -> dict:
     """The rows of vertices in a region that no face touches: isolated, as :func:`curv.estimate`
     marks them (DEGENERATE, no normal, NaN)."""
@@ -190,7 +263,7 @@ def _faceless(piece: Piece, rows: np.ndarray) -> dict:
     nan3 = np.full((c, 3), np.nan)
     return {"k1": np.full(c, np.nan), "k2": np.full(c, np.nan), "d1": nan3, "d2": nan3.copy(), "normals": nan3.copy(),
             "valid": np.zeros(c, bool), "reason": np.full(c, Reason.DEGENERATE, np.uint8),
-            "k1_se": np.full(c, np.nan), "k2_se": np.full(c, np.nan)}
+            "k1_se": np.full(c, np.nan), "k2_se": np.full(c, np.nan), "part": np.zeros(c, np.int64)}
 
 
 def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch, job: Job, frame: GridFrame | None,
@@ -224,12 +297,13 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         each pass measures its own and reports it in ``info["steps"]``, :func:`step_redo`).
     """
     t0 = time.perf_counter()
-    pending = np.asarray(core_ids, np.int64)
+    pending = core = np.asarray(core_ids, np.int64)
     total = max(pending.size, 1)
     lo, hi = (np.asarray(b, np.float64) for b in box)
     h = float(halo)
     ids_out, parts = [], []
     info = {"points": 0, "passes": 0, "redone": 0, "halo": h}
+    first, used, seen = None, 0, []  # overlap: the first pass's points by number, normals and parts; parts used
     while pending.size:
         region = Region.around(lo, hi, h, bounds)
         piece = fetch(region)
@@ -260,17 +334,20 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
             yield Progress(done_before + (1.0 - done_before) * 0.9 * float(progress), getattr(progress, "message", ""))
         if not info.get("estimate_info"):
             info["estimate_info"] = {k: v for k, v in res.info.items() if isinstance(v, (str, int, float, bool))}
-        if overlap and info["passes"] == 1:
-            from .reach import normal_reach
-
-            halo_rows = np.setdiff1d(np.arange(shape.n_vertices), centres, assume_unique=True)
-            # only the halo points whose normal this tile decided as the whole call does vote
-            decided = normal_reach(shape, fit_range=job.keywords.get("fit_range", 2),
-                                   orient=job.keywords.get("orient"))[halo_rows]
-            halo_rows = halo_rows[decided <= region.room(shape.vertices[halo_rows])]
-            halo_ids = piece.ids[order[halo_rows]]
-            sort = np.argsort(halo_ids)
-            info["overlap"] = (halo_ids[sort], np.asarray(res.normals)[halo_rows[sort]])
+        labels = turn = None
+        if overlap:
+            ids_here = piece.ids[order]
+            labels = _region_parts(shape)
+            normals_here = np.asarray(res.normals)
+            if info["passes"] == 1:
+                by_id = np.argsort(ids_here)
+                first = (ids_here[by_id], normals_here[by_id], labels[by_id])
+                used = int(labels.max(initial=-1)) + 1
+            else:
+                # another region's trees: each of its parts is turned to agree with the first pass's
+                turn, labels, used = _aligned_parts(first, ids_here, normals_here, labels, used)
+                normals_here = normals_here * turn[:, None]
+            seen.append(_halo_votes(shape, job, region, ids_here, core, normals_here, labels))
         reach = job.reach(shape, centres)
         room = region.room(shape.vertices[centres])
         kept = reach <= room
@@ -278,8 +355,14 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         if points:
             info.setdefault("steps", []).append(_steps(shape, job, rows))
         ids_out.append(pending[kept])
-        parts.append({name: np.asarray(getattr(res, name))[rows] for name in ("k1", "k2", "d1", "d2", "normals",
-                                                                             "valid", "reason", "k1_se", "k2_se")})
+        columns = {name: np.asarray(getattr(res, name))[rows] for name in _RESULT_FIELDS}
+        columns["part"] = np.zeros(rows.size, np.int64) if labels is None else labels[rows]
+        if turn is not None:
+            over = np.flatnonzero(turn[rows] < 0)
+            flipped = turned({name: values[over] for name, values in columns.items()})
+            for name, values in flipped.items():
+                columns[name][over] = values
+        parts.append(columns)
         failing = ~kept
         if not failing.any():
             break
@@ -292,6 +375,10 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
             h = np.inf
         pending = pending[failing]
         del shape, res, piece
+    if seen:
+        halo_ids = np.concatenate([v[0] for v in seen])
+        by_id = np.argsort(halo_ids, kind="stable")
+        info["overlap"] = tuple(np.concatenate([v[k] for v in seen])[by_id] for k in range(3))
     ids = np.concatenate(ids_out) if ids_out else np.empty(0, np.int64)
     sort = np.argsort(ids, kind="stable")
     columns = {name: np.concatenate([p[name] for p in parts])[sort] for name in parts[0]} if parts else empty_rows()

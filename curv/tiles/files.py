@@ -36,7 +36,7 @@ from .budget import Budget, default_budget, parse_memory, plan_budget
 from .driver import Runner
 from .engine import Job, step_redo, whole_step
 from .merge import Rows
-from .orient import Overlap, disagreeing, root_choice, spans_tiles, tile_signs
+from .orient import Overlap, Parts, disagreeing, group_roots, part_signs, spans_tiles
 from .prepare import FileInput, Prepared, iter_prepare
 from .scratch import OVERLAP_DTYPE, Scratch, read_rows, rows_to_columns
 from .sources import open_source
@@ -145,22 +145,31 @@ class _Coordinates:
 
 
 def _orientation(scratch: Scratch, prepared: Prepared, orient: str):
-    """Tile signs and undecided points of an ``outward`` run (:mod:`curv.tiles.orient`), from the
-    finished tiles' rows and halo normals in the scratch folder; also the reason codes the undecided
-    points had."""
+    """Signs of the tiles' parts and the undecided points of a run oriented along spanning trees
+    (:mod:`curv.tiles.orient`), from the finished tiles' rows and halo normals in the scratch folder:
+    ``(parts, signs, undecided ids, the reason codes the undecided points had)``."""
     from .scratch import point_dtype
 
     n_tiles = len(prepared.plan.tiles)
-    ids_of, normals_of, reasons_of = {}, {}, {}
+    ids_of, normals_of, reasons_of, parts_of = {}, {}, {}, {}
     for t in range(n_tiles):
         rows = read_rows(scratch.rows_path(t))
-        ids_of[t], normals_of[t], reasons_of[t] = rows["id"], rows["normals"].astype(np.float64), rows["reason"]
-    owner = np.empty(prepared.n, np.int32)
+        # as saved (float32 normals, int32 parts): the driver holds every tile's rows at once here
+        ids_of[t], normals_of[t], reasons_of[t], parts_of[t] = rows["id"], rows["normals"], rows["reason"], rows["part"]
+    overlaps = []
+    for t in range(n_tiles):
+        seen = read_rows(scratch.overlap_path(t))
+        overlaps.append(Overlap(t, seen["id"], seen["normal"].astype(np.float64), seen["part"]))
+    counts = [max(int(parts_of[t].max(initial=-1)), int(overlaps[t].parts.max(initial=-1))) + 1 for t in range(n_tiles)]
+    parts = Parts(counts)
+    owner = np.empty(prepared.n, np.int32)  # each point's tile
+    node = np.empty(prepared.n, np.int64 if parts.n > np.iinfo(np.int32).max else np.int32)  # its part
     for t, ids in ids_of.items():
         owner[ids] = t
+        node[ids] = parts.of(t, parts_of[t])
 
     def owner_of(ids):
-        return owner[ids]
+        return node[ids].astype(np.int64)
 
     def lookup(table, ids, width):
         out = np.empty((ids.size, width)) if width else np.empty(ids.size, np.uint8)
@@ -173,37 +182,16 @@ def _orientation(scratch: Scratch, prepared: Prepared, orient: str):
     def normal_of(ids):
         return lookup(normals_of, ids, 3)
 
-    overlaps = []
-    for t in range(n_tiles):
-        seen = read_rows(scratch.overlap_path(t))
-        overlaps.append(Overlap(t, seen["id"], seen["normal"].astype(np.float64)))
     dtype = point_dtype(prepared.has_normals)
 
-    def roots(groups):
-        out = []
-        for group in groups:
-            sums, count = np.zeros(3), 0
-            for t in group:
-                pts = scratch.read_points(int(t), dtype)["xyz"]
-                sums += pts.sum(axis=0)
-                count += pts.shape[0]
-            centroid = sums / max(count, 1)
-            best = None  # each tile's candidate, then the best of them by the same rule
-            for t in group:
-                rec = scratch.read_points(int(t), dtype)
-                normals = normal_of(rec["id"])
-                row, sign = root_choice(rec["xyz"], normals, orient, centroid)
-                if row is None:
-                    continue
-                key = rec["xyz"][row, 2] if orient == "top" else float(np.linalg.norm(rec["xyz"][row] - centroid))
-                if best is None or key > best[0]:
-                    best = (key, int(t), sign)
-            out.append((best[1], best[2]) if best else (int(group[0]), 1))
-        return out
+    def chunks():
+        for t in range(n_tiles):
+            rec = scratch.read_points(t, dtype)  # ascending numbers, as the rows
+            yield parts.of(t, parts_of[t]), rec["xyz"], normals_of[t].astype(np.float64)
 
-    signs = tile_signs(n_tiles, overlaps, owner_of, normal_of, roots)
-    bad = disagreeing(overlaps, signs, owner_of, normal_of)
-    return signs, bad, lookup(reasons_of, bad, 0)
+    signs = part_signs(parts, overlaps, owner_of, normal_of, lambda group: group_roots(group, orient, chunks))
+    bad = disagreeing(overlaps, parts, signs, owner_of, normal_of)
+    return parts, signs, bad, lookup(reasons_of, bad, 0)
 
 
 def iter_estimate_file(input, output, method: str | None = None, range=None, *, tile_size: int | None = None,
@@ -274,16 +262,16 @@ def iter_estimate_file(input, output, method: str | None = None, range=None, *, 
     for r in summaries.values():
         reasons[:len(r["reasons"])] += r["reasons"]
     t_tiles = time.perf_counter() - t1
-    signs = bad = None
+    parts = signs = bad = None
     if overlap:
-        signs, bad, was = _orientation(folder, prepared, job.keywords.get("orient"))
+        parts, signs, bad, was = _orientation(folder, prepared, job.keywords.get("orient"))
         np.subtract.at(reasons, was, 1)
         reasons[Reason.ORIENTATION] += bad.size
     t2 = time.perf_counter()
     label = _label(job, info)
 
     def open_rows():
-        return Rows(folder, n_tiles, prepared.n, signs=signs, undecided_ids=bad)
+        return Rows(folder, n_tiles, prepared.n, signs=None if signs is None else (parts, signs), undecided_ids=bad)
 
     if output.suffix.lower() in (".las", ".laz"):
         from ..formats.laswrite import iter_write_las

@@ -20,7 +20,7 @@ from ..core.mesh import Mesh
 from ..core.result import Curvature
 from ..core.support import support_of
 from .engine import ROW_FIELDS, Job, Piece, TileRows, iter_run_tile, step_redo, whole_step
-from .orient import Overlap, disagreeing, root_choice, spans_tiles, tile_signs, turned, undecided
+from .orient import Overlap, Parts, disagreeing, group_roots, part_signs, spans_tiles, turned, undecided
 from .frame import GridFrame, frame_of
 from .plan import Histogram, Region, TilePlan, plan_tiles
 
@@ -185,6 +185,7 @@ class _Assembly:
         self.valid = np.zeros(n, bool)
         self.reason = np.zeros(n, np.uint8)
         self.k1_se, self.k2_se = np.full(n, np.nan), np.full(n, np.nan)
+        self.part = np.zeros(n, np.int64)
         self.filled = np.zeros(n, bool)
         self.infos = [{} for _ in range(n_tiles)]
 
@@ -203,27 +204,27 @@ class _Assembly:
             getattr(self, name)[rows] = values
 
     def orient(self, tile_of: np.ndarray, points: np.ndarray, n_tiles: int, orient: str) -> None:
-        """Turn whole tiles so that they agree on their overlaps (:mod:`curv.tiles.orient`)."""
+        """Turn the tiles' parts so that they agree on their overlaps (:mod:`curv.tiles.orient`)."""
         overlaps = [Overlap(t, *info["overlap"]) for t, info in enumerate(self.infos) if "overlap" in info]
-
-        def roots(groups):
-            out = []
-            for group in groups:
-                rows = np.flatnonzero(np.isin(tile_of, group))
-                centroid = points[rows].mean(axis=0)
-                row, sign = root_choice(points[rows], self.normals[rows], orient, centroid)
-                out.append((int(group[0]) if row is None else int(tile_of[rows[row]]), sign))
-            return out
+        counts = np.zeros(n_tiles, np.int64)
+        np.maximum.at(counts, tile_of, self.part + 1)
+        for ov in overlaps:  # a part of a region may hold halo points only
+            counts[ov.tile] = max(counts[ov.tile], int(ov.parts.max(initial=-1)) + 1)
+        parts = Parts(counts)
+        node = parts.of(tile_of, self.part)
 
         def owner_of(ids):
-            return tile_of[ids]
+            return node[ids]
 
         def normal_of(ids):
             return self.normals[ids]
 
-        signs = tile_signs(n_tiles, overlaps, owner_of, normal_of, roots)
-        bad = disagreeing(overlaps, signs, owner_of, normal_of)
-        flip = np.flatnonzero(signs[tile_of] < 0)
+        def roots(group):
+            return group_roots(group, orient, lambda: iter([(node, points, self.normals)]))
+
+        signs = part_signs(parts, overlaps, owner_of, normal_of, roots)
+        bad = disagreeing(overlaps, parts, signs, owner_of, normal_of)
+        flip = np.flatnonzero(signs[node] < 0)
         self.put(flip, turned(self.columns(flip)))
         self.put(bad, undecided(self.columns(bad)))
 

@@ -3,7 +3,7 @@
 Every tile's rows file is sorted by point number, and a block of the output asks for consecutive
 numbers, so each tile is read once from start to end through a small buffer (:class:`Rows`):
 whatever the input's order (a LiDAR file's flight lines cross every tile), the memory held is the
-buffers and one block. Tiles turned over by the orientation across tiles are turned here
+buffers and one block. Parts turned over by the orientation across tiles are turned here
 (:func:`curv.tiles.orient.turned`), and points the tiles did not agree on are made
 ``ORIENTATION`` (:func:`curv.tiles.orient.undecided`).
 """
@@ -56,8 +56,9 @@ class Rows:
     ----------
     scratch : Scratch
     n_tiles, n : int
-    signs : (T,) int, optional
-        +1 or -1 per tile (the orientation across tiles).
+    signs : (Parts, (P,) int), optional
+        The tiles' parts and +1 or -1 for each (the orientation across tiles,
+        :func:`curv.tiles.orient.part_signs`).
     undecided_ids : (k,) int64, optional
         Ascending: points whose orientation the tiles did not agree on.
     """
@@ -66,7 +67,7 @@ class Rows:
         buffer = max(1024, BUFFER_BYTES // max(1, n_tiles) // ROW_DTYPE.itemsize)
         self.cursors = [_Cursor(scratch.rows_path(t), scratch.rows_count(t), buffer) for t in range(n_tiles)]
         self.n = n
-        self.signs = None if signs is None else np.asarray(signs)
+        self.parts, self.signs = (None, None) if signs is None else (signs[0], np.asarray(signs[1]))
         self.undecided = np.empty(0, np.int64) if undecided_ids is None else np.asarray(undecided_ids, np.int64)
         self.next = 0
 
@@ -83,10 +84,12 @@ class Rows:
                 continue
             if rows["id"][0] < start:
                 raise RuntimeError(f"tile {t} holds point {int(rows['id'][0])} twice or out of order")
-            if self.signs is not None and self.signs[t] < 0:
-                cols = turned(rows_to_columns(rows))
-                for name in ROW_DTYPE.names[1:]:
-                    rows[name] = cols[name]
+            if self.signs is not None:
+                over = np.flatnonzero(self.signs[self.parts.of(t, rows["part"])] < 0)
+                if over.size:
+                    cols = turned(rows_to_columns(rows[over]))
+                    for name in ROW_DTYPE.names[1:]:
+                        rows[name][over] = cols[name]
             at = rows["id"] - start
             out[at] = rows
             got[at] = True

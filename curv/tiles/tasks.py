@@ -41,9 +41,9 @@ def iter_file_tile(tile: int, source: FileInput, job: Job, frame, bounds, halo: 
                                     points=not source.is_mesh, overlap=overlap, georeferenced=georeferenced,
                                     step=step)
     if overlap:
-        ids, normals = rows.info.pop("overlap", (np.empty(0, np.int64), np.empty((0, 3))))
+        ids, normals, parts = rows.info.pop("overlap", (np.empty(0, np.int64), np.empty((0, 3)), np.empty(0, np.int64)))
         seen = np.empty(ids.size, OVERLAP_DTYPE)
-        seen["id"], seen["normal"] = ids, normals
+        seen["id"], seen["normal"], seen["part"] = ids, normals, parts
         write_array(scratch.overlap_path(tile), seen)
     info = rows.info
     reasons = np.bincount(rows.columns["reason"], minlength=256)
