@@ -10,8 +10,9 @@ polygons) the faces of each size, so the header, which gives every array's offse
 
 Each array is contiguous, and a block of result rows holds a slice of all of them: the writer reads
 the rows once and puts each block's slice of each array at its place in the file (a seek per array
-and block). Reading the rows again for every array (a pass per field, each written in order) cost
-more on a 1M-point run (docs/BENCHMARKS.md, "A tiled run's VTU/VTP output").
+and block). Reading the rows again for every array instead (a pass per field, each written in
+order) took 2.1-2.3 s against 0.6-0.8 s for the seeks on a 1M-point cloud of 6 tiles
+(docs/BENCHMARKS.md, "A tiled run's VTU/VTP output").
 
 The arrays are :func:`curv.formats.vtkwrite.point_arrays`' (names, dtypes and order, ``shown``
 and ``rgba`` as :func:`curv.save_result` adds them), the field data its ``reason_*`` codes
@@ -46,8 +47,6 @@ _BLOCK = 1 << 18
 """Points (or faces) per block written."""
 
 _VTK_TYPES = {"<f8": "Float64", "<i8": "Int64", "u1": "UInt8"}
-
-_ONE_FIELD_A_PASS = False
 
 _COUNT = np.dtype("<u8")
 """The byte count before each appended array (``header_type="UInt64"``: arrays over 4 GiB)."""
@@ -204,31 +203,19 @@ def iter_write_vtk(path, n: int, coordinates: Callable[[int, int], np.ndarray], 
             for array in arrays:
                 fh.seek(base + array.offset)
                 fh.write(np.array(array.nbytes, _COUNT).tobytes())
-            reader = None if _ONE_FIELD_A_PASS else open_rows()
+            reader = open_rows()
             for lo in range(0, n, _BLOCK):
                 hi = min(n, lo + _BLOCK)
                 put("Points", lo, coordinates(lo, hi))
-                if reader is not None:
-                    columns = _block_columns(reader.block(lo, hi), quantity, cmap, lim)
-                    for name, values in point_values(fields, columns).items():
-                        put(name, lo, values)
+                columns = _block_columns(reader.block(lo, hi), quantity, cmap, lim)
+                for name, values in point_values(fields, columns).items():
+                    put(name, lo, values)
                 if points:  # each point a vertex cell, as save_vtu makes them
                     put("connectivity", lo, np.arange(lo, hi))
                     put("offsets", lo, np.arange(lo + 1, hi + 1))
                     if not poly:
                         put("types", lo, np.full(hi - lo, VTK_CELL_TYPES["vertex"]))
                 yield hi / total
-            if reader is None:  # measured against the seeks, then dropped (docs/BENCHMARKS.md)
-                for name, kind, width in fields:
-                    one = open_rows()
-                    for lo in range(0, n, _BLOCK):
-                        hi = min(n, lo + _BLOCK)
-                        cols = one.block(lo, hi)
-                        if name in ("mean", "gaussian"):
-                            cols = {name: compute(name, cols["k1"], cols["k2"])}
-                        elif name in ("shown", "rgba"):
-                            cols = _block_columns(cols, quantity, cmap, lim)
-                        put(name, lo, point_values([(name, kind, width)], cols)[name])
             if not points:
                 yield from _write_faces(put, face_blocks, groups, n, total, poly=poly)
             fh.seek(base + arrays[0].offset + _COUNT.itemsize + arrays[0].nbytes)
