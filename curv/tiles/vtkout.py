@@ -6,7 +6,9 @@ meshio builds the whole document in memory (every array base64-encoded and compr
 first byte is written), so it cannot stream. This writes VTK's own binary layout instead: the XML
 header, then ``<AppendedData encoding="raw">`` holding each array as a UInt64 byte count followed by
 its little-endian bytes. Every array's size follows from the point count, the face count and (for
-polygons) the faces of each size, so the header, which gives every array's offset, goes first.
+polygons) the faces of each size, so the header, which gives every array's offset, goes first. The
+arrays lie in the reverse of the header's order, which VTK does not mind and meshio's raw reader
+needs (``_layout``).
 
 Each array is contiguous, and a block of result rows holds a slice of all of them: the writer reads
 the rows once and puts each block's slice of each array at its place in the file (a seek per array
