@@ -17,7 +17,57 @@ from ..core.validity import Reason
 from .atomic import atomic_write
 from .plywrite import float_props
 
-__all__ = ["save_vtu", "save_vtp"]
+__all__ = ["save_vtu", "save_vtp", "point_arrays", "point_values", "reason_field_data", "VTK_CELL_TYPES"]
+
+VTK_CELL_TYPES = {"vertex": 1, "triangle": 5, "polygon": 7, "quad": 9}
+"""VTK's cell type codes of the cells a result is written with (a point cloud's points are vertex cells)."""
+
+
+def point_arrays(curvature: Curvature, *, points: bool, extra=(), colors: bool = True) -> list[tuple[str, str, int]]:
+    """The point arrays of a VTK file of ``curvature``, in the order :func:`save_vtu` writes them.
+
+    The one list both writers follow (this module's through meshio, and a tiled run's
+    :mod:`curv.tiles.vtkout`, which writes the file a block at a time).
+
+    Parameters
+    ----------
+    curvature : Curvature
+        Says whether the standard errors were computed (:func:`curv.formats.plywrite.float_props`).
+    points : bool
+        A point cloud: its ``normals`` (the ones the estimate used) are written too.
+    extra : sequence of str
+        Names of more float arrays (e.g. ``shown``), after ``reason``.
+    colors : bool
+        The ``rgba`` colours are written.
+
+    Returns
+    -------
+    list of (name, numpy dtype string, components)
+        ``k1``, ``k2``, ``mean``, ``gaussian``, ``k1_se``, ``k2_se`` (when computed) float64;
+        ``d1``, ``d2`` float64 (3 components); ``valid``, ``reason`` uint8; ``extra`` float64;
+        ``rgba`` uint8 (4); ``normals`` float64 (3) for a point cloud.
+    """
+    fields = [(name, "<f8", 1) for name in float_props(curvature)]
+    fields += [("d1", "<f8", 3), ("d2", "<f8", 3), ("valid", "u1", 1), ("reason", "u1", 1)]
+    fields += [(name, "<f8", 1) for name in extra]
+    if colors:
+        fields.append(("rgba", "u1", 4))
+    if points:
+        fields.append(("normals", "<f8", 3))
+    return fields
+
+
+def point_values(fields: list[tuple[str, str, int]], columns: dict) -> dict[str, np.ndarray]:
+    """The arrays of ``fields`` (:func:`point_arrays`) from ``columns`` (name -> (m,) or (m, c)
+    values, ``valid`` bool or uint8), each contiguous in its VTK dtype."""
+    return {name: np.ascontiguousarray(columns[name], dtype=np.dtype(kind)) for name, kind, _ in fields}
+
+
+def reason_field_data() -> str:
+    """The ``<FieldData>`` block naming the reason codes (``reason_BORDER`` = 1, ...), as XML text."""
+    arrays = "".join(f'<DataArray type="Int32" Name="reason_{r.name}" NumberOfTuples="1" format="ascii">'
+                     f"{int(r)}</DataArray>" for r in Reason)
+    return f"<FieldData>{arrays}</FieldData>"
 
 
 def save_vtu(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors: np.ndarray | None = None,
@@ -68,14 +118,14 @@ def _vtk_document(path, mesh: Mesh | PointCloud, curvature: Curvature, *, colors
     n = mesh.n_vertices
     if curvature.k1.shape[0] != n:
         raise MeshError(f"curvature has {curvature.k1.shape[0]} values but the mesh has {n} vertices")
-    data = {name: np.asarray(getattr(curvature, name), np.float64) for name in float_props(curvature)}
-    data.update(d1=np.asarray(curvature.d1, np.float64), d2=np.asarray(curvature.d2, np.float64),
-                valid=curvature.valid.astype(np.uint8), reason=np.asarray(curvature.reason, np.uint8))
-    data.update({k: np.asarray(v, np.float64) for k, v in (extra or {}).items()})
-    if colors is not None:
-        data["rgba"] = np.ascontiguousarray(colors, dtype=np.uint8)
-    if not support_of(mesh).has_faces:  # points: vertex cells, with the normals the estimate used
-        data["normals"] = np.asarray(curvature.normals, np.float64)
+    points = not support_of(mesh).has_faces
+    columns = {name: getattr(curvature, name) for name in float_props(curvature)}
+    columns.update(d1=curvature.d1, d2=curvature.d2, valid=curvature.valid, reason=curvature.reason,
+                   normals=curvature.normals, rgba=colors)
+    columns.update(extra or {})
+    data = point_values(point_arrays(curvature, points=points, extra=tuple(extra or ()), colors=colors is not None),
+                        columns)
+    if points:  # vertex cells (the normals the estimate used are in point_arrays)
         cells = [("vertex", np.arange(n, dtype=np.int64)[:, None])]
     else:
         cells = []
@@ -129,8 +179,6 @@ def _with_reason_field_data(vtu: bytes) -> bytes:
 
     meshio writes no field data to VTU, so the block goes in by hand, right after the grid's opening tag.
     """
-    arrays = "".join(f'<DataArray type="Int32" Name="reason_{r.name}" NumberOfTuples="1" format="ascii">'
-                     f"{int(r)}</DataArray>" for r in Reason)
     tag = b"<UnstructuredGrid>"
     at = vtu.index(tag) + len(tag)
-    return vtu[:at] + f"\n<FieldData>{arrays}</FieldData>".encode("ascii") + vtu[at:]
+    return vtu[:at] + f"\n{reason_field_data()}".encode("ascii") + vtu[at:]

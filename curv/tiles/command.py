@@ -23,7 +23,8 @@ def add_arguments(parser) -> None:
     group = parser.add_argument_group("large inputs (tiles)")
     group.add_argument("--tile-size", type=int, metavar="N",
                        help="estimate tile by tile, at most N points (vertices) a tile, whatever the input's size; "
-                            "the result equals the whole estimate's (docs/LARGE_SCANS.md)")
+                            "the result equals the whole estimate's (docs/LARGE_SCANS.md); -o .ply, .vtu, .vtp, or .las/.laz "
+                            "for a LAS input")
     group.add_argument("--memory", metavar="SIZE",
                        help="memory budget of the whole run, every process (e.g. 4GB); an input whose estimate "
                             "would not fit is tiled. Default half the machine's total memory")
@@ -79,7 +80,8 @@ def check_las_output(args) -> None:
 def _refuse_for_tiles(args, points: bool) -> None:
     """The options a tiled run cannot take, refused in one line before any work."""
     if not args.output:
-        raise CurvError("a tiled run writes its result to a file: give -o OUT (.ply, or .las/.laz for a LAS input)")
+        raise CurvError("a tiled run writes its result to a file: give -o OUT (.ply, .vtu, .vtp, "
+                        "or .las/.laz for a LAS input)")
     given = [flag for flag, value in (("--vertices", args.vertices), ("--region", args.region),
                                       ("--smooth", getattr(args, "smooth", None))) if value is not None]
     if given:

@@ -9,8 +9,8 @@ The run (docs/LARGE_SCANS.md):
    call's (:mod:`curv.tiles.engine`).
 3. **Orientation across tiles** (only for normals oriented ``outward``: :mod:`curv.tiles.orient`).
 4. **Output**, written as it is produced and renamed into place when whole: a LAS/LAZ input's
-   records with the curvature added as extra bytes (:mod:`curv.formats.laswrite`), or a PLY
-   (:mod:`curv.tiles.plyout`), in the input's order.
+   records with the curvature added as extra bytes (:mod:`curv.formats.laswrite`), a PLY
+   (:mod:`curv.tiles.plyout`) or a VTK ``.vtu``/``.vtp`` (:mod:`curv.tiles.vtkout`), in the input's order.
 
 An interrupted run (Ctrl-C, a lost cluster, a crash) leaves no output and keeps the scratch folder:
 the same call again resumes from the finished tiles. A finished run removes its scratch folder.
@@ -46,7 +46,9 @@ __all__ = ["estimate_file", "iter_estimate_file", "FileRun", "OUTPUT_SUFFIXES", 
 
 OUTPUT_SUFFIXES = {".ply": "binary PLY (what curv.save_ply writes), in the input's order",
                    ".las": "the LAS input's records with the curvature as extra bytes",
-                   ".laz": "the same, compressed"}
+                   ".laz": "the same, compressed",
+                   ".vtu": "VTK XML unstructured grid (the arrays curv.save_vtu writes), raw appended data",
+                   ".vtp": "VTK XML poly data (the arrays curv.save_vtp writes), raw appended data"}
 
 
 @dataclass
@@ -107,12 +109,9 @@ def check_output(input_path: Path, output: Path, *, streamed: bool) -> str:
             raise CurvError(f"{output}: a LAS/LAZ output keeps the input's point records; the input must be "
                             f"LAS/LAZ (write .ply instead)")
         return suffix
-    if suffix == ".ply":
+    if suffix in OUTPUT_SUFFIXES:
         return suffix
-    if suffix in (".vtu", ".vtp") and not streamed:
-        return suffix
-    allowed = ", ".join(OUTPUT_SUFFIXES) if streamed else ", ".join([*OUTPUT_SUFFIXES, ".vtu", ".vtp"])
-    raise CurvError(f"{output}: a tiled run writes {allowed}; got {suffix or 'no suffix'}")
+    raise CurvError(f"{output}: a tiled run writes {', '.join(OUTPUT_SUFFIXES)}; got {suffix or 'no suffix'}")
 
 
 def _label(job: Job, info: dict) -> Curvature:
@@ -278,15 +277,19 @@ def iter_estimate_file(input, output, method: str | None = None, range=None, *, 
 
         yield from _phase(iter_write_las(output, input_path, open_rows().block, groups=tuple(las_extra)), 0.85, 1.0,
                           "writing")
+    elif output.suffix.lower() in (".vtu", ".vtp"):
+        from .vtkout import iter_write_vtk
+
+        yield from _phase(iter_write_vtk(output, prepared.n, _Coordinates(source), open_rows,
+                                         face_blocks=_face_blocks(source) if source.is_mesh else None,
+                                         points=points, label=label, quantity=quantity, cmap=cmap, clim=clim,
+                                         face_width=prepared.face_width),
+                          0.85, 1.0, "writing")
     else:
         from .plyout import iter_write_ply
 
-        def faces():
-            for _, block in source.face_chunks():
-                yield block
-
         yield from _phase(iter_write_ply(output, prepared.n, _Coordinates(source), open_rows,
-                                         n_faces=source.n_faces, face_blocks=faces if source.is_mesh else None,
+                                         n_faces=source.n_faces, face_blocks=_face_blocks(source) if source.is_mesh else None,
                                          points=points, label=label, quantity=quantity, cmap=cmap, clim=clim,
                                          face_width=prepared.face_width),
                           0.85, 1.0, "writing")
@@ -297,6 +300,16 @@ def iter_estimate_file(input, output, method: str | None = None, range=None, *, 
     return FileRun(input_path, output, prepared.n, source.is_mesh, n_tiles, done_before, where, budget, named,
                    {"plan": t_plan, "tiles": t_tiles, "write": t_write, "total": time.perf_counter() - t0},
                    read=read, redone=redone, label=label)
+
+
+def _face_blocks(source):
+    """``face_blocks()`` for the writers: the source's faces in order, (m, k) int blocks, each call a new pass."""
+
+    def faces():
+        for _, block in source.face_chunks():
+            yield block
+
+    return faces
 
 
 def _run_tiles(runner, todo, common, step, plan, n, summaries, t1, lo, hi):
@@ -393,7 +406,7 @@ def estimate_file(input, output, method: str | None = None, range=None, **keywor
         a time, whatever their size; other formats are read whole.
     output : str or Path
         ``.ply``; ``.las`` or ``.laz`` for a LAS/LAZ input (its records with the curvature as extra
-        bytes, :mod:`curv.formats.laswrite`); ``.vtu`` or ``.vtp`` for an input read whole.
+        bytes, :mod:`curv.formats.laswrite`); ``.vtu`` or ``.vtp`` (:mod:`curv.tiles.vtkout`).
     method, range
         As in :func:`curv.estimate`; the default estimator the input kind's
         (:data:`curv.estimators.DEFAULT_ESTIMATORS`).
@@ -413,7 +426,7 @@ def estimate_file(input, output, method: str | None = None, range=None, **keywor
     keep_scratch : bool
         Keep the scratch folder after a finished run.
     quantity, cmap, clim
-        What a PLY output's colours show (:func:`curv.save_ply`).
+        What a PLY, VTU or VTP output's colours (and its ``shown`` values) show (:func:`curv.save_ply`).
     las_extra : sequence of str
         LAS/LAZ output: the optional extra-byte groups (``directions``, ``errors``, ``normals``).
     **keywords
