@@ -60,7 +60,7 @@ from ..core.pointcloud import PointCloud
 from ..core.support import support_of
 from ..core.ranges import Range, ball_radii, resolve
 from ..estimators import get_spec
-from ..geometry.neighbourhood import new_queues
+from ..geometry.neighbourhood import latest_with_mesh, new_queues
 
 __all__ = ["ball_max", "point_reach", "normal_reach", "floored_radii", "mesh_reach", "support_reach"]
 
@@ -172,8 +172,14 @@ def normal_reach(cloud: PointCloud, *, fit_range=2, orient="up") -> np.ndarray:
     """(n,) how far what decides each point's normal and flags reads (module notes, ``own``; with an
     orientation by rule, its nearest points' too): a normal whose reach is within its room is the
     whole call's."""
-    own = _own_reach(cloud, fit_range)
-    return _with_neighbours(cloud, own) if isinstance(orient, str) else own
+    by_rule = isinstance(orient, str)
+
+    def build():
+        own = _own_reach(cloud, fit_range)
+        return _with_neighbours(cloud, own) if by_rule else own
+
+    # a tile asks twice for one region (the halo's votes, then its core's reach): 0.5 s of 8.9 at 1M
+    return latest_with_mesh(cloud, "normal reach", (fit_range, by_rule), build)
 
 
 def floored_radii(cloud: PointCloud, job) -> np.ndarray:
