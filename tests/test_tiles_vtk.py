@@ -157,6 +157,16 @@ def test_a_failed_write_leaves_no_vtu(tmp_path, monkeypatch):
 
 def test_a_tiled_run_takes_vtu_and_vtp_and_says_what_it_writes(tmp_path):
     for suffix in (".vtu", ".vtp", ".VTU"):
-        assert check_output(tmp_path / "in.ply", tmp_path / f"o{suffix}", streamed=True) == suffix.lower()
+        assert check_output(tmp_path / "in.ply", tmp_path / f"o{suffix}") == suffix.lower()
     with pytest.raises(CurvError, match=r"a tiled run writes \.ply, \.las, \.laz, \.vtu, \.vtp; got \.obj"):
-        check_output(tmp_path / "in.ply", tmp_path / "o.obj", streamed=True)
+        check_output(tmp_path / "in.ply", tmp_path / "o.obj")
+
+
+def test_the_outputs_a_tiled_run_offers_put_the_inputs_own_kind_first():
+    """One rule for the command's check and the viewer's "Whole file to..." dialog."""
+    from app.model.large import whole_file_suffixes
+    from curv.tiles import output_suffixes
+
+    assert output_suffixes("scan.LAZ") == [".laz", ".las", ".ply", ".vtu", ".vtp"]
+    assert output_suffixes("mesh.ply") == [".ply", ".vtu", ".vtp"]
+    assert whole_file_suffixes("scan.las") == output_suffixes("scan.las")

@@ -68,10 +68,11 @@ class FullResolutionSource(FileSource):
 
 
 def whole_file_suffixes(path) -> list[str]:
-    """The outputs a whole-file run of ``path`` can write: its records as LAS/LAZ (a LAS/LAZ input), PLY."""
-    if Path(path).suffix.lower() in (".las", ".laz"):
-        return [".laz", ".las", ".ply"]
-    return [".ply"]
+    """The outputs a whole-file run of ``path`` can write, its own kind first (curv's rule:
+    :func:`curv.tiles.output_suffixes`)."""
+    from curv.tiles import output_suffixes
+
+    return output_suffixes(path)
 
 
 def pane_job(pane) -> tuple:

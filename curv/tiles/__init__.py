@@ -12,8 +12,9 @@
 
 from __future__ import annotations
 
-from .files import FileRun, estimate_file, iter_estimate_file
+from .files import FileRun, estimate_file, iter_estimate_file, output_suffixes
 from .memory import estimate_tiled, iter_estimate_tiled
 from .reach import support_reach
 
-__all__ = ["estimate_file", "iter_estimate_file", "FileRun", "estimate_tiled", "iter_estimate_tiled", "support_reach"]
+__all__ = ["estimate_file", "iter_estimate_file", "FileRun", "output_suffixes", "estimate_tiled", "iter_estimate_tiled",
+           "support_reach"]

@@ -42,7 +42,7 @@ from .scratch import OVERLAP_DTYPE, Scratch, read_rows, rows_to_columns
 from .sources import open_source
 from .tasks import finished_summary, first_halo, iter_file_tile, run_file_tile
 
-__all__ = ["estimate_file", "iter_estimate_file", "FileRun", "OUTPUT_SUFFIXES", "default_scratch"]
+__all__ = ["estimate_file", "iter_estimate_file", "FileRun", "OUTPUT_SUFFIXES", "output_suffixes", "default_scratch"]
 
 OUTPUT_SUFFIXES = {".ply": "binary PLY (what curv.save_ply writes), in the input's order",
                    ".las": "the LAS input's records with the curvature as extra bytes",
@@ -101,16 +101,22 @@ def default_scratch(output) -> Path:
     return output.parent / f".{output.name}.tiles"
 
 
-def check_output(input_path: Path, output: Path, *, streamed: bool) -> str:
-    """The output's suffix if a run can write it from this input, else a one-line :class:`CurvError`."""
+def output_suffixes(input_path) -> list[str]:
+    """The outputs a tiled run of ``input_path`` can write, its own kind first: a LAS/LAZ input's
+    records again (``.laz``, ``.las``), then ``.ply``, ``.vtu``, ``.vtp`` (:data:`OUTPUT_SUFFIXES`)."""
+    records = [".laz", ".las"] if Path(input_path).suffix.lower() in (".las", ".laz") else []
+    return records + [s for s in OUTPUT_SUFFIXES if s not in (".las", ".laz")]
+
+
+def check_output(input_path: Path, output: Path) -> str:
+    """The output's suffix if a run can write it from this input (:func:`output_suffixes`), else a
+    one-line :class:`CurvError`."""
     suffix = output.suffix.lower()
+    if suffix in output_suffixes(input_path):
+        return suffix
     if suffix in (".las", ".laz"):
-        if input_path.suffix.lower() not in (".las", ".laz"):
-            raise CurvError(f"{output}: a LAS/LAZ output keeps the input's point records; the input must be "
-                            f"LAS/LAZ (write .ply instead)")
-        return suffix
-    if suffix in OUTPUT_SUFFIXES:
-        return suffix
+        raise CurvError(f"{output}: a LAS/LAZ output keeps the input's point records; the input must be "
+                        f"LAS/LAZ (write .ply instead)")
     raise CurvError(f"{output}: a tiled run writes {', '.join(OUTPUT_SUFFIXES)}; got {suffix or 'no suffix'}")
 
 
@@ -211,7 +217,7 @@ def iter_estimate_file(input, output, method: str | None = None, range=None, *, 
     georeferenced = input_path.suffix.lower() in (".las", ".laz")  # as the LAS reader says (curv.PointCloud)
     if source is not None:
         job = job.for_input(points=not source.is_mesh, georeferenced=georeferenced)
-    check_output(input_path, output, streamed=source is not None)
+    check_output(input_path, output)
     total = parse_memory(memory) if memory is not None else default_budget()
     if source is None:
         return (yield from _whole(input_path, output, job, tile_size, client, quantity, cmap, clim, las_extra, t0))
