@@ -21,7 +21,6 @@ import numpy as np
 
 from ..core.errors import EstimatorError
 from ..core.jit import Progress
-from ..core.mesh import Mesh
 from ..core.pointcloud import PointCloud
 from ..core.validity import Reason
 from .frame import GridFrame, framed_cloud, tile_mesh

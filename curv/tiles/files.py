@@ -36,9 +36,10 @@ from .budget import Budget, default_budget, parse_memory, plan_budget
 from .driver import Runner
 from .engine import Job, step_redo, whole_step
 from .merge import Rows
-from .orient import Overlap, Parts, disagreeing, group_roots, part_signs, spans_tiles
-from .prepare import FileInput, Prepared, iter_prepare
-from .scratch import OVERLAP_DTYPE, Scratch, read_rows, rows_to_columns
+from .orient import spans_tiles
+from .signs import file_part_signs
+from .prepare import FileInput, iter_prepare
+from .scratch import Scratch
 from .sources import open_source
 from .tasks import finished_summary, first_halo, iter_file_tile, run_file_tile
 
@@ -149,56 +150,6 @@ class _Coordinates:
         return out
 
 
-def _orientation(scratch: Scratch, prepared: Prepared, orient: str):
-    """Signs of the tiles' parts and the undecided points of a run oriented along spanning trees
-    (:mod:`curv.tiles.orient`), from the finished tiles' rows and halo normals in the scratch folder:
-    ``(parts, signs, undecided ids, the reason codes the undecided points had)``."""
-    from .scratch import point_dtype
-
-    n_tiles = len(prepared.plan.tiles)
-    ids_of, normals_of, reasons_of, parts_of = {}, {}, {}, {}
-    for t in range(n_tiles):
-        rows = read_rows(scratch.rows_path(t))
-        # as saved (float32 normals, int32 parts): the driver holds every tile's rows at once here
-        ids_of[t], normals_of[t], reasons_of[t], parts_of[t] = rows["id"], rows["normals"], rows["reason"], rows["part"]
-    overlaps = []
-    for t in range(n_tiles):
-        seen = read_rows(scratch.overlap_path(t))
-        overlaps.append(Overlap(t, seen["id"], seen["normal"].astype(np.float64), seen["part"]))
-    counts = [max(int(parts_of[t].max(initial=-1)), int(overlaps[t].parts.max(initial=-1))) + 1 for t in range(n_tiles)]
-    parts = Parts(counts)
-    owner = np.empty(prepared.n, np.int32)  # each point's tile
-    node = np.empty(prepared.n, np.int64 if parts.n > np.iinfo(np.int32).max else np.int32)  # its part
-    for t, ids in ids_of.items():
-        owner[ids] = t
-        node[ids] = parts.of(t, parts_of[t])
-
-    def owner_of(ids):
-        return node[ids].astype(np.int64)
-
-    def lookup(table, ids, width):
-        out = np.empty((ids.size, width)) if width else np.empty(ids.size, np.uint8)
-        tiles = owner[ids]
-        for t in np.unique(tiles):
-            at = tiles == t
-            out[at] = table[int(t)][np.searchsorted(ids_of[int(t)], ids[at])]
-        return out
-
-    def normal_of(ids):
-        return lookup(normals_of, ids, 3)
-
-    dtype = point_dtype(prepared.has_normals)
-
-    def chunks():
-        for t in range(n_tiles):
-            rec = scratch.read_points(t, dtype)  # ascending numbers, as the rows
-            yield parts.of(t, parts_of[t]), rec["xyz"], normals_of[t].astype(np.float64)
-
-    signs = part_signs(parts, overlaps, owner_of, normal_of, lambda group: group_roots(group, orient, chunks))
-    bad = disagreeing(overlaps, parts, signs, owner_of, normal_of)
-    return parts, signs, bad, lookup(reasons_of, bad, 0)
-
-
 def iter_estimate_file(input, output, method: str | None = None, range=None, *, tile_size: int | None = None,
                        memory=None, workers: int | None = None, scheduler: str | None = None, client=None,
                        scratch=None, keep_scratch: bool = False, quantity: str = "mean", cmap=None, clim=None,
@@ -269,7 +220,8 @@ def iter_estimate_file(input, output, method: str | None = None, range=None, *, 
     t_tiles = time.perf_counter() - t1
     parts = signs = bad = None
     if overlap:
-        parts, signs, bad, was = _orientation(folder, prepared, job.keywords.get("orient"))
+        parts, signs, bad, was = file_part_signs(folder, len(prepared.plan.tiles), prepared.has_normals,
+                                                 job.keywords.get("orient"))
         np.subtract.at(reasons, was, 1)
         reasons[Reason.ORIENTATION] += bad.size
     t2 = time.perf_counter()

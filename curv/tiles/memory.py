@@ -222,8 +222,8 @@ class _Assembly:
         def roots(group):
             return group_roots(group, orient, lambda: iter([(node, points, self.normals)]))
 
-        signs = part_signs(parts, overlaps, owner_of, normal_of, roots)
-        bad = disagreeing(overlaps, parts, signs, owner_of, normal_of)
+        signs = part_signs(parts, lambda: iter(overlaps), owner_of, normal_of, roots)
+        bad = disagreeing(lambda: iter(overlaps), parts, signs, owner_of, normal_of)
         flip = np.flatnonzero(signs[node] < 0)
         self.put(flip, turned(self.columns(flip)))
         self.put(bad, undecided(self.columns(bad)))

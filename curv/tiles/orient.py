@@ -76,16 +76,16 @@ class Overlap:
     tile : int
     ids : (h,) int64
         Its halo points (ascending numbers in the whole input).
-    normals : (h, 3) float64
-        The normals it estimated there, as it oriented them.
-    parts : (h,) int64
+    normals : (h, 3) float
+        The normals it estimated there, as it oriented them (a file run's as saved, float32).
+    parts : (h,) int
         The part of its region each was oriented in (its label among the tile's parts,
         :func:`curv.tiles.engine.iter_run_tile`).
     """
 
     def __init__(self, tile: int, ids: np.ndarray, normals: np.ndarray, parts: np.ndarray):
-        self.tile, self.ids, self.normals = int(tile), np.asarray(ids, np.int64), np.asarray(normals, np.float64)
-        self.parts = np.asarray(parts, np.int64)
+        self.tile, self.ids, self.normals = int(tile), np.asarray(ids, np.int64), np.asarray(normals)
+        self.parts = np.asarray(parts)
 
 
 class Parts:
@@ -108,9 +108,10 @@ class Parts:
 
 
 def _votes(overlaps, parts: Parts, owner_of, normal_of):
-    """``(a, b, agree, disagree)`` arrays over the pairs of parts ``a < b`` that share points."""
-    keys, agree = [], []
-    for ov in overlaps:
+    """``(a, b, agree, disagree)`` arrays over the pairs of parts ``a < b`` that share points; the
+    overlaps read one at a time, each summed into its pairs at once (memory: one tile's halo)."""
+    pairs, yes, total = [], [], []
+    for ov in overlaps():
         if ov.ids.size == 0:
             continue
         mine = parts.of(ov.tile, ov.parts)
@@ -119,15 +120,16 @@ def _votes(overlaps, parts: Parts, owner_of, normal_of):
         vote = (cos >= AGREE) | (cos <= -AGREE)  # NaN and edge-on pairs say nothing
         a, b = np.minimum(mine, theirs)[vote], np.maximum(mine, theirs)[vote]
         keep = a != b
-        keys.append(a[keep] * parts.n + b[keep])
-        agree.append(cos[vote][keep] >= AGREE)
-    if not keys:
-        return (np.empty(0, np.int64),) * 2 + (np.empty(0, np.int64),) * 2
-    keys, agree = np.concatenate(keys), np.concatenate(agree)
-    pairs, inverse = np.unique(keys, return_inverse=True)
-    yes = np.bincount(inverse, weights=agree, minlength=pairs.size).astype(np.int64)
-    no = np.bincount(inverse, minlength=pairs.size) - yes
-    return pairs // parts.n, pairs % parts.n, yes, no
+        key, inverse = np.unique(a[keep] * parts.n + b[keep], return_inverse=True)
+        pairs.append(key)
+        yes.append(np.bincount(inverse, weights=cos[vote][keep] >= AGREE, minlength=key.size))
+        total.append(np.bincount(inverse, minlength=key.size))
+    if not pairs:
+        return (np.empty(0, np.int64),) * 4
+    key, inverse = np.unique(np.concatenate(pairs), return_inverse=True)
+    agree = np.bincount(inverse, weights=np.concatenate(yes), minlength=key.size).astype(np.int64)
+    disagree = np.bincount(inverse, weights=np.concatenate(total), minlength=key.size).astype(np.int64) - agree
+    return key // parts.n, key % parts.n, agree, disagree
 
 
 def part_signs(parts: Parts, overlaps, owner_of, normal_of, roots) -> np.ndarray:
@@ -137,7 +139,9 @@ def part_signs(parts: Parts, overlaps, owner_of, normal_of, roots) -> np.ndarray
     Parameters
     ----------
     parts : Parts
-    overlaps : sequence of Overlap
+    overlaps : callable
+        ``overlaps()`` yields every :class:`Overlap` (read again at each call: a file run keeps
+        them on disk).
     owner_of : callable
         ``owner_of(ids) -> (m,) int``: the part (a number of ``parts``) whose tile's core holds each point.
     normal_of : callable
@@ -227,9 +231,10 @@ def group_roots(group: np.ndarray, orient: str, chunks) -> tuple[np.ndarray, np.
 
 def disagreeing(overlaps, parts: Parts, signs: np.ndarray, owner_of, normal_of) -> np.ndarray:
     """(k,) int64 ascending: the points whose normal, once every part is turned by ``signs``, points
-    one way in their own tile and the other way in a tile that holds them in its halo."""
+    one way in their own tile and the other way in a tile that holds them in its halo
+    (``overlaps()`` as in :func:`part_signs`)."""
     bad = []
-    for ov in overlaps:
+    for ov in overlaps():
         if ov.ids.size == 0:
             continue
         cos = np.einsum("ij,ij->i", ov.normals, normal_of(ov.ids)) * signs[parts.of(ov.tile, ov.parts)]
