@@ -83,10 +83,10 @@ from .normals import (BORDER_GAP, BORDER_RANGE, NORMAL_METHODS, NORMAL_RANGE, ON
                       border_radii, border_test_radii, point_normals)
 from .one_pass import local_frames, support_spread
 from .orientation import (AGREE_COSINE, GRAZING_COSINE, ORIENTATIONS, default_orientation, describe_orientation,
-                          orient_normals, tree_parts)
+                          keep_tree, orient_normals, spanning_tree)
 from .quantised import MIN_SUPPORT_STEPS, quantised_supports, range_above_grid, support_floor
 
-__all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "tree_parts",
+__all__ = ["PointNormals", "point_normals", "grid_ordered", "local_frames", "orient_normals", "keep_tree", "spanning_tree",
            "default_orientation",
            "describe_orientation", "border_points", "border_radii", "border_test_radii", "ORIENTATIONS",
            "support_spread", "support_floor", "quantised_supports", "range_above_grid",

@@ -20,7 +20,7 @@ from ..core.jit import jit, jit_parallel, launch, prange
 from ..core.pointcloud import PointCloud
 from ..core.radix import stable_order
 
-__all__ = ["orient_normals", "default_orientation", "describe_orientation", "tree_parts", "AGREE_COSINE",
+__all__ = ["orient_normals", "default_orientation", "describe_orientation", "keep_tree", "spanning_tree", "AGREE_COSINE",
            "GRAZING_COSINE", "ORIENTATIONS"]
 
 AGREE_COSINE = 0.5
@@ -38,7 +38,8 @@ leave out steep roofs and slopes whose up side is clear."""
 ORIENTATIONS = ("up", "top", "outward")
 """The named orientation rules (module notes, step 2); a viewpoint (x, y, z) is the fourth."""
 
-_TREE_PARTS: "weakref.WeakKeyDictionary[PointCloud, np.ndarray]" = weakref.WeakKeyDictionary()
+_KEEP_TREE: "weakref.WeakSet[PointCloud]" = weakref.WeakSet()
+_TREES: "weakref.WeakKeyDictionary[PointCloud, tuple]" = weakref.WeakKeyDictionary()
 
 
 @jit_parallel
@@ -321,18 +322,23 @@ def _orient_up(cloud: PointCloud, out: np.ndarray, finite: np.ndarray) -> np.nda
     return ambiguous
 
 
-def tree_parts(cloud: PointCloud) -> np.ndarray | None:
-    """(n,) int64: the part each point's normal was oriented in by the last propagation along a
-    spanning tree on ``cloud`` (:func:`orient_normals` with ``"top"`` or ``"outward"``): the smallest
-    point index of its tree, so two points share a label exactly when one root decided both. None
-    when the last orientation on ``cloud`` decided each point alone (up, a viewpoint) or none ran.
+def keep_tree(cloud: PointCloud) -> None:
+    """Ask every later propagation along a spanning tree on ``cloud`` to keep its forest
+    (:func:`spanning_tree`); kept only where asked, it is 24 bytes a point."""
+    _KEEP_TREE.add(cloud)
+
+
+def spanning_tree(cloud: PointCloud) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(ptr (n+1,), adj (ptr[n],))``: the forest the last propagation on ``cloud`` walked (CSR, both
+    directions; its trees are the parts one root each decided), when :func:`keep_tree` asked for it;
+    None when the last orientation decided each point alone (up, a viewpoint) or none ran.
 
     An estimate of a whole cloud orients its twin in grid order
     (:func:`curv.point_normals.grid_ordered`); a cloud already in its grid's order (a tile's
-    region) is oriented itself. The tiles ask it: a tile's parts are turned over one by one to
-    agree with the others (:mod:`curv.tiles.orient`).
+    region) is oriented itself. The tiles ask it: the parts of a tile's region are turned over one
+    by one to agree with the others (:mod:`curv.tiles.orient`).
     """
-    return _TREE_PARTS.get(cloud)
+    return _TREES.get(cloud)
 
 
 def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tuple[np.ndarray, np.ndarray]:
@@ -358,7 +364,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tu
     out = np.array(normals, dtype=np.float64, copy=True)
     n = out.shape[0]
     finite = np.isfinite(out).all(axis=1)
-    _TREE_PARTS.pop(cloud, None)
+    _TREES.pop(cloud, None)
     if orient is None:
         orient = default_orientation(cloud)
     if not isinstance(orient, str):
@@ -394,7 +400,8 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tu
     key[~finite] = -np.inf
     root_sign[~finite] = 0.0
     _propagate(ptr, adj, part, key, root_sign, out)
-    _TREE_PARTS[cloud] = part
+    if cloud in _KEEP_TREE:
+        _TREES[cloud] = (ptr, adj)
     ambiguous = np.zeros(n, bool)
     safe = np.where(finite[:, None], out, 0.0)
     launch(_agreement, indptr, neighbours, safe, AGREE_COSINE, ambiguous)

@@ -10,7 +10,7 @@ The rules per input kind (docs/LARGE_SCANS.md):
   are oriented by propagation along a minimum spanning tree of the neighbour graph (Hoppe et al.
   1992), from one root per connected part (its highest point turned up; its point farthest from
   its centroid turned away from it): a global walk. Each tile propagates over its own region, one
-  tree per connected part of the region (:func:`curv.point_normals.tree_parts`); the parts of
+  tree per connected part of the region (:func:`curv.point_normals.spanning_tree`); the parts of
   every tile are then made to agree (:func:`part_signs`): two parts share the points of the
   tiles' overlaps (one tile's core is the other's halo), their normals there vote whether the two
   parts agree, a spanning tree of the parts (strongest votes first) carries one sign to every
