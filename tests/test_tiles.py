@@ -271,3 +271,24 @@ def test_each_part_of_a_tile_is_turned_on_its_own_as_the_whole_call_orients_it(h
     assert (whole.normals[-110:, 2] > 0).all()  # the roof up, its own part
     assert_same(tiled, whole, rounding=True, signless_directions=True)
 
+
+
+def test_a_group_of_parts_is_rooted_and_turned_by_the_normals_its_propagation_turned():
+    """The whole call roots a part at its highest point with a finite propagated normal and turns
+    that normal up; a jet fit shown there may lean the other way of the horizontal (4M terrain
+    points: a roof's crest at nz = -0.115), so the rows' shown normals must not decide the turn."""
+    from curv.tiles.orient import group_roots
+
+    group = np.array([0, 0, 1])  # parts 0 and 1 in group 0, part 2 alone
+    xyz = np.array([[0, 0, 5.0], [1, 0, 9.0], [2, 0, 3.0], [5, 5, 1.0], [6, 5, 2.0]])
+    part = np.array([0, 1, 1, 2, 2])
+    rooting = np.array([[0, 0, 1.0], [0.99, 0, -0.14], [0, 0, -1.0], [np.nan] * 3, [0, 0.6, -0.8]])
+    root, sign = group_roots(group, "top", lambda: iter([(part, xyz, rooting)]))
+    assert root.tolist() == [1, 2] and sign.tolist() == [-1, -1]
+    centre = xyz[:3].mean(axis=0)
+    root, sign = group_roots(group, "outward", lambda: iter([(part[:3], xyz[:3], rooting[:3]),
+                                                              (part[3:], xyz[3:], rooting[3:])]))
+    far = int(np.argmax(np.linalg.norm(xyz[:3] - centre, axis=1)))
+    assert root[0] == part[far] and sign[0] == (1 if rooting[far] @ (xyz[far] - centre) >= 0 else -1)
+    # part 2's centroid is its two points' (5.5, 5, 1.5); its one finite normal points towards it
+    assert root[1] == 2 and sign[1] == -1

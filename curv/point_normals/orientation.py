@@ -40,6 +40,7 @@ ORIENTATIONS = ("up", "top", "outward")
 
 _KEEP_TREE: "weakref.WeakSet[PointCloud]" = weakref.WeakSet()
 _TREES: "weakref.WeakKeyDictionary[PointCloud, tuple]" = weakref.WeakKeyDictionary()
+_TRUSTED: "weakref.WeakKeyDictionary[PointCloud, np.ndarray]" = weakref.WeakKeyDictionary()
 
 
 @jit_parallel
@@ -322,21 +323,35 @@ def _orient_up(cloud: PointCloud, out: np.ndarray, finite: np.ndarray) -> np.nda
     return ambiguous
 
 
-def keep_tree(cloud: PointCloud) -> None:
-    """Ask every later propagation along a spanning tree on ``cloud`` to keep its forest
-    (:func:`spanning_tree`); kept only where asked, it is 24 bytes a point."""
+def keep_tree(cloud: PointCloud, trusted: np.ndarray | None = None) -> None:
+    """Ask every later propagation along a spanning tree on ``cloud`` to keep its forest and the
+    normals it turned (:func:`spanning_tree`; kept only where asked, it is 48 bytes a point).
+
+    ``trusted`` (n,) bool: the points whose neighbour-graph edges and unoriented normals the caller
+    knows to be a larger cloud's (a tile's region: :func:`curv.tiles.reach.tree_reach`). Kruskal
+    then takes every edge with an untrusted end after all the others: the forest over the trusted
+    points is the minimum one of their own edges, so a part of the larger cloud that they hold whole
+    gets the larger cloud's tree, and so its relative orientation, whatever the region's edge adds.
+    """
     _KEEP_TREE.add(cloud)
+    if trusted is None:
+        _TRUSTED.pop(cloud, None)
+    else:
+        _TRUSTED[cloud] = np.asarray(trusted, bool)
 
 
-def spanning_tree(cloud: PointCloud) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(ptr (n+1,), adj (ptr[n],))``: the forest the last propagation on ``cloud`` walked (CSR, both
-    directions; its trees are the parts one root each decided), when :func:`keep_tree` asked for it;
-    None when the last orientation decided each point alone (up, a viewpoint) or none ran.
+def spanning_tree(cloud: PointCloud) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(ptr (n+1,), adj (ptr[n],), rooting (n, 3))``: the forest the last propagation on ``cloud``
+    walked (CSR, both directions; its trees are the parts one root each decided) and the normals
+    it turned along it (the unoriented ones it was given, before the undecided are left out: the
+    root of a part is its highest point, or farthest from its centroid, with a finite one, and that
+    normal is turned up, or away), when :func:`keep_tree` asked for it; None when the last
+    orientation decided each point alone (up, a viewpoint) or none ran.
 
     An estimate of a whole cloud orients its twin in grid order
     (:func:`curv.point_normals.grid_ordered`); a cloud already in its grid's order (a tile's
     region) is oriented itself. The tiles ask it: the parts of a tile's region are turned over one
-    by one to agree with the others (:mod:`curv.tiles.orient`).
+    by one to agree with the others, and rooted as the whole call roots them (:mod:`curv.tiles.orient`).
     """
     return _TREES.get(cloud)
 
@@ -384,6 +399,9 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tu
     indptr, neighbours = graph.indptr, graph.indices
     safe = np.where(finite[:, None], out, 0.0)
     rows, cols, weight = _tree_edges(indptr, neighbours, safe, finite)
+    trusted = _TRUSTED.get(cloud) if cloud in _KEEP_TREE else None
+    if trusted is not None:  # weights lie in [0, 1]: these come after every other edge (keep_tree)
+        weight[~(trusted[rows] & trusted[cols])] += 2.0
     # Kruskal in the order of the weights (stable: ties keep the edges' order)
     ptr, adj, part = _spanning_forest(n, _stable_rank(weight), rows, cols)
     del rows, cols, weight
@@ -401,7 +419,7 @@ def orient_normals(cloud: PointCloud, normals: np.ndarray, *, orient=None) -> tu
     root_sign[~finite] = 0.0
     _propagate(ptr, adj, part, key, root_sign, out)
     if cloud in _KEEP_TREE:
-        _TREES[cloud] = (ptr, adj)
+        _TREES[cloud] = (ptr, adj, out.copy())
     ambiguous = np.zeros(n, bool)
     safe = np.where(finite[:, None], out, 0.0)
     launch(_agreement, indptr, neighbours, safe, AGREE_COSINE, ambiguous)

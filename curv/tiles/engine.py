@@ -31,12 +31,14 @@ from .reach import support_reach
 __all__ = ["Job", "Piece", "TileRows", "iter_run_tile", "shape_of", "step_redo", "whole_step", "ROW_FIELDS",
            "empty_rows"]
 
-ROW_FIELDS = ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se", "part")
+ROW_FIELDS = ("k1", "k2", "d1", "d2", "normals", "valid", "reason", "k1_se", "k2_se", "part", "rooting")
 """The per-point columns of a result a tile hands back (as :class:`curv.Curvature` names them), and
-``part``: the part of the tile's region each normal was oriented in, for the orientation across
-tiles (:mod:`curv.tiles.orient`; 0 where the normals are decided point by point)."""
+for the orientation across tiles (:mod:`curv.tiles.orient`) ``part``, the part of the tile's region
+each normal was oriented in, and ``rooting``, the normal the propagation turned there (the one a
+root is chosen and turned by: :func:`curv.point_normals.spanning_tree`); 0 and NaN where the
+normals are decided point by point."""
 
-_RESULT_FIELDS = ROW_FIELDS[:-1]
+_RESULT_FIELDS = ROW_FIELDS[:-2]
 
 _TILED_KEYWORDS = {"radius", "knn", "normals", "normal_weighting", "fit_range", "orient", "standard_errors",
                    "features", "block_size"}
@@ -154,7 +156,7 @@ class TileRows:
 def empty_rows() -> dict:
     return {"k1": np.empty(0), "k2": np.empty(0), "d1": np.empty((0, 3)), "d2": np.empty((0, 3)),
             "normals": np.empty((0, 3)), "valid": np.empty(0, bool), "reason": np.empty(0, np.uint8),
-            "k1_se": np.empty(0), "k2_se": np.empty(0), "part": np.empty(0, np.int64)}
+            "k1_se": np.empty(0), "k2_se": np.empty(0), "part": np.empty(0, np.int64), "rooting": np.empty((0, 3))}
 
 
 def shape_of(piece: Piece, frame: GridFrame | None, *, points: bool, georeferenced: bool = False,
@@ -187,31 +189,39 @@ def _estimate(shape, job: Job, centres) -> Generator[float, None, object]:
     return (yield from iter_estimate(shape, call.pop("method"), call.pop("range"), vertices=centres, **call))
 
 
-def _region_parts(shape, region) -> np.ndarray:
+def _region_parts(shape, trusted: np.ndarray) -> np.ndarray:
     """(n,) int64: the part of the region each point's normal was oriented in, numbered 0, 1, ...:
     the trees of the propagation's forest (:func:`curv.point_normals.spanning_tree`) cut at every
-    edge that has an end whose nearest points the region does not hold whole. Such an edge may be
-    missing from the whole input's neighbour graph (near the region's edge a point links to the
-    nearest it has), and a part joined through it may be two parts of the whole call's: at 4M
-    terrain points, 1,679 points of four roofs were turned down with the ground they were joined to.
-    An edge between two points whose nearest are the whole call's is one of its edges, so each part
-    is oriented inside one of its parts. All 0 when no forest was kept."""
+    edge with an end not ``trusted`` (:func:`curv.tiles.reach.tree_reach` beyond its room). Such an
+    edge may be missing from the whole input's neighbour graph (near the region's edge a point links
+    to the nearest it has), and a part joined through it may be two parts of the whole call's: at 4M
+    terrain points, roofs were turned down with the ground they were joined to. The forest over the
+    trusted points is the minimum one of their own edges (:func:`curv.point_normals.keep_tree`), so a
+    part of the whole call that the region holds whole is one part here, with the whole call's tree.
+    All 0 when no forest was kept."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from ..core.neighbour_graph import GRAPH_NEIGHBOURS
     from ..point_normals import spanning_tree
 
     tree = spanning_tree(shape)
     n = shape.n_vertices
     if tree is None:
         return np.zeros(n, np.int64)
-    ptr, adj = tree
-    exact = np.asarray(shape.kth_distance(GRAPH_NEIGHBOURS)) <= region.room(shape.vertices)
+    ptr, adj, _ = tree
     rows = np.repeat(np.arange(n), np.diff(ptr))
-    keep = exact[rows] & exact[adj]
+    keep = trusted[rows] & trusted[adj]
     graph = coo_matrix((np.ones(int(keep.sum()), np.int8), (rows[keep], adj[keep])), shape=(n, n)).tocsr()
     return connected_components(graph, directed=False)[1].astype(np.int64)
+
+
+def _rooting(shape) -> np.ndarray:
+    """(n, 3): the normals the region's propagation turned (:func:`curv.point_normals.spanning_tree`),
+    NaN when none was kept."""
+    from ..point_normals import spanning_tree
+
+    tree = spanning_tree(shape)
+    return np.full((shape.n_vertices, 3), np.nan) if tree is None else tree[2]
 
 
 def _halo_votes(shape, job, region, ids: np.ndarray, core_ids: np.ndarray, normals: np.ndarray, labels: np.ndarray):
@@ -278,7 +288,8 @@ def _faceless(piece: Piece, rows: np.ndarray) -> dict:
     nan3 = np.full((c, 3), np.nan)
     return {"k1": np.full(c, np.nan), "k2": np.full(c, np.nan), "d1": nan3, "d2": nan3.copy(), "normals": nan3.copy(),
             "valid": np.zeros(c, bool), "reason": np.full(c, Reason.DEGENERATE, np.uint8),
-            "k1_se": np.full(c, np.nan), "k2_se": np.full(c, np.nan), "part": np.zeros(c, np.int64)}
+            "k1_se": np.full(c, np.nan), "k2_se": np.full(c, np.nan), "part": np.zeros(c, np.int64),
+            "rooting": nan3.copy()}
 
 
 def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch, job: Job, frame: GridFrame | None,
@@ -339,10 +350,14 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         centres = rank[at]  # the pending points' rows of the shape
         whole = 2 * centres.size >= shape.n_vertices
         done_before = 1.0 - pending.size / total
+        trusted = None
         if overlap:
             from ..point_normals import keep_tree
+            from .reach import tree_reach
 
-            keep_tree(shape)  # its parts are turned one by one (curv.tiles.orient)
+            # its parts are turned one by one (curv.tiles.orient), each a tree of the whole call's edges
+            trusted = tree_reach(shape, fit_range=job.keywords.get("fit_range", 2)) <= region.room(shape.vertices)
+            keep_tree(shape, trusted)
         gen = _estimate(shape, job, None if whole else np.sort(centres))
         while True:
             try:
@@ -356,7 +371,7 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         labels = turn = None
         if overlap:
             ids_here = piece.ids[order]
-            labels = _region_parts(shape, region)
+            labels = _region_parts(shape, trusted)
             normals_here = np.asarray(res.normals)
             if info["passes"] == 1:
                 by_id = np.argsort(ids_here)
@@ -376,6 +391,7 @@ def iter_run_tile(core_ids: np.ndarray, box: tuple, bounds: tuple, fetch: Fetch,
         ids_out.append(pending[kept])
         columns = {name: np.asarray(getattr(res, name))[rows] for name in _RESULT_FIELDS}
         columns["part"] = np.zeros(rows.size, np.int64) if labels is None else labels[rows]
+        columns["rooting"] = np.full((rows.size, 3), np.nan) if labels is None else _rooting(shape)[rows]
         if turn is not None:
             over = np.flatnonzero(turn[rows] < 0)
             flipped = turned({name: values[over] for name, values in columns.items()})

@@ -186,6 +186,7 @@ class _Assembly:
         self.reason = np.zeros(n, np.uint8)
         self.k1_se, self.k2_se = np.full(n, np.nan), np.full(n, np.nan)
         self.part = np.zeros(n, np.int64)
+        self.rooting = np.full((n, 3), np.nan)
         self.filled = np.zeros(n, bool)
         self.infos = [{} for _ in range(n_tiles)]
 
@@ -220,7 +221,7 @@ class _Assembly:
             return self.normals[ids]
 
         def roots(group):
-            return group_roots(group, orient, lambda: iter([(node, points, self.normals)]))
+            return group_roots(group, orient, lambda: iter([(node, points, self.rooting)]))
 
         signs = part_signs(parts, lambda: iter(overlaps), owner_of, normal_of, roots)
         bad = disagreeing(lambda: iter(overlaps), parts, signs, owner_of, normal_of)

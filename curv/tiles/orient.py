@@ -65,6 +65,8 @@ def turned(columns: dict) -> dict:
     out["k1"], out["k2"] = -np.asarray(columns["k2"]), -np.asarray(columns["k1"])
     out["d1"], out["d2"] = np.asarray(columns["d2"]), np.asarray(columns["d1"])
     out["k1_se"], out["k2_se"] = np.asarray(columns["k2_se"]), np.asarray(columns["k1_se"])
+    if "rooting" in columns:
+        out["rooting"] = -np.asarray(columns["rooting"])
     return out
 
 
@@ -190,9 +192,11 @@ def group_roots(group: np.ndarray, orient: str, chunks) -> tuple[np.ndarray, np.
     from the group's centroid, among those with a finite normal; as :func:`curv.point_normals.orient_normals` roots a part), and the
     turn that makes its normal point as that call turns it.
 
-    ``chunks()`` yields ``(parts (m,), xyz (m, 3), normals (m, 3))`` over every core point once, the
-    normals as their tiles oriented them; it is called once (``"top"``) or twice (``"outward"``:
-    the centroids first).
+    ``chunks()`` yields ``(parts (m,), xyz (m, 3), rooting (m, 3))`` over every core point once:
+    the normals each tile's propagation turned (:func:`curv.point_normals.spanning_tree`), as it
+    turned them. The root is chosen and turned by those, not by the normals a result shows (a jet
+    fit's may point the other way of the vertical at a crest); it is called once (``"top"``) or
+    twice (``"outward"``: the centroids first).
     """
     g_count = int(group.max()) + 1 if group.size else 0
     centroid = None
@@ -209,15 +213,15 @@ def group_roots(group: np.ndarray, orient: str, chunks) -> tuple[np.ndarray, np.
     root = np.zeros(g_count, np.int64)
     root[group[::-1]] = np.arange(group.size)[::-1]
     sign = np.ones(g_count, np.int64)
-    for part, xyz, normals in chunks():
-        ok = np.isfinite(normals).all(axis=1)
-        part, xyz, normals = part[ok], xyz[ok], normals[ok]
+    for part, xyz, rooting in chunks():
+        ok = np.isfinite(rooting).all(axis=1)
+        part, xyz, rooting = part[ok], xyz[ok], rooting[ok]
         g = group[part]
         if orient == "top":
-            key, turn = xyz[:, 2], normals[:, 2]
+            key, turn = xyz[:, 2], rooting[:, 2]
         else:
             away = xyz - centroid[g]
-            key, turn = np.linalg.norm(away, axis=1), np.einsum("ij,ij->i", normals, away)
+            key, turn = np.linalg.norm(away, axis=1), np.einsum("ij,ij->i", rooting, away)
         top = np.full(g_count, -np.inf)
         np.maximum.at(top, g, key)
         at = np.flatnonzero((key == top[g]) & (key > best[g]))

@@ -62,7 +62,7 @@ from ..core.ranges import Range, ball_radii, resolve
 from ..estimators import get_spec
 from ..geometry.neighbourhood import latest_with_mesh, new_queues
 
-__all__ = ["ball_max", "point_reach", "normal_reach", "floored_radii", "mesh_reach", "support_reach"]
+__all__ = ["ball_max", "point_reach", "normal_reach", "tree_reach", "floored_radii", "mesh_reach", "support_reach"]
 
 
 @jit_parallel
@@ -180,6 +180,21 @@ def normal_reach(cloud: PointCloud, *, fit_range=2, orient="up") -> np.ndarray:
 
     # a tile asks twice for one region (the halo's votes, then its core's reach): 0.5 s of 8.9 at 1M
     return latest_with_mesh(cloud, "normal reach", (fit_range, by_rule), build)
+
+
+def tree_reach(cloud: PointCloud, *, fit_range=2) -> np.ndarray:
+    """(n,) how far what places a point in the orientation's spanning tree reads: its nearest (the
+    neighbour graph's edges), their spacings (the calm spacing) and the ball of its unoriented
+    normal (the border test's PCA, or a PCA at ``fit_range``, at least the support floor). Where
+    it is within a region's room, the point's edges and their weights are the whole call's
+    (:func:`curv.point_normals.keep_tree`)."""
+    from ..point_normals import border_radii, support_floor
+
+    reach = _calm_reach(cloud, _knn_reach(cloud))
+    np.maximum(reach, border_radii(cloud), out=reach)
+    np.maximum(reach, support_floor(cloud), out=reach)
+    np.maximum(reach, ball_radii(cloud, resolve(get_spec("jet"), fit_range), uses_normals=False), out=reach)
+    return reach
 
 
 def floored_radii(cloud: PointCloud, job) -> np.ndarray:

@@ -34,10 +34,11 @@ __all__ = ["Scratch", "ROW_DTYPE", "OVERLAP_DTYPE", "point_dtype", "FACE_DTYPE",
 
 ROW_DTYPE = np.dtype([("id", "<i8"), ("k1", "<f8"), ("k2", "<f8"), ("d1", "<f4", (3,)), ("d2", "<f4", (3,)),
                       ("normals", "<f4", (3,)), ("k1_se", "<f4"), ("k2_se", "<f4"), ("valid", "u1"),
-                      ("reason", "u1"), ("part", "<i4")])
+                      ("reason", "u1"), ("part", "<i4"), ("rooting", "<f4", (3,))])
 """A tile's result row: k1 and k2 in full (H and K are computed from them as in memory); the
 directions, normals and standard errors in float32, the precision every output writes them in;
-the part of the tile's region its normal was oriented in (:mod:`curv.tiles.orient`)."""
+the part of the tile's region its normal was oriented in and the normal the propagation turned
+there (:mod:`curv.tiles.orient`)."""
 
 OVERLAP_DTYPE = np.dtype([("id", "<i8"), ("normal", "<f4", (3,)), ("part", "<i4")])
 """A tile's halo point as that tile saw it: its number, its normal and the part it was oriented in."""
@@ -51,7 +52,7 @@ def face_dtype(width: int = 3) -> np.dtype:
     (the mesh's longest face's; -1 pads a shorter one). :data:`FACE_DTYPE` for triangles."""
     return FACE_DTYPE if width == 3 else np.dtype([("face", "<i8"), ("v", "<i8", (int(width),))])
 
-_VERSION = 2  # 2: rows and overlaps carry their part (the orientation across tiles)
+_VERSION = 3  # 2: rows and overlaps carry their part, 3: rows their rooting normal
 
 
 def point_dtype(normals: bool) -> np.dtype:

@@ -88,7 +88,7 @@ def file_part_signs(scratch: Scratch, n_tiles: int, has_normals: bool, orient: s
         for t in range(n_tiles):
             rows = read_rows(scratch.rows_path(t))
             xyz = scratch.read_points(t, dtype)["xyz"]  # ascending numbers, as the rows
-            yield parts.of(t, rows["part"]), xyz, rows["normals"].astype(np.float64)
+            yield parts.of(t, rows["part"]), xyz, rows["rooting"].astype(np.float64)
 
     signs = part_signs(parts, overlaps, owner_of, normal_of, lambda group: group_roots(group, orient, chunks))
     bad = disagreeing(overlaps, parts, signs, owner_of, normal_of)
