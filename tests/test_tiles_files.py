@@ -147,16 +147,18 @@ def test_a_ply_cloud_on_tiles_writes_the_whole_calls_values(tmp_path):
             assert np.array_equal(a[name], b[name]), name
 
 
-def test_a_ply_scene_of_many_parts_on_tiles_writes_the_whole_calls_orientation(tmp_path):
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_ply_scene_of_many_parts_on_tiles_writes_the_whole_calls_orientation(tmp_path, workers):
     """Oriented from each part's top (a PLY is not georeferenced): every part of every tile turned as
-    the whole call orients it (tests/test_tiles.py has the in-memory twin of this scene)."""
+    the whole call orients it, in this process or on a local cluster (the parts travel with the
+    rows; tests/test_tiles.py has the in-memory twin of this scene)."""
     from clouds import ground_ball_and_roof
 
     _write_ply(tmp_path / "in.ply", ground_ball_and_roof())
     cloud = curv.load(tmp_path / "in.ply")
     curv.save_ply(tmp_path / "whole.ply", cloud, curv.estimate(cloud, "qs"))
-    run = estimate_file(tmp_path / "in.ply", tmp_path / "tiled.ply", "qs", tile_size=11000, workers=1)
-    assert run.tiles == 2
+    run = estimate_file(tmp_path / "in.ply", tmp_path / "tiled.ply", "qs", tile_size=11000 // workers, workers=workers)
+    assert run.tiles == 2 * workers
     (a, _, _), (b, _, _) = _ply_rows(tmp_path / "whole.ply"), _ply_rows(tmp_path / "tiled.ply")
     for name in ("valid", "reason"):
         assert np.array_equal(a[name], b[name]), name
